@@ -1,0 +1,56 @@
+// Every capacity and iteration cap of the core, in one place. Static memory follows from these
+// (v2xloc-info prints it). Two profiles: the default (Linux ECU / host) and EMBEDDED (a bare-metal
+// Cortex-R target with a few MB of RAM), selected with -DV2XLOC_PROFILE_EMBEDDED.
+// Sections are owned by the stage that uses them; add a constant next to its siblings, with a
+// unit and a reason.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace v2xloc::config {
+
+#if defined(V2XLOC_PROFILE_EMBEDDED)
+inline constexpr bool kEmbeddedProfile = true;
+#else
+inline constexpr bool kEmbeddedProfile = false;
+#endif
+
+// ---- Point clouds -------------------------------------------------------------------------
+// A 64-beam, 1800-step sweep has <= 115200 returns; a 32-beam infrastructure unit fewer.
+inline constexpr std::size_t kMaxScanPoints = kEmbeddedProfile ? 16384 : 131072;
+// After voxel downsampling (registration works on these).
+inline constexpr std::size_t kMaxDownsampledPoints = kEmbeddedProfile ? 4096 : 32768;
+// Reference map (fused infrastructure + agent clouds, downsampled).
+inline constexpr std::size_t kMaxMapPoints = kEmbeddedProfile ? 8192 : 131072;
+
+// ---- Voxel downsampling ---------------------------------------------------------------------
+// Open-addressing slots; a power of two, >= 2x the point capacity keeps probe chains short.
+inline constexpr std::size_t kVoxelHashSlots = kEmbeddedProfile ? 32768 : 262144;
+inline constexpr std::size_t kVoxelMaxProbes = 64;  // bounded probing; beyond -> counted drop
+
+// ---- k-d tree -------------------------------------------------------------------------------
+inline constexpr std::size_t kKdLeafSize = 8;           // points per leaf
+inline constexpr std::size_t kKdMaxDepth = 48;          // traversal stack depth (log2(N)+slack)
+inline constexpr std::size_t kKdMaxNodeVisits = 4096;   // per query; bounded worst case
+inline constexpr std::size_t kMaxNeighbors = 128;       // kNN / hybrid result buffers
+
+// ---- Normals / FPFH -------------------------------------------------------------------------
+inline constexpr std::size_t kNormalMaxNeighbors = 30;  // Open3D's KDTreeSearchParamHybrid default
+inline constexpr std::size_t kFpfhMaxNeighbors = 100;   // Open3D examples: radius 5 voxels, 100 nn
+
+// ---- Correspondences / RANSAC ---------------------------------------------------------------
+inline constexpr std::size_t kMaxCorrespondences = kMaxDownsampledPoints;
+inline constexpr std::uint32_t kRansacMaxIterations = 100000;   // hard cap (Open3D default)
+inline constexpr std::uint32_t kRansacMaxValidations = 1000;    // full inlier counts per run
+
+// ---- ICP ------------------------------------------------------------------------------------
+inline constexpr std::uint32_t kIcpMaxIterations = 64;
+
+// ---- Localization ---------------------------------------------------------------------------
+inline constexpr std::size_t kGateMaxWindow = 64;          // validity-gate window w (frames)
+inline constexpr std::size_t kEkfHistoryLength = 32;       // fixed-lag history (frames)
+inline constexpr std::size_t kOdometryMapPoints = kEmbeddedProfile ? 16384 : 131072;
+inline constexpr std::size_t kMaxMapSources = 16;          // infra units + agents tracked at once
+
+}  // namespace v2xloc::config

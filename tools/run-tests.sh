@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# The whole test suite, as CI runs it: host build + tests, ASan/UBSan tests, aarch64 cross build +
+# tests under qemu-aarch64, and the bare-metal Cortex-R52 build with its link check.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+JOBS=${JOBS:-$(nproc)}
+
+step() { printf '\n==== %s ====\n' "$*"; }
+
+step "host: build + tests"
+cmake --preset host >/dev/null
+cmake --build --preset host -j "$JOBS"
+ctest --preset host
+
+step "host-asan: build + tests (ASan + UBSan)"
+cmake --preset host-asan >/dev/null
+cmake --build --preset host-asan -j "$JOBS"
+ctest --preset host-asan
+
+step "aarch64-linux: cross build + tests under qemu-aarch64"
+cmake --preset aarch64-linux >/dev/null
+cmake --build --preset aarch64-linux -j "$JOBS"
+ctest --preset aarch64-linux
+
+step "cortex-r52: bare-metal build + link check"
+cmake --preset cortex-r52 >/dev/null
+cmake --build --preset cortex-r52 -j "$JOBS"
+tools/check-baremetal.sh build/cortex-r52/bin/v2xloc_baremetal.elf
+
+step "all test stages passed"

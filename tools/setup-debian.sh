@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# Installs everything v2xloc needs on Debian 12 (idempotent, no prompts). Run as root or with sudo.
+set -euo pipefail
+SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+export DEBIAN_FRONTEND=noninteractive
+PKGS=(cmake ninja-build g++ pkg-config libeigen3-dev googletest libgtest-dev libgmock-dev
+      libbenchmark-dev libgpiod-dev libhidapi-dev libsocketcan-dev can-utils
+      python3 python3-numpy python3-can python3-open3d python3-matplotlib
+      g++-aarch64-linux-gnu qemu-user gcc-arm-none-eabi libstdc++-arm-none-eabi-newlib
+      binutils-arm-none-eabi valgrind nodejs npm zlib1g-dev)
+ARM64_PKGS=(libgpiod-dev:arm64 libhidapi-dev:arm64 libsocketcan-dev:arm64)
+missing=()
+for p in "${PKGS[@]}" "${ARM64_PKGS[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup-debian: installing ${missing[*]}"
+  dpkg --print-foreign-architectures | grep -qx arm64 || $SUDO dpkg --add-architecture arm64
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+echo "setup-debian: all packages present"
