@@ -9,7 +9,7 @@
 
 namespace v2xloc::sim {
 
-bool read_tum(const std::string& path, Trajectory& out, std::string& error) {
+bool read_tum(const std::string& path, StampedTrajectory& out, std::string& error) {
   std::ifstream in(path);
   if (!in) {
     error = "cannot open " + path;
@@ -42,7 +42,7 @@ bool read_tum(const std::string& path, Trajectory& out, std::string& error) {
   return true;
 }
 
-bool write_tum(const std::string& path, const Trajectory& trajectory, std::string& error) {
+bool write_tum(const std::string& path, const StampedTrajectory& trajectory, std::string& error) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (!f) {
     error = "cannot write " + path;
@@ -58,8 +58,8 @@ bool write_tum(const std::string& path, const Trajectory& trajectory, std::strin
   return ok;
 }
 
-std::vector<std::pair<std::size_t, std::size_t>> associate(const Trajectory& estimate,
-                                                           const Trajectory& reference,
+std::vector<std::pair<std::size_t, std::size_t>> associate(const StampedTrajectory& estimate,
+                                                           const StampedTrajectory& reference,
                                                            double max_dt) {
   std::vector<std::pair<std::size_t, std::size_t>> pairs;
   std::size_t j = 0;
@@ -121,7 +121,7 @@ ErrorStats error_stats(std::vector<double> errors) {
   return stats;
 }
 
-ErrorStats absolute_position_error(const Trajectory& estimate, const Trajectory& reference,
+ErrorStats absolute_position_error(const StampedTrajectory& estimate, const StampedTrajectory& reference,
                                    bool align, double max_dt, std::vector<double>* per_pose_errors) {
   const auto pairs = associate(estimate, reference, max_dt);
   std::vector<Eigen::Vector3d> est, ref;

@@ -14,17 +14,17 @@ struct StampedPose {
   Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
 };
 
-using Trajectory = std::vector<StampedPose>;
+using StampedTrajectory = std::vector<StampedPose>;
 
 // Reads a TUM trajectory; comment lines (#) and blank lines are skipped. Returns false with a
 // message (file and line) on unreadable files or malformed lines.
-bool read_tum(const std::string& path, Trajectory& out, std::string& error);
-bool write_tum(const std::string& path, const Trajectory& trajectory, std::string& error);
+bool read_tum(const std::string& path, StampedTrajectory& out, std::string& error);
+bool write_tum(const std::string& path, const StampedTrajectory& trajectory, std::string& error);
 
 // Pairs of indices (estimate, reference) whose stamps differ by at most max_dt seconds; each
 // reference pose is used at most once, both sequences must be sorted by time.
-std::vector<std::pair<std::size_t, std::size_t>> associate(const Trajectory& estimate,
-                                                           const Trajectory& reference,
+std::vector<std::pair<std::size_t, std::size_t>> associate(const StampedTrajectory& estimate,
+                                                           const StampedTrajectory& reference,
                                                            double max_dt);
 
 // Rigid transform T minimising sum |T * a_i - b_i|^2 (Umeyama 1991, scale fixed to 1).
@@ -44,7 +44,7 @@ ErrorStats error_stats(std::vector<double> errors);
 
 // Absolute position error of matched poses; with align = true the estimate is first moved by
 // the Umeyama SE(3) transform onto the reference (the paper's "aligned" numbers).
-ErrorStats absolute_position_error(const Trajectory& estimate, const Trajectory& reference,
+ErrorStats absolute_position_error(const StampedTrajectory& estimate, const StampedTrajectory& reference,
                                    bool align, double max_dt = 0.005,
                                    std::vector<double>* per_pose_errors = nullptr);
 

@@ -10,8 +10,8 @@
 namespace v2xloc::sim {
 namespace {
 
-Trajectory make_curve(std::size_t n) {
-  Trajectory t;
+StampedTrajectory make_curve(std::size_t n) {
+  StampedTrajectory t;
   for (std::size_t i = 0; i < n; ++i) {
     StampedPose p;
     p.t = 0.1 * static_cast<double>(i);
@@ -22,12 +22,12 @@ Trajectory make_curve(std::size_t n) {
   return t;
 }
 
-TEST(Trajectory, TumRoundTrip) {
+TEST(StampedTrajectory, TumRoundTrip) {
   const auto path = std::filesystem::temp_directory_path() / "v2xloc_tum_roundtrip.tum";
-  const Trajectory in = make_curve(50);
+  const StampedTrajectory in = make_curve(50);
   std::string error;
   ASSERT_TRUE(write_tum(path.string(), in, error)) << error;
-  Trajectory out;
+  StampedTrajectory out;
   ASSERT_TRUE(read_tum(path.string(), out, error)) << error;
   ASSERT_EQ(out.size(), in.size());
   for (std::size_t i = 0; i < in.size(); ++i) {
@@ -38,24 +38,24 @@ TEST(Trajectory, TumRoundTrip) {
   std::filesystem::remove(path);
 }
 
-TEST(Trajectory, MalformedTumIsAnErrorWithLineNumber) {
+TEST(StampedTrajectory, MalformedTumIsAnErrorWithLineNumber) {
   const auto path = std::filesystem::temp_directory_path() / "v2xloc_tum_bad.tum";
   std::FILE* f = std::fopen(path.string().c_str(), "w");
   std::fputs("# header\n0 1 2 3 0 0 0 1\n0.1 1 2\n", f);
   std::fclose(f);
-  Trajectory out;
+  StampedTrajectory out;
   std::string error;
   EXPECT_FALSE(read_tum(path.string(), out, error));
   EXPECT_NE(error.find(":3:"), std::string::npos) << error;
   std::filesystem::remove(path);
 }
 
-TEST(Trajectory, UmeyamaRecoversRigidTransform) {
-  const Trajectory ref = make_curve(100);
+TEST(StampedTrajectory, UmeyamaRecoversRigidTransform) {
+  const StampedTrajectory ref = make_curve(100);
   Eigen::Isometry3d offset = Eigen::Isometry3d::Identity();
   offset.linear() = Eigen::AngleAxisd(0.4, Eigen::Vector3d(0.1, 0.2, 1.0).normalized()).toRotationMatrix();
   offset.translation() = Eigen::Vector3d(3.0, -7.0, 0.5);
-  Trajectory est = ref;
+  StampedTrajectory est = ref;
   for (auto& p : est) p.position = offset * p.position;
   const ErrorStats raw = absolute_position_error(est, ref, false);
   const ErrorStats aligned = absolute_position_error(est, ref, true);
@@ -64,9 +64,9 @@ TEST(Trajectory, UmeyamaRecoversRigidTransform) {
   EXPECT_LT(aligned.max, 1e-9);
 }
 
-TEST(Trajectory, AssociationToleratesMissingAndJitteredStamps) {
-  const Trajectory ref = make_curve(20);
-  Trajectory est;
+TEST(StampedTrajectory, AssociationToleratesMissingAndJitteredStamps) {
+  const StampedTrajectory ref = make_curve(20);
+  StampedTrajectory est;
   for (std::size_t i = 0; i < ref.size(); i += 2) {
     StampedPose p = ref[i];
     p.t += 0.002;
@@ -78,7 +78,7 @@ TEST(Trajectory, AssociationToleratesMissingAndJitteredStamps) {
   EXPECT_TRUE(associate(est, ref, 0.001).empty());
 }
 
-TEST(Trajectory, ErrorStats) {
+TEST(StampedTrajectory, ErrorStats) {
   const ErrorStats s = error_stats({3.0, 1.0, 2.0, 4.0});
   EXPECT_DOUBLE_EQ(s.mean, 2.5);
   EXPECT_DOUBLE_EQ(s.median, 2.5);
