@@ -1,0 +1,520 @@
+#include "firmware/protocol/pointcloud_udp.hpp"
+
+#include <bit>
+#include <cmath>
+#include <cstring>
+
+#include "firmware/protocol/crc32.hpp"
+
+namespace v2xloc::protocol {
+namespace {
+
+using namespace pointcloud_wire;
+
+// Explicit little-endian byte-by-byte packing: identical bytes on little- and big-endian hosts.
+void put_u8(std::uint8_t* p, std::uint8_t v) { p[0] = v; }
+void put_u16(std::uint8_t* p, std::uint16_t v) {
+  p[0] = static_cast<std::uint8_t>(v);
+  p[1] = static_cast<std::uint8_t>(v >> 8);
+}
+void put_u32(std::uint8_t* p, std::uint32_t v) {
+  for (int i = 0; i < 4; ++i) p[i] = static_cast<std::uint8_t>(v >> (8 * i));
+}
+void put_u64(std::uint8_t* p, std::uint64_t v) {
+  for (int i = 0; i < 8; ++i) p[i] = static_cast<std::uint8_t>(v >> (8 * i));
+}
+void put_f32(std::uint8_t* p, float v) { put_u32(p, std::bit_cast<std::uint32_t>(v)); }
+void put_f64(std::uint8_t* p, double v) { put_u64(p, std::bit_cast<std::uint64_t>(v)); }
+
+std::uint16_t get_u16(const std::uint8_t* p) {
+  return static_cast<std::uint16_t>(p[0] | (p[1] << 8));
+}
+std::uint32_t get_u32(const std::uint8_t* p) {
+  std::uint32_t v = 0;
+  for (int i = 3; i >= 0; --i) v = (v << 8) | p[i];
+  return v;
+}
+std::uint64_t get_u64(const std::uint8_t* p) {
+  std::uint64_t v = 0;
+  for (int i = 7; i >= 0; --i) v = (v << 8) | p[i];
+  return v;
+}
+float get_f32(const std::uint8_t* p) { return std::bit_cast<float>(get_u32(p)); }
+double get_f64(const std::uint8_t* p) { return std::bit_cast<double>(get_u64(p)); }
+
+// Header field offsets (see WIRE_FORMATS.md).
+enum Offset : std::size_t {
+  kOffMagic = 0, kOffVersion = 4, kOffType = 5, kOffFlags = 6, kOffHeaderBytes = 8,
+  kOffSensorId = 10, kOffSenderId = 12, kOffFrameSeq = 16, kOffFragIndex = 20, kOffFragCount = 22,
+  kOffTimestamp = 24, kOffPosition = 32, kOffQuaternion = 56, kOffScale = 88, kOffPointsInFrag = 92,
+  kOffPointsPerFrag = 94, kOffTotalPoints = 96, kOffPayloadBytes = 100, kOffReserved = 102,
+};
+static_assert(kOffReserved + 2 == kHeaderBytes);
+
+std::uint16_t flags_for(const CloudFrameInfo& info, const CloudPointsView& points) {
+  std::uint16_t flags = 0;
+  if (!points.intensity.empty()) flags |= cloud_flags::kIntensity;
+  if (!points.time_offset_us.empty()) flags |= cloud_flags::kPointTime;
+  if (info.width == CoordWidth::kInt32) flags |= cloud_flags::kCoordsInt32;
+  return flags;
+}
+
+void write_header(std::uint8_t* p, const CloudFragmentHeader& h) {
+  put_u32(p + kOffMagic, kMagic);
+  put_u8(p + kOffVersion, kVersion);
+  put_u8(p + kOffType, static_cast<std::uint8_t>(h.info.type));
+  put_u16(p + kOffFlags, h.flags);
+  put_u16(p + kOffHeaderBytes, static_cast<std::uint16_t>(kHeaderBytes));
+  put_u16(p + kOffSensorId, h.info.sensor_id);
+  put_u32(p + kOffSenderId, h.info.sender_id);
+  put_u32(p + kOffFrameSeq, h.info.frame_seq);
+  put_u16(p + kOffFragIndex, h.fragment_index);
+  put_u16(p + kOffFragCount, h.fragment_count);
+  put_u64(p + kOffTimestamp, h.info.timestamp_ns);
+  for (int i = 0; i < 3; ++i) put_f64(p + kOffPosition + 8 * i, h.info.pose.position_m[i]);
+  for (int i = 0; i < 4; ++i) put_f64(p + kOffQuaternion + 8 * i, h.info.pose.quaternion_xyzw[i]);
+  put_f32(p + kOffScale, h.info.scale_m);
+  put_u16(p + kOffPointsInFrag, h.points_in_fragment);
+  put_u16(p + kOffPointsPerFrag, h.points_per_fragment);
+  put_u32(p + kOffTotalPoints, h.total_points);
+  put_u16(p + kOffPayloadBytes, h.payload_bytes);
+  put_u16(p + kOffReserved, 0);
+}
+
+bool same_bits(double a, double b) {
+  return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
+}
+
+bool same_frame(const CloudFragmentHeader& a, const CloudFragmentHeader& b) {
+  if (a.info.type != b.info.type || a.flags != b.flags || a.fragment_count != b.fragment_count ||
+      a.points_per_fragment != b.points_per_fragment || a.total_points != b.total_points ||
+      a.info.timestamp_ns != b.info.timestamp_ns ||
+      std::bit_cast<std::uint32_t>(a.info.scale_m) != std::bit_cast<std::uint32_t>(b.info.scale_m)) {
+    return false;
+  }
+  for (int i = 0; i < 3; ++i) {
+    if (!same_bits(a.info.pose.position_m[i], b.info.pose.position_m[i])) return false;
+  }
+  for (int i = 0; i < 4; ++i) {
+    if (!same_bits(a.info.pose.quaternion_xyzw[i], b.info.pose.quaternion_xyzw[i])) return false;
+  }
+  return true;
+}
+
+std::uint32_t expected_points(std::uint32_t total, std::uint16_t per_fragment, std::uint16_t index) {
+  const std::uint64_t first = static_cast<std::uint64_t>(index) * per_fragment;
+  if (first >= total) return 0;
+  const std::uint64_t rest = total - first;
+  return static_cast<std::uint32_t>(rest < per_fragment ? rest : per_fragment);
+}
+
+}  // namespace
+
+const char* to_string(CloudStatus status) {
+  switch (status) {
+    case CloudStatus::kOk: return "ok";
+    case CloudStatus::kDone: return "done";
+    case CloudStatus::kFrameComplete: return "frame complete";
+    case CloudStatus::kDuplicate: return "duplicate fragment";
+    case CloudStatus::kStaleFrame: return "fragment of a finished frame";
+    case CloudStatus::kBufferTooSmall: return "buffer too small";
+    case CloudStatus::kInvalidArgument: return "invalid argument";
+    case CloudStatus::kTruncated: return "truncated datagram";
+    case CloudStatus::kBadMagic: return "bad magic";
+    case CloudStatus::kUnsupported: return "unsupported version/type/flags";
+    case CloudStatus::kBadCrc: return "CRC mismatch";
+    case CloudStatus::kMalformed: return "malformed header";
+    case CloudStatus::kInconsistent: return "fragment inconsistent with its frame";
+    case CloudStatus::kCapacityExceeded: return "frame exceeds reassembly capacity";
+  }
+  return "unknown";
+}
+
+std::size_t cloud_point_stride(std::uint16_t flags) {
+  std::size_t stride = (flags & cloud_flags::kCoordsInt32) ? 12 : 6;
+  if (flags & cloud_flags::kIntensity) stride += 1;
+  if (flags & cloud_flags::kPointTime) stride += 2;
+  return stride;
+}
+
+bool quantize_coordinate(float value_m, float scale_m, CoordWidth width, std::int32_t& out) {
+  if (!std::isfinite(value_m)) return false;
+  const double limit = width == CoordWidth::kInt16 ? kInt16Limit : kInt32Limit;
+  const double steps = std::round(static_cast<double>(value_m) / static_cast<double>(scale_m));
+  if (!(steps <= limit && steps >= -limit)) return false;
+  out = static_cast<std::int32_t>(steps);
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Fragmenter
+
+bool PointCloudFragmenter::point_is_sendable(std::size_t i) const {
+  std::int32_t q = 0;
+  for (std::size_t axis = 0; axis < 3; ++axis) {
+    if (!quantize_coordinate(points_.xyz[3 * i + axis], info_.scale_m, info_.width, q)) return false;
+  }
+  return true;
+}
+
+CloudStatus PointCloudFragmenter::begin(const CloudFrameInfo& info, const CloudPointsView& points,
+                                        std::size_t max_datagram_bytes) {
+  *this = PointCloudFragmenter{};
+  if (!std::isfinite(info.scale_m) || !(info.scale_m > 0.0f)) return CloudStatus::kInvalidArgument;
+  if (info.type != CloudMessageType::kEgoScan && info.type != CloudMessageType::kMapShare) {
+    return CloudStatus::kInvalidArgument;
+  }
+  if (info.width != CoordWidth::kInt16 && info.width != CoordWidth::kInt32) {
+    return CloudStatus::kInvalidArgument;
+  }
+  if (points.xyz.size() % 3 != 0) return CloudStatus::kInvalidArgument;
+  const std::size_t n = points.xyz.size() / 3;
+  if ((!points.intensity.empty() && points.intensity.size() != n) ||
+      (!points.time_offset_us.empty() && points.time_offset_us.size() != n) || n > 0xFFFFFFFFu) {
+    return CloudStatus::kInvalidArgument;
+  }
+  info_ = info;
+  points_ = points;
+  flags_ = flags_for(info, points);
+  stride_ = cloud_point_stride(flags_);
+  if (max_datagram_bytes > kMaxDatagramBytes) max_datagram_bytes = kMaxDatagramBytes;
+  if (max_datagram_bytes < kHeaderBytes + kTrailerBytes + stride_) return CloudStatus::kBufferTooSmall;
+
+  for (std::size_t i = 0; i < n; ++i) {
+    bool finite = true;
+    for (std::size_t axis = 0; axis < 3; ++axis) finite = finite && std::isfinite(points.xyz[3 * i + axis]);
+    if (!finite) {
+      ++dropped_non_finite_;
+    } else if (!point_is_sendable(i)) {
+      ++dropped_out_of_range_;
+    } else {
+      ++total_points_;
+    }
+  }
+  const std::size_t per_fragment = (max_datagram_bytes - kHeaderBytes - kTrailerBytes) / stride_;
+  points_per_fragment_ = static_cast<std::uint16_t>(per_fragment > 0xFFFF ? 0xFFFF : per_fragment);
+  const std::uint64_t fragments =
+      total_points_ == 0 ? 1 : (static_cast<std::uint64_t>(total_points_) + points_per_fragment_ - 1) / points_per_fragment_;
+  if (fragments > 0xFFFF) return CloudStatus::kInvalidArgument;
+  fragment_count_ = static_cast<std::uint16_t>(fragments);
+  started_ = true;
+  return CloudStatus::kOk;
+}
+
+CloudStatus PointCloudFragmenter::next(std::span<std::uint8_t> out, std::size_t& written) {
+  written = 0;
+  if (!started_) return CloudStatus::kInvalidArgument;
+  if (next_fragment_ >= fragment_count_) return CloudStatus::kDone;
+  const std::uint32_t count = expected_points(total_points_, points_per_fragment_, next_fragment_);
+  const std::size_t payload = count * stride_;
+  const std::size_t size = kHeaderBytes + payload + kTrailerBytes;
+  if (out.size() < size) return CloudStatus::kBufferTooSmall;
+
+  CloudFragmentHeader h;
+  h.info = info_;
+  h.flags = flags_;
+  h.fragment_index = next_fragment_;
+  h.fragment_count = fragment_count_;
+  h.points_in_fragment = static_cast<std::uint16_t>(count);
+  h.points_per_fragment = points_per_fragment_;
+  h.total_points = total_points_;
+  h.payload_bytes = static_cast<std::uint16_t>(payload);
+  std::uint8_t* p = out.data();
+  write_header(p, h);
+
+  std::uint8_t* w = p + kHeaderBytes;
+  const std::size_t n = points_.xyz.size() / 3;
+  std::uint32_t packed = 0;
+  while (packed < count && source_cursor_ < n) {
+    const std::size_t i = source_cursor_++;
+    std::int32_t q[3];
+    bool ok = true;
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      ok = ok && quantize_coordinate(points_.xyz[3 * i + axis], info_.scale_m, info_.width, q[axis]);
+    }
+    if (!ok) continue;  // counted in begin()
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      if (info_.width == CoordWidth::kInt16) {
+        put_u16(w, static_cast<std::uint16_t>(static_cast<std::int16_t>(q[axis])));
+        w += 2;
+      } else {
+        put_u32(w, static_cast<std::uint32_t>(q[axis]));
+        w += 4;
+      }
+    }
+    if (flags_ & cloud_flags::kIntensity) put_u8(w++, points_.intensity[i]);
+    if (flags_ & cloud_flags::kPointTime) {
+      put_u16(w, points_.time_offset_us[i]);
+      w += 2;
+    }
+    ++packed;
+  }
+  if (packed != count) return CloudStatus::kInvalidArgument;  // input changed since begin()
+  put_u32(w, crc32(std::span<const std::uint8_t>(p, kHeaderBytes + payload)));
+  written = size;
+  ++next_fragment_;
+  return CloudStatus::kOk;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Parsing
+
+CloudStatus parse_cloud_fragment(std::span<const std::uint8_t> datagram, CloudFragmentHeader& h,
+                                 std::span<const std::uint8_t>& payload) {
+  const std::uint8_t* p = datagram.data();
+  if (datagram.size() < kHeaderBytes + kTrailerBytes) return CloudStatus::kTruncated;
+  if (get_u32(p + kOffMagic) != kMagic) return CloudStatus::kBadMagic;
+  if (p[kOffVersion] != kVersion || get_u16(p + kOffHeaderBytes) != kHeaderBytes) {
+    return CloudStatus::kUnsupported;
+  }
+  h.payload_bytes = get_u16(p + kOffPayloadBytes);
+  const std::size_t size = kHeaderBytes + h.payload_bytes + kTrailerBytes;
+  if (datagram.size() < size) return CloudStatus::kTruncated;
+  if (datagram.size() > size) return CloudStatus::kMalformed;
+  const std::uint32_t crc = crc32(datagram.first(kHeaderBytes + h.payload_bytes));
+  if (crc != get_u32(p + kHeaderBytes + h.payload_bytes)) return CloudStatus::kBadCrc;
+
+  const std::uint8_t type = p[kOffType];
+  h.flags = get_u16(p + kOffFlags);
+  if ((type != static_cast<std::uint8_t>(CloudMessageType::kEgoScan) &&
+       type != static_cast<std::uint8_t>(CloudMessageType::kMapShare)) ||
+      (h.flags & ~cloud_flags::kKnownMask) != 0) {
+    return CloudStatus::kUnsupported;
+  }
+  h.info.type = static_cast<CloudMessageType>(type);
+  h.info.width = (h.flags & cloud_flags::kCoordsInt32) ? CoordWidth::kInt32 : CoordWidth::kInt16;
+  h.info.sensor_id = get_u16(p + kOffSensorId);
+  h.info.sender_id = get_u32(p + kOffSenderId);
+  h.info.frame_seq = get_u32(p + kOffFrameSeq);
+  h.fragment_index = get_u16(p + kOffFragIndex);
+  h.fragment_count = get_u16(p + kOffFragCount);
+  h.info.timestamp_ns = get_u64(p + kOffTimestamp);
+  bool finite = true;
+  for (int i = 0; i < 3; ++i) {
+    h.info.pose.position_m[i] = get_f64(p + kOffPosition + 8 * i);
+    finite = finite && std::isfinite(h.info.pose.position_m[i]);
+  }
+  for (int i = 0; i < 4; ++i) {
+    h.info.pose.quaternion_xyzw[i] = get_f64(p + kOffQuaternion + 8 * i);
+    finite = finite && std::isfinite(h.info.pose.quaternion_xyzw[i]);
+  }
+  h.info.scale_m = get_f32(p + kOffScale);
+  h.points_in_fragment = get_u16(p + kOffPointsInFrag);
+  h.points_per_fragment = get_u16(p + kOffPointsPerFrag);
+  h.total_points = get_u32(p + kOffTotalPoints);
+
+  // Counts must agree with each other: a sender cannot claim overlapping or out-of-range points.
+  if (!finite || !std::isfinite(h.info.scale_m) || !(h.info.scale_m > 0.0f)) return CloudStatus::kMalformed;
+  if (h.points_per_fragment == 0 || h.fragment_count == 0 || h.fragment_index >= h.fragment_count) {
+    return CloudStatus::kMalformed;
+  }
+  const std::uint64_t fragments =
+      h.total_points == 0 ? 1 : (static_cast<std::uint64_t>(h.total_points) + h.points_per_fragment - 1) / h.points_per_fragment;
+  if (fragments != h.fragment_count) return CloudStatus::kMalformed;
+  if (h.points_in_fragment != expected_points(h.total_points, h.points_per_fragment, h.fragment_index)) {
+    return CloudStatus::kMalformed;
+  }
+  if (static_cast<std::size_t>(h.points_in_fragment) * cloud_point_stride(h.flags) != h.payload_bytes) {
+    return CloudStatus::kMalformed;
+  }
+  payload = datagram.subspan(kHeaderBytes, h.payload_bytes);
+  return CloudStatus::kOk;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reassembler
+
+PointCloudReassembler::PointCloudReassembler(const Storage& storage, const ReassemblyConfig& config)
+    : storage_(storage), config_(config) {
+  // Storage that does not match the declared capacity is shrunk to what the spans can hold,
+  // so a mis-sized caller buffer degrades capacity instead of overrunning.
+  const std::size_t slots = storage_.slots.size();
+  if (slots == 0) return;
+  std::size_t max_points = storage_.max_points;
+  if (storage_.xyz.size() / (3 * slots) < max_points) max_points = storage_.xyz.size() / (3 * slots);
+  if (storage_.intensity.size() / slots < max_points) max_points = storage_.intensity.size() / slots;
+  if (storage_.time_us.size() / slots < max_points) max_points = storage_.time_us.size() / slots;
+  storage_.max_points = static_cast<std::uint32_t>(max_points);
+  const std::size_t words = storage_.bitmaps.size() / slots;
+  if (words * 64 < storage_.max_fragments) storage_.max_fragments = static_cast<std::uint16_t>(words * 64);
+  reset();
+}
+
+std::size_t PointCloudReassembler::bitmap_words() const { return (storage_.max_fragments + 63u) / 64u; }
+
+void PointCloudReassembler::reset() {
+  for (auto& slot : storage_.slots) slot = ReassemblySlot{};
+  for (auto& key : recent_) key = FrameKey{};
+  recent_next_ = 0;
+  counters_ = ReassemblyCounters{};
+  completed_ = ReassembledCloud{};
+  completed_slot_ = SIZE_MAX;
+}
+
+std::size_t PointCloudReassembler::frames_in_flight() const {
+  std::size_t n = 0;
+  for (const auto& slot : storage_.slots) n += slot.state == ReassemblySlot::State::kFilling ? 1 : 0;
+  return n;
+}
+
+CloudStatus PointCloudReassembler::count(CloudStatus status) {
+  switch (status) {
+    case CloudStatus::kOk: ++counters_.fragments_accepted; break;
+    case CloudStatus::kFrameComplete: ++counters_.fragments_accepted; ++counters_.frames_completed; break;
+    case CloudStatus::kDuplicate: ++counters_.duplicates; break;
+    case CloudStatus::kStaleFrame: ++counters_.stale_fragments; break;
+    case CloudStatus::kTruncated: ++counters_.truncated; break;
+    case CloudStatus::kBadMagic: ++counters_.bad_magic; break;
+    case CloudStatus::kUnsupported: ++counters_.unsupported; break;
+    case CloudStatus::kBadCrc: ++counters_.bad_crc; break;
+    case CloudStatus::kMalformed: ++counters_.malformed; break;
+    case CloudStatus::kInconsistent: ++counters_.inconsistent; break;
+    case CloudStatus::kCapacityExceeded: ++counters_.over_capacity; break;
+    default: break;
+  }
+  return status;
+}
+
+void PointCloudReassembler::release_completed() {
+  if (completed_slot_ < storage_.slots.size()) storage_.slots[completed_slot_] = ReassemblySlot{};
+  completed_slot_ = SIZE_MAX;
+  completed_ = ReassembledCloud{};
+}
+
+void PointCloudReassembler::remember_finished(const CloudFragmentHeader& meta) {
+  recent_[recent_next_] = FrameKey{meta.info.sender_id, meta.info.sensor_id, meta.info.frame_seq, true};
+  recent_next_ = (recent_next_ + 1) % kRecentKeys;
+}
+
+bool PointCloudReassembler::recently_finished(const CloudFragmentHeader& meta) const {
+  for (const auto& key : recent_) {
+    if (key.valid && key.sender_id == meta.info.sender_id && key.sensor_id == meta.info.sensor_id &&
+        key.frame_seq == meta.info.frame_seq) {
+      return true;
+    }
+  }
+  return false;
+}
+
+std::size_t PointCloudReassembler::find_slot(const CloudFragmentHeader& meta) const {
+  for (std::size_t i = 0; i < storage_.slots.size(); ++i) {
+    const auto& slot = storage_.slots[i];
+    if (slot.state == ReassemblySlot::State::kFilling && slot.meta.info.sender_id == meta.info.sender_id &&
+        slot.meta.info.sensor_id == meta.info.sensor_id && slot.meta.info.frame_seq == meta.info.frame_seq) {
+      return i;
+    }
+  }
+  return SIZE_MAX;
+}
+
+std::size_t PointCloudReassembler::claim_slot(std::int64_t now_ns) {
+  (void)now_ns;
+  std::size_t oldest = SIZE_MAX;
+  for (std::size_t i = 0; i < storage_.slots.size(); ++i) {
+    const auto& slot = storage_.slots[i];
+    if (slot.state == ReassemblySlot::State::kFree) return i;
+    if (slot.state == ReassemblySlot::State::kFilling &&
+        (oldest == SIZE_MAX || slot.first_rx_ns < storage_.slots[oldest].first_rx_ns)) {
+      oldest = i;
+    }
+  }
+  if (oldest != SIZE_MAX) {
+    ++counters_.frames_evicted;
+    remember_finished(storage_.slots[oldest].meta);
+    storage_.slots[oldest] = ReassemblySlot{};
+  }
+  return oldest;
+}
+
+std::size_t PointCloudReassembler::expire(std::int64_t now_ns) {
+  std::size_t dropped = 0;
+  for (auto& slot : storage_.slots) {
+    if (slot.state == ReassemblySlot::State::kFilling && now_ns - slot.first_rx_ns > config_.frame_timeout_ns) {
+      remember_finished(slot.meta);
+      slot = ReassemblySlot{};
+      ++counters_.frames_timed_out;
+      ++dropped;
+    }
+  }
+  return dropped;
+}
+
+CloudStatus PointCloudReassembler::push(std::span<const std::uint8_t> datagram, std::int64_t now_ns) {
+  release_completed();
+  ++counters_.datagrams;
+  expire(now_ns);
+
+  CloudFragmentHeader h;
+  std::span<const std::uint8_t> payload;
+  const CloudStatus parsed = parse_cloud_fragment(datagram, h, payload);
+  if (parsed != CloudStatus::kOk) return count(parsed);
+  if (storage_.slots.empty() || h.total_points > storage_.max_points || h.fragment_count > storage_.max_fragments) {
+    return count(CloudStatus::kCapacityExceeded);
+  }
+
+  std::size_t index = find_slot(h);
+  if (index != SIZE_MAX) {
+    if (!same_frame(storage_.slots[index].meta, h)) return count(CloudStatus::kInconsistent);
+  } else {
+    if (recently_finished(h)) return count(CloudStatus::kStaleFrame);
+    index = claim_slot(now_ns);
+    if (index == SIZE_MAX) return count(CloudStatus::kCapacityExceeded);
+    ReassemblySlot& fresh = storage_.slots[index];
+    fresh.state = ReassemblySlot::State::kFilling;
+    fresh.meta = h;
+    fresh.first_rx_ns = now_ns;
+    for (std::size_t w = 0; w < bitmap_words(); ++w) storage_.bitmaps[index * bitmap_words() + w] = 0;
+  }
+  ReassemblySlot& slot = storage_.slots[index];
+  std::uint64_t& word = storage_.bitmaps[index * bitmap_words() + h.fragment_index / 64u];
+  const std::uint64_t bit = std::uint64_t{1} << (h.fragment_index % 64u);
+  if (word & bit) return count(CloudStatus::kDuplicate);
+  word |= bit;
+
+  // Decode straight into the slot; parse_cloud_fragment() guaranteed first + count <= total.
+  const std::size_t base = static_cast<std::size_t>(index) * storage_.max_points;
+  const std::size_t first = static_cast<std::size_t>(h.fragment_index) * h.points_per_fragment;
+  const bool wide = (h.flags & cloud_flags::kCoordsInt32) != 0;
+  const double scale = static_cast<double>(h.info.scale_m);
+  const std::uint8_t* r = payload.data();
+  for (std::size_t k = 0; k < h.points_in_fragment; ++k) {
+    const std::size_t dst = base + first + k;
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      std::int32_t q = 0;
+      if (wide) {
+        q = static_cast<std::int32_t>(get_u32(r));
+        r += 4;
+      } else {
+        q = static_cast<std::int16_t>(get_u16(r));
+        r += 2;
+      }
+      storage_.xyz[3 * dst + axis] = static_cast<float>(static_cast<double>(q) * scale);
+    }
+    if (h.flags & cloud_flags::kIntensity) storage_.intensity[dst] = *r++;
+    if (h.flags & cloud_flags::kPointTime) {
+      storage_.time_us[dst] = get_u16(r);
+      r += 2;
+    }
+  }
+  slot.points_received += h.points_in_fragment;
+  ++slot.fragments_received;
+  if (slot.fragments_received < slot.meta.fragment_count) return count(CloudStatus::kOk);
+
+  slot.state = ReassemblySlot::State::kComplete;
+  remember_finished(slot.meta);
+  completed_slot_ = index;
+  completed_.info = slot.meta.info;
+  completed_.point_count = slot.meta.total_points;
+  completed_.xyz = std::span<const float>(storage_.xyz).subspan(3 * base, 3 * std::size_t{slot.meta.total_points});
+  completed_.intensity = (slot.meta.flags & cloud_flags::kIntensity)
+                             ? std::span<const std::uint8_t>(storage_.intensity).subspan(base, slot.meta.total_points)
+                             : std::span<const std::uint8_t>{};
+  completed_.time_offset_us = (slot.meta.flags & cloud_flags::kPointTime)
+                                  ? std::span<const std::uint16_t>(storage_.time_us).subspan(base, slot.meta.total_points)
+                                  : std::span<const std::uint16_t>{};
+  completed_.first_fragment_rx_ns = slot.first_rx_ns;
+  completed_.completed_rx_ns = now_ns;
+  return count(CloudStatus::kFrameComplete);
+}
+
+}  // namespace v2xloc::protocol
