@@ -31,6 +31,7 @@ inline constexpr std::size_t kVoxelMaxProbes = 64;  // bounded probing; beyond -
 
 // ---- k-d tree -------------------------------------------------------------------------------
 inline constexpr std::size_t kKdLeafSize = 8;           // points per leaf
+inline constexpr std::size_t kKdFeatureLeafSize = 32;   // 33-D FPFH trees: big leaves (measured)
 inline constexpr std::size_t kKdMaxDepth = 48;          // traversal stack depth (log2(N)+slack)
 inline constexpr std::size_t kKdMaxNodeVisits = 4096;   // per query; bounded worst case
 inline constexpr std::size_t kMaxNeighbors = 128;       // kNN / hybrid result buffers
@@ -38,6 +39,7 @@ inline constexpr std::size_t kMaxNeighbors = 128;       // kNN / hybrid result b
 // ---- Normals / FPFH -------------------------------------------------------------------------
 inline constexpr std::size_t kNormalMaxNeighbors = 30;  // Open3D's KDTreeSearchParamHybrid default
 inline constexpr std::size_t kFpfhMaxNeighbors = 100;   // Open3D examples: radius 5 voxels, 100 nn
+inline constexpr std::uint32_t kJacobiMaxSweeps = 16;   // 3x3 symmetric eigen; converges in <= ~6
 
 // ---- Correspondences / RANSAC ---------------------------------------------------------------
 inline constexpr std::size_t kMaxCorrespondences = kMaxDownsampledPoints;
@@ -52,5 +54,20 @@ inline constexpr std::size_t kGateMaxWindow = 64;          // validity-gate wind
 inline constexpr std::size_t kEkfHistoryLength = 32;       // fixed-lag history (frames)
 inline constexpr std::size_t kOdometryMapPoints = kEmbeddedProfile ? 16384 : 131072;
 inline constexpr std::size_t kMaxMapSources = 16;          // infra units + agents tracked at once
+// EKF: events (measurements + frame markers) kept for out-of-sequence replay; ~16 per frame
+// (100 Hz vehicle signals at 10 Hz frames, GNSS, registration, odometry).
+inline constexpr std::size_t kEkfEventLogCapacity = kEkfHistoryLength * 16;
+inline constexpr std::uint32_t kEkfMaxPredictSubsteps = 100;   // per prediction segment
+// Odometry local map: voxel hash slots (power of two, >= 2x the voxels), points per voxel
+// (KISS-ICP uses 20), ICP Gauss-Newton iterations (KISS-ICP: 500 cap, usually < 10 used).
+inline constexpr std::size_t kOdometryHashSlots = kEmbeddedProfile ? 16384 : 131072;
+inline constexpr std::size_t kOdometryMaxPointsPerVoxel = 20;
+inline constexpr std::uint32_t kOdometryMaxIterations = 50;
+// Map fusion: voxel hash slots for merging / consistency checks (power of two, >= 2x points).
+inline constexpr std::size_t kMapFusionHashSlots = kEmbeddedProfile ? 16384 : 262144;
+
+// ---- Geodesy --------------------------------------------------------------------------------
+// Bowring's ECEF->geodetic iteration converges to 1e-14 rad in 2-3 steps for |h| < 1e5 m.
+inline constexpr std::uint32_t kGeodesyMaxIterations = 8;
 
 }  // namespace v2xloc::config

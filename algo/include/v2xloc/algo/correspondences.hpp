@@ -1,0 +1,58 @@
+// Feature correspondences: for every source feature its nearest target feature in 33-D
+// (Euclidean, exact up to the k-d tree visit cap), as in Open3D 0.16
+// RegistrationRANSACBasedOnFeatureMatching. With the mutual filter a pair (i, j) is kept only
+// if i is also the nearest source feature of j; if fewer than min_mutual pairs survive, the
+// one-way set is returned instead (Open3D: ransac_n * 3) and fell_back is set.
+// Output order: ascending source index. Ties in distance go to the lower index (deterministic).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+#include "v2xloc/algo/bounded_vector.hpp"
+#include "v2xloc/algo/config.hpp"
+#include "v2xloc/algo/kdtree.hpp"
+#include "v2xloc/algo/types.hpp"
+
+namespace v2xloc {
+
+struct Correspondence {
+  std::uint32_t source;
+  std::uint32_t target;
+};
+
+struct CorrespondenceParams {
+  bool mutual_filter = false;
+  std::size_t min_mutual = 9;   // Open3D: 3 * ransac_n with ransac_n = 3
+};
+
+enum class CorrespondenceStatus : std::uint8_t {
+  kOk,
+  kEmptyInput,      // no source features or an empty target tree
+  kInvalidStorage,  // mutual filter without a source tree or with too little scratch
+  kNoMatches,       // every query failed (non-finite features)
+};
+
+struct CorrespondenceResult {
+  CorrespondenceStatus status = CorrespondenceStatus::kEmptyInput;
+  std::uint32_t count = 0;
+  std::uint32_t truncated = 0;          // matches beyond out's capacity
+  std::uint32_t no_match = 0;           // source features with no neighbour (non-finite)
+  std::uint32_t mutual_rejected = 0;
+  bool fell_back = false;               // mutual set too small, one-way set returned
+  KdQueryCounters search;
+};
+
+// source_features: the features of the source cloud (index = source point index).
+// target_tree: built over the target features. For the mutual filter: source_tree built over
+// source_features and scratch with >= target_tree.points().size() entries (nearest source of
+// each target), else both may be empty/unused.
+CorrespondenceResult match_features(std::span<const Feature33> source_features,
+                                    const KdTree<Feature33>& target_tree,
+                                    const CorrespondenceParams& params,
+                                    BoundedVector<Correspondence>& out,
+                                    const KdTree<Feature33>* source_tree = nullptr,
+                                    std::span<std::uint32_t> scratch = {});
+
+}  // namespace v2xloc

@@ -1,0 +1,200 @@
+// The localizer: one object wiring an ego frame through every stage (paper Fig. 1):
+//   map clouds (infra/agents) -> map_fusion -> reference map (+normals, k-d tree, FPFH on demand)
+//   ego scan -> deskew -> LiDAR odometry (relative) -> registration to the map (ICP from the EKF
+//   prediction when confident, FPFH + RANSAC within the GNSS region otherwise) -> validity gate
+//   -> EKF (wheel speed / yaw rate, GNSS with NIS gate, odometry, valid registrations).
+// Inputs arrive through on_*() calls in time order per source; the caller decides the event
+// order, and the same order gives the same bits (offline evaluator and firmware share it).
+// All storage is inside the object (hundreds of MB on the host profile): make it static.
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "v2xloc/algo/config.hpp"
+#include "v2xloc/algo/ekf.hpp"
+#include "v2xloc/algo/geodesy.hpp"
+#include "v2xloc/algo/map_fusion.hpp"
+#include "v2xloc/algo/registration_result.hpp"
+#include "v2xloc/algo/types.hpp"
+#include "v2xloc/algo/validity_gate.hpp"
+#include "v2xloc/algo/bounded_vector.hpp"
+#include "v2xloc/algo/det_math.hpp"
+#include "v2xloc/algo/kdtree.hpp"
+#include "v2xloc/algo/localizer_params.hpp"
+#include "v2xloc/algo/odometry.hpp"
+#include "v2xloc/algo/register_clouds.hpp"
+#include "v2xloc/algo/voxel_downsample.hpp"
+
+namespace v2xloc {
+
+struct VehicleInput {
+  double t = 0.0;                // [s] measurement time
+  double wheel_speed = 0.0;      // [m/s]
+  double yaw_rate = 0.0;         // [rad/s]
+};
+
+struct GnssInput {
+  double t = 0.0;                // [s]
+  double lat_deg = 0.0, lon_deg = 0.0, alt_m = 0.0;
+  double h_acc = 10.0;           // [m] receiver-reported 1-sigma horizontal accuracy
+  double v_acc = 15.0;           // [m]
+  std::uint8_t num_sats = 0;
+  double hdop = 99.0;
+  bool valid = false;
+};
+
+struct MapCloudInput {
+  std::uint32_t source_id = 0;   // stable per sensor (infra unit, agent vehicle)
+  bool is_agent = false;         // agents' poses are self-reported (less trusted)
+  double t = 0.0;                // [s] capture time
+  Mat4d world_T_sensor = Mat4d::Identity();
+  std::span<const Vec3f> points{};  // sensor frame
+};
+
+struct EgoScanInput {
+  double t = 0.0;                // [s] frame time; point times are relative to it
+  std::span<const Vec3f> points{};      // LiDAR sensor frame
+  std::span<const float> point_times{}; // [s] per point, empty if the sensor has none
+  Mat4d body_T_lidar = Mat4d::Identity();
+};
+
+enum class LocalizationMode : std::uint8_t {
+  kUninitialized,  // no GNSS / no map yet
+  kGlobalSearch,   // FPFH + RANSAC within the GNSS uncertainty region
+  kTracking,       // ICP from the EKF prediction
+};
+
+struct LocalizerFrameOutput {
+  std::uint32_t frame = 0;
+  double t = 0.0;
+  LocalizationMode mode = LocalizationMode::kUninitialized;
+  // Odometry in its own frame (odom_T_body; the odom frame is the LiDAR frame of the first
+  // scan), registration and fused poses (world_T_body).
+  Mat4d odometry_pose = Mat4d::Identity();
+  bool odometry_ok = false;
+  Mat4d registration_pose = Mat4d::Identity();
+  Mat4d fused_pose = Mat4d::Identity();           // main filter (gated registrations)
+  Mat4d fused_pose_ungated = Mat4d::Identity();   // shadow filter (every ok registration)
+  bool filter_initialized = false;                // false: fused_pose is the GNSS fix
+  RegistrationStatus registration_status = RegistrationStatus::kInvalidInput;
+  bool registration_attempted = false;
+  double fitness = 0.0;
+  double inlier_rmse = 0.0;
+  bool registration_fused = false;          // passed the gate (causal) and the EKF's NIS gate
+  // Fixed-lag gate decision that became available at this frame (for frame decided_frame).
+  bool gate_decided = false;
+  std::uint32_t gate_decided_frame = 0;
+  bool gate_decided_valid = false;
+  double sigma_x = 0.0, sigma_y = 0.0, sigma_z = 0.0, sigma_yaw = 0.0;  // fused 1-sigma
+  bool localized = false;                   // fused sigma_xy below the localized threshold
+};
+
+struct LocalizerCounters {
+  std::uint32_t frames = 0;
+  std::uint32_t global_searches = 0;
+  std::uint32_t global_accepted = 0;
+  std::uint32_t tracking_registrations = 0;
+  std::uint32_t registrations_ok = 0;
+  std::uint32_t registrations_fused = 0;       // main EKF
+  std::uint32_t registrations_gate_rejected = 0;
+  std::uint32_t map_rebuilds = 0;
+  std::uint32_t gnss_received = 0;
+  std::uint32_t gnss_invalid = 0;
+  std::uint32_t scan_points_dropped = 0;       // non-finite, out of range or over capacity
+  std::uint32_t odometry_failures = 0;
+  std::uint32_t pending_overflow = 0;          // fixed-lag registrations that found no slot
+};
+
+class Localizer {
+ public:
+  Localizer() = default;
+  Localizer(const Localizer&) = delete;
+  Localizer& operator=(const Localizer&) = delete;
+
+  // Resets everything; origin is the local ENU frame the map and the outputs live in.
+  void configure(const LocalizerParams& params, const GeodeticOrigin& origin);
+
+  void on_vehicle(const VehicleInput& input);
+  void on_gnss(const GnssInput& input);
+  MapInsertResult on_map_cloud(const MapCloudInput& input);
+  // Processes one ego frame; the returned reference stays valid until the next call.
+  const LocalizerFrameOutput& on_ego_scan(const EgoScanInput& input);
+
+  const LocalizerParams& params() const { return params_; }
+  const Ekf& ekf() const { return ekf_; }
+  // A second filter fed with every successful registration (no validity gate), for the paper's
+  // "Fused" column; it never steers the registration.
+  const Ekf& ekf_ungated() const { return ekf_all_; }
+  const MapFusion& map() const { return map_; }
+  const LocalizerCounters& counters() const { return counters_; }
+  std::span<const Vec3f> map_points() const { return map_points_.span(); }
+
+ private:
+  struct PendingRegistration {
+    std::uint32_t frame = 0;
+    double t = 0.0;
+    Mat4d pose = Mat4d::Identity();
+    Eigen::Matrix<double, 4, 4> covariance = Eigen::Matrix<double, 4, 4>::Identity();
+    bool ok = false;
+  };
+  static constexpr std::size_t kPendingCapacity = config::kGateMaxWindow;
+
+  void refresh_map(double t);
+  bool prepare_scan(const EgoScanInput& input);  // filter + deskew into scan_deskewed_
+  void run_odometry(const EgoScanInput& input);
+  void register_scan(double t);
+  bool global_search(double t, RegistrationResult& result);
+  void fuse_gated(double t, const RegistrationResult& result, bool attempted_ok);
+  void fuse_registration(Ekf& ekf, const PendingRegistration& reg, bool& fused);
+  void initialize_filters(double t, const Mat4d& pose);
+  void fill_output(double t);
+
+  LocalizerParams params_{};
+  GeodeticOrigin origin_{};
+  LocalizerCounters counters_{};
+  LocalizerFrameOutput output_{};
+
+  // Fusion.
+  Ekf ekf_{};
+  Ekf ekf_all_{};
+  FixedLagValidityGate fixed_lag_gate_{};
+  CausalValidityGate causal_gate_{};
+  PendingRegistration pending_[kPendingCapacity];
+  std::uint32_t frame_ = 0;
+  std::uint32_t failed_frames_ = 0;
+  std::uint32_t frames_since_global_ = 0;
+  bool have_gnss_ = false;
+  Vec3d last_gnss_enu_ = Vec3d::Zero();
+  double last_gnss_sigma_ = 10.0;
+  double last_frame_t_ = 0.0;
+  bool have_frame_ = false;
+  double last_speed_ = 0.0;        // [m/s] latest wheel speed (filter initialization)
+  double last_yaw_rate_ = 0.0;     // [rad/s]
+  Mat4d body_T_lidar_ = Mat4d::Identity();
+
+  // Odometry (drifting, in its own frame).
+  LidarOdometry odometry_{};
+
+  // Reference map and its registration products.
+  MapFusion map_{};
+  FixedVector<Vec3f, config::kMaxMapPoints> map_points_;
+  Vec3f map_normals_[config::kMaxMapPoints];
+  KdTreeStorage<Vec3f, config::kMaxMapPoints> map_tree_;
+  std::uint64_t map_revision_ = ~0ull;
+  double map_built_t_ = -1e300;
+  bool map_ready_ = false;
+
+  // Scan buffers.
+  FixedVector<Vec3f, config::kMaxScanPoints> scan_filtered_;
+  FixedVector<float, config::kMaxScanPoints> scan_times_;
+  Vec3f scan_deskewed_[config::kMaxScanPoints];
+  std::size_t scan_deskewed_count_ = 0;
+  FixedVector<Vec3f, config::kMaxScanPoints> scan_body_;
+  FixedVector<Vec3f, config::kMaxDownsampledPoints> scan_down_;
+  VoxelDownsampleStorage<config::kVoxelHashSlots, config::kMaxDownsampledPoints> voxel_;
+  FixedVector<Vec3f, config::kMaxMapPoints> map_crop_;
+  RegistrationWorkspace global_workspace_;
+};
+
+}  // namespace v2xloc

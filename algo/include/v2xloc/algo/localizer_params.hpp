@@ -1,0 +1,79 @@
+// Every tuning value of the localizer, with units and reasons. Defaults are what v2xloc-eval
+// runs; the ablations in the evaluation flip the switches at the bottom.
+#pragma once
+
+#include <cstdint>
+
+#include "v2xloc/algo/ekf.hpp"
+#include "v2xloc/algo/icp.hpp"
+#include "v2xloc/algo/map_fusion.hpp"
+#include "v2xloc/algo/odometry.hpp"
+#include "v2xloc/algo/register_clouds.hpp"
+#include "v2xloc/algo/validity_gate.hpp"
+
+namespace v2xloc {
+
+enum class GateMode : std::uint8_t {
+  kFixedLag,  // paper's centred window; a registration is fused w/2 frames late, at its stamp
+  kCausal,    // past window only; fused immediately
+  kOff,       // every successful registration is fused (the paper's "Fused" column)
+};
+
+struct LocalizerParams {
+  // ---- Scan preprocessing ----
+  double frame_period = 0.1;          // [s] LiDAR sweep period (deskew span)
+  float min_range = 3.0f;             // [m] drops returns from the ego vehicle body
+  float max_range = 80.0f;            // [m] far returns are sparse and noisy
+  float registration_voxel = 0.3f;    // [m] ego scan downsampling for map registration
+
+  // ---- Reference map ----
+  MapFusionParams map{};              // voxel 0.2 m, consistency check on
+  double map_refresh_period = 0.5;    // [s] rebuild map points / normals / tree at most this often
+  float map_normal_radius = 0.6f;     // [m] (3 map voxels)
+
+  // ---- Odometry ----
+  OdometryParams odometry{};
+
+  // ---- Registration to the map ----
+  IcpParams icp = default_icp();      // tracking: point-to-plane from the EKF prediction
+  RegisterCloudsParams global = default_global();
+  double global_map_radius = 70.0;    // [m] map crop around the GNSS fix for the global search
+  double global_gnss_gate_sigmas = 4.0;  // accept a global solution within this many GNSS sigmas
+  double global_min_fitness = 0.3;    // and with at least this ICP fitness
+  double tracking_max_sigma_xy = 0.5; // [m] EKF position sigma above which we search globally
+  std::uint32_t max_failed_frames = 10;  // consecutive unfused registrations -> global search
+  std::uint32_t global_retry_frames = 5; // frames between two global searches (bounded cost)
+
+  // ---- Validity gate and fusion ----
+  GateMode gate_mode = GateMode::kFixedLag;
+  ValidityGateParams gate{};
+  EkfParams ekf{};
+  RegistrationCovarianceParams registration_covariance{};
+  double localized_sigma_xy = 0.10;   // [m] Reid et al. 2019 local-street budget, 1 sigma
+
+  // ---- Switches (ablations) ----
+  bool use_gnss = true;
+  bool use_vehicle_signals = true;
+  bool use_odometry = true;
+  bool deskew = true;
+
+  static IcpParams default_icp() {
+    IcpParams p;
+    p.method = IcpMethod::kPointToPlane;
+    p.max_correspondence_distance = 1.0;
+    p.criteria.max_iterations = 30;
+    p.criteria.relative_fitness = 1e-7;
+    p.criteria.relative_rmse = 1e-7;
+    p.kernel.type = RobustKernelType::kTukey;
+    p.kernel.scale = 0.3;
+    return p;
+  }
+  static RegisterCloudsParams default_global() {
+    RegisterCloudsParams p;
+    p.mode = RegistrationMode::kGlobal;
+    p.voxel_size = 0.6f;
+    return p;
+  }
+};
+
+}  // namespace v2xloc

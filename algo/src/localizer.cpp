@@ -1,0 +1,378 @@
+// Localizer wiring (see localizer.hpp for the data flow). Each step is one private function:
+// prepare_scan -> run_odometry -> refresh_map -> register_scan (tracking ICP or global search)
+// -> fuse_gated (validity gate -> EKF) -> fill_output.
+#include "v2xloc/algo/localizer.hpp"
+
+#include <cmath>
+
+#include "v2xloc/algo/deskew.hpp"
+#include "v2xloc/algo/icp.hpp"
+#include "v2xloc/algo/normals.hpp"
+#include "v2xloc/algo/rigid_motion.hpp"
+
+namespace v2xloc {
+namespace {
+
+Vec3f transform_point(const Mat4d& T, const Vec3f& p) {
+  const Vec3d q = T.topLeftCorner<3, 3>() * p.cast<double>() + T.topRightCorner<3, 1>();
+  return q.cast<float>();
+}
+
+bool finite_point(const Vec3f& p) {
+  return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
+}
+
+double horizontal_distance(const Mat4d& pose, const Vec3d& enu) {
+  const double dx = pose(0, 3) - enu.x(), dy = pose(1, 3) - enu.y();
+  return std::sqrt(dx * dx + dy * dy);
+}
+
+}  // namespace
+
+void Localizer::configure(const LocalizerParams& params, const GeodeticOrigin& origin) {
+  params_ = params;
+  origin_ = origin;
+  counters_ = {};
+  output_ = {};
+  ekf_ = Ekf(params.ekf);
+  ekf_all_ = Ekf(params.ekf);
+  fixed_lag_gate_ = FixedLagValidityGate(params.gate);
+  causal_gate_ = CausalValidityGate(params.gate);
+  for (auto& p : pending_) p = {};
+  frame_ = 0;
+  failed_frames_ = 0;
+  frames_since_global_ = params.global_retry_frames;  // allow a search at the first frame
+  have_gnss_ = false;
+  have_frame_ = false;
+  last_frame_t_ = 0.0;
+  last_speed_ = 0.0;
+  last_yaw_rate_ = 0.0;
+  odometry_.configure(params.odometry);
+  odometry_.reset();
+  map_.configure(params.map);
+  map_points_.clear();
+  map_revision_ = ~0ull;
+  map_built_t_ = -1e300;
+  map_ready_ = false;
+}
+
+void Localizer::on_vehicle(const VehicleInput& in) {
+  if (!std::isfinite(in.t) || !std::isfinite(in.wheel_speed) || !std::isfinite(in.yaw_rate)) return;
+  last_speed_ = in.wheel_speed;
+  last_yaw_rate_ = in.yaw_rate;
+  if (!params_.use_vehicle_signals || !ekf_.initialized()) return;
+  ekf_.on_vehicle_signals(in.t, in.wheel_speed, in.yaw_rate);
+  ekf_all_.on_vehicle_signals(in.t, in.wheel_speed, in.yaw_rate);
+}
+
+void Localizer::on_gnss(const GnssInput& in) {
+  ++counters_.gnss_received;
+  if (!in.valid || !std::isfinite(in.lat_deg) || !std::isfinite(in.lon_deg) ||
+      !std::isfinite(in.alt_m) || !(in.h_acc > 0.0) || !(in.v_acc > 0.0) || !std::isfinite(in.t)) {
+    ++counters_.gnss_invalid;
+    return;
+  }
+  const Vec3d enu = geodetic_to_enu(origin_, GeodeticPoint{in.lat_deg, in.lon_deg, in.alt_m});
+  have_gnss_ = true;
+  last_gnss_enu_ = enu;
+  last_gnss_sigma_ = in.h_acc;
+  if (!params_.use_gnss || !ekf_.initialized()) return;
+  ekf_.on_gnss(in.t, enu, in.h_acc, in.v_acc);
+  ekf_all_.on_gnss(in.t, enu, in.h_acc, in.v_acc);
+}
+
+MapInsertResult Localizer::on_map_cloud(const MapCloudInput& in) {
+  return map_.insert(in.source_id, in.t, in.world_T_sensor, in.points);
+}
+
+const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
+  output_ = {};
+  output_.frame = frame_;
+  output_.t = in.t;
+  ++counters_.frames;
+  body_T_lidar_ = in.body_T_lidar;
+  if (std::isfinite(in.t) && (!have_frame_ || in.t > last_frame_t_)) {
+    prepare_scan(in);
+    run_odometry(in);
+    if (ekf_.initialized()) {
+      ekf_.predict_to(in.t);
+      ekf_all_.predict_to(in.t);
+    }
+    refresh_map(in.t);
+    register_scan(in.t);
+    last_frame_t_ = in.t;
+    have_frame_ = true;
+  }
+  fill_output(in.t);
+  ++frame_;
+  return output_;
+}
+
+// Finite points within [min_range, max_range], deskewed with the odometry's constant-velocity
+// model (KISS-ICP: the previous frame's relative motion spread over the sweep).
+bool Localizer::prepare_scan(const EgoScanInput& in) {
+  scan_filtered_.clear();
+  scan_times_.clear();
+  const bool has_times = in.point_times.size() == in.points.size() && !in.points.empty();
+  const float min2 = params_.min_range * params_.min_range;
+  const float max2 = params_.max_range * params_.max_range;
+  std::uint32_t dropped = 0;
+  for (std::size_t i = 0; i < in.points.size(); ++i) {
+    const Vec3f& p = in.points[i];
+    const float r2 = p.squaredNorm();
+    if (!finite_point(p) || r2 < min2 || r2 > max2 || (has_times && !std::isfinite(in.point_times[i]))) {
+      ++dropped;
+      continue;
+    }
+    if (!scan_filtered_.push_back(p)) {
+      ++dropped;
+      continue;
+    }
+    if (has_times) scan_times_.push_back(in.point_times[i]);
+  }
+  counters_.scan_points_dropped += dropped;
+
+  scan_deskewed_count_ = scan_filtered_.size();
+  const bool deskew_now = params_.deskew && has_times && have_frame_;
+  if (deskew_now) {
+    DeskewParams dp;
+    dp.reference_time = 0.0;
+    dp.delta_duration = params_.frame_period;
+    const DeskewResult r = deskew(scan_filtered_.span(), scan_times_.span(), odometry_.last_delta(),
+                                  dp, std::span<Vec3f>(scan_deskewed_, config::kMaxScanPoints));
+    if (r.status == DeskewStatus::kOk) {
+      scan_deskewed_count_ = r.points_out;
+      return true;
+    }
+  }
+  for (std::size_t i = 0; i < scan_filtered_.size(); ++i) scan_deskewed_[i] = scan_filtered_[i];
+  return true;
+}
+
+void Localizer::run_odometry(const EgoScanInput& in) {
+  const std::span<const Vec3f> scan(scan_deskewed_, scan_deskewed_count_);
+  const OdometryResult r = odometry_.register_frame(scan);
+  const bool ok = r.status == OdometryStatus::kOk || r.status == OdometryStatus::kFirstFrame;
+  if (!ok) ++counters_.odometry_failures;
+  const Mat4d lidar_T_body = se3_inverse(in.body_T_lidar);
+  output_.odometry_ok = ok;
+  output_.odometry_pose = r.pose * lidar_T_body;
+  if (r.status != OdometryStatus::kOk || !have_frame_ || !params_.use_odometry ||
+      !ekf_.initialized()) {
+    return;
+  }
+  const Mat4d body_delta = in.body_T_lidar * r.delta * lidar_T_body;
+  const double dt = in.t - last_frame_t_;
+  ekf_.on_odometry(in.t, dt, body_delta);
+  ekf_all_.on_odometry(in.t, dt, body_delta);
+}
+
+// Rebuilds the registration target (merged points, k-d tree, normals) when the map changed,
+// at most every map_refresh_period: infrastructure clouds arrive several times per second and
+// the static scene hardly changes between them.
+void Localizer::refresh_map(double t) {
+  map_.expire(t);
+  if (map_.revision() == map_revision_) return;
+  if (map_ready_ && t - map_built_t_ < params_.map_refresh_period) return;
+  map_.extract(map_points_);
+  map_tree_.build(map_points_.span());
+  NormalParams np;
+  np.radius = params_.map_normal_radius;
+  np.orient_to_viewpoint = false;  // point-to-plane residuals do not care about the sign
+  estimate_normals(map_tree_.tree, np, std::span<Vec3f>(map_normals_, map_points_.size()));
+  map_revision_ = map_.revision();
+  map_built_t_ = t;
+  map_ready_ = map_points_.size() >= 100;
+  ++counters_.map_rebuilds;
+}
+
+void Localizer::register_scan(double t) {
+  ++frames_since_global_;
+  if (!map_ready_) {
+    ++failed_frames_;
+    return;
+  }
+  // Source: the deskewed scan in the body frame, downsampled.
+  scan_body_.clear();
+  for (std::size_t i = 0; i < scan_deskewed_count_; ++i) {
+    scan_body_.push_back(transform_point(body_T_lidar_, scan_deskewed_[i]));
+  }
+  voxel_.run(scan_body_.span(), params_.registration_voxel, scan_down_);
+
+  const IcpTarget target{map_points_.span(), std::span<const Vec3f>(map_normals_, map_points_.size()),
+                         &map_tree_.tree};
+  const double sigma_xy = ekf_.initialized()
+      ? std::sqrt(0.5 * (ekf_.covariance()(ekf_index::kPosX, ekf_index::kPosX) +
+                         ekf_.covariance()(ekf_index::kPosY, ekf_index::kPosY)))
+      : 1e9;
+  const bool tracking = ekf_.initialized() && sigma_xy <= params_.tracking_max_sigma_xy &&
+                        failed_frames_ <= params_.max_failed_frames;
+  RegistrationResult result;
+  if (tracking) {
+    output_.mode = LocalizationMode::kTracking;
+    ++counters_.tracking_registrations;
+    result = icp(scan_down_.span(), target, ekf_.state().pose(), params_.icp);
+  } else {
+    output_.mode = LocalizationMode::kGlobalSearch;
+    if (!have_gnss_ || frames_since_global_ < params_.global_retry_frames) {
+      ++failed_frames_;
+      return;
+    }
+    frames_since_global_ = 0;
+    if (!global_search(t, result)) {
+      output_.registration_attempted = true;
+      output_.registration_status = result.status;
+      output_.registration_pose = result.transform;
+      output_.fitness = result.fitness;
+      output_.inlier_rmse = result.inlier_rmse;
+      ++failed_frames_;
+      fuse_gated(t, result, false);
+      return;
+    }
+  }
+  output_.registration_attempted = true;
+  output_.registration_status = result.status;
+  output_.registration_pose = result.transform;
+  output_.fitness = result.fitness;
+  output_.inlier_rmse = result.inlier_rmse;
+  if (result.ok()) ++counters_.registrations_ok;
+  fuse_gated(t, result, true);
+}
+
+// FPFH + RANSAC against the map around the GNSS fix, ICP refinement, then two checks the
+// symmetric intersection needs: the solution must lie inside the GNSS uncertainty region and
+// explain enough of the scan.
+bool Localizer::global_search(double t, RegistrationResult& result) {
+  ++counters_.global_searches;
+  map_crop_.clear();
+  const double r2 = params_.global_map_radius * params_.global_map_radius;
+  for (const Vec3f& p : map_points_) {
+    const double dx = p.x() - last_gnss_enu_.x(), dy = p.y() - last_gnss_enu_.y();
+    if (dx * dx + dy * dy <= r2) map_crop_.push_back(p);
+  }
+  const RegisterCloudsResult coarse =
+      register_clouds(scan_down_.span(), map_crop_.span(), params_.global, Mat4d::Identity(),
+                      global_workspace_);
+  result = coarse.registration;
+  if (!coarse.registration.ok()) return false;
+  const IcpTarget target{map_points_.span(), std::span<const Vec3f>(map_normals_, map_points_.size()),
+                         &map_tree_.tree};
+  result = icp(scan_down_.span(), target, coarse.registration.transform, params_.icp);
+  if (!result.ok()) return false;
+  const double gate = params_.global_gnss_gate_sigmas *
+                      (last_gnss_sigma_ * params_.ekf.gates.gnss_sigma_inflation + 1.0);
+  if (result.fitness < params_.global_min_fitness ||
+      (params_.use_gnss && horizontal_distance(result.transform, last_gnss_enu_) > gate)) {
+    result.status = RegistrationStatus::kDidNotConverge;
+    return false;
+  }
+  ++counters_.global_accepted;
+  if (!ekf_.initialized() || failed_frames_ > params_.max_failed_frames) {
+    initialize_filters(t, result.transform);
+  }
+  return true;
+}
+
+void Localizer::initialize_filters(double t, const Mat4d& pose) {
+  EkfState s;
+  s.pos_x = pose(0, 3);
+  s.pos_y = pose(1, 3);
+  s.pos_z = pose(2, 3);
+  s.yaw = yaw_of(pose.topLeftCorner<3, 3>());
+  s.speed = last_speed_;
+  s.yaw_rate = last_yaw_rate_;
+  EkfCovariance P = EkfCovariance::Zero();
+  const double sigmas[kEkfStateSize] = {0.1, 0.1, 0.1, 0.01, 0.5, 0.05, 0.005, 0.02};
+  for (int i = 0; i < kEkfStateSize; ++i) P(i, i) = sigmas[i] * sigmas[i];
+  ekf_.initialize(t, s, P);
+  ekf_all_.initialize(t, s, P);
+  ekf_.predict_to(t);
+  ekf_all_.predict_to(t);
+  failed_frames_ = 0;
+}
+
+// Validity gate -> EKF. The shadow filter takes every ok registration; the main one only those
+// the gate accepts (fixed-lag: w/2 frames later, fused at the frame's own time stamp through the
+// EKF's history).
+void Localizer::fuse_gated(double t, const RegistrationResult& result, bool attempted_ok) {
+  PendingRegistration reg;
+  reg.frame = frame_;
+  reg.t = t;
+  reg.pose = result.transform;
+  reg.ok = attempted_ok && result.ok();
+  if (reg.ok) {
+    reg.covariance = registration_covariance(result.information, result.inlier_rmse, result.transform,
+                                             params_.registration_covariance);
+    bool fused_all = false;
+    fuse_registration(ekf_all_, reg, fused_all);
+  }
+  const GateSample sample{result.fitness, result.inlier_rmse, reg.ok};
+  bool fused = false;
+  switch (params_.gate_mode) {
+    case GateMode::kOff:
+      if (reg.ok) fuse_registration(ekf_, reg, fused);
+      break;
+    case GateMode::kCausal: {
+      const GateDecision d = causal_gate_.push(sample);
+      output_.gate_decided = d.available;
+      output_.gate_decided_frame = static_cast<std::uint32_t>(d.frame);
+      output_.gate_decided_valid = d.valid;
+      if (d.valid && reg.ok) fuse_registration(ekf_, reg, fused);
+      break;
+    }
+    case GateMode::kFixedLag: {
+      pending_[frame_ % kPendingCapacity] = reg;
+      const GateDecision d = fixed_lag_gate_.push(sample);
+      output_.gate_decided = d.available;
+      output_.gate_decided_frame = static_cast<std::uint32_t>(d.frame);
+      output_.gate_decided_valid = d.valid;
+      if (d.available && d.valid) {
+        const PendingRegistration& late = pending_[d.frame % kPendingCapacity];
+        if (late.ok && late.frame == d.frame) fuse_registration(ekf_, late, fused);
+      }
+      break;
+    }
+  }
+  if (fused) {
+    failed_frames_ = 0;
+  } else if (!reg.ok) {
+    ++failed_frames_;
+  }
+  if (!reg.ok || (params_.gate_mode != GateMode::kFixedLag && !fused)) {
+    ++counters_.registrations_gate_rejected;
+  }
+  output_.registration_fused = fused;
+}
+
+void Localizer::fuse_registration(Ekf& ekf, const PendingRegistration& reg, bool& fused) {
+  if (!ekf.initialized()) return;
+  fused = ekf.on_registration(reg.t, reg.pose, reg.covariance) == EkfFuseStatus::kFused;
+  if (fused && &ekf == &ekf_) ++counters_.registrations_fused;
+}
+
+void Localizer::fill_output(double t) {
+  output_.t = t;
+  output_.filter_initialized = ekf_.initialized();
+  if (!ekf_.initialized()) {
+    Mat4d gnss_pose = Mat4d::Identity();
+    gnss_pose.topRightCorner<3, 1>() = last_gnss_enu_;
+    output_.fused_pose = gnss_pose;
+    output_.fused_pose_ungated = gnss_pose;
+    output_.sigma_x = output_.sigma_y = have_gnss_ ? last_gnss_sigma_ : 1e3;
+    output_.sigma_z = output_.sigma_x;
+    output_.sigma_yaw = det::kPi;
+    output_.localized = false;
+    return;
+  }
+  output_.fused_pose = ekf_.state().pose();
+  output_.fused_pose_ungated = ekf_all_.state().pose();
+  const EkfCovariance& P = ekf_.covariance();
+  output_.sigma_x = std::sqrt(P(ekf_index::kPosX, ekf_index::kPosX));
+  output_.sigma_y = std::sqrt(P(ekf_index::kPosY, ekf_index::kPosY));
+  output_.sigma_z = std::sqrt(P(ekf_index::kPosZ, ekf_index::kPosZ));
+  output_.sigma_yaw = std::sqrt(P(ekf_index::kYaw, ekf_index::kYaw));
+  const double sigma_xy = std::sqrt(0.5 * (P(0, 0) + P(1, 1)));
+  output_.localized = sigma_xy <= params_.localized_sigma_xy;
+}
+
+}  // namespace v2xloc

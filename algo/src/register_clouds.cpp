@@ -1,0 +1,198 @@
+#include "v2xloc/algo/register_clouds.hpp"
+
+#include <cmath>
+
+namespace v2xloc {
+namespace {
+
+class StageTimer {
+ public:
+  StageTimer(TickClock clock, RegisterStageStats& stats) : clock_(clock), stats_(stats) {
+    start_ = last_ = now();
+  }
+  void lap(RegisterStage stage) {
+    const std::uint64_t t = now();
+    stats_.ticks[static_cast<int>(stage)] += t - last_;
+    last_ = t;
+    stats_.total_ticks = t - start_;
+  }
+
+ private:
+  std::uint64_t now() const { return clock_ != nullptr ? clock_() : 0; }
+  TickClock clock_;
+  RegisterStageStats& stats_;
+  std::uint64_t start_ = 0, last_ = 0;
+};
+
+std::uint32_t overflow_of(const VoxelDownsampleResult& r) {
+  return r.output_overflow + r.hash_overflow + r.range_overflow;
+}
+
+// A cloud whose scatter has a (near) zero middle eigenvalue is a line or a point: no rigid
+// registration is defined (rotation about the line is unobservable).
+bool is_collinear(std::span<const Vec3f> cloud) {
+  if (cloud.size() < 3) return true;
+  Vec3d mean = Vec3d::Zero();
+  for (const Vec3f& p : cloud) mean += p.cast<double>();
+  mean /= static_cast<double>(cloud.size());
+  Mat3d cov = Mat3d::Zero();
+  for (const Vec3f& p : cloud) {
+    const Vec3d d = p.cast<double>() - mean;
+    cov += d * d.transpose();
+  }
+  Vec3d eigenvalues;
+  Mat3d eigenvectors;
+  symmetric_eigen3(cov, eigenvalues, eigenvectors);
+  return !(eigenvalues(1) > 1e-10 * eigenvalues(2)) || !(eigenvalues(2) > 0.0);
+}
+
+}  // namespace
+
+RegisterCloudsResult register_clouds(std::span<const Vec3f> source, std::span<const Vec3f> target,
+                                     const RegisterCloudsParams& params, const Mat4d& initial,
+                                     RegistrationWorkspace& ws) {
+  RegisterCloudsResult out;
+  RegistrationResult& reg = out.registration;
+  RegisterStageStats& stats = out.stats;
+  reg.transform = params.mode == RegistrationMode::kIcpOnly ? initial : Mat4d::Identity();
+  out.coarse.transform = reg.transform;
+  stats.source_input = static_cast<std::uint32_t>(source.size());
+  stats.target_input = static_cast<std::uint32_t>(target.size());
+  const float voxel = params.voxel_size;
+  if (!std::isfinite(voxel) || !(voxel > 0.0f) || !initial.allFinite() ||
+      !(params.normal_radius_voxels > 0.0f) || !(params.fpfh_radius_voxels > 0.0f) ||
+      !(params.ransac_distance_voxels > 0.0) || !(params.icp_distance_voxels > 0.0)) {
+    reg.status = RegistrationStatus::kInvalidInput;
+    out.coarse.status = reg.status;
+    return out;
+  }
+  StageTimer timer(params.clock, stats);
+
+  // Truncate what does not fit a scan buffer (counted, never silent).
+  if (source.size() > config::kMaxScanPoints) {
+    stats.source_truncated = static_cast<std::uint32_t>(source.size() - config::kMaxScanPoints);
+    source = source.first(config::kMaxScanPoints);
+  }
+  if (target.size() > config::kMaxScanPoints) {
+    stats.target_truncated = static_cast<std::uint32_t>(target.size() - config::kMaxScanPoints);
+    target = target.first(config::kMaxScanPoints);
+  }
+
+  // 1. Downsampling (one hash table, reused: the stage leaves it empty).
+  const VoxelDownsampleResult ds_source = ws.voxel.run(source, voxel, ws.source_down);
+  const VoxelDownsampleResult ds_target = ws.voxel.run(target, voxel, ws.target_down);
+  timer.lap(RegisterStage::kDownsample);
+  stats.source_downsampled = static_cast<std::uint32_t>(ws.source_down.size());
+  stats.target_downsampled = static_cast<std::uint32_t>(ws.target_down.size());
+  stats.downsample_overflow = overflow_of(ds_source) + overflow_of(ds_target);
+  reg.nonfinite_dropped = ds_source.non_finite_dropped + ds_target.non_finite_dropped;
+  reg.overflow_dropped = stats.source_truncated + stats.target_truncated + stats.downsample_overflow;
+  auto finish = [&](RegistrationStatus status) {
+    reg.status = status;
+    if (params.mode == RegistrationMode::kIcpOnly || out.coarse.status == RegistrationStatus::kInvalidInput) {
+      out.coarse.status = status;
+    }
+    reg.nonfinite_dropped = ds_source.non_finite_dropped + ds_target.non_finite_dropped;
+    reg.overflow_dropped = stats.source_truncated + stats.target_truncated +
+                           stats.downsample_overflow + stats.correspondences_truncated;
+    return out;
+  };
+  if (ws.source_down.size() < 3 || ws.target_down.size() < 3) {
+    return finish(RegistrationStatus::kNotEnoughPoints);
+  }
+  const std::span<const Vec3f> src = ws.source_down.span();
+  const std::span<const Vec3f> tgt = ws.target_down.span();
+  if (is_collinear(src) || is_collinear(tgt)) return finish(RegistrationStatus::kDegenerate);
+
+  // 2. Trees and normals (source normals only feed FPFH).
+  const bool global = params.mode == RegistrationMode::kGlobal;
+  const KdBuildResult tb = ws.target_tree.build(tgt);
+  if (tb.status != KdBuildStatus::kOk) return finish(RegistrationStatus::kNotEnoughPoints);
+  NormalParams np;
+  np.radius = params.normal_radius_voxels * voxel;
+  np.max_nn = params.normal_max_nn;
+  np.viewpoint = params.target_viewpoint;
+  const NormalsResult nt = estimate_normals(ws.target_tree.tree, np,
+                                            std::span<Vec3f>(ws.target_normals, tgt.size()));
+  stats.search_cap_hits += nt.search.visit_cap_hits;
+  if (global) {
+    const KdBuildResult sb = ws.source_tree.build(src);
+    if (sb.status != KdBuildStatus::kOk) return finish(RegistrationStatus::kNotEnoughPoints);
+    np.viewpoint = params.source_viewpoint;
+    const NormalsResult ns = estimate_normals(ws.source_tree.tree, np,
+                                              std::span<Vec3f>(ws.source_normals, src.size()));
+    stats.search_cap_hits += ns.search.visit_cap_hits;
+  }
+  timer.lap(RegisterStage::kNormals);
+
+  Mat4d start = initial;
+  if (global) {
+    // 3. FPFH on both clouds.
+    FpfhParams fp;
+    fp.radius = params.fpfh_radius_voxels * voxel;
+    fp.max_nn = params.fpfh_max_nn;
+    const std::span<Feature33> scratch(ws.spfh_scratch, RegistrationWorkspace::kMaxPoints);
+    const std::span<Feature33> fsrc(ws.source_features, src.size());
+    const std::span<Feature33> ftgt(ws.target_features, tgt.size());
+    const FpfhResult fs = compute_fpfh(ws.source_tree.tree,
+                                       std::span<const Vec3f>(ws.source_normals, src.size()), fp,
+                                       scratch, fsrc);
+    const FpfhResult ft = compute_fpfh(ws.target_tree.tree,
+                                       std::span<const Vec3f>(ws.target_normals, tgt.size()), fp,
+                                       scratch, ftgt);
+    stats.search_cap_hits += fs.search.visit_cap_hits + ft.search.visit_cap_hits;
+    timer.lap(RegisterStage::kFpfh);
+    if (fs.status != FpfhStatus::kOk || ft.status != FpfhStatus::kOk) {
+      return finish(RegistrationStatus::kInvalidInput);
+    }
+
+    // 4. Nearest-feature correspondences (optionally mutual).
+    ws.target_feature_tree.build(std::span<const Feature33>(ftgt));
+    const KdTree<Feature33>* source_feature_tree = nullptr;
+    if (params.mutual_filter) {
+      ws.source_feature_tree.build(std::span<const Feature33>(fsrc));
+      source_feature_tree = &ws.source_feature_tree.tree;
+    }
+    CorrespondenceParams cp;
+    cp.mutual_filter = params.mutual_filter;
+    const CorrespondenceResult cr = match_features(
+        fsrc, ws.target_feature_tree.tree, cp, ws.correspondences, source_feature_tree,
+        std::span<std::uint32_t>(ws.mutual_scratch, RegistrationWorkspace::kMaxPoints));
+    stats.correspondences = cr.count;
+    stats.correspondences_truncated = cr.truncated;
+    stats.search_cap_hits += cr.search.visit_cap_hits;
+    timer.lap(RegisterStage::kCorrespondences);
+    if (cr.count < 3) {
+      out.coarse.status = RegistrationStatus::kNoCorrespondences;
+      return finish(RegistrationStatus::kNoCorrespondences);
+    }
+
+    // 5. RANSAC.
+    RansacParams rp = params.ransac;
+    rp.max_correspondence_distance = params.ransac_distance_voxels * voxel;
+    rp.distance_check_threshold = rp.max_correspondence_distance;
+    const RansacResult rr = ransac(src, tgt, ws.correspondences.span(), ws.target_tree.tree, rp);
+    timer.lap(RegisterStage::kRansac);
+    out.coarse = rr.registration;
+    stats.ransac_validations = rr.validations;
+    stats.ransac_correspondence_inliers = rr.correspondence_inliers;
+    if (!rr.registration.ok()) return finish(rr.registration.status);
+    start = rr.registration.transform;
+  }
+
+  // 6. ICP refinement against the target view.
+  IcpParams ip = params.icp;
+  ip.max_correspondence_distance = params.icp_distance_voxels * voxel;
+  IcpTarget view;
+  view.points = tgt;
+  view.normals = std::span<const Vec3f>(ws.target_normals, tgt.size());
+  view.tree = &ws.target_tree.tree;
+  const RegistrationResult fine = icp(src, view, start, ip);
+  timer.lap(RegisterStage::kIcp);
+  stats.icp_iterations = fine.iterations;
+  stats.search_cap_hits += fine.search_truncated;
+  reg = fine;
+  return finish(fine.status);
+}
+
+}  // namespace v2xloc

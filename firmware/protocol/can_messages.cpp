@@ -1,0 +1,373 @@
+#include "firmware/protocol/can_messages.hpp"
+
+#include <cmath>
+
+#include "v2xloc/algo/det_math.hpp"
+
+namespace v2xloc::protocol {
+namespace {
+
+// One DBC signal: start bit (LSB, Intel), length, signedness, physical = raw * factor + offset,
+// physical range [min, max].
+struct Signal {
+  unsigned start;
+  unsigned length;
+  bool is_signed;
+  double factor;
+  double offset;
+  double min;
+  double max;
+};
+
+// ---- Signal table (keep in step with tools/dbc/v2xloc.dbc) ----------------------------------
+constexpr Signal kWheelSpeed{0, 16, true, 0.01, 0.0, -327.68, 327.67};
+constexpr Signal kYawRate{16, 16, true, 0.0001, 0.0, -3.2768, 3.2767};
+constexpr Signal kLatitude{0, 32, true, 1e-7, 0.0, -90.0, 90.0};
+constexpr Signal kLongitude{32, 32, true, 1e-7, 0.0, -180.0, 180.0};
+constexpr Signal kAltitude{0, 20, false, 0.01, -1000.0, -1000.0, 9485.75};
+constexpr Signal kHAcc{20, 12, false, 0.05, 0.0, 0.0, 204.75};
+constexpr Signal kVAcc{32, 12, false, 0.05, 0.0, 0.0, 204.75};
+constexpr Signal kNumSats{44, 6, false, 1.0, 0.0, 0.0, 63.0};
+constexpr Signal kFixType{50, 2, false, 1.0, 0.0, 0.0, 3.0};
+constexpr Signal kGnssStatusCounter{52, 4, false, 1.0, 0.0, 0.0, 15.0};
+constexpr Signal kTimeOfWeek{0, 32, false, 0.001, 0.0, 0.0, 604799.999};
+constexpr Signal kWeek{32, 16, false, 1.0, 0.0, 0.0, 65535.0};
+constexpr Signal kHdop{48, 8, false, 0.1, 0.0, 0.0, 25.5};
+constexpr Signal kPdop{56, 8, false, 0.1, 0.0, 0.0, 25.5};
+constexpr Signal kPoseX{0, 24, true, 0.001, 0.0, -8388.608, 8388.607};
+constexpr Signal kPoseY{24, 24, true, 0.001, 0.0, -8388.608, 8388.607};
+constexpr Signal kPoseZ{0, 16, true, 0.01, 0.0, -327.68, 327.67};
+constexpr Signal kPoseYaw{16, 16, true, 0.0001, 0.0, -3.1416, 3.1416};
+constexpr Signal kFrameCounter{32, 16, false, 1.0, 0.0, 0.0, 65535.0};
+constexpr Signal kSigmaX{0, 12, false, 0.005, 0.0, 0.0, 20.475};
+constexpr Signal kSigmaY{12, 12, false, 0.005, 0.0, 0.0, 20.475};
+constexpr Signal kSigmaZ{24, 12, false, 0.005, 0.0, 0.0, 20.475};
+constexpr Signal kSigmaYaw{36, 12, false, 0.0001, 0.0, 0.0, 0.4095};
+constexpr Signal kState{0, 4, false, 1.0, 0.0, 0.0, 5.0};
+constexpr Signal kErrorFlags{4, 4, false, 1.0, 0.0, 0.0, 15.0};
+constexpr Signal kUptime{8, 24, false, 0.1, 0.0, 0.0, 1677721.5};
+constexpr Signal kCanRxErrors{32, 8, false, 1.0, 0.0, 0.0, 255.0};
+constexpr Signal kUdpDropped{40, 8, false, 1.0, 0.0, 0.0, 255.0};
+constexpr unsigned kCounterBit48 = 48;  // VehicleMotion, PoseSigma, Heartbeat
+constexpr unsigned kCounterBit52 = 52;  // GnssStatus, PosePosition, PoseAttitude (flags in 48..51)
+constexpr unsigned kFlagsBit = 48;
+constexpr unsigned kCrcByte = 7;
+
+// Physical -> raw with clamping; NaN becomes the value nearest zero in range. Counts saturation.
+void encode(std::uint8_t* data, const Signal& s, double phys, PackStats* stats) {
+  bool saturated = false;
+  if (std::isnan(phys)) {  // +-Inf falls into the clamping below
+    phys = s.min > 0.0 ? s.min : (s.max < 0.0 ? s.max : 0.0);
+    saturated = true;
+  }
+  if (phys < s.min) {
+    phys = s.min;
+    saturated = true;
+  } else if (phys > s.max) {
+    phys = s.max;
+    saturated = true;
+  }
+  if (saturated && stats != nullptr) ++stats->saturated;
+  const double scaled = (phys - s.offset) / s.factor;
+  const auto raw = static_cast<std::int64_t>(std::floor(scaled + 0.5));
+  put_bits_le(data, s.start, s.length, static_cast<std::uint64_t>(raw));
+}
+
+// Raw -> physical; flags values outside the DBC range (half an LSB tolerance for rounding).
+double decode(const std::uint8_t* data, const Signal& s, bool& out_of_range) {
+  const std::uint64_t bits = get_bits_le(data, s.start, s.length);
+  std::int64_t raw = static_cast<std::int64_t>(bits);
+  if (s.is_signed && s.length < 64 && (bits >> (s.length - 1)) != 0u) {
+    raw = static_cast<std::int64_t>(bits) - (static_cast<std::int64_t>(1) << s.length);
+  }
+  const double phys = static_cast<double>(raw) * s.factor + s.offset;
+  const double tol = 0.5 * s.factor;
+  if (phys < s.min - tol || phys > s.max + tol) out_of_range = true;
+  return phys;
+}
+
+void put_counter(std::uint8_t* data, unsigned bit, std::uint8_t counter) {
+  put_bits_le(data, bit, 4, counter % kCounterModulo);
+}
+
+std::uint8_t pack_flags(const PoseFlags& f) {
+  return static_cast<std::uint8_t>((f.pose_valid ? 1u : 0u) | (f.registration_valid ? 2u : 0u) |
+                                   (f.gnss_used ? 4u : 0u) | (f.degraded ? 8u : 0u));
+}
+PoseFlags unpack_flags(std::uint8_t bits) {
+  PoseFlags f;
+  f.pose_valid = (bits & 1u) != 0u;
+  f.registration_valid = (bits & 2u) != 0u;
+  f.gnss_used = (bits & 4u) != 0u;
+  f.degraded = (bits & 8u) != 0u;
+  return f;
+}
+
+CanFrame start_frame(std::uint32_t id) {
+  CanFrame f;
+  f.id = id;
+  f.dlc = 8;
+  return f;
+}
+void seal(CanFrame& f) { f.data[kCrcByte] = frame_crc(f.id, f.data); }
+
+DecodeStatus check(const CanFrame& f, std::uint32_t id, bool has_crc) {
+  if (f.id != id) return DecodeStatus::kWrongId;
+  if (f.dlc != 8) return DecodeStatus::kWrongDlc;
+  if (has_crc && f.data[kCrcByte] != frame_crc(f.id, f.data)) return DecodeStatus::kBadChecksum;
+  return DecodeStatus::kOk;
+}
+
+DecodeStatus range_status(bool out_of_range) {
+  return out_of_range ? DecodeStatus::kOutOfRange : DecodeStatus::kOk;
+}
+
+}  // namespace
+
+const char* to_string(DecodeStatus status) {
+  switch (status) {
+    case DecodeStatus::kOk: return "ok";
+    case DecodeStatus::kWrongId: return "wrong id";
+    case DecodeStatus::kWrongDlc: return "wrong dlc";
+    case DecodeStatus::kBadChecksum: return "bad checksum";
+    case DecodeStatus::kOutOfRange: return "out of range";
+  }
+  return "unknown";
+}
+
+void put_bits_le(std::uint8_t* data, unsigned start_bit, unsigned length, std::uint64_t raw) {
+  for (unsigned i = 0; i < length; ++i) {
+    const unsigned bit = start_bit + i;
+    const auto mask = static_cast<std::uint8_t>(1u << (bit % 8u));
+    if (((raw >> i) & 1u) != 0u) data[bit / 8u] = static_cast<std::uint8_t>(data[bit / 8u] | mask);
+    else data[bit / 8u] = static_cast<std::uint8_t>(data[bit / 8u] & ~mask);
+  }
+}
+
+std::uint64_t get_bits_le(const std::uint8_t* data, unsigned start_bit, unsigned length) {
+  std::uint64_t raw = 0;
+  for (unsigned i = 0; i < length; ++i) {
+    const unsigned bit = start_bit + i;
+    raw |= static_cast<std::uint64_t>((data[bit / 8u] >> (bit % 8u)) & 1u) << i;
+  }
+  return raw;
+}
+
+std::uint8_t crc8_j1850(const std::uint8_t* data, std::uint32_t length, std::uint8_t init) {
+  std::uint8_t crc = init;
+  for (std::uint32_t i = 0; i < length; ++i) {
+    crc = static_cast<std::uint8_t>(crc ^ data[i]);
+    for (int b = 0; b < 8; ++b) {
+      crc = (crc & 0x80u) != 0u ? static_cast<std::uint8_t>((crc << 1) ^ 0x1Du) : static_cast<std::uint8_t>(crc << 1);
+    }
+  }
+  return static_cast<std::uint8_t>(crc ^ 0xFFu);
+}
+
+std::uint8_t frame_crc(std::uint32_t id, const std::uint8_t* data) {
+  std::uint8_t buf[9];
+  buf[0] = static_cast<std::uint8_t>(id & 0xFFu);
+  buf[1] = static_cast<std::uint8_t>((id >> 8) & 0x07u);
+  for (int i = 0; i < 7; ++i) buf[2 + i] = data[i];
+  return crc8_j1850(buf, 9);
+}
+
+// ---- Vehicle motion ---------------------------------------------------------------------------
+CanFrame pack(const VehicleMotion& m, PackStats* stats) {
+  CanFrame f = start_frame(kVehicleMotionId);
+  encode(f.data, kWheelSpeed, m.wheel_speed_mps, stats);
+  encode(f.data, kYawRate, m.yaw_rate_rps, stats);
+  put_bits_le(f.data, 32, 1, m.speed_valid ? 1u : 0u);
+  put_bits_le(f.data, 33, 1, m.yaw_rate_valid ? 1u : 0u);
+  put_counter(f.data, kCounterBit48, m.counter);
+  seal(f);
+  return f;
+}
+
+DecodeStatus unpack(const CanFrame& f, VehicleMotion& m) {
+  const DecodeStatus s = check(f, kVehicleMotionId, true);
+  if (s != DecodeStatus::kOk) return s;
+  bool oor = false;
+  m.wheel_speed_mps = decode(f.data, kWheelSpeed, oor);
+  m.yaw_rate_rps = decode(f.data, kYawRate, oor);
+  m.speed_valid = get_bits_le(f.data, 32, 1) != 0u;
+  m.yaw_rate_valid = get_bits_le(f.data, 33, 1) != 0u;
+  m.counter = static_cast<std::uint8_t>(get_bits_le(f.data, kCounterBit48, 4));
+  return range_status(oor);
+}
+
+// ---- GNSS -------------------------------------------------------------------------------------
+CanFrame pack(const GnssPosition& m, PackStats* stats) {
+  CanFrame f = start_frame(kGnssPositionId);
+  encode(f.data, kLatitude, m.lat_deg, stats);
+  encode(f.data, kLongitude, m.lon_deg, stats);
+  return f;
+}
+
+DecodeStatus unpack(const CanFrame& f, GnssPosition& m) {
+  const DecodeStatus s = check(f, kGnssPositionId, false);
+  if (s != DecodeStatus::kOk) return s;
+  bool oor = false;
+  m.lat_deg = decode(f.data, kLatitude, oor);
+  m.lon_deg = decode(f.data, kLongitude, oor);
+  return range_status(oor);
+}
+
+CanFrame pack(const GnssStatus& m, PackStats* stats) {
+  CanFrame f = start_frame(kGnssStatusId);
+  encode(f.data, kAltitude, m.alt_m, stats);
+  encode(f.data, kHAcc, m.h_acc_m, stats);
+  encode(f.data, kVAcc, m.v_acc_m, stats);
+  encode(f.data, kNumSats, static_cast<double>(m.num_sats), stats);
+  encode(f.data, kFixType, static_cast<double>(static_cast<std::uint8_t>(m.fix_type)), stats);
+  put_counter(f.data, kCounterBit52, m.counter);
+  seal(f);
+  return f;
+}
+
+DecodeStatus unpack(const CanFrame& f, GnssStatus& m) {
+  const DecodeStatus s = check(f, kGnssStatusId, true);
+  if (s != DecodeStatus::kOk) return s;
+  bool oor = false;
+  m.alt_m = decode(f.data, kAltitude, oor);
+  m.h_acc_m = decode(f.data, kHAcc, oor);
+  m.v_acc_m = decode(f.data, kVAcc, oor);
+  m.num_sats = static_cast<std::uint8_t>(decode(f.data, kNumSats, oor));
+  m.fix_type = static_cast<GnssFixType>(get_bits_le(f.data, kFixType.start, kFixType.length));
+  m.counter = static_cast<std::uint8_t>(get_bits_le(f.data, kGnssStatusCounter.start, 4));
+  return range_status(oor);
+}
+
+CanFrame pack(const GnssTimeDop& m, PackStats* stats) {
+  CanFrame f = start_frame(kGnssTimeDopId);
+  encode(f.data, kTimeOfWeek, m.time_of_week_s, stats);
+  encode(f.data, kWeek, static_cast<double>(m.week), stats);
+  encode(f.data, kHdop, m.hdop, stats);
+  encode(f.data, kPdop, m.pdop, stats);
+  return f;
+}
+
+DecodeStatus unpack(const CanFrame& f, GnssTimeDop& m) {
+  const DecodeStatus s = check(f, kGnssTimeDopId, false);
+  if (s != DecodeStatus::kOk) return s;
+  bool oor = false;
+  m.time_of_week_s = decode(f.data, kTimeOfWeek, oor);
+  m.week = static_cast<std::uint16_t>(get_bits_le(f.data, kWeek.start, kWeek.length));
+  m.hdop = decode(f.data, kHdop, oor);
+  m.pdop = decode(f.data, kPdop, oor);
+  return range_status(oor);
+}
+
+// ---- Fused pose out ---------------------------------------------------------------------------
+CanFrame pack(const PosePosition& m, PackStats* stats) {
+  CanFrame f = start_frame(kPosePositionId);
+  encode(f.data, kPoseX, m.x_m, stats);
+  encode(f.data, kPoseY, m.y_m, stats);
+  put_bits_le(f.data, kFlagsBit, 4, pack_flags(m.flags));
+  put_counter(f.data, kCounterBit52, m.counter);
+  seal(f);
+  return f;
+}
+
+DecodeStatus unpack(const CanFrame& f, PosePosition& m) {
+  const DecodeStatus s = check(f, kPosePositionId, true);
+  if (s != DecodeStatus::kOk) return s;
+  bool oor = false;
+  m.x_m = decode(f.data, kPoseX, oor);
+  m.y_m = decode(f.data, kPoseY, oor);
+  m.flags = unpack_flags(static_cast<std::uint8_t>(get_bits_le(f.data, kFlagsBit, 4)));
+  m.counter = static_cast<std::uint8_t>(get_bits_le(f.data, kCounterBit52, 4));
+  return range_status(oor);
+}
+
+CanFrame pack(const PoseAttitude& m, PackStats* stats) {
+  CanFrame f = start_frame(kPoseAttitudeId);
+  encode(f.data, kPoseZ, m.z_m, stats);
+  // An angle wraps instead of saturating; [-pi, pi] then fits the signal's range.
+  encode(f.data, kPoseYaw, std::isfinite(m.yaw_rad) ? det::wrap_pi(m.yaw_rad) : m.yaw_rad, stats);
+  encode(f.data, kFrameCounter, static_cast<double>(m.frame_counter), stats);
+  put_bits_le(f.data, kFlagsBit, 4, pack_flags(m.flags));
+  put_counter(f.data, kCounterBit52, m.counter);
+  seal(f);
+  return f;
+}
+
+DecodeStatus unpack(const CanFrame& f, PoseAttitude& m) {
+  const DecodeStatus s = check(f, kPoseAttitudeId, true);
+  if (s != DecodeStatus::kOk) return s;
+  bool oor = false;
+  m.z_m = decode(f.data, kPoseZ, oor);
+  m.yaw_rad = decode(f.data, kPoseYaw, oor);
+  m.frame_counter = static_cast<std::uint16_t>(get_bits_le(f.data, kFrameCounter.start, kFrameCounter.length));
+  m.flags = unpack_flags(static_cast<std::uint8_t>(get_bits_le(f.data, kFlagsBit, 4)));
+  m.counter = static_cast<std::uint8_t>(get_bits_le(f.data, kCounterBit52, 4));
+  return range_status(oor);
+}
+
+CanFrame pack(const PoseSigma& m, PackStats* stats) {
+  CanFrame f = start_frame(kPoseSigmaId);
+  encode(f.data, kSigmaX, m.sigma_x_m, stats);
+  encode(f.data, kSigmaY, m.sigma_y_m, stats);
+  encode(f.data, kSigmaZ, m.sigma_z_m, stats);
+  encode(f.data, kSigmaYaw, m.sigma_yaw_rad, stats);
+  put_counter(f.data, kCounterBit48, m.counter);
+  seal(f);
+  return f;
+}
+
+DecodeStatus unpack(const CanFrame& f, PoseSigma& m) {
+  const DecodeStatus s = check(f, kPoseSigmaId, true);
+  if (s != DecodeStatus::kOk) return s;
+  bool oor = false;
+  m.sigma_x_m = decode(f.data, kSigmaX, oor);
+  m.sigma_y_m = decode(f.data, kSigmaY, oor);
+  m.sigma_z_m = decode(f.data, kSigmaZ, oor);
+  m.sigma_yaw_rad = decode(f.data, kSigmaYaw, oor);
+  m.counter = static_cast<std::uint8_t>(get_bits_le(f.data, kCounterBit48, 4));
+  return range_status(oor);
+}
+
+// ---- Heartbeat --------------------------------------------------------------------------------
+CanFrame pack(const Heartbeat& m, PackStats* stats) {
+  CanFrame f = start_frame(kHeartbeatId);
+  encode(f.data, kState, static_cast<double>(static_cast<std::uint8_t>(m.state)), stats);
+  encode(f.data, kErrorFlags, static_cast<double>(m.error_flags), stats);
+  encode(f.data, kUptime, m.uptime_s, stats);
+  encode(f.data, kCanRxErrors, static_cast<double>(m.can_rx_errors), stats);
+  encode(f.data, kUdpDropped, static_cast<double>(m.udp_dropped), stats);
+  put_counter(f.data, kCounterBit48, m.counter);
+  seal(f);
+  return f;
+}
+
+DecodeStatus unpack(const CanFrame& f, Heartbeat& m) {
+  const DecodeStatus s = check(f, kHeartbeatId, true);
+  if (s != DecodeStatus::kOk) return s;
+  bool oor = false;
+  const auto state = static_cast<std::uint8_t>(decode(f.data, kState, oor));
+  m.state = static_cast<LocalizerState>(state);
+  m.error_flags = static_cast<std::uint8_t>(get_bits_le(f.data, kErrorFlags.start, kErrorFlags.length));
+  m.uptime_s = decode(f.data, kUptime, oor);
+  m.can_rx_errors = static_cast<std::uint8_t>(get_bits_le(f.data, kCanRxErrors.start, 8));
+  m.udp_dropped = static_cast<std::uint8_t>(get_bits_le(f.data, kUdpDropped.start, 8));
+  m.counter = static_cast<std::uint8_t>(get_bits_le(f.data, kCounterBit48, 4));
+  return range_status(oor);
+}
+
+// ---- Rolling counters -------------------------------------------------------------------------
+bool RollingCounterMonitor::update(std::uint8_t counter) {
+  counter = static_cast<std::uint8_t>(counter % kCounterModulo);
+  if (!seen_) {
+    seen_ = true;
+    last_ = counter;
+    return true;
+  }
+  const auto step = static_cast<std::uint8_t>((counter + kCounterModulo - last_) % kCounterModulo);
+  last_ = counter;
+  if (step == 1) return true;
+  if (step == 0) ++repeated_;
+  else lost_ += static_cast<std::uint32_t>(step - 1);
+  return false;
+}
+
+}  // namespace v2xloc::protocol

@@ -1,0 +1,166 @@
+// CAN messages of v2xloc, bit-exact with tools/dbc/v2xloc.dbc (classic CAN, 500 kbit/s, 11-bit ids,
+// Intel / little-endian signals). Physical-value structs, pack/unpack per message, range clamping
+// with a saturation count, a 4-bit rolling counter and a CRC-8 (SAE J1850) on the safety-relevant
+// frames. Allocation-free, no exceptions: shared by the firmware and the host tools.
+// Formats: firmware/WIRE_FORMATS.md (## CAN).
+#pragma once
+
+#include <cstdint>
+
+#include "firmware/protocol/can_frame.hpp"
+
+namespace v2xloc::protocol {
+
+// ---- Identifiers (lower id wins arbitration: motion first, then GNSS, pose, status) ----------
+inline constexpr std::uint32_t kVehicleMotionId = 0x120;
+inline constexpr std::uint32_t kGnssPositionId = 0x130;
+inline constexpr std::uint32_t kGnssStatusId = 0x131;
+inline constexpr std::uint32_t kGnssTimeDopId = 0x132;
+inline constexpr std::uint32_t kPosePositionId = 0x200;
+inline constexpr std::uint32_t kPoseAttitudeId = 0x201;
+inline constexpr std::uint32_t kPoseSigmaId = 0x202;
+inline constexpr std::uint32_t kHeartbeatId = 0x300;
+
+inline constexpr std::uint8_t kCounterModulo = 16;  // 4-bit rolling counters
+
+enum class DecodeStatus : std::uint8_t {
+  kOk = 0,
+  kWrongId,
+  kWrongDlc,
+  kBadChecksum,
+  kOutOfRange,  // decoded, but a signal lies outside its DBC [min|max] (values are still written)
+};
+
+const char* to_string(DecodeStatus status);
+
+// CRC-8 SAE J1850: poly 0x1D, init 0xFF, final XOR 0xFF (check value "123456789" -> 0x4B).
+std::uint8_t crc8_j1850(const std::uint8_t* data, std::uint32_t length, std::uint8_t init = 0xFF);
+// The frame CRC covers the 11-bit id (low byte, then high byte: a frame replayed under another id
+// fails) and data bytes 0..6; it sits in byte 7.
+std::uint8_t frame_crc(std::uint32_t id, const std::uint8_t* data);
+
+// Counts signals clamped into their DBC range (or NaN replaced) while packing.
+struct PackStats {
+  std::uint32_t saturated = 0;
+};
+
+// ---- Vehicle motion (0x120, 10-100 Hz): wheel speed, yaw rate --------------------------------
+struct VehicleMotion {
+  double wheel_speed_mps = 0.0;  // signed: negative when reversing; [-327.68, 327.67], 0.01 m/s
+  double yaw_rate_rps = 0.0;     // [-3.2768, 3.2767], 1e-4 rad/s, counter-clockwise positive
+  bool speed_valid = false;
+  bool yaw_rate_valid = false;
+  std::uint8_t counter = 0;      // 0..15
+};
+
+// ---- GNSS (0x130 position, 0x131 status, 0x132 time + DOP), 1-10 Hz ---------------------------
+struct GnssPosition {
+  double lat_deg = 0.0;  // [-90, 90], 1e-7 deg
+  double lon_deg = 0.0;  // [-180, 180], 1e-7 deg
+};
+
+enum class GnssFixType : std::uint8_t { kNoFix = 0, kFix2D = 1, kFix3D = 2, kDeadReckoning = 3 };
+
+struct GnssStatus {
+  double alt_m = 0.0;        // [-1000, 9485.75], 0.01 m (height above the ellipsoid)
+  double h_acc_m = 0.0;      // [0, 204.75], 0.05 m
+  double v_acc_m = 0.0;      // [0, 204.75], 0.05 m
+  std::uint8_t num_sats = 0; // [0, 63]
+  GnssFixType fix_type = GnssFixType::kNoFix;
+  std::uint8_t counter = 0;
+};
+
+struct GnssTimeDop {
+  double time_of_week_s = 0.0;  // [0, 604799.999], 1 ms
+  std::uint16_t week = 0;       // GPS week (full, no rollover)
+  double hdop = 0.0;            // [0, 25.5], 0.1
+  double pdop = 0.0;            // [0, 25.5], 0.1
+};
+
+// ---- Fused pose out (0x200..0x202, at the localizer's frame rate) -----------------------------
+struct PoseFlags {
+  bool pose_valid = false;          // the localizer vouches for this pose
+  bool registration_valid = false;  // the latest registration passed the validity gate
+  bool gnss_used = false;           // GNSS contributed since the last frame
+  bool degraded = false;            // dead-reckoning only for longer than the configured limit
+};
+
+struct PosePosition {
+  double x_m = 0.0;  // local ENU frame, [-8388.608, 8388.607], 1 mm
+  double y_m = 0.0;
+  PoseFlags flags;
+  std::uint8_t counter = 0;
+};
+
+struct PoseAttitude {
+  double z_m = 0.0;            // [-327.68, 327.67], 0.01 m
+  double yaw_rad = 0.0;        // [-3.1416, 3.1416], 1e-4 rad (ENU: 0 = east, CCW positive)
+  std::uint16_t frame_counter = 0;  // localizer frame index mod 65536 (ties the three frames)
+  PoseFlags flags;
+  std::uint8_t counter = 0;
+};
+
+struct PoseSigma {
+  double sigma_x_m = 0.0;      // [0, 20.475], 0.005 m (1 sigma)
+  double sigma_y_m = 0.0;
+  double sigma_z_m = 0.0;
+  double sigma_yaw_rad = 0.0;  // [0, 0.4095], 1e-4 rad
+  std::uint8_t counter = 0;
+};
+
+// ---- Status / heartbeat (0x300, 1 Hz) --------------------------------------------------------
+enum class LocalizerState : std::uint8_t {
+  kInit = 0, kWaitingForGnss = 1, kLocalizing = 2, kLocalized = 3, kDegraded = 4, kFault = 5
+};
+inline constexpr std::uint8_t kLocalizerStateMax = 5;
+
+struct Heartbeat {
+  LocalizerState state = LocalizerState::kInit;
+  std::uint8_t error_flags = 0;    // 4 bits, see WIRE_FORMATS.md
+  double uptime_s = 0.0;           // [0, 1677721.5], 0.1 s
+  std::uint8_t can_rx_errors = 0;  // saturating counters since start-up, [0, 255]
+  std::uint8_t udp_dropped = 0;
+  std::uint8_t counter = 0;
+};
+
+// Packing never fails: out-of-range values are clamped (counted in stats, if given).
+CanFrame pack(const VehicleMotion& m, PackStats* stats = nullptr);
+CanFrame pack(const GnssPosition& m, PackStats* stats = nullptr);
+CanFrame pack(const GnssStatus& m, PackStats* stats = nullptr);
+CanFrame pack(const GnssTimeDop& m, PackStats* stats = nullptr);
+CanFrame pack(const PosePosition& m, PackStats* stats = nullptr);
+CanFrame pack(const PoseAttitude& m, PackStats* stats = nullptr);
+CanFrame pack(const PoseSigma& m, PackStats* stats = nullptr);
+CanFrame pack(const Heartbeat& m, PackStats* stats = nullptr);
+
+// Unpacking checks id, DLC (exactly 8), CRC where present, and DBC ranges. On kWrongId /
+// kWrongDlc / kBadChecksum the output is left untouched.
+DecodeStatus unpack(const CanFrame& f, VehicleMotion& m);
+DecodeStatus unpack(const CanFrame& f, GnssPosition& m);
+DecodeStatus unpack(const CanFrame& f, GnssStatus& m);
+DecodeStatus unpack(const CanFrame& f, GnssTimeDop& m);
+DecodeStatus unpack(const CanFrame& f, PosePosition& m);
+DecodeStatus unpack(const CanFrame& f, PoseAttitude& m);
+DecodeStatus unpack(const CanFrame& f, PoseSigma& m);
+DecodeStatus unpack(const CanFrame& f, Heartbeat& m);
+
+// Receiver-side rolling-counter supervision (one per message id): counts frames lost in between
+// and repeated (stale) frames.
+class RollingCounterMonitor {
+ public:
+  // Returns true when the counter advanced by exactly one (or on the first frame).
+  bool update(std::uint8_t counter);
+  std::uint32_t lost() const { return lost_; }
+  std::uint32_t repeated() const { return repeated_; }
+
+ private:
+  std::uint8_t last_ = 0;
+  bool seen_ = false;
+  std::uint32_t lost_ = 0, repeated_ = 0;
+};
+
+// Bit-level helpers (Intel byte order, DBC start bit = LSB), exposed for the DBC conformance test.
+void put_bits_le(std::uint8_t* data, unsigned start_bit, unsigned length, std::uint64_t raw);
+std::uint64_t get_bits_le(const std::uint8_t* data, unsigned start_bit, unsigned length);
+
+}  // namespace v2xloc::protocol

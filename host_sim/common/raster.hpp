@@ -1,0 +1,39 @@
+// Simple RGB raster drawing for top-view plots (the paper's Fig. 2 style): a world-to-pixel
+// mapping, lines, circles, filled rectangles and polygons. No text.
+#pragma once
+
+#include "host_sim/common/png.hpp"
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+namespace v2xloc::sim {
+
+struct Rgb {
+  std::uint8_t r = 0, g = 0, b = 0;
+};
+
+class Canvas {
+ public:
+  // World rectangle [x0, x1] x [y0, y1] (metres, y up) drawn at `pixels_per_metre`.
+  Canvas(double x0, double y0, double x1, double y1, double pixels_per_metre, Rgb background);
+
+  void fill_rect(double xa, double ya, double xb, double yb, Rgb c);        // world, axis aligned
+  void fill_polygon(const std::vector<Eigen::Vector2d>& poly, Rgb c);        // world, convex or not
+  void line(const Eigen::Vector2d& a, const Eigen::Vector2d& b, Rgb c, double width_px = 1.0);
+  void polyline(const std::vector<Eigen::Vector2d>& pts, Rgb c, double width_px = 1.0);
+  void circle(const Eigen::Vector2d& centre, double radius_px, Rgb c, bool filled = true);
+  void cross(const Eigen::Vector2d& centre, double half_px, Rgb c);
+
+  const ImageRgb& image() const { return img_; }
+
+ private:
+  Eigen::Vector2d to_px(const Eigen::Vector2d& w) const;
+  void put(int x, int y, Rgb c);
+  void disc_px(double cx, double cy, double r, Rgb c);
+  double x0_, y1_, ppm_;
+  ImageRgb img_;
+};
+
+}  // namespace v2xloc::sim

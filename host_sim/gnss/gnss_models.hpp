@@ -1,0 +1,61 @@
+// The physics and the receiver maths of the GNSS simulator, as small pure functions so each can be
+// tested on its own: atmosphere, multipath (paper eq. 1), Gauss-Markov errors, weighted least squares.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <vector>
+
+#include "v2xloc/algo/geodesy.hpp"
+
+namespace v2xloc::sim::gnss {
+
+inline constexpr double kSpeedOfLight = 299792458.0;          // m/s
+inline constexpr double kEarthRotationRate = 7.2921151467e-5;  // rad/s (WGS84)
+inline constexpr double kEarthGm = 3.986004418e14;             // m^3/s^2
+inline constexpr double kTecUnit = 1e16;                       // electrons/m^2 per TECU
+
+// Ionospheric group delay (paper: dd_ion = 40.3 TEC / f^2), TEC in electrons/m^2, f in Hz -> metres.
+double iono_delay_m(double tec_el_per_m2, double carrier_hz);
+// Single-layer slant factor 1/cos(z') with sin(z') = R cos(el) / (R + h_shell) (IS-GPS-200 style).
+double iono_slant_factor(double elevation_rad, double shell_height_m);
+
+// Saastamoinen (1972) zenith delay, hydrostatic + wet, pressure hPa, temperature K, humidity 0..1.
+double saastamoinen_zenith_m(double pressure_hpa, double temperature_k, double relative_humidity,
+                             double latitude_rad, double height_m);
+// A simple elevation mapping, 1.001 / sqrt(0.002001 + sin^2(el)) (finite at the horizon).
+double tropo_mapping(double elevation_rad);
+
+// One reflected path of paper eq. 1: attenuation a_k in (0, 1], excess path d_k - d_0 and the
+// range-equivalent phase shift phi_k, both in metres.
+struct ReflectedPath {
+  double attenuation = 0.0;
+  double excess_m = 0.0;
+  double phase_m = 0.0;
+};
+// dd_mult = sum_k a_k (d_k - d_0 + phi_k)  (paper eq. 1).
+double multipath_delay_m(const ReflectedPath* paths, std::size_t count);
+
+// First-order Gauss-Markov step with stationary sigma and correlation time tau.
+double gauss_markov_step(double x, double sigma, double tau_s, double dt_s, double white_unit);
+
+struct PseudorangeObservation {
+  Eigen::Vector3d sat_ecef;
+  double pseudorange_m = 0.0;  // already corrected by the receiver's atmosphere models
+  double sigma_m = 1.0;        // a-priori sigma (elevation and C/N0 weighting)
+};
+
+struct WlsSolution {
+  Eigen::Vector4d state = Eigen::Vector4d::Zero();  // ECEF x, y, z, c*dt
+  double hdop = 0.0, vdop = 0.0, pdop = 0.0;
+  int iterations = 0;
+  bool converged = false;
+};
+
+// Gauss-Newton weighted least squares for position + clock; DOPs from the unweighted geometry in
+// the local ENU frame (as receivers report them).
+WlsSolution solve_position_wls(const std::vector<PseudorangeObservation>& obs,
+                               const Eigen::Vector4d& initial, int max_iterations,
+                               const v2xloc::GeodeticOrigin& frame);
+
+}  // namespace v2xloc::sim::gnss

@@ -1,0 +1,243 @@
+#include "host_sim/gnss/gnss_simulator.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "host_sim/gnss/gnss_models.hpp"
+#include "v2xloc/algo/det_math.hpp"
+
+namespace v2xloc::sim {
+namespace {
+
+constexpr double kDegToRad = det::kPi / 180.0;
+constexpr double kGpsOrbitRadius = 26559.7e3;      // m, semi-major axis (circular)
+constexpr double kGalileoOrbitRadius = 29599.8e3;  // m
+constexpr double kRayStartLift = 0.05;             // m, keeps the antenna off its own mount
+constexpr double kSkyRayRange = 2000.0;            // m, beyond the world's tallest geometry
+constexpr double kFacadeHitTolerance = 0.3;        // m, reflection ray must end on the facade
+constexpr double kCn0ElevationSpanDb = 12.0;       // zenith-to-horizon C/N0 drop (antenna gain)
+
+// Receiver's a-priori sigma: elevation and C/N0 weighting (in the spirit of RTKLIB's model).
+double apriori_sigma(double sigma_uere, double sin_el, double cn0_dbhz) {
+  const double cn0_factor = std::pow(10.0, (45.0 - cn0_dbhz) / 20.0);
+  return sigma_uere * std::sqrt(0.5 + 0.5 / (sin_el * sin_el)) * cn0_factor;
+}
+
+}  // namespace
+
+GnssSimulator::GnssSimulator(const GnssConfig& config, const RayCaster& world,
+                             const v2xloc::GeodeticOrigin& origin, std::uint64_t seed)
+    : cfg_(config), world_(world), origin_(origin), rng_(derive_seed(seed, {0x474E5353ull})) {  // "GNSS"
+  // Walker-like constellations: planes evenly spaced in RAAN, satellites evenly in argument of
+  // latitude with a per-plane phase offset (GPS 24/6, Galileo Walker 24/3/1).
+  auto add_constellation = [&](bool galileo, int planes, int per_plane, double radius, double incl_deg,
+                               int prn_base) {
+    for (int p = 0; p < planes; ++p) {
+      for (int k = 0; k < per_plane; ++k) {
+        Satellite s;
+        s.prn = prn_base + p * per_plane + k;
+        s.galileo = galileo;
+        s.radius_m = radius;
+        s.inclination_rad = incl_deg * kDegToRad;
+        s.raan_rad = 2.0 * det::kPi * p / planes + (galileo ? 0.35 : 0.0);
+        s.phase_rad = 2.0 * det::kPi * k / per_plane + 2.0 * det::kPi * p / (planes * per_plane);
+        s.mean_motion_rps = std::sqrt(gnss::kEarthGm / (radius * radius * radius));
+        s.sisre_m = rng_.gaussian(cfg_.sisre_sigma_m);
+        s.iono_rel = rng_.gaussian(cfg_.iono_gradient_sigma);
+        sats_.push_back(s);
+      }
+    }
+  };
+  add_constellation(false, cfg_.gps_planes, cfg_.gps_per_plane, kGpsOrbitRadius, 55.0, 1);
+  add_constellation(true, cfg_.galileo_planes, cfg_.galileo_per_plane, kGalileoOrbitRadius, 56.0, 201);
+  tropo_true_scale_ = 1.0 + rng_.gaussian(cfg_.tropo_model_error_sigma);
+  clock_bias_m_ = cfg_.clock_bias_initial_m;
+  clock_drift_mps_ = cfg_.clock_drift_mps;
+  last_solution_ << origin_.ecef, 0.0;  // the receiver's last known position: the area it is in
+}
+
+Eigen::Vector3d GnssSimulator::satellite_ecef(const Satellite& sat, double t) const {
+  const double time = t + cfg_.epoch_offset_s;
+  const double u = sat.phase_rad + sat.mean_motion_rps * time;
+  const double raan = sat.raan_rad - gnss::kEarthRotationRate * time;  // inertial -> Earth-fixed
+  const double cu = det::cos(u), su = det::sin(u);
+  const double co = det::cos(raan), so = det::sin(raan);
+  const double ci = det::cos(sat.inclination_rad), si = det::sin(sat.inclination_rad);
+  return sat.radius_m * Eigen::Vector3d(cu * co - su * so * ci, cu * so + su * co * ci, su * si);
+}
+
+void GnssSimulator::propagate_errors(double dt) {
+  for (Satellite& s : sats_) {
+    s.sisre_m = gnss::gauss_markov_step(s.sisre_m, cfg_.sisre_sigma_m, cfg_.sisre_tau_s, dt, rng_.gaussian());
+    s.iono_rel = gnss::gauss_markov_step(s.iono_rel, cfg_.iono_gradient_sigma, cfg_.iono_tau_s, dt, rng_.gaussian());
+  }
+  // Receiver clock: bias integrates the drift, the drift random-walks (TCXO).
+  clock_bias_m_ += clock_drift_mps_ * dt;
+  clock_drift_mps_ += cfg_.clock_drift_random_walk * std::sqrt(dt) * rng_.gaussian();
+}
+
+void GnssSimulator::discover_facades(const Eigen::Vector3d& antenna_enu) {
+  facades_.clear();
+  const int steps = std::max(4, static_cast<int>(std::lround(360.0 / cfg_.probe_azimuth_step_deg)));
+  const Eigen::Vector3d start = antenna_enu + Eigen::Vector3d(0, 0, kRayStartLift);
+  for (int i = 0; i < steps; ++i) {
+    const double az = 2.0 * det::kPi * i / steps;
+    const Eigen::Vector3d dir(det::sin(az), det::cos(az), 0.0);
+    RayHit hit;
+    if (!world_.cast(start, dir, cfg_.max_facade_distance_m, hit)) continue;
+    if (std::abs(hit.normal.z()) > 0.3) continue;  // only (near) vertical reflectors
+    Eigen::Vector3d n = hit.normal;
+    if (n.dot(dir) > 0.0) n = -n;                  // face the antenna
+    const Eigen::Vector3d point = start + hit.range * dir;
+    bool known = false;
+    for (const Facade& f : facades_) {
+      if (f.object_id == hit.object_id && f.normal.dot(n) > 0.999 && std::abs((point - f.point).dot(n)) < 0.5) {
+        known = true;
+        break;
+      }
+    }
+    if (!known) facades_.push_back({point, n, hit.object_id});
+  }
+}
+
+void GnssSimulator::find_reflections(const Eigen::Vector3d& antenna_enu, const Eigen::Vector3d& los,
+                                     std::vector<double>& excess_m) const {
+  excess_m.clear();
+  const Eigen::Vector3d start = antenna_enu + Eigen::Vector3d(0, 0, kRayStartLift);
+  for (const Facade& f : facades_) {
+    const double s_dot_n = los.dot(f.normal);
+    if (s_dot_n <= 1e-3) continue;                  // satellite behind the facade
+    const double h = (start - f.point).dot(f.normal);
+    if (h <= 0.0) continue;
+    // The signal arrives from the mirror image of the satellite direction; the ray must end on this
+    // facade (not before it, not above its roof), and the facade point must see the satellite.
+    const Eigen::Vector3d d = los - 2.0 * s_dot_n * f.normal;
+    const double range = h / s_dot_n;
+    RayHit hit;
+    if (!world_.cast(start, d, range + kFacadeHitTolerance, hit)) continue;
+    if (std::abs(hit.range - range) > kFacadeHitTolerance || std::abs(hit.normal.dot(f.normal)) < 0.99) continue;
+    const Eigen::Vector3d bounce = start + hit.range * d + 0.01 * f.normal;
+    RayHit sky;
+    if (world_.cast(bounce, los, kSkyRayRange, sky)) continue;
+    excess_m.push_back(2.0 * h * s_dot_n);          // image-antenna geometry: 2 h cos(incidence)
+  }
+}
+
+GnssFix GnssSimulator::fix(double t, const Eigen::Vector3d& antenna_enu) {
+  const double dt = started_ ? t - last_t_ : 0.0;
+  if (dt > 0.0) propagate_errors(dt);
+  started_ = true;
+  last_t_ = t;
+
+  GnssFix out;
+  out.t = t;
+  const Eigen::Vector3d rx_ecef = v2xloc::enu_to_ecef(origin_, antenna_enu);
+  const double lat_rad = origin_.geodetic.lat_deg * kDegToRad;
+  const double wavelength = gnss::kSpeedOfLight / cfg_.carrier_hz;
+  const double zenith_model = gnss::saastamoinen_zenith_m(1013.25, 288.15, 0.5, lat_rad, origin_.geodetic.alt_m);
+  const double zenith_true = tropo_true_scale_ *
+      gnss::saastamoinen_zenith_m(cfg_.pressure_hpa, cfg_.temperature_k, cfg_.relative_humidity, lat_rad,
+                                  origin_.geodetic.alt_m);
+  const double smoothing = dt > 0.0 ? 1.0 - std::exp(-dt / cfg_.multipath_smoothing_tau_s) : 1.0;
+  discover_facades(antenna_enu);
+
+  // Satellites above the mask, highest first, limited by the receiver's channels.
+  struct Candidate {
+    std::size_t index;
+    Eigen::Vector3d sat_ecef, los_enu;
+    double elevation;
+  };
+  std::vector<Candidate> visible;
+  for (std::size_t i = 0; i < sats_.size(); ++i) {
+    const Eigen::Vector3d sat = satellite_ecef(sats_[i], t);
+    const Eigen::Vector3d los = v2xloc::ecef_delta_to_enu(origin_, sat - rx_ecef).normalized();
+    const double el = det::asin(std::clamp(los.z(), -1.0, 1.0));
+    if (el >= cfg_.elevation_mask_deg * kDegToRad) visible.push_back({i, sat, los, el});
+    else sats_[i].tracked_before = false;
+  }
+  std::sort(visible.begin(), visible.end(), [](const Candidate& a, const Candidate& b) {
+    return a.elevation > b.elevation || (a.elevation == b.elevation && a.index < b.index);
+  });
+  if (static_cast<int>(visible.size()) > cfg_.max_tracked_satellites) visible.resize(static_cast<std::size_t>(cfg_.max_tracked_satellites));
+  out.num_visible = static_cast<int>(visible.size());
+
+  std::vector<gnss::PseudorangeObservation> obs;
+  std::vector<gnss::ReflectedPath> paths;
+  for (const Candidate& c : visible) {
+    Satellite& sat = sats_[c.index];
+    const double sin_el = det::sin(c.elevation);
+    const Eigen::Vector3d start = antenna_enu + Eigen::Vector3d(0, 0, kRayStartLift);
+    RayHit block;
+    const bool los_clear = !world_.cast(start, c.los_enu, kSkyRayRange, block);
+    find_reflections(antenna_enu, c.los_enu, excess_scratch_);
+    double cn0 = cfg_.cn0_zenith_dbhz - kCn0ElevationSpanDb * (1.0 - sin_el);
+    paths.clear();
+    double path_error = 0.0;
+    if (los_clear) {
+      // Multipath on a line-of-sight signal, paper eq. 1. a_k: the facade's reflection coefficient
+      // scaled by the correlator's in-phase share (1 + cos theta_k) / 2, theta_k the carrier phase
+      // of the reflected path; phi_k: the reflection's half-cycle phase shift as range (lambda / 2).
+      for (double excess : excess_scratch_) {
+        const double theta = 2.0 * det::kPi * excess / wavelength + det::kPi;
+        const double a = std::clamp(cfg_.reflection_amplitude * 0.5 * (1.0 + det::cos(theta)), 1e-3, 1.0);
+        paths.push_back({a, excess, 0.5 * wavelength});
+      }
+      path_error = gnss::multipath_delay_m(paths.data(), paths.size());
+    } else if (!excess_scratch_.empty()) {
+      // NLOS: the receiver tracks the shortest reflection alone (a = 1 in eq. 1), weaker signal.
+      const double excess = *std::min_element(excess_scratch_.begin(), excess_scratch_.end());
+      paths.push_back({1.0, excess, 0.5 * wavelength});
+      path_error = gnss::multipath_delay_m(paths.data(), paths.size());
+      cn0 -= cfg_.reflection_loss_db - 20.0 * std::log10(std::max(cfg_.reflection_amplitude, 1e-3));
+      ++out.num_nlos;
+    } else {
+      ++out.num_blocked;
+      sat.tracked_before = false;
+      continue;
+    }
+    const double noise_sigma = cfg_.code_noise_m_at_45dbhz * std::pow(10.0, (45.0 - cn0) / 20.0);
+    const double raw_error = path_error + noise_sigma * rng_.gaussian();
+    // Code-carrier smoothing: the receiver low-passes code noise and multipath (time correlation).
+    sat.multipath_smoothed_m = sat.tracked_before
+                                   ? sat.multipath_smoothed_m + smoothing * (raw_error - sat.multipath_smoothed_m)
+                                   : raw_error;
+    sat.tracked_before = true;
+
+    const double iono_true = gnss::iono_delay_m(cfg_.vtec_tecu * gnss::kTecUnit * (1.0 + sat.iono_rel), cfg_.carrier_hz) *
+                             gnss::iono_slant_factor(c.elevation, cfg_.iono_shell_height_m);
+    const double iono_model = gnss::iono_delay_m(cfg_.vtec_model_fraction * cfg_.vtec_tecu * gnss::kTecUnit, cfg_.carrier_hz) *
+                              gnss::iono_slant_factor(c.elevation, cfg_.iono_shell_height_m);
+    const double mapping = gnss::tropo_mapping(c.elevation);
+    const double geometric = (c.sat_ecef - rx_ecef).norm();
+    const double pseudorange = geometric + clock_bias_m_ + sat.sisre_m + iono_true + zenith_true * mapping +
+                               sat.multipath_smoothed_m;
+    // The receiver applies its own atmosphere models; the residuals stay in the measurement.
+    gnss::PseudorangeObservation o;
+    o.sat_ecef = c.sat_ecef;
+    o.pseudorange_m = pseudorange - iono_model - zenith_model * mapping;
+    o.sigma_m = apriori_sigma(cfg_.sigma_uere_m, sin_el, cn0);
+    obs.push_back(o);
+  }
+
+  out.num_sats = static_cast<int>(obs.size());
+  if (obs.size() < 4) return out;
+  Eigen::Vector4d initial = last_solution_;
+  if (!have_solution_) initial(3) = 0.0;
+  const gnss::WlsSolution sol = gnss::solve_position_wls(obs, initial, cfg_.max_lsq_iterations, origin_);
+  if (!sol.converged) return out;
+  last_solution_ = sol.state;
+  have_solution_ = true;
+  const auto geo = v2xloc::ecef_to_geodetic(sol.state.head<3>());
+  out.lat_deg = geo.point.lat_deg;
+  out.lon_deg = geo.point.lon_deg;
+  out.alt_m = geo.point.alt_m;
+  out.hdop = sol.hdop;
+  out.pdop = sol.pdop;
+  out.h_acc_m = cfg_.sigma_uere_m * sol.hdop;
+  out.v_acc_m = cfg_.sigma_uere_m * sol.vdop;
+  out.enu_estimate = v2xloc::ecef_to_enu(origin_, sol.state.head<3>());
+  out.valid = geo.status != v2xloc::GeodesyStatus::kInvalidInput && sol.pdop < 50.0;
+  return out;
+}
+
+}  // namespace v2xloc::sim

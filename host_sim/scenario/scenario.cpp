@@ -1,0 +1,116 @@
+#include "host_sim/scenario/scenario.hpp"
+
+#include "host_sim/world/intersection_world.hpp"
+
+#include <cmath>
+
+namespace v2xloc::sim {
+namespace {
+
+using L = IntersectionLayout;
+constexpr double kHalfPi = M_PI / 2.0;
+constexpr double kWaitOffset = L::kStopLine + 3.0;  // car centre waiting at the stop line
+
+}  // namespace
+
+const char* permutation_name(Permutation p) {
+  switch (p) {
+    case Permutation::k4Infra2Agent: return "4_infra_2_agent";
+    case Permutation::k4Infra: return "4_infra";
+    case Permutation::k2Infra: return "2_infra";
+  }
+  return "?";
+}
+
+bool parse_permutation(const std::string& name, Permutation& out) {
+  for (Permutation p : kAllPermutations) {
+    if (name == permutation_name(p)) {
+      out = p;
+      return true;
+    }
+  }
+  return false;
+}
+
+Scenario make_scenario(int id, double duration) {
+  Scenario sc;
+  sc.id = id;
+  sc.name = "sim" + std::to_string(id);
+  const double lane = L::kInnerLane;
+  const double turn_radius = 10.0;
+  const double w = 2.0 * M_PI / 12.0;  // speed oscillation period 12 s
+  switch (id) {
+    case 0: {
+      sc.description = "ego crosses straight eastbound; agent 0 drives the parallel opposing path";
+      sc.duration = 20.0;
+      sc.ego = Trajectory(std::move(Path({-95.0, -lane, 0.0}).straight(250.0)), 0.0, 8.0, 0.6, w);
+      sc.agents.push_back(Trajectory(std::move(Path({90.0, lane, M_PI}).straight(250.0)), 0.0, 7.5, 0.4, w * 1.3));
+      sc.agents.push_back(Trajectory::stationary({lane, -kWaitOffset, kHalfPi}));
+      break;
+    }
+    case 1: {
+      sc.description = "ego crosses straight westbound; both agents stationary at the stop lines";
+      sc.duration = 20.0;
+      sc.ego = Trajectory(std::move(Path({90.0, lane, M_PI}).straight(250.0)), 0.0, 7.5, 0.5, w);
+      sc.agents.push_back(Trajectory::stationary({lane, -kWaitOffset, kHalfPi}));
+      sc.agents.push_back(Trajectory::stationary({-lane, kWaitOffset, -kHalfPi}));
+      break;
+    }
+    case 2: {
+      sc.description = "ego crosses eastbound; agent 0 crosses on the perpendicular path (northbound)";
+      sc.duration = 20.0;
+      sc.ego = Trajectory(std::move(Path({-90.0, -lane, 0.0}).straight(250.0)), 0.0, 8.0, 0.6, w);
+      sc.agents.push_back(Trajectory(std::move(Path({lane, -40.0, kHalfPi}).straight(250.0)), 0.0, 8.0, 0.5, w * 0.8));
+      sc.agents.push_back(Trajectory::stationary({kWaitOffset, lane, M_PI}));
+      break;
+    }
+    case 3: {
+      sc.description = "ego (northbound) and agent 0 (southbound) turn left";
+      sc.duration = 22.0;
+      const double approach = 50.0;
+      sc.ego = Trajectory(std::move(Path({lane, -approach, kHalfPi})
+                                        .straight(approach - (turn_radius - lane))
+                                        .arc(turn_radius, kHalfPi)
+                                        .straight(150.0)),
+                          0.0, 6.5, 0.5, w);
+      const double agent_approach = 45.0;
+      sc.agents.push_back(Trajectory(std::move(Path({-lane, agent_approach, -kHalfPi})
+                                                   .straight(agent_approach - (turn_radius - lane))
+                                                   .arc(turn_radius, kHalfPi)
+                                                   .straight(150.0)),
+                                     0.0, 6.0, 0.4, w * 1.2));
+      sc.agents.push_back(Trajectory::stationary({-kWaitOffset, -lane, 0.0}));
+      break;
+    }
+    default:
+      sc.description = "invalid";
+      break;
+  }
+  if (duration > 0.0) sc.duration = duration;
+  return sc;
+}
+
+std::vector<InfraSite> infra_sites(Permutation p) {
+  const double c = L::kRoadHalfWidth + 2.5;  // on the sidewalk corner
+  const double height = 5.0;
+  const double tilt = 10.0 * M_PI / 180.0;
+  struct Corner { const char* name; double sx, sy; };
+  const Corner corners[4] = {{"infra_0", 1, 1}, {"infra_1", -1, 1}, {"infra_2", -1, -1}, {"infra_3", 1, -1}};
+  std::vector<InfraSite> out;
+  for (int i = 0; i < 4; ++i) {
+    if (p == Permutation::k2Infra && (i == 1 || i == 3)) continue;  // keep the NE/SW diagonal
+    const Corner& k = corners[i];
+    InfraSite s;
+    s.name = k.name;
+    s.sensor_to_enu = Eigen::Isometry3d::Identity();
+    const double yaw = std::atan2(-k.sy, -k.sx);  // face the intersection centre
+    // Positive rotation about the sensor's y axis pitches its x axis down.
+    s.sensor_to_enu.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
+                                Eigen::AngleAxisd(tilt, Eigen::Vector3d::UnitY())).toRotationMatrix();
+    s.sensor_to_enu.translation() = Eigen::Vector3d(k.sx * c, k.sy * c, height);
+    out.push_back(s);
+  }
+  return out;
+}
+
+}  // namespace v2xloc::sim

@@ -1,0 +1,179 @@
+// Binds each DBC message to the codec's physical struct by signal name, so tests can drive any
+// message generically: physical values in by name -> pack; unpack -> physical values by name.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "firmware/protocol/can_messages.hpp"
+
+namespace v2xloc::test {
+
+using Values = std::map<std::string, double>;
+
+struct MessageBinding {
+  std::uint32_t id;
+  std::function<protocol::CanFrame(const Values&, protocol::PackStats*)> pack;
+  std::function<protocol::DecodeStatus(const protocol::CanFrame&, Values&)> unpack;
+};
+
+namespace detail {
+inline double get(const Values& v, const char* name) {
+  const auto it = v.find(name);
+  return it == v.end() ? 0.0 : it->second;
+}
+template <class T>
+T as(const Values& v, const char* name) {
+  return static_cast<T>(get(v, name));
+}
+inline void set_flags(protocol::PoseFlags& f, const Values& v) {
+  f.pose_valid = get(v, "PoseValid") != 0.0;
+  f.registration_valid = get(v, "RegistrationValid") != 0.0;
+  f.gnss_used = get(v, "GnssUsed") != 0.0;
+  f.degraded = get(v, "Degraded") != 0.0;
+}
+inline void get_flags(const protocol::PoseFlags& f, Values& v) {
+  v["PoseValid"] = f.pose_valid;
+  v["RegistrationValid"] = f.registration_valid;
+  v["GnssUsed"] = f.gnss_used;
+  v["Degraded"] = f.degraded;
+}
+}  // namespace detail
+
+inline std::vector<MessageBinding> message_bindings() {
+  using namespace protocol;
+  using detail::as;
+  using detail::get;
+  std::vector<MessageBinding> b;
+  b.push_back({kVehicleMotionId,
+               [](const Values& v, PackStats* s) {
+                 VehicleMotion m;
+                 m.wheel_speed_mps = get(v, "WheelSpeed");
+                 m.yaw_rate_rps = get(v, "YawRate");
+                 m.speed_valid = get(v, "SpeedValid") != 0.0;
+                 m.yaw_rate_valid = get(v, "YawRateValid") != 0.0;
+                 m.counter = as<std::uint8_t>(v, "Counter");
+                 return pack(m, s);
+               },
+               [](const CanFrame& f, Values& v) {
+                 VehicleMotion m;
+                 const auto st = unpack(f, m);
+                 v = {{"WheelSpeed", m.wheel_speed_mps}, {"YawRate", m.yaw_rate_rps}, {"SpeedValid", m.speed_valid},
+                      {"YawRateValid", m.yaw_rate_valid}, {"Counter", m.counter}};
+                 return st;
+               }});
+  b.push_back({kGnssPositionId,
+               [](const Values& v, PackStats* s) { return pack(GnssPosition{get(v, "Latitude"), get(v, "Longitude")}, s); },
+               [](const CanFrame& f, Values& v) {
+                 GnssPosition m;
+                 const auto st = unpack(f, m);
+                 v = {{"Latitude", m.lat_deg}, {"Longitude", m.lon_deg}};
+                 return st;
+               }});
+  b.push_back({kGnssStatusId,
+               [](const Values& v, PackStats* s) {
+                 GnssStatus m;
+                 m.alt_m = get(v, "Altitude");
+                 m.h_acc_m = get(v, "HorizontalAccuracy");
+                 m.v_acc_m = get(v, "VerticalAccuracy");
+                 m.num_sats = as<std::uint8_t>(v, "NumSatellites");
+                 m.fix_type = static_cast<GnssFixType>(as<std::uint8_t>(v, "FixType"));
+                 m.counter = as<std::uint8_t>(v, "Counter");
+                 return pack(m, s);
+               },
+               [](const CanFrame& f, Values& v) {
+                 GnssStatus m;
+                 const auto st = unpack(f, m);
+                 v = {{"Altitude", m.alt_m}, {"HorizontalAccuracy", m.h_acc_m}, {"VerticalAccuracy", m.v_acc_m},
+                      {"NumSatellites", m.num_sats}, {"FixType", static_cast<double>(m.fix_type)}, {"Counter", m.counter}};
+                 return st;
+               }});
+  b.push_back({kGnssTimeDopId,
+               [](const Values& v, PackStats* s) {
+                 GnssTimeDop m;
+                 m.time_of_week_s = get(v, "TimeOfWeek");
+                 m.week = as<std::uint16_t>(v, "Week");
+                 m.hdop = get(v, "Hdop");
+                 m.pdop = get(v, "Pdop");
+                 return pack(m, s);
+               },
+               [](const CanFrame& f, Values& v) {
+                 GnssTimeDop m;
+                 const auto st = unpack(f, m);
+                 v = {{"TimeOfWeek", m.time_of_week_s}, {"Week", m.week}, {"Hdop", m.hdop}, {"Pdop", m.pdop}};
+                 return st;
+               }});
+  b.push_back({kPosePositionId,
+               [](const Values& v, PackStats* s) {
+                 PosePosition m;
+                 m.x_m = get(v, "PoseX");
+                 m.y_m = get(v, "PoseY");
+                 detail::set_flags(m.flags, v);
+                 m.counter = as<std::uint8_t>(v, "Counter");
+                 return pack(m, s);
+               },
+               [](const CanFrame& f, Values& v) {
+                 PosePosition m;
+                 const auto st = unpack(f, m);
+                 v = {{"PoseX", m.x_m}, {"PoseY", m.y_m}, {"Counter", m.counter}};
+                 detail::get_flags(m.flags, v);
+                 return st;
+               }});
+  b.push_back({kPoseAttitudeId,
+               [](const Values& v, PackStats* s) {
+                 PoseAttitude m;
+                 m.z_m = get(v, "PoseZ");
+                 m.yaw_rad = get(v, "PoseYaw");
+                 m.frame_counter = as<std::uint16_t>(v, "FrameCounter");
+                 detail::set_flags(m.flags, v);
+                 m.counter = as<std::uint8_t>(v, "Counter");
+                 return pack(m, s);
+               },
+               [](const CanFrame& f, Values& v) {
+                 PoseAttitude m;
+                 const auto st = unpack(f, m);
+                 v = {{"PoseZ", m.z_m}, {"PoseYaw", m.yaw_rad}, {"FrameCounter", m.frame_counter}, {"Counter", m.counter}};
+                 detail::get_flags(m.flags, v);
+                 return st;
+               }});
+  b.push_back({kPoseSigmaId,
+               [](const Values& v, PackStats* s) {
+                 PoseSigma m;
+                 m.sigma_x_m = get(v, "SigmaX");
+                 m.sigma_y_m = get(v, "SigmaY");
+                 m.sigma_z_m = get(v, "SigmaZ");
+                 m.sigma_yaw_rad = get(v, "SigmaYaw");
+                 m.counter = as<std::uint8_t>(v, "Counter");
+                 return pack(m, s);
+               },
+               [](const CanFrame& f, Values& v) {
+                 PoseSigma m;
+                 const auto st = unpack(f, m);
+                 v = {{"SigmaX", m.sigma_x_m}, {"SigmaY", m.sigma_y_m}, {"SigmaZ", m.sigma_z_m},
+                      {"SigmaYaw", m.sigma_yaw_rad}, {"Counter", m.counter}};
+                 return st;
+               }});
+  b.push_back({kHeartbeatId,
+               [](const Values& v, PackStats* s) {
+                 Heartbeat m;
+                 m.state = static_cast<LocalizerState>(as<std::uint8_t>(v, "State"));
+                 m.error_flags = as<std::uint8_t>(v, "ErrorFlags");
+                 m.uptime_s = get(v, "Uptime");
+                 m.can_rx_errors = as<std::uint8_t>(v, "CanRxErrors");
+                 m.udp_dropped = as<std::uint8_t>(v, "UdpDropped");
+                 m.counter = as<std::uint8_t>(v, "Counter");
+                 return pack(m, s);
+               },
+               [](const CanFrame& f, Values& v) {
+                 Heartbeat m;
+                 const auto st = unpack(f, m);
+                 v = {{"State", static_cast<double>(m.state)}, {"ErrorFlags", m.error_flags}, {"Uptime", m.uptime_s},
+                      {"CanRxErrors", m.can_rx_errors}, {"UdpDropped", m.udp_dropped}, {"Counter", m.counter}};
+                 return st;
+               }});
+  return b;
+}
+
+}  // namespace v2xloc::test

@@ -1,0 +1,178 @@
+#include "host_sim/recording/recorder.hpp"
+#include "host_sim/recording/recording_reader.hpp"
+#include "tools/cloud_io/pcd.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+namespace v2xloc::sim {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string tmp_dir(const std::string& name) {
+  const fs::path p = fs::path(V2XLOC_BINARY_DIR) / "test_tmp" / "host_sim" / name;
+  fs::remove_all(p);
+  fs::create_directories(p);
+  return p.string();
+}
+
+std::vector<char> slurp(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+}
+
+RecorderConfig quick_config(const std::string& dir, std::uint64_t seed) {
+  RecorderConfig c;
+  c.scenario = 3;
+  c.permutation = Permutation::k4Infra2Agent;
+  c.seed = seed;
+  c.quick = true;
+  c.duration = 1.0;
+  c.out_dir = dir;
+  return c;
+}
+
+class HostSimRecording : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_a_ = tmp_dir("rec_a");
+    dir_b_ = tmp_dir("rec_b");
+    dir_c_ = tmp_dir("rec_c");
+    std::string err;
+    ok_ = generate_recording(quick_config(dir_a_, 11), sum_a_, err) &&
+          generate_recording(quick_config(dir_b_, 11), sum_b_, err) &&
+          generate_recording(quick_config(dir_c_, 12), sum_c_, err);
+    error_ = err;
+  }
+  static inline std::string dir_a_, dir_b_, dir_c_, error_;
+  static inline RecordingSummary sum_a_, sum_b_, sum_c_;
+  static inline bool ok_ = false;
+};
+
+TEST_F(HostSimRecording, SameSeedGivesByteIdenticalRecording) {
+  ASSERT_TRUE(ok_) << error_;
+  std::size_t files = 0;
+  for (const auto& e : fs::recursive_directory_iterator(dir_a_)) {
+    if (!e.is_regular_file()) continue;
+    const fs::path rel = fs::relative(e.path(), dir_a_);
+    ASSERT_TRUE(fs::exists(fs::path(dir_b_) / rel)) << rel;
+    EXPECT_EQ(slurp(e.path()), slurp(fs::path(dir_b_) / rel)) << rel;
+    ++files;
+  }
+  EXPECT_GT(files, 20u);
+}
+
+TEST_F(HostSimRecording, DifferentSeedGivesDifferentNoise) {
+  ASSERT_TRUE(ok_) << error_;
+  EXPECT_NE(slurp(fs::path(dir_a_) / "ego_lidar/000000.pcd"), slurp(fs::path(dir_c_) / "ego_lidar/000000.pcd"));
+  EXPECT_NE(slurp(fs::path(dir_a_) / "stereo/000000.png"), slurp(fs::path(dir_c_) / "stereo/000000.png"));
+}
+
+TEST_F(HostSimRecording, ReaderIteratesFramesCloudsAndTruth) {
+  ASSERT_TRUE(ok_) << error_;
+  RecordingReader r;
+  std::string err;
+  ASSERT_TRUE(r.open(dir_a_, err)) << err;
+  EXPECT_EQ(r.frame_count(), 10);
+  EXPECT_EQ(r.scenario(), 3);
+  EXPECT_EQ(r.permutation(), "4_infra_2_agent");
+  ASSERT_EQ(r.ground_truth().size(), 10u);
+  EXPECT_EQ(r.ground_truth_100hz().size(), 100u);
+  for (int i = 0; i < r.frame_count(); ++i) {
+    cloud_io::PointCloud scan;
+    ASSERT_TRUE(r.ego_scan(i, scan, err)) << err;
+    ASSERT_TRUE(scan.has_time());
+    ASSERT_TRUE(scan.has_intensity());
+    EXPECT_GT(scan.size(), 16u * 256u / 2u);  // quick ego LiDAR: 16 x 256 rays
+    EXPECT_LE(scan.size(), 16u * 256u);
+    for (float t : scan.time) {
+      EXPECT_GE(t, 0.0f);
+      EXPECT_LT(t, 0.1f);
+    }
+    EXPECT_NEAR(r.ground_truth()[static_cast<std::size_t>(i)].t, r.frame_time(i), 1e-9);
+    Image16 disp;
+    ASSERT_TRUE(r.disparity(i, disp, err)) << err;
+    EXPECT_EQ(disp.width, r.stereo_calibration().width);
+  }
+  // 2 Hz map clouds over 1 s: stamps 0.0 and 0.5, 4 infra + 2 agents each.
+  EXPECT_EQ(r.map_clouds().size(), 12u);
+  EXPECT_EQ(r.latest_map_clouds(0.7).size(), 6u);
+  EXPECT_EQ(r.map_clouds_until(0.2).size(), 6u);
+  EXPECT_EQ(r.infra_surveyed_poses().size(), 4u);
+  for (const auto& m : r.map_clouds()) {
+    cloud_io::PointCloud c;
+    ASSERT_TRUE(r.load_map_cloud(m, c, err)) << err;
+    EXPECT_EQ(c.size(), m.points);
+    if (m.kind == "infra") {
+      EXPECT_TRUE(m.sensor_pose.isApprox(m.true_sensor_pose));
+    }
+    if (m.kind == "agent") {
+      const double e = (m.sensor_pose.translation() - m.true_sensor_pose.translation()).norm();
+      EXPECT_GT(e, 0.0);
+      EXPECT_LT(e, 0.5);  // small self-localization error
+    }
+  }
+  // Ground truth interpolation agrees with the frame truth.
+  EXPECT_TRUE(r.ground_truth_at(0.5).isApprox(r.ground_truth()[5].pose, 1e-6));
+}
+
+TEST_F(HostSimRecording, EgoScanGeometryMatchesTheWorldViaGroundTruth) {
+  ASSERT_TRUE(ok_) << error_;
+  RecordingReader r;
+  std::string err;
+  ASSERT_TRUE(r.open(dir_a_, err)) << err;
+  cloud_io::PointCloud scan;
+  ASSERT_TRUE(r.ego_scan(4, scan, err)) << err;
+  // Points classified as ground (world z near 0 after deskew with truth) must be numerous.
+  std::size_t ground = 0;
+  for (std::size_t k = 0; k < scan.size(); ++k) {
+    const Eigen::Isometry3d T = r.ground_truth_at(r.frame_time(4) + scan.time[k]) * r.ego_lidar_mount();
+    const Eigen::Vector3d w = T * scan.points[k].cast<double>();
+    ground += std::abs(w.z()) < 0.1 ? 1 : 0;
+  }
+  EXPECT_GT(ground, scan.size() / 4);
+}
+
+TEST_F(HostSimRecording, CanLogHoldsVehicleAndGnssFramesInTimeOrder) {
+  ASSERT_TRUE(ok_) << error_;
+  RecordingReader r;
+  std::string err;
+  ASSERT_TRUE(r.open(dir_a_, err)) << err;
+  if (r.can_log_path().empty()) GTEST_SKIP() << "built without the CAN codec / candump writer";
+  std::vector<CanLogFrame> frames;
+  ASSERT_TRUE(r.can_frames(frames, err)) << err;
+  std::size_t motion = 0, gnss = 0;
+  double last = -1;
+  for (const auto& f : frames) {
+    EXPECT_GE(f.t, last - 1e-9);
+    last = f.t;
+    motion += f.id == 0x120 ? 1 : 0;
+    gnss += (f.id >= 0x130 && f.id <= 0x132) ? 1 : 0;
+    EXPECT_EQ(f.dlc, 8);
+  }
+  EXPECT_EQ(motion, 100u);  // 100 Hz over 1 s
+  EXPECT_GE(gnss, 10u);     // 5 Hz x (status + time/DOP [+ position])
+  EXPECT_LT(last, 1.0);
+}
+
+TEST(HostSimCandump, ParsesStandardAndExtendedFrames) {
+  double t = 0;
+  CanLogFrame f;
+  ASSERT_TRUE(parse_candump_line("(1700000000.250000) can0 123#DEADBEEF", t, f));
+  EXPECT_DOUBLE_EQ(t, 1700000000.25);
+  EXPECT_EQ(f.id, 0x123u);
+  EXPECT_EQ(f.dlc, 4);
+  EXPECT_EQ(f.data[0], 0xDE);
+  ASSERT_TRUE(parse_candump_line("(1.000000) vcan0 18FF0001#0102", t, f));
+  EXPECT_EQ(f.id, 0x18FF0001u | 0x80000000u);
+  EXPECT_EQ(f.dlc, 2);
+  EXPECT_FALSE(parse_candump_line("garbage", t, f));
+  EXPECT_FALSE(parse_candump_line("(1.0) can0 123#ABC", t, f));
+}
+
+}  // namespace
+}  // namespace v2xloc::sim

@@ -1,0 +1,139 @@
+#include "v2xloc/algo/map_fusion.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+#include <vector>
+
+#include "v2xloc/algo/rigid_motion.hpp"
+
+namespace v2xloc {
+namespace {
+
+// A corner of two walls and the ground, in the world frame, 0.1 m spacing.
+std::vector<Vec3d> corner_scene() {
+  std::vector<Vec3d> pts;
+  for (int i = 0; i < 100; ++i)
+    for (int j = 0; j < 40; ++j) {
+      pts.emplace_back(0.1 * i, 0.0, 0.1 * j);
+      pts.emplace_back(0.0, 0.1 * i, 0.1 * j);
+      pts.emplace_back(0.1 * i, 0.1 * j * 2.5, 0.0);
+    }
+  return pts;
+}
+
+std::vector<Vec3f> in_sensor_frame(const std::vector<Vec3d>& world, const Mat4d& world_T_sensor) {
+  const Mat4d inv = se3_inverse(world_T_sensor);
+  std::vector<Vec3f> out;
+  for (const Vec3d& p : world)
+    out.push_back((inv.topLeftCorner<3, 3>() * p + inv.topRightCorner<3, 1>()).cast<float>());
+  return out;
+}
+
+Mat4d sensor_pose(double x, double y, double yaw) {
+  Mat4d T = Mat4d::Identity();
+  T.topLeftCorner<3, 3>() = rot_z(yaw);
+  T(0, 3) = x;
+  T(1, 3) = y;
+  T(2, 3) = 3.0;
+  return T;
+}
+
+MapFusion& fresh_map(const MapFusionParams& p = {}) {
+  static MapFusion map;  // ~9 MB
+  map.configure(p);
+  return map;
+}
+
+TEST(MapFusion, ReplacementStaleAndAgeing) {
+  MapFusionParams params;
+  params.max_age = 1.0;
+  MapFusion& map = fresh_map(params);
+  const auto scene = corner_scene();
+  const Mat4d pose_a = sensor_pose(12.0, 12.0, 2.0);
+  auto r = map.insert(7, 10.0, pose_a, in_sensor_frame(scene, pose_a));
+  ASSERT_EQ(r.status, MapInsertStatus::kInserted);
+  const std::size_t n1 = map.point_count();
+  EXPECT_GT(n1, 1000u);
+  EXPECT_EQ(n1, r.stored_points);
+  // The same source re-scans: replaced, not accumulated.
+  r = map.insert(7, 10.1, pose_a, in_sensor_frame(scene, pose_a));
+  EXPECT_EQ(r.status, MapInsertStatus::kReplaced);
+  EXPECT_EQ(map.point_count(), n1);
+  // Reordered (older) message: stale.
+  r = map.insert(7, 10.05, pose_a, in_sensor_frame(scene, pose_a));
+  EXPECT_EQ(r.status, MapInsertStatus::kStale);
+  // A second source: points add up; consistent overlap accepted.
+  const Mat4d pose_b = sensor_pose(-5.0, 15.0, -0.7);
+  r = map.insert(8, 10.5, pose_b, in_sensor_frame(scene, pose_b));
+  EXPECT_EQ(r.status, MapInsertStatus::kInserted);
+  EXPECT_GT(r.consistency_fitness, 0.95);
+  EXPECT_GT(r.overlap_points, 1000u);
+  EXPECT_GT(map.point_count(), n1);
+  // Ageing: at t = 11.3 source 7 (10.1) is older than 1 s, source 8 (10.5) is not.
+  EXPECT_EQ(map.expire(11.3), 1u);
+  EXPECT_EQ(map.counters().sources_evicted_age, 1u);
+  std::size_t active = 0;
+  for (const MapSourceInfo& s : map.sources()) active += s.active;
+  EXPECT_EQ(active, 1u);
+  FixedVector<Vec3f, 65536>* out = new FixedVector<Vec3f, 65536>();
+  const MapExtractResult e = map.extract(*out);
+  // One source left; re-gridding (origin at the merged min bound) merges a few neighbours.
+  EXPECT_LE(e.points, map.point_count());
+  EXPECT_GT(e.points, 0.95 * map.point_count());
+  delete out;
+}
+
+TEST(MapFusion, InconsistentSourceRejected) {
+  MapFusion& map = fresh_map();
+  const auto scene = corner_scene();
+  const Mat4d pose_a = sensor_pose(12.0, 12.0, 2.0);
+  ASSERT_EQ(map.insert(1, 0.0, pose_a, in_sensor_frame(scene, pose_a)).status,
+            MapInsertStatus::kInserted);
+  // Agent claims a pose 1.5 m / 0.5 m up / 5 deg off its true one: its cloud lands beside the map.
+  const Mat4d true_pose = sensor_pose(3.0, 20.0, -1.0);
+  Mat4d claimed = true_pose;
+  claimed(0, 3) += 1.5;
+  claimed(2, 3) += 0.5;
+  claimed.topLeftCorner<3, 3>() = rot_z(-1.0 + 0.087);
+  const auto r = map.insert(2, 0.1, claimed, in_sensor_frame(scene, true_pose));
+  std::printf("inconsistent source: fitness %.3f over %u overlap points\n", r.consistency_fitness,
+              r.overlap_points);
+  EXPECT_EQ(r.status, MapInsertStatus::kRejectedInconsistent);
+  EXPECT_LT(r.consistency_fitness, 0.5);
+  EXPECT_EQ(map.counters().rejected_inconsistent, 1u);
+}
+
+TEST(MapFusion, CapacityAndSourceSlotOverflowCounted) {
+  MapFusionParams params;
+  params.check_consistency = false;
+  params.voxel_size = 0.2;
+  MapFusion& map = fresh_map(params);
+  // One flat cloud larger than the map: 0.2 m grid over N x N cells.
+  const int n = static_cast<int>(std::sqrt(double(config::kMaxMapPoints))) + 20;
+  std::vector<Vec3f> big;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) big.emplace_back(0.2f * i + 0.1f, 0.2f * j + 0.1f, 0.0f);
+  big.emplace_back(NAN, 0.0f, 0.0f);
+  const auto r = map.insert(1, 0.0, Mat4d::Identity(), big);
+  EXPECT_EQ(r.non_finite_dropped, 1u);
+  EXPECT_EQ(map.point_count(), config::kMaxMapPoints);
+  EXPECT_EQ(r.stored_points + r.capacity_dropped, static_cast<std::uint32_t>(n * n));
+  EXPECT_GT(map.counters().points_dropped_capacity, 0u);
+  // Source slots: fill all, then a newer source displaces the oldest, an older one is refused.
+  map.clear();
+  std::vector<Vec3f> small = {Vec3f(0, 0, 0), Vec3f(1, 0, 0)};
+  for (std::uint32_t s = 0; s < config::kMaxMapSources; ++s)
+    EXPECT_EQ(map.insert(100 + s, 1.0 + s, Mat4d::Identity(), small).status,
+              MapInsertStatus::kInserted);
+  EXPECT_EQ(map.insert(999, 0.5, Mat4d::Identity(), small).status, MapInsertStatus::kNoSourceSlot);
+  EXPECT_EQ(map.insert(1000, 50.0, Mat4d::Identity(), small).status, MapInsertStatus::kInserted);
+  EXPECT_EQ(map.counters().sources_evicted_slot, 1u);
+  EXPECT_EQ(map.counters().no_source_slot, 1u);
+  bool oldest_present = false;
+  for (const MapSourceInfo& s : map.sources()) oldest_present |= s.active && s.id == 100;
+  EXPECT_FALSE(oldest_present);
+}
+
+}  // namespace
+}  // namespace v2xloc

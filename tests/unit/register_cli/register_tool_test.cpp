@@ -1,0 +1,141 @@
+// Runs the v2xloc-register executable on the real outdoor pair and checks its JSON and exit codes.
+// Host only: spawns the host-built tool (and python3 to validate the JSON).
+#include "tools/cloud_io/cloud_io.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <sys/wait.h>
+
+namespace {
+
+const std::string kTool = std::string(V2XLOC_BINARY_DIR) + "/bin/v2xloc-register";
+const std::string kPair = std::string(V2XLOC_SHARED_DATA_DIR) + "/outdoor_lidar_pair";
+
+struct ToolRun {
+  int exit_code = -1;
+  std::string out;
+};
+
+ToolRun run(const std::string& args) {
+  ToolRun r;
+  std::FILE* pipe = popen((kTool + " " + args).c_str(), "r");
+  if (pipe == nullptr) return r;
+  char buf[4096];
+  std::size_t n = 0;
+  while ((n = std::fread(buf, 1, sizeof(buf), pipe)) > 0) r.out.append(buf, n);
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+bool read_matrix(std::istream& in, Eigen::Matrix4d& m) {
+  for (int i = 0; i < 16; ++i) {
+    if (!(in >> m(i / 4, i % 4))) return false;
+  }
+  return true;
+}
+
+// The "transform" rows of the JSON (first occurrence = final registration).
+bool json_transform(const std::string& json, Eigen::Matrix4d& m) {
+  const std::size_t at = json.find("\"transform\":");
+  if (at == std::string::npos) return false;
+  std::string numbers = json.substr(at + 12, json.find("]]", at) - at - 12);
+  for (char& c : numbers) {
+    if (c == '[' || c == ']' || c == ',') c = ' ';
+  }
+  std::istringstream in(numbers);
+  return read_matrix(in, m);
+}
+
+bool valid_json(const std::string& json) {
+  if (!std::filesystem::exists("/usr/bin/python3")) return true;  // nothing to check with
+  const std::string path = testing::TempDir() + "/v2xloc_register.json";
+  std::ofstream(path) << json;
+  const std::string cmd = "/usr/bin/python3 -c 'import json,sys; json.load(open(sys.argv[1]))' " + path;
+  const bool ok = std::system(cmd.c_str()) == 0;
+  std::remove(path.c_str());
+  return ok;
+}
+
+void expect_close_to_reference(const std::string& json) {
+  Eigen::Matrix4d reference, estimate;
+  std::ifstream ref_file(kPair + "/T_target_source.txt");
+  ASSERT_TRUE(read_matrix(ref_file, reference));
+  ASSERT_TRUE(json_transform(json, estimate)) << json;
+  const Eigen::Matrix4d delta = reference.inverse() * estimate;
+  const double translation = delta.topRightCorner<3, 1>().norm();
+  const double cos_angle = std::clamp((delta.topLeftCorner<3, 3>().trace() - 1.0) / 2.0, -1.0, 1.0);
+  const double angle_deg = std::acos(cos_angle) * 180.0 / M_PI;
+  EXPECT_LT(translation, 0.05) << json;
+  EXPECT_LT(angle_deg, 0.5) << json;
+  std::printf("  translation error %.4f m, rotation error %.4f deg\n", translation, angle_deg);
+}
+
+class RegisterTool : public testing::Test {
+ protected:
+  void SetUp() override {
+    if (!std::filesystem::exists(kTool)) GTEST_SKIP() << "tool not built: " << kTool;
+    if (!std::filesystem::exists(kPair + "/source.ply")) GTEST_SKIP() << "shared data absent: " << kPair;
+  }
+};
+
+TEST_F(RegisterTool, GlobalModeRecoversTheOutdoorReference) {
+  const ToolRun r = run(kPair + "/source.ply " + kPair + "/target.ply --voxel 0.5 --seed 7");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_EQ(r.out.rfind("{\"status\":\"ok\"", 0), 0u) << r.out;
+  EXPECT_TRUE(valid_json(r.out)) << r.out;
+  for (const char* key : {"\"fitness\":", "\"inlier_rmse\":", "\"iterations\":", "\"source_downsampled\":",
+                          "\"correspondences\":", "\"ms\":{", "\"ransac\":", "\"icp\":"}) {
+    EXPECT_NE(r.out.find(key), std::string::npos) << key;
+  }
+  expect_close_to_reference(r.out);
+  std::printf("  %s", r.out.c_str());
+}
+
+TEST_F(RegisterTool, IcpModeFromAPerturbedInitialGuess) {
+  Eigen::Matrix4d reference;
+  std::ifstream ref_file(kPair + "/T_target_source.txt");
+  ASSERT_TRUE(read_matrix(ref_file, reference));
+  Eigen::Affine3d offset(Eigen::AngleAxisd(2.0 * M_PI / 180.0, Eigen::Vector3d::UnitZ()));
+  offset.translation() = Eigen::Vector3d(0.3, -0.2, 0.05);
+  const Eigen::Matrix4d init = offset.matrix() * reference;
+  const std::string init_path = testing::TempDir() + "/v2xloc_init.txt";
+  {
+    std::ofstream f(init_path);
+    f.precision(17);
+    f << init << "\n";
+  }
+  const ToolRun r = run(kPair + "/source.ply " + kPair + "/target.ply --mode icp --voxel 0.25 --init " + init_path);
+  std::remove(init_path.c_str());
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_NE(r.out.find("\"mode\":\"icp\""), std::string::npos);
+  expect_close_to_reference(r.out);
+}
+
+TEST_F(RegisterTool, ExitCodes) {
+  EXPECT_EQ(run("").exit_code, 2);
+  EXPECT_EQ(run(kPair + "/source.ply 2>/dev/null").exit_code, 2);
+  EXPECT_EQ(run(kPair + "/nope.ply " + kPair + "/target.ply 2>/dev/null").exit_code, 2);
+  EXPECT_EQ(run(kPair + "/source.ply " + kPair + "/target.ply --mode ndt 2>/dev/null").exit_code, 2);
+  EXPECT_EQ(run(kPair + "/source.ply " + kPair + "/T_target_source.txt 2>/dev/null").exit_code, 2);
+  // Two points cannot be registered: exit 1 with the JSON still printed.
+  v2xloc::cloud_io::PointCloud tiny;
+  tiny.points = {Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(1, 0, 0)};
+  const std::string tiny_path = testing::TempDir() + "/v2xloc_tiny.pcd";
+  std::string error;
+  ASSERT_TRUE(v2xloc::cloud_io::write_cloud(tiny_path, tiny, error)) << error;
+  const ToolRun r = run(tiny_path + " " + tiny_path);
+  std::remove(tiny_path.c_str());
+  EXPECT_EQ(r.exit_code, 1) << r.out;
+  EXPECT_EQ(r.out.rfind("{\"status\":\"", 0), 0u) << r.out;
+  EXPECT_EQ(r.out.find("{\"status\":\"ok\""), std::string::npos) << r.out;
+  EXPECT_TRUE(valid_json(r.out)) << r.out;
+}
+
+}  // namespace

@@ -1,0 +1,102 @@
+// Feature matching: one-way nearest neighbour vs brute force, mutual filter, fallback, capacity.
+#include "v2xloc/algo/correspondences.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+#include <vector>
+
+namespace v2xloc {
+namespace {
+
+std::vector<Feature33> random_features(std::size_t n, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0.0f, 100.0f);
+  std::vector<Feature33> f(n);
+  for (auto& x : f)
+    for (int b = 0; b < kFpfhBins; ++b) x[b] = u(rng);
+  return f;
+}
+
+std::uint32_t brute_nn(const std::vector<Feature33>& set, const Feature33& q) {
+  std::uint32_t best = 0;
+  float best_d = INFINITY;
+  for (std::size_t i = 0; i < set.size(); ++i) {
+    float d = 0.0f;
+    for (int b = 0; b < kFpfhBins; ++b) d += (set[i][b] - q[b]) * (set[i][b] - q[b]);
+    if (d < best_d) {
+      best_d = d;
+      best = std::uint32_t(i);
+    }
+  }
+  return best;
+}
+
+static KdTreeStorage<Feature33, 4000> src_tree;
+static KdTreeStorage<Feature33, 4000> tgt_tree;
+static FixedVector<Correspondence, 4000> out;
+static std::uint32_t scratch[4000];
+
+TEST(Correspondences, OneWayAndMutualMatchBruteForce) {
+  const auto src = random_features(1500, 1);
+  auto tgt = random_features(1200, 2);
+  // Plant 300 near-copies so there are real mutual matches.
+  for (int k = 0; k < 300; ++k) tgt[4 * k] = src[5 * k] + Feature33::Constant(0.01f);
+  ASSERT_EQ(src_tree.build(src, 1u << 30).status, KdBuildStatus::kOk);
+  ASSERT_EQ(tgt_tree.build(tgt, 1u << 30).status, KdBuildStatus::kOk);
+
+  CorrespondenceParams p;
+  CorrespondenceResult r = match_features(src, tgt_tree.tree, p, out);
+  ASSERT_EQ(r.status, CorrespondenceStatus::kOk);
+  ASSERT_EQ(r.count, src.size());
+  for (std::size_t i = 0; i < src.size(); ++i) {
+    EXPECT_EQ(out[i].source, i);
+    EXPECT_EQ(out[i].target, brute_nn(tgt, src[i]));
+  }
+
+  p.mutual_filter = true;
+  r = match_features(src, tgt_tree.tree, p, out, &src_tree.tree, scratch);
+  ASSERT_EQ(r.status, CorrespondenceStatus::kOk);
+  EXPECT_FALSE(r.fell_back);
+  std::size_t want = 0;
+  for (std::size_t i = 0; i < src.size(); ++i) {
+    const std::uint32_t j = brute_nn(tgt, src[i]);
+    if (brute_nn(src, tgt[j]) == i) ++want;
+  }
+  EXPECT_EQ(r.count, want);
+  EXPECT_GE(r.count, 300u);
+  EXPECT_EQ(r.count + r.mutual_rejected, src.size());
+  for (const auto& c : out) {
+    EXPECT_EQ(brute_nn(tgt, src[c.source]), c.target);
+    EXPECT_EQ(brute_nn(src, tgt[c.target]), c.source);
+  }
+}
+
+TEST(Correspondences, MutualFallbackAndCapacity) {
+  const auto src = random_features(500, 3);
+  const auto tgt = random_features(500, 4);
+  src_tree.build(src);
+  tgt_tree.build(tgt);
+  CorrespondenceParams p;
+  p.mutual_filter = true;
+  p.min_mutual = 100000;  // unreachable: falls back to the one-way set
+  CorrespondenceResult r = match_features(src, tgt_tree.tree, p, out, &src_tree.tree, scratch);
+  EXPECT_TRUE(r.fell_back);
+  EXPECT_EQ(r.count, 500u);
+  EXPECT_EQ(match_features(src, tgt_tree.tree, p, out).status,
+            CorrespondenceStatus::kInvalidStorage);
+  static FixedVector<Correspondence, 100> small;
+  p.mutual_filter = false;
+  r = match_features(src, tgt_tree.tree, p, small);
+  EXPECT_EQ(r.count, 100u);
+  EXPECT_EQ(r.truncated, 400u);
+  auto bad = src;
+  bad[7][3] = NAN;
+  r = match_features(bad, tgt_tree.tree, p, out);
+  EXPECT_EQ(r.no_match, 1u);
+  EXPECT_EQ(r.count, 499u);
+  EXPECT_EQ(match_features({}, tgt_tree.tree, p, out).status, CorrespondenceStatus::kEmptyInput);
+}
+
+}  // namespace
+}  // namespace v2xloc

@@ -1,0 +1,155 @@
+#!/usr/bin/python3
+"""Per-stage timing of the registration pipeline: Open3D (single thread) vs v2xloc.
+
+Runs the outdoor_lidar_pair (../shared/data) through Open3D with the parameters of our
+pipeline (voxel 0.25 m, normals 2 voxels / 30 nn, FPFH 5 voxels / 100 nn, mutual feature
+matching, RANSAC 1.5 voxels with edge-length 0.9 + distance checkers, 100000 iterations /
+0.999 confidence, point-to-plane ICP at 1 voxel) and reads our per-stage times from
+`v2xloc-register ... --mode global` JSON if that tool exists, else from the v2xloc-bench Google
+Benchmark suite (bench_registration.cpp, JSON output). Prints both, the ratio, and whether each
+result is within 5 cm / 0.5 deg of the reference transform.
+
+usage: compare_open3d.py [--build build/host] [--data ../shared/data/outdoor_lidar_pair] [--runs 3]
+"""
+import os
+
+os.environ["OMP_NUM_THREADS"] = "1"  # before importing open3d: single-threaded Open3D
+
+import argparse
+import json
+import subprocess
+import time
+
+import numpy as np
+import open3d as o3d
+
+REG = o3d.pipelines.registration
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.normpath(os.path.join(HERE, "..", ".."))
+
+
+def errors(T, ref):
+    te = float(np.linalg.norm(T[:3, 3] - ref[:3, 3]))
+    c = (np.trace(T[:3, :3].T @ ref[:3, :3]) - 1.0) / 2.0
+    re = float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
+    return te, re
+
+
+def open3d_run(src, tgt, voxel):
+    t = {}
+    s0 = time.perf_counter()
+    sd = src.voxel_down_sample(voxel)
+    td = tgt.voxel_down_sample(voxel)
+    s1 = time.perf_counter()
+    t["downsample"] = s1 - s0
+    p_n = o3d.geometry.KDTreeSearchParamHybrid(radius=2 * voxel, max_nn=30)
+    sd.estimate_normals(p_n)
+    td.estimate_normals(p_n)
+    sd.orient_normals_towards_camera_location(np.zeros(3))
+    td.orient_normals_towards_camera_location(np.zeros(3))
+    s2 = time.perf_counter()
+    t["normals"] = s2 - s1
+    p_f = o3d.geometry.KDTreeSearchParamHybrid(radius=5 * voxel, max_nn=100)
+    fs = REG.compute_fpfh_feature(sd, p_f)
+    ft = REG.compute_fpfh_feature(td, p_f)
+    s3 = time.perf_counter()
+    t["fpfh"] = s3 - s2
+    dist = 1.5 * voxel
+    ransac = REG.registration_ransac_based_on_feature_matching(
+        sd, td, fs, ft, True, dist, REG.TransformationEstimationPointToPoint(False), 3,
+        [REG.CorrespondenceCheckerBasedOnEdgeLength(0.9), REG.CorrespondenceCheckerBasedOnDistance(dist)],
+        REG.RANSACConvergenceCriteria(100000, 0.999))
+    s4 = time.perf_counter()
+    t["correspondences+ransac"] = s4 - s3  # Open3D matches features inside the RANSAC call
+    icp = REG.registration_icp(sd, td, voxel, ransac.transformation,
+                               REG.TransformationEstimationPointToPlane(), REG.ICPConvergenceCriteria())
+    s5 = time.perf_counter()
+    t["icp"] = s5 - s4
+    t["total"] = s5 - s0
+    return t, icp.transformation, ransac
+
+
+def ours_from_register_tool(build, data, voxel):
+    exe = os.path.join(build, "bin", "v2xloc-register")
+    if not os.path.exists(exe):
+        return None
+    out = subprocess.run([exe, os.path.join(data, "source.ply"), os.path.join(data, "target.ply"),
+                          "--voxel", str(voxel), "--mode", "global"], capture_output=True, text=True)
+    if out.returncode != 0:
+        return None
+    j = json.loads(out.stdout)
+    ms = j.get("stage_ms") or j.get("ms") or j.get("milliseconds") or j.get("timings_ms") or {}
+    T = np.array(j["transform"], dtype=float).reshape(4, 4)
+    t = {k: v / 1000.0 for k, v in ms.items()}
+    return t, T, "v2xloc-register"
+
+
+def ours_from_bench(build, runs):
+    exe = os.path.join(build, "bin", "v2xloc-bench")
+    if not os.path.exists(exe):
+        raise SystemExit(f"neither v2xloc-register nor {exe} found: build the host preset first")
+    out = subprocess.run([exe, "--benchmark_filter=BM_(Downsample|Normals|Fpfh|Correspondences|Ransac|Icp|GlobalPipeline)$",
+                          "--benchmark_format=json", f"--benchmark_repetitions={runs}",
+                          "--benchmark_report_aggregates_only=true"], capture_output=True, text=True, check=True)
+    j = json.loads(out.stdout)
+    t, counters = {}, {}
+    names = {"BM_Downsample": "downsample", "BM_Normals": "normals", "BM_Fpfh": "fpfh",
+             "BM_Correspondences": "correspondences", "BM_Ransac": "ransac", "BM_Icp": "icp",
+             "BM_GlobalPipeline": "total"}
+    for b in j["benchmarks"]:
+        if b.get("aggregate_name") != "median":
+            continue
+        key = names.get(b["run_name"])
+        if key:
+            t[key] = b["real_time"] / 1000.0  # ms -> s
+            if key == "total":
+                counters = b
+    t["correspondences+ransac"] = t.get("correspondences", 0.0) + t.get("ransac", 0.0)
+    return t, counters, "v2xloc-bench (median of %d)" % runs
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--build", default=os.path.join(ROOT, "build", "host"))
+    ap.add_argument("--data", default=os.path.join(ROOT, "..", "shared", "data", "outdoor_lidar_pair"))
+    ap.add_argument("--voxel", type=float, default=0.25)
+    ap.add_argument("--runs", type=int, default=3)
+    a = ap.parse_args()
+    o3d.utility.set_verbosity_level(o3d.utility.VerbosityLevel.Error)
+    src = o3d.io.read_point_cloud(os.path.join(a.data, "source.ply"))
+    tgt = o3d.io.read_point_cloud(os.path.join(a.data, "target.ply"))
+    ref = np.loadtxt(os.path.join(a.data, "T_target_source.txt"))
+
+    o3d_times, o3d_ok = [], 0
+    for i in range(a.runs):
+        o3d.utility.random.seed(i)
+        t, T, _ = open3d_run(src, tgt, a.voxel)
+        te, re = errors(T, ref)
+        o3d_ok += int(te <= 0.05 and re <= 0.5)
+        o3d_times.append(t)
+        last = (te, re)
+    o3d_med = {k: float(np.median([t[k] for t in o3d_times])) for k in o3d_times[0]}
+
+    ours = ours_from_register_tool(a.build, a.data, a.voxel)
+    if ours is not None:
+        our_t, T, source = ours
+        te, re = errors(T, ref)
+    else:
+        our_t, counters, source = ours_from_bench(a.build, a.runs)
+        te, re = counters.get("te_m", float("nan")), counters.get("re_deg", float("nan"))
+    our_ok = te <= 0.05 and re <= 0.5
+
+    print(f"outdoor_lidar_pair, voxel {a.voxel} m; Open3D {o3d.__version__} single thread "
+          f"(median of {a.runs}) vs ours [{source}]")
+    print(f"{'stage':<24}{'open3d ms':>12}{'v2xloc ms':>12}{'speed-up':>10}")
+    for k in ["downsample", "normals", "fpfh", "correspondences+ransac", "icp", "total"]:
+        o, w = o3d_med.get(k), our_t.get(k)
+        if o is None or w is None:
+            continue
+        print(f"{k:<24}{o * 1e3:12.1f}{w * 1e3:12.1f}{(o / w if w > 0 else float('inf')):9.1f}x")
+    print(f"success (5 cm / 0.5 deg): open3d {o3d_ok}/{a.runs} (last te {last[0]:.4f} m re {last[1]:.3f} deg); "
+          f"v2xloc {'yes' if our_ok else 'no'} (te {te:.4f} m re {re:.3f} deg)")
+
+
+if __name__ == "__main__":
+    main()
