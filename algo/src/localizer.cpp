@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "v2xloc/algo/deskew.hpp"
+#include "v2xloc/algo/ekf.hpp"
 #include "v2xloc/algo/icp.hpp"
 #include "v2xloc/algo/normals.hpp"
 #include "v2xloc/algo/rigid_motion.hpp"
@@ -47,6 +48,7 @@ void Localizer::configure(const LocalizerParams& params, const GeodeticOrigin& o
   last_frame_t_ = 0.0;
   last_speed_ = 0.0;
   last_yaw_rate_ = 0.0;
+  have_vehicle_ = false;
   odometry_.configure(params.odometry);
   odometry_.reset();
   map_.configure(params.map);
@@ -60,6 +62,7 @@ void Localizer::on_vehicle(const VehicleInput& in) {
   if (!std::isfinite(in.t) || !std::isfinite(in.wheel_speed) || !std::isfinite(in.yaw_rate)) return;
   last_speed_ = in.wheel_speed;
   last_yaw_rate_ = in.yaw_rate;
+  have_vehicle_ = true;
   if (!params_.use_vehicle_signals || !ekf_.initialized()) return;
   ekf_.on_vehicle_signals(in.t, in.wheel_speed, in.yaw_rate);
   ekf_all_.on_vehicle_signals(in.t, in.wheel_speed, in.yaw_rate);
@@ -82,7 +85,7 @@ void Localizer::on_gnss(const GnssInput& in) {
 }
 
 MapInsertResult Localizer::on_map_cloud(const MapCloudInput& in) {
-  return map_.insert(in.source_id, in.t, in.world_T_sensor, in.points);
+  return map_.insert(in.source_id, in.t, in.world_T_sensor, in.points, !in.is_agent);
 }
 
 const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
@@ -133,13 +136,26 @@ bool Localizer::prepare_scan(const EgoScanInput& in) {
   counters_.scan_points_dropped += dropped;
 
   scan_deskewed_count_ = scan_filtered_.size();
-  const bool deskew_now = params_.deskew && has_times && have_frame_;
+  const bool deskew_now = params_.deskew && has_times && have_vehicle_;
   if (deskew_now) {
+    // Constant-velocity model from the wheel speed and yaw rate (the EKF's bias-corrected values
+    // once it runs), not from the odometry's last estimate: a deskew driven by the estimate it
+    // feeds is a feedback loop, and it has no motion at all for the first scan.
+    double v = last_speed_, w = last_yaw_rate_;
+    if (ekf_.initialized()) {
+      const EkfState s = ekf_.state();
+      v = s.speed;
+      w = s.yaw_rate;
+    }
+    Vec6d xi = Vec6d::Zero();
+    xi(0) = v * params_.frame_period;
+    xi(5) = w * params_.frame_period;
+    const Mat4d delta = se3_inverse(in.body_T_lidar) * se3_exp(xi) * in.body_T_lidar;
     DeskewParams dp;
     dp.reference_time = 0.0;
     dp.delta_duration = params_.frame_period;
-    const DeskewResult r = deskew(scan_filtered_.span(), scan_times_.span(), odometry_.last_delta(),
-                                  dp, std::span<Vec3f>(scan_deskewed_, config::kMaxScanPoints));
+    const DeskewResult r = deskew(scan_filtered_.span(), scan_times_.span(), delta, dp,
+                                  std::span<Vec3f>(scan_deskewed_, config::kMaxScanPoints));
     if (r.status == DeskewStatus::kOk) {
       scan_deskewed_count_ = r.points_out;
       return true;

@@ -110,7 +110,8 @@ double MapFusion::consistency(std::size_t slot, std::uint32_t& overlap_points) {
 }
 
 MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
-                                  const Mat4d& world_T_sensor, std::span<const Vec3f> points) {
+                                  const Mat4d& world_T_sensor, std::span<const Vec3f> points,
+                                  bool trusted) {
   MapInsertResult r;
   r.input_points = static_cast<std::uint32_t>(points.size());
   if (!std::isfinite(timestamp) || !world_T_sensor.allFinite()) return r;
@@ -166,7 +167,7 @@ MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
   r.capacity_dropped += ds.output_overflow + ds.hash_overflow + ds.range_overflow;
   counters_.non_finite_dropped += r.non_finite_dropped;
 
-  if (params_.check_consistency && !candidate_.empty()) {
+  if (params_.check_consistency && !trusted && !candidate_.empty()) {
     r.consistency_fitness = consistency(known ? slot : config::kMaxMapSources, r.overlap_points);
     if (r.overlap_points >= params_.min_overlap_points &&
         r.consistency_fitness < params_.min_fitness) {

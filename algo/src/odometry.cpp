@@ -1,5 +1,7 @@
 #include "v2xloc/algo/odometry.hpp"
 
+#include "v2xloc/algo/normals.hpp"
+
 #include <cmath>
 
 #include "v2xloc/algo/det_math.hpp"
@@ -184,7 +186,22 @@ OdometryResult LidarOdometry::register_frame(std::span<const Vec3f> scan) {
   r.sigma = sigma;
   r.threshold = tau;
 
-  // Point-to-point Gauss-Newton with a Geman-McClure kernel, left-multiplied twist (rho, omega).
+  // Source normals for the point-to-plane residual: PCA over the fine frame, each coarse point
+  // takes the normal of its nearest fine point.
+  if (params_.point_to_plane) {
+    fine_tree_.build(frame_fine_.span());
+    NormalParams np;
+    np.radius = static_cast<float>(params_.normal_radius);
+    np.orient_to_viewpoint = false;  // the residual is squared: the sign does not matter
+    estimate_normals(fine_tree_.tree, np, std::span<Vec3f>(fine_normals_, frame_fine_.size()));
+    for (std::size_t i = 0; i < frame_coarse_.size(); ++i) {
+      Neighbor nb{0, 0.0f};
+      const KdQueryResult q = fine_tree_.tree.nearest(frame_coarse_[i], nb);
+      coarse_normals_[i] = q.count > 0 ? fine_normals_[nb.index] : Vec3f::Zero();
+    }
+  }
+
+  // Gauss-Newton with a Geman-McClure kernel, left-multiplied twist (rho, omega).
   Mat4d T = prediction;
   r.status = OdometryStatus::kOk;
   for (std::uint32_t it = 0; it < params_.max_iterations; ++it) {
@@ -192,21 +209,34 @@ OdometryResult LidarOdometry::register_frame(std::span<const Vec3f> scan) {
     Vec6d b = Vec6d::Zero();
     double sse = 0.0;
     std::uint32_t matches = 0;
-    for (const Vec3f& ps : frame_coarse_) {
-      const Vec3d p = transform(T, ps);
+    const Mat3d R = T.topLeftCorner<3, 3>();
+    for (std::size_t i = 0; i < frame_coarse_.size(); ++i) {
+      const Vec3d p = transform(T, frame_coarse_[i]);
       Vec3d q;
       double d2;
       if (!nearest(p, tau * tau, q, d2)) continue;
       const Vec3d res = p - q;
       const double k2 = kappa * kappa;
-      const double denom = k2 + d2;
-      const double w = k2 / (denom * denom) * k2;  // normalised so w(0) = 1
       Eigen::Matrix<double, 3, 6> J;
       J.leftCols<3>() = Mat3d::Identity();
       J.rightCols<3>() = -skew(p);
-      H += w * (J.transpose() * J);
-      b += w * (J.transpose() * res);
-      sse += d2;
+      if (params_.point_to_plane) {
+        const Vec3d n = R * coarse_normals_[i].cast<double>();
+        if (n.squaredNorm() < 0.5) continue;  // no normal (isolated point)
+        const double e = n.dot(res);
+        const double denom = k2 + e * e;
+        const double w = k2 / (denom * denom) * k2;
+        const Eigen::Matrix<double, 1, 6> Jn = n.transpose() * J;
+        H += w * (Jn.transpose() * Jn);
+        b += w * (Jn.transpose() * e);
+        sse += e * e;
+      } else {
+        const double denom = k2 + d2;
+        const double w = k2 / (denom * denom) * k2;  // normalised so w(0) = 1
+        H += w * (J.transpose() * J);
+        b += w * (J.transpose() * res);
+        sse += d2;
+      }
       ++matches;
     }
     r.iterations = it + 1;

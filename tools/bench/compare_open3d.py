@@ -6,7 +6,8 @@ pipeline (voxel 0.25 m, normals 2 voxels / 30 nn, FPFH 5 voxels / 100 nn, mutual
 matching, RANSAC 1.5 voxels with edge-length 0.9 + distance checkers, 100000 iterations /
 0.999 confidence, point-to-plane ICP at 1 voxel) and reads our per-stage times from
 `v2xloc-register ... --mode global` JSON if that tool exists, else from the v2xloc-bench Google
-Benchmark suite (bench_registration.cpp, JSON output). Prints both, the ratio, and whether each
+Benchmark suite (bench_registration.cpp, JSON output). Times are CPU times of the process
+(process_time / Google Benchmark cpu_time) so a busy machine does not skew the ratio. Prints both, the ratio, and whether each
 result is within 5 cm / 0.5 deg of the reference transform.
 
 usage: compare_open3d.py [--build build/host] [--data ../shared/data/outdoor_lidar_pair] [--runs 3]
@@ -37,33 +38,33 @@ def errors(T, ref):
 
 def open3d_run(src, tgt, voxel):
     t = {}
-    s0 = time.perf_counter()
+    s0 = time.process_time()
     sd = src.voxel_down_sample(voxel)
     td = tgt.voxel_down_sample(voxel)
-    s1 = time.perf_counter()
+    s1 = time.process_time()
     t["downsample"] = s1 - s0
     p_n = o3d.geometry.KDTreeSearchParamHybrid(radius=2 * voxel, max_nn=30)
     sd.estimate_normals(p_n)
     td.estimate_normals(p_n)
     sd.orient_normals_towards_camera_location(np.zeros(3))
     td.orient_normals_towards_camera_location(np.zeros(3))
-    s2 = time.perf_counter()
+    s2 = time.process_time()
     t["normals"] = s2 - s1
     p_f = o3d.geometry.KDTreeSearchParamHybrid(radius=5 * voxel, max_nn=100)
     fs = REG.compute_fpfh_feature(sd, p_f)
     ft = REG.compute_fpfh_feature(td, p_f)
-    s3 = time.perf_counter()
+    s3 = time.process_time()
     t["fpfh"] = s3 - s2
     dist = 1.5 * voxel
     ransac = REG.registration_ransac_based_on_feature_matching(
         sd, td, fs, ft, True, dist, REG.TransformationEstimationPointToPoint(False), 3,
         [REG.CorrespondenceCheckerBasedOnEdgeLength(0.9), REG.CorrespondenceCheckerBasedOnDistance(dist)],
         REG.RANSACConvergenceCriteria(100000, 0.999))
-    s4 = time.perf_counter()
+    s4 = time.process_time()
     t["correspondences+ransac"] = s4 - s3  # Open3D matches features inside the RANSAC call
     icp = REG.registration_icp(sd, td, voxel, ransac.transformation,
                                REG.TransformationEstimationPointToPlane(), REG.ICPConvergenceCriteria())
-    s5 = time.perf_counter()
+    s5 = time.process_time()
     t["icp"] = s5 - s4
     t["total"] = s5 - s0
     return t, icp.transformation, ransac
@@ -88,20 +89,21 @@ def ours_from_bench(build, runs):
     exe = os.path.join(build, "bin", "v2xloc-bench")
     if not os.path.exists(exe):
         raise SystemExit(f"neither v2xloc-register nor {exe} found: build the host preset first")
-    out = subprocess.run([exe, "--benchmark_filter=BM_(Downsample|Normals|Fpfh|Correspondences|Ransac|Icp|GlobalPipeline)$",
+    out = subprocess.run([exe, "--benchmark_filter=BM_Registration(Downsample|Normals|Fpfh|Correspondences|Ransac|Icp|GlobalPipeline)$",
                           "--benchmark_format=json", f"--benchmark_repetitions={runs}",
                           "--benchmark_report_aggregates_only=true"], capture_output=True, text=True, check=True)
     j = json.loads(out.stdout)
     t, counters = {}, {}
-    names = {"BM_Downsample": "downsample", "BM_Normals": "normals", "BM_Fpfh": "fpfh",
-             "BM_Correspondences": "correspondences", "BM_Ransac": "ransac", "BM_Icp": "icp",
-             "BM_GlobalPipeline": "total"}
+    names = {"BM_RegistrationDownsample": "downsample", "BM_RegistrationNormals": "normals",
+             "BM_RegistrationFpfh": "fpfh", "BM_RegistrationCorrespondences": "correspondences",
+             "BM_RegistrationRansac": "ransac", "BM_RegistrationIcp": "icp",
+             "BM_RegistrationGlobalPipeline": "total"}
     for b in j["benchmarks"]:
         if b.get("aggregate_name") != "median":
             continue
         key = names.get(b["run_name"])
         if key:
-            t[key] = b["real_time"] / 1000.0  # ms -> s
+            t[key] = b["cpu_time"] / 1000.0  # ms -> s (CPU time: fair on a shared machine)
             if key == "total":
                 counters = b
     t["correspondences+ransac"] = t.get("correspondences", 0.0) + t.get("ransac", 0.0)

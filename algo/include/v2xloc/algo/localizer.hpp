@@ -171,6 +171,7 @@ class Localizer {
   bool have_frame_ = false;
   double last_speed_ = 0.0;        // [m/s] latest wheel speed (filter initialization)
   double last_yaw_rate_ = 0.0;     // [rad/s]
+  bool have_vehicle_ = false;
   Mat4d body_T_lidar_ = Mat4d::Identity();
 
   // Odometry (drifting, in its own frame).

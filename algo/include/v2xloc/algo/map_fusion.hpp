@@ -97,9 +97,13 @@ class MapFusion {
   }
   void clear();
 
-  // points in the sensor frame; world_T_sensor maps them into the global frame.
+  // points in the sensor frame; world_T_sensor maps them into the global frame. A trusted source
+  // (surveyed infrastructure) skips the consistency check: sensors at different corners see
+  // different faces of the same buildings, so their mutual overlap score is low (0.2-0.4
+  // measured for exact poses) and would reject good clouds; the check is for self-localized
+  // agents.
   MapInsertResult insert(std::uint32_t source_id, double timestamp, const Mat4d& world_T_sensor,
-                         std::span<const Vec3f> points);
+                         std::span<const Vec3f> points, bool trusted = false);
   // Evicts sources with now - timestamp > max_age; returns how many.
   std::uint32_t expire(double now);
   // Merged map on the voxel grid into `out` (cleared first).

@@ -4,8 +4,13 @@
 //   2. double voxelisation of the (deskewed) scan: 0.5 v for the map, 1.5 v as ICP source (III-B)
 //   3. adaptive threshold: model deviation dT = T_pred^-1 T_k, delta = 2 r_max sin(theta/2) + |t|,
 //      sigma = sqrt(mean delta^2 over frames with motion), tau = 3 sigma          (eqs. 4-6, III-C)
-//   4. point-to-point ICP against the local map with a Geman-McClure kernel kappa = sigma / 3,
-//      nearest neighbour among the points of the 27 voxels around each source point (III-D)
+//   4. ICP against the local map with a Geman-McClure kernel kappa = sigma / 3, nearest neighbour
+//      among the points of the 27 voxels around each source point (III-D). Residual: point-to-
+//      point as KISS-ICP, or (default) point-to-plane along the *source* point's normal (PCA over
+//      the 0.5 v frame). Why: on a flat road a LiDAR's ground rings move with the sensor; point-to-
+//      point residuals between this frame's rings and the last frame's pull the estimate back
+//      to the previous pose (measured: the odometry stalled at 0 m while the car drove 8 m).
+//      Along the ground normal those residuals only constrain z, roll and pitch.
 //   5. map update: <= max points per voxel, voxels farther than max_range from the sensor evicted.
 // Choice vs the shared ICP (icp.hpp): that ICP wants a k-d tree built over a fixed target; the local
 // map changes every frame, and a rebuild over ~1e5 points per frame costs more than the voxel-
@@ -20,6 +25,7 @@
 #include <span>
 
 #include "v2xloc/algo/bounded_vector.hpp"
+#include "v2xloc/algo/kdtree.hpp"
 #include "v2xloc/algo/config.hpp"
 #include "v2xloc/algo/types.hpp"
 #include "v2xloc/algo/voxel_downsample.hpp"
@@ -35,6 +41,8 @@ struct OdometryParams {
   double min_motion = 0.1;      // [m] model deviations below this are not sampled (no motion)
   std::uint32_t max_iterations = 50;   // clamped to config::kOdometryMaxIterations
   double convergence = 1e-4;    // stop when |d xi| (m, rad) < this
+  bool point_to_plane = true;   // residual along the source normal (see the header comment)
+  double normal_radius = 1.5;   // [m] PCA neighbourhood over the 0.5 v frame (source normals)
 };
 
 enum class OdometryStatus : std::uint8_t {
@@ -124,6 +132,9 @@ class LidarOdometry {
   FixedVector<Vec3f, config::kMaxDownsampledPoints> frame_fine_;
   FixedVector<Vec3f, config::kMaxDownsampledPoints> frame_coarse_;
   std::uint32_t fine_voxel_[config::kMaxDownsampledPoints];
+  KdTreeStorage<Vec3f, config::kMaxDownsampledPoints> fine_tree_;
+  Vec3f fine_normals_[config::kMaxDownsampledPoints];
+  Vec3f coarse_normals_[config::kMaxDownsampledPoints];
 };
 
 }  // namespace v2xloc

@@ -1,0 +1,130 @@
+// v2xloc-eval RECORDING_DIR... [--json] [--plots DIR] [--estimates DIR] [--frames N]
+//   [--gate fixed-lag|causal|off] [--no-gnss-gate] [--no-odometry] [--quiet]
+// Runs the localizer offline over each recording and prints the paper's Table 1 (unaligned and
+// aligned) with the paper's numbers beside ours; --json prints one JSON object instead.
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "host_sim/eval/trajectory.hpp"
+#include "tools/eval/metrics.hpp"
+#include "tools/eval/offline_run.hpp"
+#include "tools/eval/plots.hpp"
+#include "tools/eval/report.hpp"
+
+namespace {
+
+v2xloc::Localizer g_localizer;  // hundreds of MB of static buffers: never on the stack
+
+int usage() {
+  std::fprintf(stderr,
+               "usage: v2xloc-eval RECORDING_DIR... [--json] [--plots DIR] [--estimates DIR]\n"
+               "                   [--frames N] [--gate fixed-lag|causal|off] [--no-gnss-gate]\n"
+               "                   [--no-odometry] [--no-vehicle] [--quiet]\n");
+  return 2;
+}
+
+bool write_estimates(const std::string& dir, const std::string& name,
+                     const std::vector<v2xloc::eval::FrameRecord>& records, std::string& error) {
+  v2xloc::sim::StampedTrajectory fused, truth;
+  for (const auto& r : records) {
+    v2xloc::sim::StampedPose p;
+    p.t = r.t;
+    const Eigen::Isometry3d f(r.out.fused_pose);
+    p.position = f.translation();
+    p.orientation = Eigen::Quaterniond(f.linear());
+    fused.push_back(p);
+    p.position = r.truth.translation();
+    p.orientation = Eigen::Quaterniond(r.truth.linear());
+    truth.push_back(p);
+  }
+  return v2xloc::sim::write_tum(dir + "/" + name + "_fused.tum", fused, error);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::string> dirs;
+  bool json = false;
+  std::string plots_dir, estimates_dir;
+  v2xloc::eval::RunOptions options;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&](const char* what) -> const char* {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "missing value for %s\n", what);
+        std::exit(usage());
+      }
+      return argv[++i];
+    };
+    if (a == "--json") json = true;
+    else if (a == "--plots") plots_dir = next("--plots");
+    else if (a == "--estimates") estimates_dir = next("--estimates");
+    else if (a == "--frames") options.max_frames = std::atoi(next("--frames"));
+    else if (a == "--quiet") options.quiet = true;
+    else if (a == "--no-gnss-gate") options.params.ekf.gates.gnss_gate_enabled = false;
+    else if (a == "--no-odometry") options.params.use_odometry = false;
+    else if (a == "--no-vehicle") options.params.use_vehicle_signals = false;
+    else if (a == "--gate") {
+      const std::string g = next("--gate");
+      if (g == "fixed-lag") options.params.gate_mode = v2xloc::GateMode::kFixedLag;
+      else if (g == "causal") options.params.gate_mode = v2xloc::GateMode::kCausal;
+      else if (g == "off") options.params.gate_mode = v2xloc::GateMode::kOff;
+      else return usage();
+    } else if (a == "-h" || a == "--help") return usage();
+    else if (!a.empty() && a[0] == '-') {
+      std::fprintf(stderr, "unknown option %s\n", a.c_str());
+      return usage();
+    } else dirs.push_back(a);
+  }
+  if (dirs.empty()) return usage();
+  if (json) options.quiet = true;
+
+  std::vector<v2xloc::eval::RowReport> rows;
+  for (const std::string& dir : dirs) {
+    v2xloc::sim::RecordingReader reader;
+    std::string error;
+    if (!reader.open(dir, error)) {
+      std::fprintf(stderr, "v2xloc-eval: %s: %s\n", dir.c_str(), error.c_str());
+      return 1;
+    }
+    v2xloc::eval::RowReport row;
+    row.sim = reader.scenario();
+    row.permutation = reader.permutation();
+    row.dir = dir;
+    if (!options.quiet) std::fprintf(stderr, "Sim %d %s (%s)\n", row.sim, row.permutation.c_str(), dir.c_str());
+    std::vector<v2xloc::eval::FrameRecord> records;
+    if (!v2xloc::eval::run_offline(reader, g_localizer, options, records, row.stats, error)) {
+      std::fprintf(stderr, "v2xloc-eval: %s: %s\n", dir.c_str(), error.c_str());
+      return 1;
+    }
+    row.metrics = v2xloc::eval::compute_metrics(records);
+    const std::string name = "sim" + std::to_string(row.sim) + "_" + row.permutation;
+    if (!plots_dir.empty()) {
+      std::filesystem::create_directories(plots_dir);
+      if (!v2xloc::eval::write_top_view(plots_dir + "/" + name + "_topview.png", records, error) ||
+          !v2xloc::eval::write_error_plot(plots_dir + "/" + name + "_error.png", records, error)) {
+        std::fprintf(stderr, "v2xloc-eval: plots: %s\n", error.c_str());
+        return 1;
+      }
+    }
+    if (!estimates_dir.empty()) {
+      std::filesystem::create_directories(estimates_dir);
+      if (!write_estimates(estimates_dir, name, records, error)) {
+        std::fprintf(stderr, "v2xloc-eval: estimates: %s\n", error.c_str());
+        return 1;
+      }
+    }
+    rows.push_back(row);
+  }
+  if (json) {
+    std::printf("%s\n", v2xloc::eval::format_json(rows).c_str());
+  } else {
+    std::printf("%s\n%s", v2xloc::eval::format_table(rows, false).c_str(),
+                v2xloc::eval::format_table(rows, true).c_str());
+    if (!plots_dir.empty()) std::printf("\nplots: %s\n", plots_dir.c_str());
+  }
+  return 0;
+}

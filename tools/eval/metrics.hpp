@@ -1,0 +1,38 @@
+// The paper's Table 1 columns from per-frame records. Every column is the mean Euclidean
+// distance (3-D) between estimated and true body positions over the frames it covers:
+//   slam        odometry, anchored at the true pose of frame 0 (drift only)
+//   gps         latest GNSS fix (lever arm removed), frames with a fix
+//   reg         registration pose, frames whose registration returned ok
+//   reg_valid   registration pose, frames the fixed-lag validity gate accepted
+//   fused       gated EKF, every frame (before the first fix of the filter: the GNSS fix)
+//   fused_valid gated EKF, frames the validity gate accepted
+// Aligned = the same after an SE(3) Umeyama alignment of the estimate onto the truth per column
+// (evo's APE --align, as the paper); unaligned is what the vehicle lives with.
+#pragma once
+
+#include <vector>
+
+#include "tools/eval/offline_run.hpp"
+
+namespace v2xloc::eval {
+
+struct ColumnErrors {
+  double slam = 0, gps = 0, reg = 0, reg_valid = 0, fused = 0, fused_valid = 0;
+  double fused_ungated = 0;  // extra: EKF fed every ok registration (no envelope gate)
+};
+
+struct RowMetrics {
+  int frames = 0;
+  int valid_frames = 0;
+  int reg_ok_frames = 0;
+  ColumnErrors unaligned;
+  ColumnErrors aligned;
+  double fused_max = 0.0;   // unaligned worst frame of the gated EKF
+};
+
+RowMetrics compute_metrics(const std::vector<FrameRecord>& records);
+
+// Per-frame unaligned error of the gated EKF (plots).
+std::vector<double> fused_errors(const std::vector<FrameRecord>& records);
+
+}  // namespace v2xloc::eval

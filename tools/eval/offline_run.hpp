@@ -1,0 +1,47 @@
+// Runs the localizer over a recording in process, in the canonical event order (per frame: CAN
+// frames up to the frame stamp, then map clouds up to it, then the ego scan), and keeps one
+// record per frame for the evaluation.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <string>
+#include <vector>
+
+#include "host_sim/recording/recording_reader.hpp"
+#include "v2xloc/algo/localizer.hpp"
+#include "v2xloc/algo/localizer_params.hpp"
+
+namespace v2xloc::eval {
+
+struct FrameRecord {
+  double t = 0.0;
+  Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();  // body -> ENU
+  bool has_gnss = false;
+  Eigen::Vector3d gnss_body = Eigen::Vector3d::Zero();       // latest fix, antenna lever removed
+  LocalizerFrameOutput out;                                  // the localizer's frame output
+  bool gate_valid = false;     // fixed-lag decision for this frame (arrives w/2 frames later)
+  bool gate_decided = false;
+};
+
+struct RunOptions {
+  LocalizerParams params{};
+  int max_frames = -1;                                     // -1: all
+  Eigen::Vector3d gnss_antenna_in_body{0.0, 0.0, 1.75};    // recording's GNSS lever arm [m]
+  bool quiet = false;
+};
+
+struct RunStats {
+  double seconds = 0.0;          // wall time of the localizer calls only
+  double max_frame_ms = 0.0;
+  LocalizerCounters counters{};
+  std::size_t can_decode_errors = 0;
+  std::size_t map_clouds = 0;
+  std::size_t map_clouds_rejected = 0;
+};
+
+// `localizer` must be static storage (it holds every buffer). Returns false with `error` set
+// when the recording cannot be read.
+bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const RunOptions& options,
+                 std::vector<FrameRecord>& records, RunStats& stats, std::string& error);
+
+}  // namespace v2xloc::eval
