@@ -9,6 +9,7 @@
 #include "v2xloc/algo/ekf.hpp"
 #include "v2xloc/algo/icp.hpp"
 #include "v2xloc/algo/normals.hpp"
+#include "v2xloc/algo/pose_search.hpp"
 #include "v2xloc/algo/rigid_motion.hpp"
 
 namespace v2xloc {
@@ -228,6 +229,9 @@ void Localizer::register_scan(double t) {
     output_.mode = LocalizationMode::kTracking;
     ++counters_.tracking_registrations;
     result = icp(scan_down_.span(), target, ekf_.state().pose(), params_.icp);
+    if (result.ok() && result.inlier_rmse > params_.max_inlier_rmse) {
+      result.status = RegistrationStatus::kDidNotConverge;  // counted as a failed frame
+    }
   } else {
     output_.mode = LocalizationMode::kGlobalSearch;
     if (!have_gnss_ || frames_since_global_ < params_.global_retry_frames) {
@@ -260,25 +264,43 @@ void Localizer::register_scan(double t) {
 // explain enough of the scan.
 bool Localizer::global_search(double t, RegistrationResult& result) {
   ++counters_.global_searches;
-  map_crop_.clear();
-  const double r2 = params_.global_map_radius * params_.global_map_radius;
-  for (const Vec3f& p : map_points_) {
-    const double dx = p.x() - last_gnss_enu_.x(), dy = p.y() - last_gnss_enu_.y();
-    if (dx * dx + dy * dy <= r2) map_crop_.push_back(p);
-  }
-  const RegisterCloudsResult coarse =
-      register_clouds(scan_down_.span(), map_crop_.span(), params_.global, Mat4d::Identity(),
-                      global_workspace_);
-  result = coarse.registration;
-  if (!coarse.registration.ok()) return false;
   const IcpTarget target{map_points_.span(), std::span<const Vec3f>(map_normals_, map_points_.size()),
                          &map_tree_.tree};
-  result = icp(scan_down_.span(), target, coarse.registration.transform, params_.icp);
+  const double region = params_.global_gnss_gate_sigmas *
+                        (last_gnss_sigma_ * params_.ekf.gates.gnss_sigma_inflation + 1.0);
+  // (1) Exhaustive, GNSS-seeded search over position and heading.
+  PoseSearchParams sp = params_.search;
+  sp.radius = region < sp.radius ? region : sp.radius;
+  const PoseSearchResult searched = search_pose(scan_down_.span(), target, last_gnss_enu_, sp);
+  RegistrationResult best = searched.best;
+  // (2) The paper's FPFH + RANSAC against the map around the fix, with the same prior.
+  if (params_.use_fpfh_ransac) {
+    map_crop_.clear();
+    const double r2 = params_.global_map_radius * params_.global_map_radius;
+    for (const Vec3f& p : map_points_) {
+      const double dx = p.x() - last_gnss_enu_.x(), dy = p.y() - last_gnss_enu_.y();
+      if (dx * dx + dy * dy <= r2) map_crop_.push_back(p);
+    }
+    RegisterCloudsParams gp = params_.global;
+    gp.ransac.prior.center = Vec3d(last_gnss_enu_.x(), last_gnss_enu_.y(), searched.ground_z);
+    gp.ransac.prior.max_horizontal = region;
+    gp.ransac.prior.max_vertical = 3.0;
+    const RegisterCloudsResult coarse = register_clouds(scan_down_.span(), map_crop_.span(), gp,
+                                                        Mat4d::Identity(), global_workspace_);
+    if (coarse.registration.ok()) {
+      const RegistrationResult r = icp(scan_down_.span(), target, coarse.registration.transform, sp.icp);
+      if (r.ok() && (!best.ok() || r.fitness > best.fitness)) best = r;
+    }
+  }
+  if (!best.ok()) {
+    result = best;
+    return false;
+  }
+  // Final refinement with the tracking ICP, then the acceptance checks.
+  result = icp(scan_down_.span(), target, best.transform, params_.icp);
   if (!result.ok()) return false;
-  const double gate = params_.global_gnss_gate_sigmas *
-                      (last_gnss_sigma_ * params_.ekf.gates.gnss_sigma_inflation + 1.0);
-  if (result.fitness < params_.global_min_fitness ||
-      (params_.use_gnss && horizontal_distance(result.transform, last_gnss_enu_) > gate)) {
+  if (result.fitness < params_.global_min_fitness || result.inlier_rmse > params_.max_inlier_rmse ||
+      (params_.use_gnss && horizontal_distance(result.transform, last_gnss_enu_) > region)) {
     result.status = RegistrationStatus::kDidNotConverge;
     return false;
   }

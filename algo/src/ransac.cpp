@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "v2xloc/algo/icp.hpp"
+#include "v2xloc/algo/det_math.hpp"
 #include "v2xloc/algo/kabsch.hpp"
 #include "v2xloc/algo/prng.hpp"
 
@@ -89,6 +90,14 @@ class CorrespondenceSet {
   std::span<const Vec3f> target_;
   std::span<const Correspondence> corr_;
 };
+
+bool within_prior(const Mat4d& t, const RansacPosePrior& prior) {
+  const double dx = t(0, 3) - prior.center.x(), dy = t(1, 3) - prior.center.y();
+  if (dx * dx + dy * dy > prior.max_horizontal * prior.max_horizontal) return false;
+  if (std::abs(t(2, 3) - prior.center.z()) > prior.max_vertical) return false;
+  // cos(tilt) = (R z) . z = R(2, 2).
+  return t(2, 2) >= det::cos(prior.max_tilt);
+}
 
 bool edge_lengths_similar(const Vec3d (&ps)[3], const Vec3d (&pt)[3], double similarity) {
   for (int i = 0; i < 3; ++i) {
@@ -177,6 +186,10 @@ RansacResult ransac(std::span<const Vec3f> source, std::span<const Vec3f> target
         ++out.rejected_distance;
         continue;
       }
+    }
+    if (params.prior.enabled && !within_prior(t, params.prior)) {
+      ++out.rejected_prior;
+      continue;
     }
     ++out.validations;
     const Score s = set.score(t, max_d2, nullptr);

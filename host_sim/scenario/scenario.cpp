@@ -39,19 +39,23 @@ Scenario make_scenario(int id, double duration) {
   const double lane = L::kInnerLane;
   const double turn_radius = 10.0;
   const double w = 2.0 * M_PI / 12.0;  // speed oscillation period 12 s
+  // Straight runs start kApproach before the centre: the recording covers the V2X zone of the
+  // intersection (the infrastructure LiDARs' useful range), where cooperative localization is
+  // defined; 20 s at ~6 m/s ends about as far beyond it.
+  constexpr double kApproach = 60.0;
   switch (id) {
     case 0: {
       sc.description = "ego crosses straight eastbound; agent 0 drives the parallel opposing path";
       sc.duration = 20.0;
-      sc.ego = Trajectory(std::move(Path({-95.0, -lane, 0.0}).straight(250.0)), 0.0, 8.0, 0.6, w);
-      sc.agents.push_back(Trajectory(std::move(Path({90.0, lane, M_PI}).straight(250.0)), 0.0, 7.5, 0.4, w * 1.3));
+      sc.ego = Trajectory(std::move(Path({-kApproach, -lane, 0.0}).straight(250.0)), 0.0, 6.0, 0.5, w);
+      sc.agents.push_back(Trajectory(std::move(Path({kApproach, lane, M_PI}).straight(250.0)), 0.0, 6.0, 0.4, w * 1.3));
       sc.agents.push_back(Trajectory::stationary({lane, -kWaitOffset, kHalfPi}));
       break;
     }
     case 1: {
       sc.description = "ego crosses straight westbound; both agents stationary at the stop lines";
       sc.duration = 20.0;
-      sc.ego = Trajectory(std::move(Path({90.0, lane, M_PI}).straight(250.0)), 0.0, 7.5, 0.5, w);
+      sc.ego = Trajectory(std::move(Path({kApproach, lane, M_PI}).straight(250.0)), 0.0, 6.0, 0.5, w);
       sc.agents.push_back(Trajectory::stationary({lane, -kWaitOffset, kHalfPi}));
       sc.agents.push_back(Trajectory::stationary({-lane, kWaitOffset, -kHalfPi}));
       break;
@@ -59,8 +63,8 @@ Scenario make_scenario(int id, double duration) {
     case 2: {
       sc.description = "ego crosses eastbound; agent 0 crosses on the perpendicular path (northbound)";
       sc.duration = 20.0;
-      sc.ego = Trajectory(std::move(Path({-90.0, -lane, 0.0}).straight(250.0)), 0.0, 8.0, 0.6, w);
-      sc.agents.push_back(Trajectory(std::move(Path({lane, -40.0, kHalfPi}).straight(250.0)), 0.0, 8.0, 0.5, w * 0.8));
+      sc.ego = Trajectory(std::move(Path({-kApproach, -lane, 0.0}).straight(250.0)), 0.0, 6.0, 0.5, w);
+      sc.agents.push_back(Trajectory(std::move(Path({lane, -30.0, kHalfPi}).straight(250.0)), 0.0, 6.0, 0.5, w * 0.8));
       sc.agents.push_back(Trajectory::stationary({kWaitOffset, lane, M_PI}));
       break;
     }

@@ -8,6 +8,7 @@
 #include "v2xloc/algo/icp.hpp"
 #include "v2xloc/algo/map_fusion.hpp"
 #include "v2xloc/algo/odometry.hpp"
+#include "v2xloc/algo/pose_search.hpp"
 #include "v2xloc/algo/register_clouds.hpp"
 #include "v2xloc/algo/validity_gate.hpp"
 
@@ -36,13 +37,17 @@ struct LocalizerParams {
 
   // ---- Registration to the map ----
   IcpParams icp = default_icp();      // tracking: point-to-plane from the EKF prediction
-  RegisterCloudsParams global = default_global();
+  RegisterCloudsParams global = default_global();   // the paper's FPFH + RANSAC
+  PoseSearchParams search = default_search();        // GNSS-seeded exhaustive search
+  bool use_fpfh_ransac = true;        // try FPFH + RANSAC too; the better ICP fitness wins
   double global_map_radius = 70.0;    // [m] map crop around the GNSS fix for the global search
   double global_gnss_gate_sigmas = 4.0;  // accept a global solution within this many GNSS sigmas
   double global_min_fitness = 0.3;    // and with at least this ICP fitness
+  double max_inlier_rmse = 0.2;       // [m] a registration above this is a failure (aliased
+                                      // or partial alignments; correct ones measure 2-8 cm)
   double tracking_max_sigma_xy = 0.5; // [m] EKF position sigma above which we search globally
   std::uint32_t max_failed_frames = 10;  // consecutive unfused registrations -> global search
-  std::uint32_t global_retry_frames = 5; // frames between two global searches (bounded cost)
+  std::uint32_t global_retry_frames = 20; // frames between two global searches (bounded cost)
 
   // ---- Validity gate and fusion ----
   GateMode gate_mode = GateMode::kFixedLag;
@@ -71,7 +76,23 @@ struct LocalizerParams {
   static RegisterCloudsParams default_global() {
     RegisterCloudsParams p;
     p.mode = RegistrationMode::kGlobal;
-    p.voxel_size = 0.6f;
+    p.voxel_size = 1.0f;            // the map is sparse far from the sensors: coarse descriptors
+    p.mutual_filter = false;        // mutual matching leaves too few pairs on sparse maps
+    p.ransac.prior.enabled = true;  // hypotheses must be level and inside the GNSS region
+    p.ransac.prior.max_tilt = 0.087;  // [rad] 5 deg
+    return p;
+  }
+  static PoseSearchParams default_search() {
+    PoseSearchParams p;
+    p.icp.method = IcpMethod::kPointToPlane;
+    p.icp.max_correspondence_distance = 2.0;  // the grid is 2.5 m / 7.5 deg coarse
+    p.icp.criteria.max_iterations = 30;
+    p.icp.kernel.type = RobustKernelType::kTukey;
+    p.icp.kernel.scale = 1.0;
+    p.yaw_steps = 24;               // 15 deg; the coarse ICP pulls in +-7.5 deg
+    p.step = 3.0;
+    p.score_points = 96;
+    p.fine_icp = default_icp();
     return p;
   }
 };

@@ -31,7 +31,19 @@ struct RansacCriteria {
   double confidence = 0.999;                                      // Open3D default
 };
 
+// Optional prior on the hypothesis (a vehicle on a road: GNSS region, near-level attitude). A
+// hypothesis outside it is rejected before scoring, like Open3D's checkers: in a symmetric
+// street canyon the best FPFH consensus is often the mirrored pose, which only a prior excludes.
+struct RansacPosePrior {
+  bool enabled = false;
+  Vec3d center = Vec3d::Zero();     // expected translation of the hypothesis [m]
+  double max_horizontal = 1e9;      // [m] allowed |t_xy - center_xy|
+  double max_vertical = 1e9;        // [m] allowed |t_z - center_z|
+  double max_tilt = 3.2;            // [rad] allowed angle between R * z and z (roll/pitch)
+};
+
 struct RansacParams {
+  RansacPosePrior prior{};
   double max_correspondence_distance = 0.075;  // [m] inlier distance (Open3D tutorial: 1.5 voxel)
   double edge_length_similarity = 0.9;         // 0 disables the edge-length checker
   double distance_check_threshold = 0.0;       // [m]; 0: = max_correspondence_distance; < 0: off
@@ -47,6 +59,7 @@ struct RansacResult {
   std::uint32_t validations = 0;             // hypotheses that passed the checkers
   std::uint32_t rejected_edge_length = 0;
   std::uint32_t rejected_distance = 0;
+  std::uint32_t rejected_prior = 0;
   std::uint32_t degenerate_samples = 0;      // Kabsch refused the sample (collinear / repeated)
   std::uint32_t invalid_correspondences = 0; // out-of-range indices or non-finite points, skipped
   std::uint32_t adaptive_bound = 0;          // final confidence-derived iteration bound

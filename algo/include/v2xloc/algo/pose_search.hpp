@@ -1,0 +1,46 @@
+// GNSS-seeded global pose search: an exhaustive, bounded multi-hypothesis search over position
+// (a grid inside the GNSS uncertainty disc) and heading (all yaws), for a vehicle on a road
+// (roll = pitch = 0, body origin on the ground). Each hypothesis is scored by the fraction of a
+// fixed subsample of above-ground scan points that land within score_distance of the map; the
+// best few are refined by ICP. Used when FPFH + RANSAC cannot decide: in a straight street
+// canyon the mirrored pose matches the features as well as the true one, and far from the
+// intersection the infrastructure map is too sparse for descriptors.
+// Work is bounded by the grid size: hypotheses <= (2 r / step + 1)^2 * yaw_steps, each costing
+// score_points nearest-neighbour queries.
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "v2xloc/algo/icp.hpp"
+#include "v2xloc/algo/registration_result.hpp"
+#include "v2xloc/algo/types.hpp"
+
+namespace v2xloc {
+
+struct PoseSearchParams {
+  double radius = 20.0;            // [m] search disc around the GNSS fix
+  double step = 2.5;               // [m] grid spacing
+  std::uint32_t yaw_steps = 48;    // 7.5 deg apart
+  std::uint32_t score_points = 256;
+  double score_distance = 1.0;     // [m]
+  double min_height = 0.5;         // [m] scan points below this (body frame) are ground: not scored
+  std::uint32_t max_hypotheses = 40000;  // hard cap (worst-case time)
+  IcpParams icp{};                 // coarse refinement of the best hypotheses
+  IcpParams fine_icp{};            // then fine ICP; the winner has the lowest fine inlier RMSE
+                                   // among those with fitness >= the best fitness - 0.1
+};
+
+struct PoseSearchResult {
+  RegistrationResult best;         // refined best hypothesis (status kOk when found)
+  std::uint32_t hypotheses = 0;    // scored
+  double best_score = 0.0;         // coarse score of the winning hypothesis
+  double ground_z = 0.0;           // [m] map ground height used for the hypotheses
+};
+
+inline constexpr std::uint32_t kPoseSearchRefine = 10;  // hypotheses refined by ICP
+
+PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& map,
+                             const Vec3d& center, const PoseSearchParams& params);
+
+}  // namespace v2xloc

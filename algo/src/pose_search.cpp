@@ -1,0 +1,133 @@
+#include "v2xloc/algo/pose_search.hpp"
+
+#include <cmath>
+
+#include "v2xloc/algo/det_math.hpp"
+#include "v2xloc/algo/kdtree.hpp"
+#include "v2xloc/algo/rigid_motion.hpp"
+
+namespace v2xloc {
+namespace {
+
+struct Candidate {
+  double score = -1.0;
+  double x = 0.0, y = 0.0, yaw = 0.0;
+};
+
+// Most populated 0.2 m height bin of the map near the centre: the road surface.
+double estimate_ground(std::span<const Vec3f> map, const Vec3d& center, double radius) {
+  constexpr int kBins = 400;  // [-40, 40] m around the centre height
+  std::uint32_t hist[kBins] = {};
+  const double r2 = radius * radius;
+  for (const Vec3f& p : map) {
+    const double dx = p.x() - center.x(), dy = p.y() - center.y();
+    if (dx * dx + dy * dy > r2) continue;
+    const int b = static_cast<int>(std::floor((p.z() - center.z() + 40.0) / 0.2));
+    if (b >= 0 && b < kBins) ++hist[b];
+  }
+  int best = -1;
+  std::uint32_t count = 0;
+  for (int b = 0; b < kBins; ++b) {
+    if (hist[b] > count) {
+      count = hist[b];
+      best = b;
+    }
+  }
+  return best < 0 ? center.z() : center.z() - 40.0 + 0.2 * (best + 0.5);
+}
+
+Mat4d pose_of(double x, double y, double z, double yaw) {
+  Mat4d t = Mat4d::Identity();
+  t.topLeftCorner<3, 3>() = rot_z(yaw);
+  t(0, 3) = x;
+  t(1, 3) = y;
+  t(2, 3) = z;
+  return t;
+}
+
+}  // namespace
+
+PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& map,
+                             const Vec3d& center, const PoseSearchParams& params) {
+  PoseSearchResult out;
+  out.best.status = RegistrationStatus::kNotEnoughPoints;
+  if (map.tree == nullptr || map.points.empty() || scan_body.empty() || !(params.step > 0.0) ||
+      params.yaw_steps == 0) {
+    out.best.status = RegistrationStatus::kInvalidInput;
+    return out;
+  }
+  // Fixed subsample of above-ground points (every k-th), in body coordinates.
+  constexpr std::uint32_t kMaxScore = 512;
+  Vec3f score_pts[kMaxScore];
+  std::uint32_t above = 0;
+  for (const Vec3f& p : scan_body) above += p.z() > params.min_height ? 1u : 0u;
+  const std::uint32_t want = params.score_points < kMaxScore ? params.score_points : kMaxScore;
+  if (above < 16) return out;
+  const std::uint32_t stride = above > want ? above / want : 1u;
+  std::uint32_t n = 0, seen = 0;
+  for (const Vec3f& p : scan_body) {
+    if (!(p.z() > params.min_height)) continue;
+    if (seen++ % stride == 0 && n < want) score_pts[n++] = p;
+  }
+
+  out.ground_z = estimate_ground(map.points, center, params.radius + 10.0);
+  Candidate top[kPoseSearchRefine];
+  const double d2max = params.score_distance * params.score_distance;
+  const int cells = static_cast<int>(std::floor(params.radius / params.step));
+  for (int iy = -cells; iy <= cells; ++iy) {
+    for (int ix = -cells; ix <= cells; ++ix) {
+      const double ox = ix * params.step, oy = iy * params.step;
+      if (ox * ox + oy * oy > params.radius * params.radius) continue;
+      for (std::uint32_t k = 0; k < params.yaw_steps; ++k) {
+        if (out.hypotheses >= params.max_hypotheses) break;
+        ++out.hypotheses;
+        const double yaw = 2.0 * det::kPi * k / params.yaw_steps;
+        const double c = det::cos(yaw), s = det::sin(yaw);
+        const double x = center.x() + ox, y = center.y() + oy;
+        std::uint32_t hits = 0;
+        for (std::uint32_t i = 0; i < n; ++i) {
+          const Vec3f& p = score_pts[i];
+          const Vec3f q(static_cast<float>(c * p.x() - s * p.y() + x),
+                        static_cast<float>(s * p.x() + c * p.y() + y),
+                        static_cast<float>(p.z() + out.ground_z));
+          Neighbor nb{0, 0.0f};
+          if (map.tree->nearest(q, nb).count > 0 && nb.squared_distance <= d2max) ++hits;
+        }
+        const double score = static_cast<double>(hits) / n;
+        // Keep the best kPoseSearchRefine (insertion into a sorted fixed array).
+        if (score <= top[kPoseSearchRefine - 1].score) continue;
+        int j = static_cast<int>(kPoseSearchRefine) - 1;
+        while (j > 0 && top[j - 1].score < score) {
+          top[j] = top[j - 1];
+          --j;
+        }
+        top[j] = Candidate{score, x, y, yaw};
+      }
+    }
+  }
+  // Refine the best hypotheses (coarse then fine ICP). Aliased poses along a straight canyon
+  // reach similar fitness at a coarse threshold but not the fine RMSE of the true pose.
+  RegistrationResult refined[kPoseSearchRefine];
+  double best_fitness = 0.0;
+  for (std::uint32_t i = 0; i < kPoseSearchRefine; ++i) {
+    const Candidate& cand = top[i];
+    refined[i].status = RegistrationStatus::kDidNotConverge;
+    if (cand.score < 0.0) continue;
+    const RegistrationResult coarse =
+        icp(scan_body, map, pose_of(cand.x, cand.y, out.ground_z, cand.yaw), params.icp);
+    if (!coarse.ok()) continue;
+    refined[i] = icp(scan_body, map, coarse.transform, params.fine_icp);
+    if (refined[i].ok() && refined[i].fitness > best_fitness) best_fitness = refined[i].fitness;
+  }
+  for (std::uint32_t i = 0; i < kPoseSearchRefine; ++i) {
+    const RegistrationResult& r = refined[i];
+    if (!r.ok() || r.fitness < best_fitness - 0.1) continue;
+    if (!out.best.ok() || r.inlier_rmse < out.best.inlier_rmse) {
+      out.best = r;
+      out.best_score = top[i].score;
+    }
+  }
+  return out;
+}
+
+}  // namespace v2xloc
