@@ -42,7 +42,10 @@ void Localizer::configure(const LocalizerParams& params, const GeodeticOrigin& o
   causal_gate_ = CausalValidityGate(params.gate);
   for (auto& p : pending_) p = {};
   frame_ = 0;
+  gate_pushes_ = 0;
   failed_frames_ = 0;
+  nis_rejections_ = 0;
+  nis_rejections_ungated_ = 0;
   frames_since_global_ = params.global_retry_frames;  // allow a search at the first frame
   have_gnss_ = false;
   have_frame_ = false;
@@ -273,6 +276,10 @@ bool Localizer::global_search(double t, RegistrationResult& result) {
   sp.radius = region < sp.radius ? region : sp.radius;
   const PoseSearchResult searched = search_pose(scan_down_.span(), target, last_gnss_enu_, sp);
   RegistrationResult best = searched.best;
+  const bool distinct = searched.best_tight_fitness > 0.0 &&
+                        searched.runner_up_tight_fitness <
+                            params_.global_max_ambiguity * searched.best_tight_fitness;
+  if (!distinct) best.status = RegistrationStatus::kDidNotConverge;
   // (2) The paper's FPFH + RANSAC against the map around the fix, with the same prior.
   if (params_.use_fpfh_ransac) {
     map_crop_.clear();
@@ -288,8 +295,12 @@ bool Localizer::global_search(double t, RegistrationResult& result) {
     const RegisterCloudsResult coarse = register_clouds(scan_down_.span(), map_crop_.span(), gp,
                                                         Mat4d::Identity(), global_workspace_);
     if (coarse.registration.ok()) {
+      // Only confirms the exhaustive search (same basin); alone it is not trusted in a canyon.
       const RegistrationResult r = icp(scan_down_.span(), target, coarse.registration.transform, sp.icp);
-      if (r.ok() && (!best.ok() || r.fitness > best.fitness)) best = r;
+      if (r.ok() && best.ok() && r.fitness > best.fitness &&
+          horizontal_distance(r.transform, best.transform.topRightCorner<3, 1>()) < sp.distinct_distance) {
+        best = r;
+      }
     }
   }
   if (!best.ok()) {
@@ -311,7 +322,7 @@ bool Localizer::global_search(double t, RegistrationResult& result) {
   return true;
 }
 
-void Localizer::initialize_filters(double t, const Mat4d& pose) {
+void Localizer::restart_filter(Ekf& ekf, double t, const Mat4d& pose) {
   EkfState s;
   s.pos_x = pose(0, 3);
   s.pos_y = pose(1, 3);
@@ -322,10 +333,13 @@ void Localizer::initialize_filters(double t, const Mat4d& pose) {
   EkfCovariance P = EkfCovariance::Zero();
   const double sigmas[kEkfStateSize] = {0.1, 0.1, 0.1, 0.01, 0.5, 0.05, 0.005, 0.02};
   for (int i = 0; i < kEkfStateSize; ++i) P(i, i) = sigmas[i] * sigmas[i];
-  ekf_.initialize(t, s, P);
-  ekf_all_.initialize(t, s, P);
-  ekf_.predict_to(t);
-  ekf_all_.predict_to(t);
+  ekf.initialize(t, s, P);
+  ekf.predict_to(t);
+}
+
+void Localizer::initialize_filters(double t, const Mat4d& pose) {
+  restart_filter(ekf_, t, pose);
+  restart_filter(ekf_all_, t, pose);
   failed_frames_ = 0;
 }
 
@@ -359,14 +373,19 @@ void Localizer::fuse_gated(double t, const RegistrationResult& result, bool atte
       break;
     }
     case GateMode::kFixedLag: {
-      pending_[frame_ % kPendingCapacity] = reg;
+      // The gate counts its own pushes (frames without a registration attempt are not pushed);
+      // the ring is indexed by that count and remembers the localizer frame.
+      reg.gate_index = gate_pushes_++;
+      pending_[reg.gate_index % kPendingCapacity] = reg;
       const GateDecision d = fixed_lag_gate_.push(sample);
-      output_.gate_decided = d.available;
-      output_.gate_decided_frame = static_cast<std::uint32_t>(d.frame);
-      output_.gate_decided_valid = d.valid;
-      if (d.available && d.valid) {
+      if (d.available) {
         const PendingRegistration& late = pending_[d.frame % kPendingCapacity];
-        if (late.ok && late.frame == d.frame) fuse_registration(ekf_, late, fused);
+        if (late.gate_index == d.frame) {
+          output_.gate_decided = true;
+          output_.gate_decided_frame = late.frame;
+          output_.gate_decided_valid = d.valid;
+          if (d.valid && late.ok) fuse_registration(ekf_, late, fused);
+        }
       }
       break;
     }
@@ -382,10 +401,25 @@ void Localizer::fuse_gated(double t, const RegistrationResult& result, bool atte
   output_.registration_fused = fused;
 }
 
+// A registration the validity gate accepted but the filter's NIS gate keeps rejecting means the
+// filter, not the registration, is wrong (it drifted on odometry while over-confident): after
+// reset_after_rejections such frames in a row the filter restarts at the registration.
 void Localizer::fuse_registration(Ekf& ekf, const PendingRegistration& reg, bool& fused) {
   if (!ekf.initialized()) return;
-  fused = ekf.on_registration(reg.t, reg.pose, reg.covariance) == EkfFuseStatus::kFused;
-  if (fused && &ekf == &ekf_) ++counters_.registrations_fused;
+  const EkfFuseStatus status = ekf.on_registration(reg.t, reg.pose, reg.covariance);
+  fused = status == EkfFuseStatus::kFused;
+  std::uint32_t& rejections = &ekf == &ekf_ ? nis_rejections_ : nis_rejections_ungated_;
+  if (fused) {
+    rejections = 0;
+    if (&ekf == &ekf_) ++counters_.registrations_fused;
+    return;
+  }
+  if (status != EkfFuseStatus::kRejectedGate) return;
+  if (++rejections < params_.reset_after_rejections) return;
+  rejections = 0;
+  ++counters_.filter_resets;
+  restart_filter(ekf, reg.t, reg.pose);
+  fused = true;
 }
 
 void Localizer::fill_output(double t) {

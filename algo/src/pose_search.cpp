@@ -119,13 +119,33 @@ PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& 
     refined[i] = icp(scan_body, map, coarse.transform, params.fine_icp);
     if (refined[i].ok() && refined[i].fitness > best_fitness) best_fitness = refined[i].fitness;
   }
+  // The winner: the highest fitness at a tight threshold (an aliased pose explains the scan at
+  // 1 m but not at 0.3 m; inlier RMSE at a loose threshold does not separate them).
+  double tight[kPoseSearchRefine];
+  double best_tight = -1.0;
+  std::uint32_t winner = kPoseSearchRefine;
   for (std::uint32_t i = 0; i < kPoseSearchRefine; ++i) {
     const RegistrationResult& r = refined[i];
+    tight[i] = -1.0;
     if (!r.ok() || r.fitness < best_fitness - 0.1) continue;
-    if (!out.best.ok() || r.inlier_rmse < out.best.inlier_rmse) {
-      out.best = r;
-      out.best_score = top[i].score;
+    tight[i] = evaluate_registration(scan_body, map, r.transform, params.select_distance).fitness;
+    if (tight[i] > best_tight) {
+      best_tight = tight[i];
+      winner = i;
     }
+  }
+  if (winner == kPoseSearchRefine) return out;
+  out.best = refined[winner];
+  out.best_score = top[winner].score;
+  out.best_tight_fitness = best_tight;
+  // Runner-up: the best candidate that is a different pose (not the same basin).
+  for (std::uint32_t i = 0; i < kPoseSearchRefine; ++i) {
+    if (i == winner || tight[i] < 0.0) continue;
+    const Mat4d d = se3_inverse(refined[winner].transform) * refined[i].transform;
+    const double dist = std::sqrt(d(0, 3) * d(0, 3) + d(1, 3) * d(1, 3));
+    const double dyaw = std::abs(det::wrap_pi(yaw_of(d.topLeftCorner<3, 3>())));
+    if (dist < params.distinct_distance && dyaw < params.distinct_yaw) continue;
+    if (tight[i] > out.runner_up_tight_fitness) out.runner_up_tight_fitness = tight[i];
   }
   return out;
 }

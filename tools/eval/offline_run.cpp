@@ -169,8 +169,24 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
                    frame_seconds * 1e3);
     }
   }
-  if (!options.quiet) std::fprintf(stderr, "\n");
   stats.counters = localizer.counters();
+  if (!options.quiet) {
+    const LocalizerCounters& c = stats.counters;
+    std::fprintf(stderr,
+                 "\n  global searches %u (accepted %u), tracking %u, registrations ok %u, fused %u, "
+                 "filter resets %u; EKF: registrations fused %llu rejected %llu, GNSS fused %llu "
+                 "rejected %llu, too late %llu, invalid %llu, numeric %llu, history overflows %llu\n",
+                 c.global_searches, c.global_accepted, c.tracking_registrations, c.registrations_ok,
+                 c.registrations_fused, c.filter_resets,
+                 static_cast<unsigned long long>(localizer.ekf().counters().registration_fused),
+                 static_cast<unsigned long long>(localizer.ekf().counters().registration_rejected),
+                 static_cast<unsigned long long>(localizer.ekf().counters().gnss_fused),
+                 static_cast<unsigned long long>(localizer.ekf().counters().gnss_rejected),
+                 static_cast<unsigned long long>(localizer.ekf().counters().too_late),
+                 static_cast<unsigned long long>(localizer.ekf().counters().invalid_inputs),
+                 static_cast<unsigned long long>(localizer.ekf().counters().numeric_failures),
+                 static_cast<unsigned long long>(localizer.ekf().counters().history_overflows));
+  }
   return true;
 }
 

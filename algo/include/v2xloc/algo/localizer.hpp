@@ -104,6 +104,7 @@ struct LocalizerCounters {
   std::uint32_t scan_points_dropped = 0;       // non-finite, out of range or over capacity
   std::uint32_t odometry_failures = 0;
   std::uint32_t pending_overflow = 0;          // fixed-lag registrations that found no slot
+  std::uint32_t filter_resets = 0;             // filter restarted at a registration
 };
 
 class Localizer {
@@ -132,7 +133,8 @@ class Localizer {
 
  private:
   struct PendingRegistration {
-    std::uint32_t frame = 0;
+    std::uint32_t frame = 0;       // localizer frame index
+    std::uint64_t gate_index = 0;  // push index in the fixed-lag gate
     double t = 0.0;
     Mat4d pose = Mat4d::Identity();
     Eigen::Matrix<double, 4, 4> covariance = Eigen::Matrix<double, 4, 4>::Identity();
@@ -148,6 +150,7 @@ class Localizer {
   void fuse_gated(double t, const RegistrationResult& result, bool attempted_ok);
   void fuse_registration(Ekf& ekf, const PendingRegistration& reg, bool& fused);
   void initialize_filters(double t, const Mat4d& pose);
+  void restart_filter(Ekf& ekf, double t, const Mat4d& pose);
   void fill_output(double t);
 
   LocalizerParams params_{};
@@ -162,7 +165,10 @@ class Localizer {
   CausalValidityGate causal_gate_{};
   PendingRegistration pending_[kPendingCapacity];
   std::uint32_t frame_ = 0;
+  std::uint64_t gate_pushes_ = 0;
   std::uint32_t failed_frames_ = 0;
+  std::uint32_t nis_rejections_ = 0;          // consecutive NIS rejections (main filter)
+  std::uint32_t nis_rejections_ungated_ = 0;
   std::uint32_t frames_since_global_ = 0;
   bool have_gnss_ = false;
   Vec3d last_gnss_enu_ = Vec3d::Zero();

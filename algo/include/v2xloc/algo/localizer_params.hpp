@@ -25,7 +25,7 @@ struct LocalizerParams {
   double frame_period = 0.1;          // [s] LiDAR sweep period (deskew span)
   float min_range = 3.0f;             // [m] drops returns from the ego vehicle body
   float max_range = 80.0f;            // [m] far returns are sparse and noisy
-  float registration_voxel = 0.3f;    // [m] ego scan downsampling for map registration
+  float registration_voxel = 0.5f;    // [m] ego scan downsampling for map registration
 
   // ---- Reference map ----
   MapFusionParams map{};              // voxel 0.2 m, consistency check on
@@ -43,17 +43,24 @@ struct LocalizerParams {
   double global_map_radius = 70.0;    // [m] map crop around the GNSS fix for the global search
   double global_gnss_gate_sigmas = 4.0;  // accept a global solution within this many GNSS sigmas
   double global_min_fitness = 0.3;    // and with at least this ICP fitness
-  double max_inlier_rmse = 0.2;       // [m] a registration above this is a failure (aliased
-                                      // or partial alignments; correct ones measure 2-8 cm)
+  // ... and distinct: runner-up basin's tight fitness / winner's below this. Far from the
+  // intersection the sparse map makes aliased poses along the street nearly as good; we wait
+  // (GNSS only) until the answer is unambiguous instead of locking onto a wrong basin.
+  double global_max_ambiguity = 0.85;
+  // [m] a registration above this inlier RMSE is a failure. Off by default: at a 1 m inlier
+  // threshold the RMSE of a correct alignment is 0.3-0.5 m (scan parts the map lacks still find
+  // a neighbour), so it does not separate good from bad; the validity gate does that.
+  double max_inlier_rmse = 1e9;
   double tracking_max_sigma_xy = 0.5; // [m] EKF position sigma above which we search globally
   std::uint32_t max_failed_frames = 10;  // consecutive unfused registrations -> global search
-  std::uint32_t global_retry_frames = 20; // frames between two global searches (bounded cost)
+  std::uint32_t global_retry_frames = 10; // frames between two global searches (bounded cost)
 
   // ---- Validity gate and fusion ----
   GateMode gate_mode = GateMode::kFixedLag;
   ValidityGateParams gate{};
   EkfParams ekf{};
   RegistrationCovarianceParams registration_covariance{};
+  std::uint32_t reset_after_rejections = 3;  // NIS-rejected registrations in a row -> restart
   double localized_sigma_xy = 0.10;   // [m] Reid et al. 2019 local-street budget, 1 sigma
 
   // ---- Switches (ablations) ----
@@ -66,7 +73,7 @@ struct LocalizerParams {
     IcpParams p;
     p.method = IcpMethod::kPointToPlane;
     p.max_correspondence_distance = 1.0;
-    p.criteria.max_iterations = 30;
+    p.criteria.max_iterations = 20;
     p.criteria.relative_fitness = 1e-7;
     p.criteria.relative_rmse = 1e-7;
     p.kernel.type = RobustKernelType::kTukey;

@@ -27,8 +27,10 @@ struct PoseSearchParams {
   double min_height = 0.5;         // [m] scan points below this (body frame) are ground: not scored
   std::uint32_t max_hypotheses = 40000;  // hard cap (worst-case time)
   IcpParams icp{};                 // coarse refinement of the best hypotheses
-  IcpParams fine_icp{};            // then fine ICP; the winner has the lowest fine inlier RMSE
-                                   // among those with fitness >= the best fitness - 0.1
+  IcpParams fine_icp{};            // then fine ICP; the winner has the highest fitness at
+  double select_distance = 0.3;    // [m] this threshold among those within 0.1 of the best
+  double distinct_distance = 2.0;  // [m] a runner-up farther than this (or distinct_yaw) is
+  double distinct_yaw = 0.17;      // [rad] another basin: its score measures the ambiguity
 };
 
 struct PoseSearchResult {
@@ -36,6 +38,8 @@ struct PoseSearchResult {
   std::uint32_t hypotheses = 0;    // scored
   double best_score = 0.0;         // coarse score of the winning hypothesis
   double ground_z = 0.0;           // [m] map ground height used for the hypotheses
+  double best_tight_fitness = 0.0;       // winner's fitness at select_distance
+  double runner_up_tight_fitness = 0.0;  // best other basin (0 when none): ambiguity check
 };
 
 inline constexpr std::uint32_t kPoseSearchRefine = 10;  // hypotheses refined by ICP
