@@ -41,8 +41,8 @@ Scenario make_scenario(int id, double duration) {
   const double w = 2.0 * M_PI / 12.0;  // speed oscillation period 12 s
   // Straight runs start kApproach before the centre: the recording covers the V2X zone of the
   // intersection (the infrastructure LiDARs' useful range), where cooperative localization is
-  // defined; 20 s at ~6 m/s ends about as far beyond it.
-  constexpr double kApproach = 60.0;
+  // defined; 20 s at ~6 m/s ends about 80 m beyond it.
+  constexpr double kApproach = 40.0;
   switch (id) {
     case 0: {
       sc.description = "ego crosses straight eastbound; agent 0 drives the parallel opposing path";

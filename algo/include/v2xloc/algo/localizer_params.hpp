@@ -53,7 +53,7 @@ struct LocalizerParams {
   double max_inlier_rmse = 1e9;
   double tracking_max_sigma_xy = 0.5; // [m] EKF position sigma above which we search globally
   std::uint32_t max_failed_frames = 10;  // consecutive unfused registrations -> global search
-  std::uint32_t global_retry_frames = 10; // frames between two global searches (bounded cost)
+  std::uint32_t global_retry_frames = 2;  // frames between two global searches (bounded cost)
 
   // ---- Validity gate and fusion ----
   GateMode gate_mode = GateMode::kFixedLag;
