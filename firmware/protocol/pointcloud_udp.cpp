@@ -54,7 +54,7 @@ static_assert(kOffReserved + 2 == kHeaderBytes);
 std::uint16_t flags_for(const CloudFrameInfo& info, const CloudPointsView& points) {
   std::uint16_t flags = 0;
   if (!points.intensity.empty()) flags |= cloud_flags::kIntensity;
-  if (!points.time_offset_us.empty()) flags |= cloud_flags::kPointTime;
+  if (!points.time_offset_ticks.empty()) flags |= cloud_flags::kPointTime;
   if (info.width == CoordWidth::kInt32) flags |= cloud_flags::kCoordsInt32;
   return flags;
 }
@@ -170,7 +170,7 @@ CloudStatus PointCloudFragmenter::begin(const CloudFrameInfo& info, const CloudP
   if (points.xyz.size() % 3 != 0) return CloudStatus::kInvalidArgument;
   const std::size_t n = points.xyz.size() / 3;
   if ((!points.intensity.empty() && points.intensity.size() != n) ||
-      (!points.time_offset_us.empty() && points.time_offset_us.size() != n) || n > 0xFFFFFFFFu) {
+      (!points.time_offset_ticks.empty() && points.time_offset_ticks.size() != n) || n > 0xFFFFFFFFu) {
     return CloudStatus::kInvalidArgument;
   }
   info_ = info;
@@ -244,7 +244,7 @@ CloudStatus PointCloudFragmenter::next(std::span<std::uint8_t> out, std::size_t&
     }
     if (flags_ & cloud_flags::kIntensity) put_u8(w++, points_.intensity[i]);
     if (flags_ & cloud_flags::kPointTime) {
-      put_u16(w, points_.time_offset_us[i]);
+      put_u16(w, points_.time_offset_ticks[i]);
       w += 2;
     }
     ++packed;
@@ -333,7 +333,7 @@ PointCloudReassembler::PointCloudReassembler(const Storage& storage, const Reass
   std::size_t max_points = storage_.max_points;
   if (storage_.xyz.size() / (3 * slots) < max_points) max_points = storage_.xyz.size() / (3 * slots);
   if (storage_.intensity.size() / slots < max_points) max_points = storage_.intensity.size() / slots;
-  if (storage_.time_us.size() / slots < max_points) max_points = storage_.time_us.size() / slots;
+  if (storage_.time_ticks.size() / slots < max_points) max_points = storage_.time_ticks.size() / slots;
   storage_.max_points = static_cast<std::uint32_t>(max_points);
   const std::size_t words = storage_.bitmaps.size() / slots;
   if (words * 64 < storage_.max_fragments) storage_.max_fragments = static_cast<std::uint16_t>(words * 64);
@@ -492,7 +492,7 @@ CloudStatus PointCloudReassembler::push(std::span<const std::uint8_t> datagram, 
     }
     if (h.flags & cloud_flags::kIntensity) storage_.intensity[dst] = *r++;
     if (h.flags & cloud_flags::kPointTime) {
-      storage_.time_us[dst] = get_u16(r);
+      storage_.time_ticks[dst] = get_u16(r);
       r += 2;
     }
   }
@@ -509,8 +509,8 @@ CloudStatus PointCloudReassembler::push(std::span<const std::uint8_t> datagram, 
   completed_.intensity = (slot.meta.flags & cloud_flags::kIntensity)
                              ? std::span<const std::uint8_t>(storage_.intensity).subspan(base, slot.meta.total_points)
                              : std::span<const std::uint8_t>{};
-  completed_.time_offset_us = (slot.meta.flags & cloud_flags::kPointTime)
-                                  ? std::span<const std::uint16_t>(storage_.time_us).subspan(base, slot.meta.total_points)
+  completed_.time_offset_ticks = (slot.meta.flags & cloud_flags::kPointTime)
+                                  ? std::span<const std::uint16_t>(storage_.time_ticks).subspan(base, slot.meta.total_points)
                                   : std::span<const std::uint16_t>{};
   completed_.first_fragment_rx_ns = slot.first_rx_ns;
   completed_.completed_rx_ns = now_ns;

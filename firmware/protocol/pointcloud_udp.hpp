@@ -29,7 +29,7 @@ enum class CoordWidth : std::uint8_t { kInt16 = 2, kInt32 = 4 };
 // Header flag bits; any other bit set -> the datagram is rejected (kUnsupported).
 namespace cloud_flags {
 inline constexpr std::uint16_t kIntensity = 1u << 0;   // uint8 per point
-inline constexpr std::uint16_t kPointTime = 1u << 1;   // uint16 microseconds after timestamp_ns
+inline constexpr std::uint16_t kPointTime = 1u << 1;   // uint16 ticks of kPointTimeTick after timestamp_ns
 inline constexpr std::uint16_t kCoordsInt32 = 1u << 2; // int32 coordinates (else int16)
 inline constexpr std::uint16_t kKnownMask = kIntensity | kPointTime | kCoordsInt32;
 }  // namespace cloud_flags
@@ -55,6 +55,10 @@ const char* to_string(CloudStatus status);
 
 // Sensor pose in the sender's reference frame (global frame for map shares, vehicle frame or
 // global frame for ego scans, per the stream's calibration). Quaternion in x, y, z, w order.
+// One tick of the per-point time field: 4 us, so a u16 spans 262 ms and covers a full 10 Hz
+// sweep (100 ms) with margin; the 2 us quantization error is 0.03 mm of motion at 15 m/s.
+inline constexpr double kPointTimeTick = 4e-6;  // [s]
+
 struct SensorPose {
   double position_m[3] = {0.0, 0.0, 0.0};
   double quaternion_xyzw[4] = {0.0, 0.0, 0.0, 1.0};
@@ -71,12 +75,12 @@ struct CloudFrameInfo {
   CoordWidth width = CoordWidth::kInt16;
 };
 
-// Points in the sensor frame, metres. xyz.size() == 3 * n; intensity and time_offset_us are either
+// Points in the sensor frame, metres. xyz.size() == 3 * n; intensity and time_offset_ticks are either
 // empty (field absent on the wire) or exactly n long.
 struct CloudPointsView {
   std::span<const float> xyz;
   std::span<const std::uint8_t> intensity;
-  std::span<const std::uint16_t> time_offset_us;
+  std::span<const std::uint16_t> time_offset_ticks;
 };
 
 // Quantize one coordinate; false when not finite or outside the symmetric range of `width`.
@@ -140,7 +144,7 @@ struct ReassembledCloud {
   std::uint32_t point_count = 0;
   std::span<const float> xyz;                    // 3 * point_count
   std::span<const std::uint8_t> intensity;       // empty when absent
-  std::span<const std::uint16_t> time_offset_us; // empty when absent
+  std::span<const std::uint16_t> time_offset_ticks; // empty when absent
   std::int64_t first_fragment_rx_ns = 0;
   std::int64_t completed_rx_ns = 0;
 };
@@ -184,7 +188,7 @@ class PointCloudReassembler {
     std::span<ReassemblySlot> slots;
     std::span<float> xyz;                  // slots * 3 * max_points
     std::span<std::uint8_t> intensity;     // slots * max_points
-    std::span<std::uint16_t> time_us;      // slots * max_points
+    std::span<std::uint16_t> time_ticks;      // slots * max_points
     std::span<std::uint64_t> bitmaps;      // slots * ceil(max_fragments / 64)
     std::uint32_t max_points = 0;
     std::uint16_t max_fragments = 0;
@@ -234,7 +238,7 @@ struct ReassemblerArrays {
   std::array<ReassemblySlot, Slots> slots{};
   std::array<float, Slots * MaxPoints * 3> xyz{};
   std::array<std::uint8_t, Slots * MaxPoints> intensity{};
-  std::array<std::uint16_t, Slots * MaxPoints> time_us{};
+  std::array<std::uint16_t, Slots * MaxPoints> time_ticks{};
   std::array<std::uint64_t, Slots * ((MaxFragments + 63) / 64)> bitmaps{};
 };
 }  // namespace detail
@@ -249,7 +253,7 @@ class StaticPointCloudReassembler : private detail::ReassemblerArrays<Slots, Max
  public:
   explicit StaticPointCloudReassembler(const ReassemblyConfig& config = {})
       : Arrays(),
-        PointCloudReassembler(Storage{Arrays::slots, Arrays::xyz, Arrays::intensity, Arrays::time_us,
+        PointCloudReassembler(Storage{Arrays::slots, Arrays::xyz, Arrays::intensity, Arrays::time_ticks,
                                       Arrays::bitmaps, static_cast<std::uint32_t>(MaxPoints),
                                       static_cast<std::uint16_t>(MaxFragments)},
                               config) {}

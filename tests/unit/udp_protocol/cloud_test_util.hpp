@@ -14,10 +14,10 @@ namespace v2xloc::protocol::test {
 struct SyntheticCloud {
   std::vector<float> xyz;
   std::vector<std::uint8_t> intensity;
-  std::vector<std::uint16_t> time_us;
+  std::vector<std::uint16_t> time_ticks;
   CloudPointsView view(bool with_intensity = true, bool with_time = true) const {
     return CloudPointsView{xyz, with_intensity ? std::span<const std::uint8_t>(intensity) : std::span<const std::uint8_t>{},
-                           with_time ? std::span<const std::uint16_t>(time_us) : std::span<const std::uint16_t>{}};
+                           with_time ? std::span<const std::uint16_t>(time_ticks) : std::span<const std::uint16_t>{}};
   }
 };
 
@@ -30,7 +30,7 @@ inline SyntheticCloud make_cloud(std::size_t n, float range_m, std::uint32_t see
     c.xyz.push_back(coord(rng));
     c.xyz.push_back(coord(rng));
     c.intensity.push_back(static_cast<std::uint8_t>(rng()));
-    c.time_us.push_back(static_cast<std::uint16_t>(rng()));
+    c.time_ticks.push_back(static_cast<std::uint16_t>(rng()));
   }
   return c;
 }

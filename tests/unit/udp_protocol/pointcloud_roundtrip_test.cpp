@@ -19,7 +19,7 @@ using Reassembler = StaticPointCloudReassembler<4, 20000, 256>;
 
 // Reassembles `datagrams` in the given order; returns the number of completed frames.
 int feed(PointCloudReassembler& r, const Datagrams& datagrams, std::vector<float>* xyz = nullptr,
-         std::vector<std::uint8_t>* intensity = nullptr, std::vector<std::uint16_t>* time_us = nullptr,
+         std::vector<std::uint8_t>* intensity = nullptr, std::vector<std::uint16_t>* time_ticks = nullptr,
          CloudFrameInfo* info = nullptr) {
   int completed = 0;
   std::int64_t now = 1000;
@@ -30,7 +30,7 @@ int feed(PointCloudReassembler& r, const Datagrams& datagrams, std::vector<float
       const ReassembledCloud& c = r.completed();
       if (xyz) xyz->assign(c.xyz.begin(), c.xyz.end());
       if (intensity) intensity->assign(c.intensity.begin(), c.intensity.end());
-      if (time_us) time_us->assign(c.time_offset_us.begin(), c.time_offset_us.end());
+      if (time_ticks) time_ticks->assign(c.time_offset_ticks.begin(), c.time_offset_ticks.end());
       if (info) *info = c.info;
     }
   }
@@ -76,12 +76,12 @@ TEST(PointCloudUdp, Int16RoundTripStaysWithinHalfAStep) {
   auto r = std::make_unique<Reassembler>();
   std::vector<float> xyz;
   std::vector<std::uint8_t> intensity;
-  std::vector<std::uint16_t> time_us;
+  std::vector<std::uint16_t> time_ticks;
   CloudFrameInfo got{};
-  ASSERT_EQ(feed(*r, d, &xyz, &intensity, &time_us, &got), 1);
+  ASSERT_EQ(feed(*r, d, &xyz, &intensity, &time_ticks, &got), 1);
   ASSERT_EQ(xyz.size(), cloud.xyz.size());
   EXPECT_EQ(intensity, cloud.intensity);
-  EXPECT_EQ(time_us, cloud.time_us);
+  EXPECT_EQ(time_ticks, cloud.time_ticks);
   double max_err = 0.0;
   for (std::size_t i = 0; i < xyz.size(); ++i) max_err = std::max(max_err, std::abs(double(xyz[i]) - double(cloud.xyz[i])));
   // Bound: half a quantization step (1 mm) plus the float rounding of a 65 m value (~4 um).
@@ -111,10 +111,10 @@ TEST(PointCloudUdp, Int32RoundTripCoversKilometres) {
   auto r = std::make_unique<Reassembler>();
   std::vector<float> xyz;
   std::vector<std::uint8_t> intensity{1};
-  std::vector<std::uint16_t> time_us{1};
-  ASSERT_EQ(feed(*r, d, &xyz, &intensity, &time_us), 1);
+  std::vector<std::uint16_t> time_ticks{1};
+  ASSERT_EQ(feed(*r, d, &xyz, &intensity, &time_ticks), 1);
   EXPECT_TRUE(intensity.empty());
-  EXPECT_TRUE(time_us.empty());
+  EXPECT_TRUE(time_ticks.empty());
   ASSERT_EQ(xyz.size(), cloud.xyz.size());
   for (std::size_t i = 0; i < xyz.size(); ++i) {
     const double bound = 0.00005 + std::abs(double(cloud.xyz[i])) * 0x1p-23 + 1e-9;

@@ -1,0 +1,190 @@
+#include "firmware/app/firmware_app.hpp"
+
+#include <cmath>
+
+#include "hal/hid_imu_report.hpp"
+
+namespace v2xloc::firmware {
+namespace {
+
+// GPS time (week, time of week) of the whole second -> Unix ns. GPS epoch 1980-01-06 = Unix
+// 315964800 s; GPS is ahead of UTC by the leap seconds (18 s since 2017-01-01).
+constexpr std::int64_t kGpsEpochUnixS = 315964800;
+constexpr std::int64_t kGpsLeapSeconds = 18;
+
+std::int64_t gps_second_to_unix_ns(std::uint16_t week, double time_of_week_s) {
+  const std::int64_t tow_ms = std::llround(time_of_week_s * 1000.0);  // 1 ms on the wire
+  const std::int64_t gps_s = static_cast<std::int64_t>(week) * 604800 + tow_ms / 1000;
+  return (gps_s + kGpsEpochUnixS - kGpsLeapSeconds) * 1'000'000'000;
+}
+
+std::uint8_t saturate_u8(std::uint64_t v) { return v > 255 ? 255 : static_cast<std::uint8_t>(v); }
+
+}  // namespace
+
+FirmwareApp::FirmwareApp(const FirmwareHal& hal, InputDecoder& decoder, LocalizerPort& localizer,
+                         const FirmwareConfig& config)
+    : hal_(hal), decoder_(decoder), localizer_(localizer), config_(config) {}
+
+hal::Status FirmwareApp::start() {
+  start_ns_ = hal_.clock.monotonic_ns();
+  next_heartbeat_ns_ = start_ns_ + config_.heartbeat_period_ns;
+  last_can_ns_ = last_datagram_ns_ = last_gnss_ns_ = start_ns_;
+  if (hal_.led != nullptr) hal_.led->set_value(false);
+  return hal_.can.accept_all();
+}
+
+std::size_t FirmwareApp::poll_once() {
+  ++counters_.polls;
+  std::size_t handled = drain_can();
+  handled += poll_pps();
+  handled += poll_imu();
+  handled += drain_datagrams();
+  decoder_.expire(hal_.clock.monotonic_ns());
+  maybe_heartbeat();
+  return handled;
+}
+
+std::size_t FirmwareApp::drain_can() {
+  std::size_t n = 0;
+  hal::CanRxFrame rx;
+  while (n < config_.max_can_frames_per_drain && hal_.can.receive(rx) == hal::Status::kOk) {
+    ++n;
+    ++counters_.can_rx;
+    last_can_ns_ = rx.timestamp_ns;
+    if (rx.error || rx.remote) {
+      ++counters_.can_error_frames;
+      continue;
+    }
+    const CanInputKind kind = decoder_.on_can(rx.frame, disciplined(rx.timestamp_ns), localizer_);
+    if (kind == CanInputKind::kGnssFix) {
+      last_gnss_ns_ = rx.timestamp_ns;
+      discipline_clock(rx.timestamp_ns);
+    }
+  }
+  return n;
+}
+
+void FirmwareApp::discipline_clock(std::int64_t rx_monotonic_ns) {
+  // The PPS edge marks the start of the GNSS second named by the next time message of that second.
+  if (!pps_pending_) return;
+  const std::int64_t age = rx_monotonic_ns - pps_edge_ns_;
+  if (age < 0) return;  // the message predates the edge: wait for the next one
+  pps_pending_ = false;
+  if (age >= 1'000'000'000) return;  // no time message within the second: edge unusable
+  const protocol::GnssTimeDop& t = decoder_.last_gnss_time();
+  if (hal_.clock.set_time(gps_second_to_unix_ns(t.week, t.time_of_week_s), pps_edge_ns_) == hal::Status::kOk) {
+    ++counters_.clock_disciplined;
+  }
+}
+
+std::size_t FirmwareApp::poll_pps() {
+  if (hal_.pps == nullptr) return 0;
+  std::size_t n = 0;
+  hal::GpioEdge edge;
+  while (hal_.pps->read_edge(edge) == hal::Status::kOk) {
+    ++n;
+    if (edge.kind != hal::GpioEdge::Kind::kRising) continue;
+    ++counters_.pps_edges;
+    pps_pending_ = true;
+    pps_edge_ns_ = edge.timestamp_ns;
+  }
+  return n;
+}
+
+std::size_t FirmwareApp::poll_imu() {
+  if (hal_.imu == nullptr) return 0;
+  std::size_t n = 0;
+  std::array<std::uint8_t, 64> report{};
+  hal::HidReportInfo info;
+  while (n < 256 && hal_.imu->read_report(report, info) == hal::Status::kOk) {
+    ++n;
+    hal::hid_imu::RawReport raw;
+    if (hal::hid_imu::decode_input_report(std::span<const std::uint8_t>(report.data(), info.size), raw) !=
+        hal::Status::kOk) {
+      ++counters_.imu_malformed;
+      continue;
+    }
+    ++counters_.imu_reports;
+    imu_yaw_rate_ = hal::hid_imu::to_si(raw).gyro_rad_s[2];
+  }
+  return n;
+}
+
+std::size_t FirmwareApp::drain_datagrams() {
+  std::size_t n = 0;
+  hal::DatagramInfo info;
+  while (n < config_.max_datagrams_per_poll) {
+    const hal::Status s = hal_.clouds.receive(datagram_buffer_, info);
+    if (s == hal::Status::kBufferTooSmall) {
+      ++counters_.datagrams_oversize;
+      ++n;
+      continue;
+    }
+    if (s != hal::Status::kOk) break;
+    ++n;
+    ++counters_.datagrams_rx;
+    const std::int64_t now = hal_.clock.monotonic_ns();
+    last_datagram_ns_ = now;
+    if (!decoder_.on_datagram(std::span<const std::uint8_t>(datagram_buffer_.data(), info.size), now)) continue;
+    // Canonical order: every CAN frame sent before this cloud's last fragment goes first.
+    drain_can();
+    const LocalizerFrameOutput* out = nullptr;
+    if (decoder_.dispatch_completed(localizer_, &out) == CloudKind::kEgoScan && out != nullptr) publish_pose(*out);
+  }
+  return n;
+}
+
+void FirmwareApp::send(const protocol::CanFrame& frame) {
+  if (hal_.can.send(frame) == hal::Status::kOk) {
+    ++counters_.can_tx;
+  } else {
+    ++counters_.can_tx_failed;
+  }
+}
+
+void FirmwareApp::publish_pose(const LocalizerFrameOutput& out) {
+  latest_ = out;
+  has_output_ = true;
+  const PoseFrames frames = pose_encoder_.encode(out, decoder_.last_frame_index(), decoder_.gnss_used_in_last_frame());
+  send(frames.position);
+  send(frames.attitude);
+  send(frames.sigma);  // last: the replayer's lockstep waits for it
+  ++counters_.frames_published;
+  if (hal_.led != nullptr && out.localized != led_on_) {
+    led_on_ = out.localized;
+    hal_.led->set_value(led_on_);
+    ++counters_.led_changes;
+  }
+}
+
+protocol::Heartbeat FirmwareApp::heartbeat_now() const {
+  const std::int64_t now = hal_.clock.monotonic_ns();
+  const DecoderCounters& d = decoder_.counters();
+  const protocol::ReassemblyCounters& r = decoder_.reassembly_counters();
+  protocol::Heartbeat hb;
+  hb.state = localizer_state(has_output_ ? &latest_ : nullptr);
+  hb.error_flags = static_cast<std::uint8_t>(
+      (now - last_can_ns_ > config_.input_timeout_ns ? 1u : 0u) |
+      (now - last_datagram_ns_ > config_.input_timeout_ns ? 2u : 0u) |
+      (now - last_gnss_ns_ > config_.gnss_timeout_ns ? 4u : 0u) |
+      (r.over_capacity + r.frames_evicted > 0 ? 8u : 0u));
+  hb.uptime_s = static_cast<double>(now - start_ns_) * 1e-9;
+  hb.can_rx_errors = saturate_u8(d.can_rejected + counters_.can_error_frames);
+  hb.udp_dropped = saturate_u8(d.datagrams_rejected + counters_.datagrams_oversize + r.frames_timed_out +
+                               r.frames_evicted + d.clouds_rejected);
+  hb.counter = heartbeat_counter_;
+  return hb;
+}
+
+void FirmwareApp::maybe_heartbeat() {
+  const std::int64_t now = hal_.clock.monotonic_ns();
+  if (now < next_heartbeat_ns_) return;
+  send(protocol::pack(heartbeat_now()));
+  heartbeat_counter_ = static_cast<std::uint8_t>((heartbeat_counter_ + 1) % protocol::kCounterModulo);
+  ++counters_.heartbeats;
+  // Simulated time may jump several periods: one heartbeat, then the next period boundary.
+  next_heartbeat_ns_ += config_.heartbeat_period_ns * ((now - next_heartbeat_ns_) / config_.heartbeat_period_ns + 1);
+}
+
+}  // namespace v2xloc::firmware

@@ -1,0 +1,104 @@
+// The ECU application loop: polls the HAL, decodes (InputDecoder), runs the localizer, publishes
+// the fused pose on CAN after every ego scan, drives the "localized" LED, disciplines the clock on
+// GNSS PPS edges and sends a 1 Hz heartbeat. It only knows hal/ interfaces; main() picks backends.
+// Event order: before a completed cloud is handed to the localizer, every pending CAN frame is
+// decoded first, so inputs reach the localizer in the canonical order of the replay event stream
+// (host_sim/replay/event_stream.hpp). No allocation: all buffers are members of static objects.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "firmware/app/input_decoder.hpp"
+#include "firmware/app/pose_frames.hpp"
+#include "hal/can_bus.hpp"
+#include "hal/clock.hpp"
+#include "hal/datagram_link.hpp"
+#include "hal/gpio_line.hpp"
+#include "hal/hid_device.hpp"
+
+namespace v2xloc::firmware {
+
+struct FirmwareHal {
+  hal::CanBus& can;              // vehicle bus: GNSS + vehicle motion in, pose + heartbeat out
+  hal::DatagramLink& clouds;     // UDP: ego scans and V2X map shares
+  hal::Clock& clock;
+  hal::GpioLine* pps = nullptr;  // GNSS PPS input (optional)
+  hal::GpioLine* led = nullptr;  // "localized" LED output (optional)
+  hal::HidDevice* imu = nullptr; // USB HID IMU (optional; hal/HID_IMU_REPORT.md)
+};
+
+struct FirmwareConfig {
+  std::int64_t heartbeat_period_ns = 1'000'000'000;
+  std::int64_t input_timeout_ns = 1'000'000'000;   // heartbeat error bits: CAN / UDP silent
+  std::int64_t gnss_timeout_ns = 2'000'000'000;
+  std::size_t max_datagrams_per_poll = 4096;       // bounded work per poll
+  std::size_t max_can_frames_per_drain = 65536;
+};
+
+struct FirmwareCounters {
+  std::uint64_t polls = 0;
+  std::uint64_t can_rx = 0;
+  std::uint64_t can_error_frames = 0;
+  std::uint64_t can_tx = 0;
+  std::uint64_t can_tx_failed = 0;
+  std::uint64_t datagrams_rx = 0;
+  std::uint64_t datagrams_oversize = 0;   // did not fit the receive buffer (discarded by the link)
+  std::uint64_t frames_published = 0;
+  std::uint64_t heartbeats = 0;
+  std::uint64_t pps_edges = 0;
+  std::uint64_t clock_disciplined = 0;
+  std::uint64_t imu_reports = 0;
+  std::uint64_t imu_malformed = 0;
+  std::uint64_t led_changes = 0;
+};
+
+class FirmwareApp {
+ public:
+  FirmwareApp(const FirmwareHal& hal, InputDecoder& decoder, LocalizerPort& localizer,
+              const FirmwareConfig& config = {});
+
+  // Accept-all CAN filter, LED off, heartbeat schedule. Call once before the loop.
+  hal::Status start();
+  // One pass over every input; returns how many events were handled (0 = idle).
+  std::size_t poll_once();
+
+  const FirmwareCounters& counters() const { return counters_; }
+  const InputDecoder& decoder() const { return decoder_; }
+  const LocalizerFrameOutput* latest_output() const { return has_output_ ? &latest_ : nullptr; }
+  double latest_imu_yaw_rate() const { return imu_yaw_rate_; }
+  protocol::Heartbeat heartbeat_now() const;
+
+ private:
+  std::size_t drain_can();
+  std::size_t drain_datagrams();
+  std::size_t poll_pps();
+  std::size_t poll_imu();
+  void maybe_heartbeat();
+  void publish_pose(const LocalizerFrameOutput& out);
+  void discipline_clock(std::int64_t rx_monotonic_ns);
+  void send(const protocol::CanFrame& frame);
+  std::int64_t disciplined(std::int64_t monotonic_ns) const {
+    return monotonic_ns + (hal_.clock.time_ns() - hal_.clock.monotonic_ns());
+  }
+
+  FirmwareHal hal_;
+  InputDecoder& decoder_;
+  LocalizerPort& localizer_;
+  FirmwareConfig config_;
+  FirmwareCounters counters_{};
+  PoseFrameEncoder pose_encoder_{};
+  LocalizerFrameOutput latest_{};
+  bool has_output_ = false;
+  bool led_on_ = false;
+  std::uint8_t heartbeat_counter_ = 0;
+  std::int64_t start_ns_ = 0;
+  std::int64_t next_heartbeat_ns_ = 0;
+  std::int64_t last_can_ns_ = 0, last_datagram_ns_ = 0, last_gnss_ns_ = 0;
+  bool pps_pending_ = false;
+  std::int64_t pps_edge_ns_ = 0;
+  double imu_yaw_rate_ = 0.0;
+  std::array<std::uint8_t, 2048> datagram_buffer_{};  // > 1400-byte fragments; larger ones are counted
+};
+
+}  // namespace v2xloc::firmware

@@ -1,0 +1,155 @@
+#include "firmware/app/input_decoder.hpp"
+
+#include <cmath>
+
+#include "firmware/app/wire_conventions.hpp"
+
+namespace v2xloc::firmware {
+
+CanInputKind InputDecoder::on_can(const protocol::CanFrame& frame, std::int64_t time_ns, LocalizerPort& sink) {
+  ++counters_.can_frames;
+  const double t = localizer_time_s(time_ns, epoch_ns_);
+  const auto rejected = [this] {
+    ++counters_.can_rejected;
+    return CanInputKind::kRejected;
+  };
+  switch (frame.id) {
+    case protocol::kVehicleMotionId: {
+      protocol::VehicleMotion m;
+      if (protocol::unpack(frame, m) != protocol::DecodeStatus::kOk) return rejected();
+      if (!m.speed_valid || !m.yaw_rate_valid) {
+        ++counters_.vehicle_invalid;
+        return CanInputKind::kInvalid;
+      }
+      sink.on_vehicle(VehicleInput{t, m.wheel_speed_mps, m.yaw_rate_rps});
+      ++counters_.vehicle_inputs;
+      return CanInputKind::kVehicle;
+    }
+    case protocol::kGnssPositionId:
+      if (protocol::unpack(frame, gnss_position_) != protocol::DecodeStatus::kOk) return rejected();
+      have_position_ = true;
+      return CanInputKind::kGnssPart;
+    case protocol::kGnssStatusId:
+      if (protocol::unpack(frame, gnss_status_) != protocol::DecodeStatus::kOk) return rejected();
+      have_status_ = true;
+      return CanInputKind::kGnssPart;
+    case protocol::kGnssTimeDopId: {
+      // The time/DOP frame closes a fix (sent last: position, status, time). A fix without its
+      // status frame is incomplete; without a position it is forwarded as invalid (no fix).
+      if (protocol::unpack(frame, gnss_time_) != protocol::DecodeStatus::kOk) return rejected();
+      if (!have_status_) {
+        have_position_ = false;
+        ++counters_.gnss_incomplete;
+        return CanInputKind::kInvalid;
+      }
+      GnssInput g;
+      g.t = t;
+      const bool fixed = gnss_status_.fix_type == protocol::GnssFixType::kFix2D ||
+                         gnss_status_.fix_type == protocol::GnssFixType::kFix3D;
+      g.valid = fixed && have_position_;
+      if (have_position_) {
+        g.lat_deg = gnss_position_.lat_deg;
+        g.lon_deg = gnss_position_.lon_deg;
+      }
+      g.alt_m = gnss_status_.alt_m;
+      g.h_acc = gnss_status_.h_acc_m;
+      g.v_acc = gnss_status_.v_acc_m;
+      g.num_sats = gnss_status_.num_sats;
+      g.hdop = gnss_time_.hdop;
+      have_position_ = have_status_ = false;
+      sink.on_gnss(g);
+      ++counters_.gnss_inputs;
+      gnss_since_last_scan_ = true;
+      return CanInputKind::kGnssFix;
+    }
+    default:
+      ++counters_.can_unknown_id;
+      return CanInputKind::kUnknownId;
+  }
+}
+
+bool InputDecoder::on_datagram(std::span<const std::uint8_t> datagram, std::int64_t now_ns) {
+  ++counters_.datagrams;
+  completed_pending_ = false;
+  const protocol::CloudStatus s = reassembler_.push(datagram, now_ns);
+  switch (s) {
+    case protocol::CloudStatus::kFrameComplete:
+      completed_pending_ = true;
+      return true;
+    case protocol::CloudStatus::kOk:
+    case protocol::CloudStatus::kDuplicate:   // normal on UDP: counted by the reassembler
+    case protocol::CloudStatus::kStaleFrame:
+      return false;
+    default:
+      ++counters_.datagrams_rejected;
+      return false;
+  }
+}
+
+bool InputDecoder::pose_to_matrix(const protocol::SensorPose& pose, Mat4d& out) const {
+  const double* q = pose.quaternion_xyzw;
+  const double norm_sq = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+  if (!(std::abs(norm_sq - 1.0) < 1e-3)) return false;  // also rejects NaN
+  for (const double p : pose.position_m) {
+    if (!std::isfinite(p)) return false;
+  }
+  Eigen::Quaterniond quat(q[3], q[0], q[1], q[2]);
+  quat.normalize();
+  out = Mat4d::Identity();
+  out.topLeftCorner<3, 3>() = quat.toRotationMatrix();
+  out(0, 3) = pose.position_m[0];
+  out(1, 3) = pose.position_m[1];
+  out(2, 3) = pose.position_m[2];
+  return true;
+}
+
+CloudKind InputDecoder::dispatch_completed(LocalizerPort& sink, const LocalizerFrameOutput** output) {
+  if (!completed_pending_) return CloudKind::kNone;
+  completed_pending_ = false;
+  const protocol::ReassembledCloud& cloud = reassembler_.completed();
+  const protocol::CloudFrameInfo& info = cloud.info;
+  Mat4d pose;
+  const std::uint32_t n = cloud.point_count;
+  if (!pose_to_matrix(info.pose, pose) || n > points_.size() || cloud.xyz.size() < 3u * n) {
+    ++counters_.clouds_rejected;
+    return CloudKind::kRejected;
+  }
+  for (std::uint32_t i = 0; i < n; ++i) {
+    points_[i] = Vec3f(cloud.xyz[3u * i], cloud.xyz[3u * i + 1], cloud.xyz[3u * i + 2]);
+  }
+  const double t = localizer_time_s(static_cast<std::int64_t>(info.timestamp_ns), epoch_ns_);
+  const std::span<const Vec3f> points(points_.data(), n);
+
+  if (info.type == protocol::CloudMessageType::kMapShare) {
+    MapCloudInput in;
+    in.source_id = info.sender_id;
+    in.is_agent = sender_is_agent(info.sender_id);
+    in.t = t;
+    in.world_T_sensor = pose;
+    in.points = points;
+    last_map_insert_ = sink.on_map_cloud(in);
+    ++counters_.map_clouds;
+    return CloudKind::kMapCloud;
+  }
+  if (info.type != protocol::CloudMessageType::kEgoScan || info.sender_id != kEgoSenderId) {
+    ++counters_.clouds_rejected;
+    return CloudKind::kRejected;
+  }
+  EgoScanInput in;
+  in.t = t;
+  in.points = points;
+  if (cloud.time_offset_ticks.size() == n) {
+    for (std::uint32_t i = 0; i < n; ++i) point_times_[i] = static_cast<float>(cloud.time_offset_ticks[i] * protocol::kPointTimeTick);
+    in.point_times = std::span<const float>(point_times_.data(), n);
+  }
+  in.body_T_lidar = pose;
+  gnss_flag_for_frame_ = gnss_since_last_scan_;
+  gnss_since_last_scan_ = false;
+  last_frame_index_ = static_cast<std::uint32_t>(counters_.ego_scans);
+  ++counters_.ego_scans;
+  const LocalizerFrameOutput& out = sink.on_ego_scan(in);
+  if (output != nullptr) *output = &out;
+  return CloudKind::kEgoScan;
+}
+
+}  // namespace v2xloc::firmware

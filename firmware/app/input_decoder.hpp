@@ -1,0 +1,102 @@
+// Wire -> localizer inputs. CAN frames (vehicle motion, GNSS position/status/time) are decoded with
+// the DBC codec; point-cloud datagrams are reassembled and dequantized into an ego scan or a map
+// share. The firmware loop and the offline evaluator both feed this one class, so the offline
+// path applies exactly the firmware's quantization and decoding (bit-identical inputs).
+// Allocation-free; all storage (reassembler, decoded cloud) is inside: make the object static.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+
+#include "firmware/app/localizer_port.hpp"
+#include "firmware/protocol/can_messages.hpp"
+#include "firmware/protocol/pointcloud_udp.hpp"
+#include "v2xloc/algo/config.hpp"
+
+namespace v2xloc::firmware {
+
+inline constexpr std::size_t kReassemblySlots = 4;                 // clouds in flight at once
+inline constexpr std::size_t kMaxCloudPoints = config::kMaxScanPoints;
+inline constexpr std::size_t kMaxCloudFragments = 2048;            // >= 131072 / 143 points
+using CloudReassembler = protocol::StaticPointCloudReassembler<kReassemblySlots, kMaxCloudPoints, kMaxCloudFragments>;
+
+enum class CanInputKind : std::uint8_t {
+  kVehicle,       // delivered a VehicleInput
+  kGnssFix,       // delivered a GnssInput (on the time/DOP frame that closes a fix)
+  kGnssPart,      // position or status of a fix, stored until the time frame
+  kInvalid,       // decoded, but flagged invalid by the sender (counted, not forwarded)
+  kRejected,      // wrong DLC, CRC or range (counted)
+  kUnknownId,     // not ours (counted)
+};
+
+enum class CloudKind : std::uint8_t { kNone, kEgoScan, kMapCloud, kRejected };
+
+struct DecoderCounters {
+  std::uint64_t can_frames = 0;
+  std::uint64_t vehicle_inputs = 0;
+  std::uint64_t vehicle_invalid = 0;
+  std::uint64_t gnss_inputs = 0;
+  std::uint64_t gnss_incomplete = 0;   // time frame without the fix's status frame
+  std::uint64_t can_rejected = 0;      // DLC / CRC / range failures
+  std::uint64_t can_unknown_id = 0;
+  std::uint64_t datagrams = 0;
+  std::uint64_t datagrams_rejected = 0;  // any reassembler status other than ok/complete/duplicate/stale
+  std::uint64_t ego_scans = 0;
+  std::uint64_t map_clouds = 0;
+  std::uint64_t clouds_rejected = 0;     // complete but unusable (bad pose, wrong message type)
+};
+
+class InputDecoder {
+ public:
+  // epoch_ns: disciplined time that maps to localizer time 0 (see localizer_time_s).
+  explicit InputDecoder(std::int64_t epoch_ns = 0) : epoch_ns_(epoch_ns) {}
+  void set_epoch_ns(std::int64_t epoch_ns) { epoch_ns_ = epoch_ns; }
+  std::int64_t epoch_ns() const { return epoch_ns_; }
+
+  // One CAN frame received at disciplined time time_ns.
+  CanInputKind on_can(const protocol::CanFrame& frame, std::int64_t time_ns, LocalizerPort& sink);
+  // Latest GNSS time frame (valid after kGnssFix), for PPS discipline.
+  const protocol::GnssTimeDop& last_gnss_time() const { return gnss_time_; }
+
+  // One datagram received at monotonic now_ns. True when it completed a cloud: the caller first
+  // drains earlier inputs (CAN), then calls dispatch_completed() before the next datagram.
+  bool on_datagram(std::span<const std::uint8_t> datagram, std::int64_t now_ns);
+  // Hands the completed cloud to the localizer. Returns its kind; for an ego scan, `output`
+  // points at the localizer's frame output and `frame_index` is the ego scan count - 1.
+  CloudKind dispatch_completed(LocalizerPort& sink, const LocalizerFrameOutput** output = nullptr);
+  std::size_t expire(std::int64_t now_ns) { return reassembler_.expire(now_ns); }
+
+  // True when a GNSS fix reached the localizer between the previous ego scan and the latest one
+  // (pose flag GnssUsed of the latest frame).
+  bool gnss_used_in_last_frame() const { return gnss_flag_for_frame_; }
+  std::uint32_t last_frame_index() const { return last_frame_index_; }
+  const MapInsertResult& last_map_insert() const { return last_map_insert_; }
+
+  const DecoderCounters& counters() const { return counters_; }
+  const protocol::ReassemblyCounters& reassembly_counters() const { return reassembler_.counters(); }
+
+  static constexpr std::size_t static_bytes() { return sizeof(InputDecoder); }
+
+ private:
+  bool pose_to_matrix(const protocol::SensorPose& pose, Mat4d& out) const;
+
+  std::int64_t epoch_ns_ = 0;
+  CloudReassembler reassembler_{};
+  std::array<Vec3f, kMaxCloudPoints> points_{};
+  std::array<float, kMaxCloudPoints> point_times_{};
+  bool completed_pending_ = false;
+
+  protocol::GnssPosition gnss_position_{};
+  protocol::GnssStatus gnss_status_{};
+  protocol::GnssTimeDop gnss_time_{};
+  bool have_position_ = false;
+  bool have_status_ = false;
+  bool gnss_since_last_scan_ = false;
+  bool gnss_flag_for_frame_ = false;
+  std::uint32_t last_frame_index_ = 0;
+  MapInsertResult last_map_insert_{};
+  DecoderCounters counters_{};
+};
+
+}  // namespace v2xloc::firmware

@@ -1,0 +1,41 @@
+// The firmware's view of the localizer: the four input calls and the per-frame output, behind a
+// small virtual interface so the application loop (and the offline evaluator, which feeds the
+// same decoder) does not depend on which localizer type main() links in. LocalizerAdapter binds
+// any type with the v2xloc::Localizer API (configure / on_vehicle / on_gnss / on_map_cloud /
+// on_ego_scan) without copying: the localizer object itself stays a static owned by main.
+#pragma once
+
+#include "v2xloc/algo/geodesy.hpp"
+#include "v2xloc/algo/localizer.hpp"
+#include "v2xloc/algo/map_fusion.hpp"
+
+namespace v2xloc::firmware {
+
+class LocalizerPort {
+ public:
+  virtual void on_vehicle(const VehicleInput& input) = 0;
+  virtual void on_gnss(const GnssInput& input) = 0;
+  virtual MapInsertResult on_map_cloud(const MapCloudInput& input) = 0;
+  virtual const LocalizerFrameOutput& on_ego_scan(const EgoScanInput& input) = 0;
+
+ protected:
+  ~LocalizerPort() = default;  // never deleted through the interface (static objects)
+};
+
+template <class LocalizerT>
+class LocalizerAdapter final : public LocalizerPort {
+ public:
+  explicit LocalizerAdapter(LocalizerT& localizer) : localizer_(localizer) {}
+  void on_vehicle(const VehicleInput& input) override { localizer_.on_vehicle(input); }
+  void on_gnss(const GnssInput& input) override { localizer_.on_gnss(input); }
+  MapInsertResult on_map_cloud(const MapCloudInput& input) override { return localizer_.on_map_cloud(input); }
+  const LocalizerFrameOutput& on_ego_scan(const EgoScanInput& input) override {
+    return localizer_.on_ego_scan(input);
+  }
+  LocalizerT& localizer() { return localizer_; }
+
+ private:
+  LocalizerT& localizer_;
+};
+
+}  // namespace v2xloc::firmware

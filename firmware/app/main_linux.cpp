@@ -1,0 +1,324 @@
+// v2xloc-firmware: the ECU application on Linux. Chooses the HAL backends (real: SocketCAN, UDP,
+// libgpiod, hidapi; --emulated: CAN over UDP on loopback, SimClock driven by the replayer,
+// scripted PPS), builds the static objects, prints their memory, and runs the poll loop.
+// Options (also as key=value lines in --config FILE): see usage() and firmware/README.md.
+#include <poll.h>
+#include <sys/socket.h>
+
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <string>
+
+#include "firmware/app/alloc_counter.hpp"
+#include "firmware/app/emulated_wiring.hpp"
+#include "firmware/app/firmware_app.hpp"
+#include "firmware/app/selected_localizer.hpp"
+#include "hal/emulated/emulated_can_bus.hpp"
+#include "hal/emulated/scripted_hid_device.hpp"
+#include "hal/emulated/sim_clock.hpp"
+#include "hal/linux/gpiod_line.hpp"
+#include "hal/linux/hidapi_device.hpp"
+#include "hal/linux/linux_clock.hpp"
+#include "hal/linux/socketcan_bus.hpp"
+#include "hal/linux/udp_link.hpp"
+
+extern "C" {
+extern char __bss_start;  // GNU ld: start of .bss
+extern char _end;         // end of .bss
+extern char __data_start;
+extern char _edata;
+}
+
+namespace {
+
+using namespace v2xloc;
+using namespace v2xloc::firmware;
+
+// ---- The static objects of the ECU (BSS; nothing of this size lives on the stack or heap). ----
+SelectedLocalizer g_localizer;
+InputDecoder g_decoder;
+
+volatile std::sig_atomic_t g_stop = 0;
+void on_signal(int) { g_stop = 1; }
+
+int usage() {
+  std::fprintf(stderr,
+               "usage: v2xloc-firmware [--config FILE] [--emulated] [options]\n"
+               "  common:   --cloud-port N (UDP clouds, default 47200; 0 = ephemeral)  --cloud-bind A.B.C.D\n"
+               "            --origin LAT,LON,ALT (local ENU origin)  --epoch-ns N (Unix ns of localizer t = 0)\n"
+               "            --max-frames N (exit after N published frames)  --rcvbuf BYTES (default 33554432)\n"
+               "  real:     --can-iface can0 [--can-bring-up 1]  --pps-chip gpiochip0 --pps-line N\n"
+               "            --led-chip gpiochip0 --led-line N  --imu VID:PID\n"
+               "  emulated: --can-port N (firmware's CAN-over-UDP port, 0 = ephemeral)  --can-peer-port N\n"
+               "            --imu-script FILE (ScriptedHidDevice)  --pps 0|1 (scripted PPS, default 1)\n"
+               "Prints 'v2xloc-firmware: ready can=PORT cloud=PORT' once the sockets are bound.\n");
+  return 2;
+}
+
+bool load_config(const std::string& path, std::map<std::string, std::string>& kv) {
+  std::ifstream in(path);
+  if (!in) return false;
+  std::string line;
+  while (std::getline(in, line)) {
+    const auto hash = line.find('#');
+    if (hash != std::string::npos) line.resize(hash);
+    const auto eq = line.find('=');
+    if (eq == std::string::npos) continue;
+    auto trim = [](std::string s) {
+      const auto b = s.find_first_not_of(" \t\r");
+      const auto e = s.find_last_not_of(" \t\r");
+      return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
+    };
+    kv[trim(line.substr(0, eq))] = trim(line.substr(eq + 1));
+  }
+  return true;
+}
+
+void print_memory() {
+  std::printf("v2xloc-firmware: localizer: %s\n", kSelectedLocalizerName);
+  std::printf("v2xloc-firmware: static memory: localizer %.1f MiB, decoder (reassembler %zu slots x %zu points + cloud buffers) %.1f MiB,"
+              " app %zu B; .bss %.1f MiB, .data %zu B\n",
+              sizeof(SelectedLocalizer) / 1048576.0, kReassemblySlots, kMaxCloudPoints, sizeof(InputDecoder) / 1048576.0,
+              sizeof(FirmwareApp), static_cast<double>(&_end - &__bss_start) / 1048576.0,
+              static_cast<std::size_t>(&_edata - &__data_start));
+}
+
+void force_receive_buffer(int fd, int bytes) {
+  // SO_RCVBUFFORCE (root / CAP_NET_ADMIN) lifts the rmem_max cap so a 100k-point scan
+  // (~800 fragments) fits the socket queue; otherwise SO_RCVBUF up to rmem_max.
+  if (setsockopt(fd, SOL_SOCKET, SO_RCVBUFFORCE, &bytes, sizeof bytes) != 0) {
+    setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &bytes, sizeof bytes);
+  }
+  int actual = 0;
+  socklen_t len = sizeof actual;
+  getsockopt(fd, SOL_SOCKET, SO_RCVBUF, &actual, &len);
+  std::printf("v2xloc-firmware: cloud socket receive buffer %d bytes\n", actual);
+}
+
+void print_counters(const FirmwareApp& app) {
+  const FirmwareCounters& c = app.counters();
+  const DecoderCounters& d = app.decoder().counters();
+  const protocol::ReassemblyCounters& r = app.decoder().reassembly_counters();
+  std::printf("v2xloc-firmware: polls %llu can_rx %llu can_err %llu can_tx %llu tx_fail %llu datagrams %llu oversize %llu"
+              " frames %llu heartbeats %llu pps %llu disciplined %llu imu %llu\n",
+              (unsigned long long)c.polls, (unsigned long long)c.can_rx, (unsigned long long)c.can_error_frames,
+              (unsigned long long)c.can_tx, (unsigned long long)c.can_tx_failed, (unsigned long long)c.datagrams_rx,
+              (unsigned long long)c.datagrams_oversize, (unsigned long long)c.frames_published,
+              (unsigned long long)c.heartbeats, (unsigned long long)c.pps_edges, (unsigned long long)c.clock_disciplined,
+              (unsigned long long)c.imu_reports);
+  std::printf("v2xloc-firmware: decoded vehicle %llu (invalid %llu) gnss %llu (incomplete %llu) can_rejected %llu unknown_id %llu"
+              " ego_scans %llu map_clouds %llu clouds_rejected %llu datagrams_rejected %llu\n",
+              (unsigned long long)d.vehicle_inputs, (unsigned long long)d.vehicle_invalid,
+              (unsigned long long)d.gnss_inputs, (unsigned long long)d.gnss_incomplete,
+              (unsigned long long)d.can_rejected, (unsigned long long)d.can_unknown_id,
+              (unsigned long long)d.ego_scans, (unsigned long long)d.map_clouds, (unsigned long long)d.clouds_rejected,
+              (unsigned long long)d.datagrams_rejected);
+  std::printf("v2xloc-firmware: reassembly fragments %llu frames %llu duplicates %llu stale %llu timed_out %llu evicted %llu"
+              " bad_crc %llu truncated %llu malformed %llu over_capacity %llu\n",
+              (unsigned long long)r.fragments_accepted, (unsigned long long)r.frames_completed,
+              (unsigned long long)r.duplicates, (unsigned long long)r.stale_fragments,
+              (unsigned long long)r.frames_timed_out, (unsigned long long)r.frames_evicted,
+              (unsigned long long)r.bad_crc, (unsigned long long)r.truncated, (unsigned long long)r.malformed,
+              (unsigned long long)r.over_capacity);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::map<std::string, std::string> kv;
+  bool emulated = false;
+  for (int i = 1; i < argc; ++i) {
+    std::string a = argv[i];
+    if (a == "--emulated") {
+      emulated = true;
+    } else if (a == "-h" || a == "--help") {
+      return usage();
+    } else if (a.rfind("--", 0) == 0) {
+      std::string key = a.substr(2), value;
+      const auto eq = key.find('=');
+      if (eq != std::string::npos) {
+        value = key.substr(eq + 1);
+        key.resize(eq);
+      } else if (i + 1 < argc) {
+        value = argv[++i];
+      } else {
+        return usage();
+      }
+      if (key == "config") {
+        if (!load_config(value, kv)) {
+          std::fprintf(stderr, "v2xloc-firmware: cannot read config %s\n", value.c_str());
+          return 2;
+        }
+      } else {
+        kv[key] = value;
+      }
+    } else {
+      return usage();
+    }
+  }
+  if (kv.count("emulated") && kv["emulated"] != "0") emulated = true;
+  auto get = [&](const char* key, const char* fallback) { return kv.count(key) ? kv[key] : std::string(fallback); };
+  auto get_ll = [&](const char* key, long long fallback) {
+    return kv.count(key) ? std::strtoll(kv[key].c_str(), nullptr, 0) : fallback;
+  };
+
+  double lat = 48.1374, lon = 11.5755, alt = 520.0;
+  if (kv.count("origin") && std::sscanf(kv["origin"].c_str(), "%lf,%lf,%lf", &lat, &lon, &alt) != 3) return usage();
+  const std::int64_t epoch_ns = get_ll("epoch-ns", 0);
+  const long long max_frames = get_ll("max-frames", 0);
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
+
+  print_memory();
+  configure_localizer(g_localizer, make_geodetic_origin(lat, lon, alt));
+  g_decoder.set_epoch_ns(epoch_ns);
+  static LocalizerAdapter<SelectedLocalizer> port(g_localizer);
+
+  // ---- Backends ----
+  static hal::UdpLink cloud_link;
+  hal::UdpOptions cloud_options;
+  if (!hal::parse_ipv4(get("cloud-bind", emulated ? "127.0.0.1" : "0.0.0.0").c_str(), cloud_options.bind.address)) return usage();
+  cloud_options.bind.port = static_cast<std::uint16_t>(get_ll("cloud-port", 47200));
+  if (cloud_link.open(cloud_options) != hal::Status::kOk) {
+    std::fprintf(stderr, "v2xloc-firmware: cloud UDP: %s\n", cloud_link.last_error());
+    return 1;
+  }
+  force_receive_buffer(cloud_link.fd(), static_cast<int>(get_ll("rcvbuf", 32 << 20)));
+
+  static hal::LinuxClock linux_clock;
+  static hal::SimClock sim_clock(0, epoch_ns, hal::SimClock::SleepMode::kExternal);
+  static hal::UdpLink can_link;
+  static hal::SocketCanBus socketcan;
+  static hal::GpiodLine pps_gpiod, led_gpiod;
+  static hal::HidapiDevice imu_hidapi;
+  static hal::ScriptedGpioLine pps_scripted(sim_clock);
+  static CountingLedLine led_emulated;
+  static hal::ScriptedHidDevice imu_scripted(sim_clock);
+  static hal::EmulatedCanBus* emulated_can = nullptr;
+  static SimTimeCanBus* sim_time_can = nullptr;
+
+  hal::CanBus* can = nullptr;
+  hal::Clock* clock = nullptr;
+  hal::GpioLine* pps = nullptr;
+  hal::GpioLine* led = nullptr;
+  hal::HidDevice* imu = nullptr;
+  int poll_fds[4] = {cloud_link.fd(), -1, -1, -1};
+
+  if (emulated) {
+    hal::UdpOptions o;
+    o.bind.port = static_cast<std::uint16_t>(get_ll("can-port", 47100));
+    o.has_peer = true;
+    o.peer = hal::Ipv4Endpoint{0x7F000001u, static_cast<std::uint16_t>(get_ll("can-peer-port", 47101))};
+    o.receive_buffer_bytes = 1 << 20;
+    if (can_link.open(o) != hal::Status::kOk) {
+      std::fprintf(stderr, "v2xloc-firmware: emulated CAN UDP: %s\n", can_link.last_error());
+      return 1;
+    }
+    static hal::EmulatedCanBus ecan(can_link, sim_clock);
+    static SimTimeCanBus stcan(ecan, sim_clock);
+    emulated_can = &ecan;
+    sim_time_can = &stcan;
+    can = &stcan;
+    clock = &sim_clock;
+    if (get_ll("pps", 1) != 0) {
+      script_pps_edges(pps_scripted, epoch_ns, 3600LL * 1'000'000'000);  // one hour of edges, at start-up
+      pps = &pps_scripted;
+    }
+    led = &led_emulated;
+    if (kv.count("imu-script")) {
+      if (imu_scripted.load_script(kv["imu-script"].c_str()) != hal::Status::kOk) {
+        std::fprintf(stderr, "v2xloc-firmware: cannot load %s\n", kv["imu-script"].c_str());
+        return 1;
+      }
+      imu = &imu_scripted;
+    }
+    poll_fds[1] = can_link.fd();
+  } else {
+    static std::string iface = get("can-iface", "can0");
+    hal::SocketCanOptions o;
+    o.interface = iface.c_str();
+    o.bring_up = get_ll("can-bring-up", 0) != 0;
+    if (socketcan.open(o) != hal::Status::kOk) {
+      std::fprintf(stderr, "v2xloc-firmware: SocketCAN %s: %s\n", iface.c_str(), socketcan.last_error());
+      return 1;
+    }
+    can = &socketcan;
+    clock = &linux_clock;
+    poll_fds[1] = socketcan.fd();
+    static std::string pps_chip = get("pps-chip", "gpiochip0"), led_chip = get("led-chip", "gpiochip0");
+    if (kv.count("pps-line")) {
+      hal::GpiodLineOptions g;
+      g.chip = pps_chip.c_str();
+      g.offset = static_cast<unsigned>(get_ll("pps-line", 0));
+      if (pps_gpiod.open(g) != hal::Status::kOk) {
+        std::fprintf(stderr, "v2xloc-firmware: PPS: %s\n", pps_gpiod.last_error());
+        return 1;
+      }
+      pps = &pps_gpiod;
+      poll_fds[2] = pps_gpiod.event_fd();
+    }
+    if (kv.count("led-line")) {
+      hal::GpiodLineOptions g;
+      g.chip = led_chip.c_str();
+      g.offset = static_cast<unsigned>(get_ll("led-line", 0));
+      g.mode = hal::GpiodLineOptions::Mode::kOutput;
+      if (led_gpiod.open(g) != hal::Status::kOk) {
+        std::fprintf(stderr, "v2xloc-firmware: LED: %s\n", led_gpiod.last_error());
+        return 1;
+      }
+      led = &led_gpiod;
+    }
+    if (kv.count("imu")) {
+      unsigned vid = 0, pid = 0;
+      if (std::sscanf(kv["imu"].c_str(), "%x:%x", &vid, &pid) != 2) return usage();
+      hal::HidapiOptions h;
+      h.vendor_id = static_cast<std::uint16_t>(vid);
+      h.product_id = static_cast<std::uint16_t>(pid);
+      if (imu_hidapi.open(h) != hal::Status::kOk) {
+        std::fprintf(stderr, "v2xloc-firmware: IMU: %s\n", imu_hidapi.last_error());
+        return 1;
+      }
+      imu = &imu_hidapi;
+    }
+  }
+
+  static FirmwareApp app(FirmwareHal{*can, cloud_link, *clock, pps, led, imu}, g_decoder, port);
+  if (app.start() != hal::Status::kOk) {
+    std::fprintf(stderr, "v2xloc-firmware: CAN filter set-up failed\n");
+    return 1;
+  }
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  std::printf("v2xloc-firmware: ready can=%u cloud=%u mode=%s\n",
+              emulated ? can_link.local_endpoint().port : 0u, cloud_link.local_endpoint().port,
+              emulated ? "emulated" : "real");
+
+  // ---- Main loop: no allocation from here on (counted, reported at exit). ----
+  pollfd fds[4];
+  nfds_t nfds = 0;
+  for (int fd : poll_fds) {
+    if (fd >= 0) fds[nfds++] = pollfd{fd, POLLIN, 0};
+  }
+  alloc_counter::arm(true);
+  while (!g_stop) {
+    if (app.poll_once() == 0) poll(fds, nfds, 20);  // idle: wait for input (or the heartbeat tick)
+    if (max_frames > 0 && app.counters().frames_published >= static_cast<unsigned long long>(max_frames)) break;
+  }
+  alloc_counter::arm(false);
+
+  std::printf("v2xloc-firmware: heap allocations in the main loop: %llu (%llu bytes)\n",
+              (unsigned long long)alloc_counter::allocations(), (unsigned long long)alloc_counter::bytes());
+  print_counters(app);
+  if (sim_time_can != nullptr) {
+    std::printf("v2xloc-firmware: sim-time frames %llu (backwards %llu), sim time %.3f s, LED changes %llu\n",
+                (unsigned long long)sim_time_can->time_frames(), (unsigned long long)sim_time_can->time_backwards(),
+                sim_clock.monotonic_ns() * 1e-9, (unsigned long long)led_emulated.changes());
+    const hal::CanCounters cc = emulated_can->counters();
+    std::printf("v2xloc-firmware: emulated CAN rx %llu tx %llu malformed %llu\n", (unsigned long long)cc.rx_frames,
+                (unsigned long long)cc.tx_frames, (unsigned long long)cc.rx_malformed);
+  }
+  return 0;
+}

@@ -1,0 +1,113 @@
+// THE canonical event order of a recording, shared by the offline evaluator (in-process) and the
+// replayer (over emulated CAN + UDP), so both feed the localizer identically:
+//   for each frame i at t_i: every CAN frame of the recording's candump log with t <= t_i not yet
+//   emitted (log order); then every map cloud (infra / agent) with stamp <= t_i not yet emitted
+//   (stamp order); then ego scan i.
+// Events are wire bytes: CAN frames as protocol::CanFrame, clouds as the UDP datagrams of the
+// point-cloud fragmenter (quantized exactly as sent). WireEventDecoder turns them into localizer
+// inputs through the firmware's own InputDecoder, so the offline path sees the firmware's bits.
+// Time: every event carries its recording time in ns (the emulated firmware's SimClock time);
+// disciplined (wire) time = epoch_ns + recording time, epoch_ns = Unix time of recording t = 0.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "firmware/app/input_decoder.hpp"
+#include "firmware/app/pose_frames.hpp"
+#include "firmware/app/wire_conventions.hpp"
+#include "firmware/protocol/can_frame.hpp"
+#include "host_sim/recording/recording_reader.hpp"
+
+namespace v2xloc::sim::replay {
+
+struct WireEvent {
+  enum class Kind : std::uint8_t { kCan, kMapCloud, kEgoScan };
+  Kind kind = Kind::kCan;
+  std::int64_t time_ns = 0;             // recording time [ns] (CAN log stamp, cloud stamp, frame stamp)
+  protocol::CanFrame can{};             // kCan
+  std::vector<std::vector<std::uint8_t>> datagrams;  // clouds: the fragments, in send order
+  std::uint32_t sender_id = 0;          // clouds
+  std::uint32_t points_sent = 0;        // clouds: after the fragmenter's drops
+  std::uint32_t points_dropped = 0;     // clouds: out of quantization range / not finite
+  std::uint32_t times_clamped = 0;      // ego: point times beyond the u16 microsecond field
+  int frame = -1;                       // kEgoScan: frame index
+};
+
+struct EventStreamConfig {
+  float scale_m = firmware::kCloudScaleM;
+  bool ego_point_times = true;          // send per-point times (deskew)
+  std::size_t max_datagram_bytes = protocol::pointcloud_wire::kMaxDatagramBytes;
+  int max_frames = -1;                  // < 0: all frames of the recording
+};
+
+struct EventStreamStats {
+  std::size_t can_frames = 0, map_clouds = 0, ego_scans = 0, datagrams = 0;
+  std::uint64_t points_dropped = 0, times_clamped = 0;
+};
+
+class EventStream {
+ public:
+  // Loads the CAN log (if any) and the map-cloud list. The reader must outlive the stream.
+  bool open(const RecordingReader& reader, const EventStreamConfig& config, std::string& error);
+
+  int frame_count() const { return frame_count_; }
+  std::int64_t epoch_ns() const { return epoch_ns_; }
+  std::int64_t frame_time_ns(int i) const;
+  // Appends frame i's events in canonical order. Frames must be requested in order 0, 1, 2, ...
+  bool next_frame(int i, std::vector<WireEvent>& out, std::string& error);
+  const EventStreamStats& stats() const { return stats_; }
+
+  // Sender id of a map-cloud sensor name ("infra_2" -> 3, "agent_1_lidar" -> 33); false if unknown.
+  static bool sender_id_for(const MapCloudInfo& info, std::uint32_t& sender_id);
+
+ private:
+  bool fragment(protocol::CloudMessageType type, std::uint32_t sender_id, std::uint32_t seq,
+                std::int64_t stamp_ns, const Eigen::Isometry3d& pose, const cloud_io::PointCloud& cloud,
+                bool with_times, WireEvent& ev, std::string& error) const;
+
+  const RecordingReader* reader_ = nullptr;
+  EventStreamConfig config_{};
+  int frame_count_ = 0;
+  std::int64_t epoch_ns_ = 0;
+  struct TimedCan {
+    std::int64_t time_ns;
+    protocol::CanFrame frame;
+  };
+  std::vector<TimedCan> can_;
+  std::size_t next_can_ = 0, next_cloud_ = 0;
+  int next_frame_ = 0;
+  std::vector<std::uint32_t> cloud_seq_;  // per sender id
+  EventStreamStats stats_{};
+};
+
+// Wire events -> localizer inputs through the firmware's InputDecoder (same decode, same order),
+// and the ego frames' outputs encoded as the firmware's pose CAN frames.
+struct DecodedFrame {
+  int frame = -1;
+  LocalizerFrameOutput output{};
+  firmware::PoseFrames pose{};
+};
+
+class WireEventDecoder {
+ public:
+  WireEventDecoder(firmware::InputDecoder& decoder, firmware::LocalizerPort& localizer)
+      : decoder_(decoder), localizer_(localizer) {}
+  // Returns true and fills `frame` when the event was an ego scan that produced an output.
+  bool feed(const WireEvent& event, DecodedFrame& frame);
+
+ private:
+  firmware::InputDecoder& decoder_;
+  firmware::LocalizerPort& localizer_;
+  firmware::PoseFrameEncoder encoder_{};
+};
+
+// The offline evaluator's loop: the whole event stream in-process. `decoder` is large (make it
+// with std::make_unique); its epoch is set from the recording. False + error on I/O failures.
+bool run_offline(const RecordingReader& reader, firmware::LocalizerPort& localizer, firmware::InputDecoder& decoder,
+                 const EventStreamConfig& config, const std::function<void(const DecodedFrame&)>& on_frame,
+                 std::string& error);
+
+}  // namespace v2xloc::sim::replay

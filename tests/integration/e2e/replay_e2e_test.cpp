@@ -1,0 +1,191 @@
+// Firmware process + replayer on loopback on a short simulated scenario: the pose frames received
+// over emulated CAN are bit-identical to the offline localizer's outputs on the same event stream
+// (same decoder, same localizer type, encoded with the same pose codec); the firmware reports no
+// heap allocation in its loop; the v2xloc-replay CLI writes a TUM estimate and evaluates it.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <string>
+
+#include "firmware/app/selected_localizer.hpp"
+#include "host_sim/replay/event_stream.hpp"
+#include "host_sim/replay/replay_session.hpp"
+
+namespace v2xloc::sim::replay {
+namespace {
+
+namespace fs = std::filesystem;
+const std::string kBin = std::string(V2XLOC_BINARY_DIR) + "/bin/";
+
+firmware::SelectedLocalizer g_offline_localizer;
+
+class ReplayE2e : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new std::string((fs::temp_directory_path() / ("v2xloc_e2e_" + std::to_string(getpid()))).string());
+    const std::string cmd = kBin + "v2xloc-sim generate --scenario 0 --perm 2_infra --quick --no-stereo --out " +
+                            *dir_ + "/rec > " + *dir_ + ".gen.log 2>&1";
+    fs::create_directories(*dir_);
+    generated_ = std::system(cmd.c_str()) == 0;
+  }
+  static void TearDownTestSuite() {
+    std::error_code ec;
+    fs::remove_all(*dir_, ec);
+    fs::remove(*dir_ + ".gen.log", ec);
+    delete dir_;
+  }
+  void SetUp() override {
+    ASSERT_TRUE(generated_) << "v2xloc-sim generate failed, see " << *dir_ << ".gen.log";
+    std::string error;
+    ASSERT_TRUE(reader_.open(*dir_ + "/rec", error)) << error;
+    ASSERT_FALSE(reader_.can_log_path().empty()) << "recording without a CAN log";
+  }
+  static std::string* dir_;
+  static bool generated_;
+  RecordingReader reader_;
+};
+std::string* ReplayE2e::dir_ = nullptr;
+bool ReplayE2e::generated_ = false;
+
+bool same_frame(const protocol::CanFrame& a, const protocol::CanFrame& b) {
+  return a.id == b.id && a.dlc == b.dlc && std::memcmp(a.data, b.data, sizeof a.data) == 0;
+}
+
+std::string hex(const firmware::PoseFrames& f) {
+  std::string out;
+  char buf[8];
+  for (const protocol::CanFrame* c : {&f.position, &f.attitude, &f.sigma}) {
+    std::snprintf(buf, sizeof buf, " %03X#", static_cast<unsigned>(c->id));
+    out += buf;
+    for (int k = 0; k < c->dlc; ++k) {
+      std::snprintf(buf, sizeof buf, "%02X", c->data[k]);
+      out += buf;
+    }
+  }
+  return out;
+}
+
+TEST_F(ReplayE2e, FirmwarePoseFramesAreBitIdenticalToTheOfflinePath) {
+  // 20 frames (2 s: 10 GNSS fixes, 200 vehicle frames, 8 map clouds) keep the test well under
+  // two minutes while the localizer runs its global search.
+  constexpr int kFrames = 20;
+  ReplayOptions options;
+  options.firmware_path = kBin + "v2xloc-firmware";
+  options.frame_timeout_s = 60.0;
+  options.stream.max_frames = kFrames;
+  ReplayResult replayed;
+  std::string error;
+  ASSERT_TRUE(replay_recording(reader_, options, replayed, error)) << error << "\n" << replayed.firmware_output;
+  ASSERT_EQ(static_cast<int>(replayed.frames.size()), std::min(kFrames, reader_.frame_count()));
+  EXPECT_EQ(replayed.timeouts, 0);
+  EXPECT_EQ(replayed.firmware_exit_code, 0);
+  EXPECT_NE(replayed.firmware_output.find("heap allocations in the main loop: 0 "), std::string::npos)
+      << replayed.firmware_output;
+  EXPECT_NE(replayed.firmware_output.find("datagrams_rejected 0"), std::string::npos) << replayed.firmware_output;
+  EXPECT_NE(replayed.firmware_output.find("timed_out 0 evicted 0"), std::string::npos) << replayed.firmware_output;
+  EXPECT_GT(replayed.stream_stats.map_clouds, 0u);
+  EXPECT_GT(replayed.stream_stats.can_frames, 0u);
+
+  auto decoder = std::make_unique<firmware::InputDecoder>();
+  firmware::configure_localizer(g_offline_localizer,
+                                make_geodetic_origin(reader_.origin_lat_deg(), reader_.origin_lon_deg(), reader_.origin_alt_m()));
+  firmware::LocalizerAdapter<firmware::SelectedLocalizer> port(g_offline_localizer);
+  std::vector<DecodedFrame> offline;
+  EventStreamConfig offline_config;
+  offline_config.max_frames = kFrames;
+  ASSERT_TRUE(run_offline(reader_, port, *decoder, offline_config, [&](const DecodedFrame& f) { offline.push_back(f); },
+                          error))
+      << error;
+  ASSERT_EQ(offline.size(), replayed.frames.size());
+
+  int mismatches = 0;
+  for (std::size_t i = 0; i < offline.size(); ++i) {
+    const firmware::PoseFrames& a = offline[i].pose;
+    const firmware::PoseFrames& b = replayed.frames[i].pose;
+    const bool same = same_frame(a.position, b.position) && same_frame(a.attitude, b.attitude) && same_frame(a.sigma, b.sigma);
+    if (!same && ++mismatches <= 5) {
+      ADD_FAILURE() << "frame " << i << ": offline x " << offline[i].output.fused_pose(0, 3) << " y "
+                    << offline[i].output.fused_pose(1, 3) << " vs firmware x " << replayed.frames[i].position.x_m << " y "
+                    << replayed.frames[i].position.y_m << "\n  offline " << hex(a) << "\n  firmware" << hex(b);
+    }
+  }
+  EXPECT_EQ(mismatches, 0);
+  // Not a vacuous comparison: the trajectory moves (the ego drives ~7 m/s).
+  const double dx = replayed.frames.back().position.x_m - replayed.frames.front().position.x_m;
+  const double dy = replayed.frames.back().position.y_m - replayed.frames.front().position.y_m;
+  EXPECT_GT(std::hypot(dx, dy), 1.0);
+}
+
+TEST_F(ReplayE2e, ReplayCliWritesTumAndEvaluates) {
+  const std::string out = *dir_ + "/out";
+  const std::string log = *dir_ + "/replay.log";
+  const std::string cmd = kBin + "v2xloc-replay " + *dir_ + "/rec --out " + out + " --frames 12 > " + log + " 2>&1";
+  const int rc = std::system(cmd.c_str());
+  std::ifstream lf(log);
+  const std::string text((std::istreambuf_iterator<char>(lf)), std::istreambuf_iterator<char>());
+  ASSERT_EQ(rc, 0) << text;
+  StampedTrajectory est;
+  std::string error;
+  ASSERT_TRUE(read_tum(out + "/fused.tum", est, error)) << error;
+  EXPECT_EQ(est.size(), 12u);
+  EXPECT_NE(text.find("aligned (SE(3))"), std::string::npos) << text;
+  EXPECT_NE(text.find("timeouts 0"), std::string::npos) << text;
+}
+
+TEST_F(ReplayE2e, EventStreamIsInCanonicalOrder) {
+  EventStream stream;
+  std::string error;
+  ASSERT_TRUE(stream.open(reader_, EventStreamConfig{}, error)) << error;
+  std::int64_t previous_frame_ns = -1, last_can_ns = -1, last_cloud_ns = -1;
+  std::vector<WireEvent> events;
+  for (int i = 0; i < stream.frame_count(); ++i) {
+    events.clear();
+    ASSERT_TRUE(stream.next_frame(i, events, error)) << error;
+    const std::int64_t t_i = stream.frame_time_ns(i);
+    ASSERT_FALSE(events.empty());
+    ASSERT_EQ(events.back().kind, WireEvent::Kind::kEgoScan);
+    EXPECT_EQ(events.back().frame, i);
+    EXPECT_EQ(events.back().time_ns, t_i);
+    int phase = 0;  // 0 CAN, 1 map clouds, 2 ego
+    for (const WireEvent& ev : events) {
+      const int p = ev.kind == WireEvent::Kind::kCan ? 0 : ev.kind == WireEvent::Kind::kMapCloud ? 1 : 2;
+      EXPECT_GE(p, phase) << "frame " << i;
+      phase = p;
+      EXPECT_LE(ev.time_ns, t_i);
+      if (ev.kind == WireEvent::Kind::kCan) {
+        EXPECT_GT(ev.time_ns, previous_frame_ns);  // not already due in an earlier frame
+        EXPECT_GE(ev.time_ns, last_can_ns);        // log order
+        last_can_ns = ev.time_ns;
+      } else if (ev.kind == WireEvent::Kind::kMapCloud) {
+        EXPECT_GT(ev.time_ns, previous_frame_ns);
+        EXPECT_GE(ev.time_ns, last_cloud_ns);      // stamp order
+        last_cloud_ns = ev.time_ns;
+        EXPECT_TRUE(ev.sender_id >= firmware::kInfraSenderBase && ev.sender_id < firmware::kAgentSenderBase);
+        EXPECT_FALSE(ev.datagrams.empty());
+      } else {
+        EXPECT_FALSE(ev.datagrams.empty());
+        for (const auto& d : ev.datagrams) EXPECT_LE(d.size(), protocol::pointcloud_wire::kMaxDatagramBytes);
+      }
+    }
+    previous_frame_ns = t_i;
+  }
+  EXPECT_EQ(stream.stats().ego_scans, static_cast<std::size_t>(reader_.frame_count()));
+  EXPECT_GT(stream.stats().can_frames, 0u);
+}
+
+TEST_F(ReplayE2e, MissingFirmwareFailsWithNonZeroStatus) {
+  const std::string cmd = kBin + "v2xloc-replay " + *dir_ + "/rec --firmware /nonexistent/v2xloc-firmware --frames 2 > /dev/null 2>&1";
+  EXPECT_NE(std::system(cmd.c_str()), 0);
+}
+
+}  // namespace
+}  // namespace v2xloc::sim::replay
