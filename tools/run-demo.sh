@@ -10,7 +10,7 @@ REC=${V2XLOC_RECORDINGS:-out/recordings}
 OUT=out
 
 cmake --preset host >/dev/null
-cmake --build --preset host -j "$(nproc)" --target v2xloc-sim v2xloc-eval
+cmake --build --preset host -j "$(nproc)" --target v2xloc-sim v2xloc-eval v2xloc-firmware v2xloc-replay
 
 duration_args=()
 [ -n "${V2XLOC_DURATION:-}" ] && duration_args=(--duration "$V2XLOC_DURATION")
@@ -30,3 +30,10 @@ done
 
 build/host/bin/v2xloc-eval "${dirs[@]}" --plots "$OUT/plots" --estimates "$OUT/estimates" | tee "$OUT/table.txt"
 echo "table: $OUT/table.txt   plots: $OUT/plots   estimates (TUM): $OUT/estimates"
+
+# The same localizer as ECU firmware: a v2xloc-firmware process fed over emulated CAN + UDP on
+# loopback by the replayer, lock-step under a simulated clock; its pose CAN frames -> TUM + APE.
+echo
+echo "firmware replay over emulated CAN/UDP: $REC/sim0_4_infra_2_agent"
+build/host/bin/v2xloc-replay "$REC/sim0_4_infra_2_agent" --firmware build/host/bin/v2xloc-firmware \
+  --out "$OUT/replay_sim0_4_infra_2_agent"
