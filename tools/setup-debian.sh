@@ -7,10 +7,12 @@ PKGS=(cmake ninja-build g++ pkg-config libeigen3-dev googletest libgtest-dev lib
       libbenchmark-dev libgpiod-dev libhidapi-dev libsocketcan-dev can-utils
       python3 python3-numpy python3-can python3-open3d python3-matplotlib
       g++-aarch64-linux-gnu qemu-user gcc-arm-none-eabi libstdc++-arm-none-eabi-newlib
-      binutils-arm-none-eabi valgrind nodejs npm zlib1g-dev)
+      binutils-arm-none-eabi valgrind nodejs npm zlib1g-dev ca-certificates)
 ARM64_PKGS=(libgpiod-dev:arm64 libhidapi-dev:arm64 libsocketcan-dev:arm64)
 missing=()
 for p in "${PKGS[@]}" "${ARM64_PKGS[@]}"; do
+  # NodeSource's nodejs bundles npm and conflicts with Debian's npm package: a working npm is enough.
+  if [ "$p" = npm ] && command -v npm >/dev/null 2>&1; then continue; fi
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 if [ ${#missing[@]} -gt 0 ]; then

@@ -67,8 +67,13 @@ void add_building(IntersectionWorld& iw, Rng& rng, const WorldConfig& cfg, Vecto
   }
   // Rooftop structure (stair house / HVAC) on larger roofs.
   if ((hi - lo).minCoeff() > 10.0 && rng.bernoulli(0.6)) {
-    const Vector2d c = 0.5 * (lo + hi) + Vector2d(rng.uniform(-2, 2), rng.uniform(-2, 2));
-    const Vector2d h(rng.uniform(1.5, 3.5), rng.uniform(1.5, 3.5));
+    // One draw per statement: argument evaluation order is unspecified (differs across ISAs).
+    const double cx = rng.uniform(-2, 2);
+    const double cy = rng.uniform(-2, 2);
+    const double hx = rng.uniform(1.5, 3.5);
+    const double hy = rng.uniform(1.5, 3.5);
+    const Vector2d c = 0.5 * (lo + hi) + Vector2d(cx, cy);
+    const Vector2d h(hx, hy);
     w.add(Primitive::box(Vector3d(c.x() - h.x(), c.y() - h.y(), height),
                          Vector3d(c.x() + h.x(), c.y() + h.y(), height + rng.uniform(2.0, 3.5)), kMatBuilding, id));
   }

@@ -127,7 +127,12 @@ class Sampler {
   void emit(const Vec3d& p) {
     if (!in_range(p)) return;
     const double s = options_.noise_sigma;
-    out_.push_back(p + Vec3d(s * gaussian(), s * gaussian(), s * gaussian()));
+    // One draw per statement: the evaluation order of function arguments is unspecified, and
+    // GCC orders them differently on x86-64 and aarch64 (this broke cross-arch golden bits).
+    const double nx = gaussian();
+    const double ny = gaussian();
+    const double nz = gaussian();
+    out_.push_back(p + Vec3d(s * nx, s * ny, s * nz));
   }
   // Rectangle origin + u*[0,1] + v*[0,1]; keep(p) filters.
   template <class Keep>
@@ -140,7 +145,9 @@ class Sampler {
     const double area = u.cross(v).norm();
     const auto n = static_cast<std::uint32_t>(area * density);
     for (std::uint32_t i = 0; i < n; ++i) {
-      const Vec3d p = origin + rng_.uniform01() * u + rng_.uniform01() * v;
+      const double a = rng_.uniform01();
+      const double b = rng_.uniform01();
+      const Vec3d p = origin + a * u + b * v;
       if (keep(p)) emit(p);
     }
   }
@@ -279,7 +286,10 @@ Mat4d random_transform(Pcg32& rng, double max_yaw, double max_tilt, double max_t
   const double roll = rng.uniform(-max_tilt, max_tilt);
   Vec3d t;
   do {
-    t = Vec3d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
+    const double tx = rng.uniform(-1, 1);  // one draw per statement (see Sampler::emit)
+    const double ty = rng.uniform(-1, 1);
+    const double tz = rng.uniform(-1, 1);
+    t = Vec3d(tx, ty, tz);
   } while (t.squaredNorm() > 1.0);
   return rotation_zyx(yaw, pitch, roll, max_translation * t);
 }
