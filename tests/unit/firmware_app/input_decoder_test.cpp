@@ -161,7 +161,7 @@ TEST(InputDecoder, CloudsSurviveTruncatedCorruptAndDuplicateFragments) {
   ASSERT_EQ(sink.ego_times[0].size(), 1000u);
   for (std::size_t i = 0; i < 1000; ++i) {
     for (int a = 0; a < 3; ++a) EXPECT_NEAR(sink.ego_points[0][i][a], xyz[3 * i + a], 0.5 * kCloudScaleM + 1e-5);
-    EXPECT_FLOAT_EQ(sink.ego_times[0][i], static_cast<float>(times[i]) * 1e-6f);
+    EXPECT_FLOAT_EQ(sink.ego_times[0][i], static_cast<float>(times[i] * protocol::kPointTimeTick));
   }
   EXPECT_DOUBLE_EQ(sink.ego[0].body_T_lidar(0, 3), 9.5);
   EXPECT_EQ(dec->last_frame_index(), 0u);

@@ -11,10 +11,14 @@
 namespace v2xloc::sim {
 namespace {
 
+#include <unistd.h>
+
 namespace fs = std::filesystem;
 
+// One folder per test process: ctest runs each TEST as its own process, two at a time.
 std::string tmp_dir(const std::string& name) {
-  const fs::path p = fs::path(V2XLOC_BINARY_DIR) / "test_tmp" / "host_sim" / name;
+  const fs::path p = fs::path(V2XLOC_BINARY_DIR) / "test_tmp" / "host_sim" /
+                     (name + "_" + std::to_string(::getpid()));
   fs::remove_all(p);
   fs::create_directories(p);
   return p.string();

@@ -86,7 +86,7 @@ class RegisterTool : public testing::Test {
 };
 
 TEST_F(RegisterTool, GlobalModeRecoversTheOutdoorReference) {
-  const ToolRun r = run(kPair + "/source.ply " + kPair + "/target.ply --voxel 0.5 --seed 7");
+  const ToolRun r = run(kPair + "/source.ply " + kPair + "/target.ply --voxel 0.25 --seed 7");
   ASSERT_EQ(r.exit_code, 0) << r.out;
   EXPECT_EQ(r.out.rfind("{\"status\":\"ok\"", 0), 0u) << r.out;
   EXPECT_TRUE(valid_json(r.out)) << r.out;
