@@ -117,7 +117,7 @@ const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
 
 // Finite points within [min_range, max_range], deskewed with the odometry's constant-velocity
 // model (KISS-ICP: the previous frame's relative motion spread over the sweep).
-bool Localizer::prepare_scan(const EgoScanInput& in) {
+void Localizer::prepare_scan(const EgoScanInput& in) {
   scan_filtered_.clear();
   scan_times_.clear();
   const bool has_times = in.point_times.size() == in.points.size() && !in.points.empty();
@@ -162,11 +162,15 @@ bool Localizer::prepare_scan(const EgoScanInput& in) {
                                   std::span<Vec3f>(scan_deskewed_, config::kMaxScanPoints));
     if (r.status == DeskewStatus::kOk) {
       scan_deskewed_count_ = r.points_out;
-      return true;
+      return;
     }
   }
   for (std::size_t i = 0; i < scan_filtered_.size(); ++i) scan_deskewed_[i] = scan_filtered_[i];
-  return true;
+}
+
+IcpTarget Localizer::map_target() const {
+  return IcpTarget{map_points_.span(), std::span<const Vec3f>(map_normals_, map_points_.size()),
+                   &map_tree_.tree};
 }
 
 void Localizer::run_odometry(const EgoScanInput& in) {
@@ -219,8 +223,7 @@ void Localizer::register_scan(double t) {
   }
   voxel_.run(scan_body_.span(), params_.registration_voxel, scan_down_);
 
-  const IcpTarget target{map_points_.span(), std::span<const Vec3f>(map_normals_, map_points_.size()),
-                         &map_tree_.tree};
+  const IcpTarget target = map_target();
   const double sigma_xy = ekf_.initialized()
       ? std::sqrt(0.5 * (ekf_.covariance()(ekf_index::kPosX, ekf_index::kPosX) +
                          ekf_.covariance()(ekf_index::kPosY, ekf_index::kPosY)))
@@ -267,8 +270,7 @@ void Localizer::register_scan(double t) {
 // explain enough of the scan.
 bool Localizer::global_search(double t, RegistrationResult& result) {
   ++counters_.global_searches;
-  const IcpTarget target{map_points_.span(), std::span<const Vec3f>(map_normals_, map_points_.size()),
-                         &map_tree_.tree};
+  const IcpTarget target = map_target();
   const double region = params_.global_gnss_gate_sigmas *
                         (last_gnss_sigma_ * params_.ekf.gates.gnss_sigma_inflation + 1.0);
   // (1) Exhaustive, GNSS-seeded search over position and heading.

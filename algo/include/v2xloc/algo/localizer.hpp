@@ -20,6 +20,7 @@
 #include "v2xloc/algo/validity_gate.hpp"
 #include "v2xloc/algo/bounded_vector.hpp"
 #include "v2xloc/algo/det_math.hpp"
+#include "v2xloc/algo/icp.hpp"
 #include "v2xloc/algo/kdtree.hpp"
 #include "v2xloc/algo/localizer_params.hpp"
 #include "v2xloc/algo/odometry.hpp"
@@ -143,7 +144,8 @@ class Localizer {
   static constexpr std::size_t kPendingCapacity = config::kGateMaxWindow;
 
   void refresh_map(double t);
-  bool prepare_scan(const EgoScanInput& input);  // filter + deskew into scan_deskewed_
+  void prepare_scan(const EgoScanInput& input);  // filter + deskew into scan_deskewed_
+  IcpTarget map_target() const;                  // the reference map as an ICP target
   void run_odometry(const EgoScanInput& input);
   void register_scan(double t);
   bool global_search(double t, RegistrationResult& result);
