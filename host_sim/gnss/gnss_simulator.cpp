@@ -215,7 +215,7 @@ GnssFix GnssSimulator::fix(double t, const Eigen::Vector3d& antenna_enu) {
     gnss::PseudorangeObservation o;
     o.sat_ecef = c.sat_ecef;
     o.pseudorange_m = pseudorange - iono_model - zenith_model * mapping;
-    o.sigma_m = apriori_sigma(cfg_.sigma_uere_m, sin_el, cn0);
+    o.sigma_m = apriori_sigma(cfg_.sigma_uere_m, sin_el, cfg_.cn0_weighting ? cn0 : 45.0);
     obs.push_back(o);
   }
 

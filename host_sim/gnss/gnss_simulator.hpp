@@ -27,7 +27,7 @@ struct GnssConfig {
   int galileo_planes = 3, galileo_per_plane = 8;  // 24 Galileo, r = 29600 km, i = 56 deg
   double epoch_offset_s = 0.0;     // shifts the constellation snapshot (t = 0 of the scenario)
   int max_tracked_satellites = 16; // receiver channels used for the fix (highest elevation first)
-  double elevation_mask_deg = 10.0;
+  double elevation_mask_deg = 5.0;   // consumer default (admits low, often NLOS, signals)
 
   // Signal (GPS L1 C/A and Galileo E1 share the carrier).
   double carrier_hz = 1575.42e6;
@@ -60,6 +60,9 @@ struct GnssConfig {
   double clock_drift_mps = 1.5;          // c * ddt/dt
   double clock_drift_random_walk = 0.05; // m/s per sqrt(s)
   double sigma_uere_m = 3.0;             // what the receiver believes its range error is
+  // Low-cost automotive receivers weight by elevation only: an NLOS signal's C/N0 loss then does not
+  // reduce its weight in the fix (true = RTKLIB-style C/N0 weighting, a survey-grade receiver).
+  bool cn0_weighting = false;
   int max_lsq_iterations = 10;
 };
 

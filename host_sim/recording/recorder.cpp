@@ -12,6 +12,7 @@
 
 #if V2XLOC_SIM_HAVE_GNSS
 #include "host_sim/gnss/gnss_simulator.hpp"
+#include "host_sim/recording/gnss_drive.hpp"
 #endif
 #if V2XLOC_SIM_HAVE_VEHICLE
 #include "host_sim/vehicle/vehicle_signals.hpp"
@@ -34,7 +35,7 @@ namespace {
 namespace fs = std::filesystem;
 
 // Stream ids for derive_seed (each sensor/frame gets its own noise stream).
-enum Stream : std::uint64_t { kEgoLidar = 1, kStereo = 2, kInfra = 3, kAgentLidar = 4, kAgentPose = 5, kGnss = 6, kVehicle = 7 };
+enum Stream : std::uint64_t { kEgoLidar = 1, kStereo = 2, kInfra = 3, kAgentLidar = 4, kAgentPose = 5, kVehicle = 7 /* 6: GNSS, gnss_drive.cpp */ };
 
 std::string frame_file(const char* dir, int index, const char* ext) {
   char buf[64];
@@ -262,45 +263,32 @@ bool generate_recording(const RecorderConfig& cfg, RecordingSummary& summary, st
   std::vector<GnssFix> fixes;
   {
     const v2xloc::GeodeticOrigin origin = v2xloc::make_geodetic_origin(cfg.origin_lat_deg, cfg.origin_lon_deg, cfg.origin_alt_m);
-    GnssConfig gcfg;
-    world.set_time(0.0);
-    GnssSimulator gnss(gcfg, world, origin, derive_seed(cfg.seed, {kGnss}));
+    const GnssDrive drive = simulate_gnss_drive(sc, world, origin, cfg.seed, cfg.gnss_rate_hz, antenna_in_body);
     std::string csv = "# t lat_deg lon_deg alt_m h_acc_m v_acc_m num_sats hdop pdop valid east_m north_m up_m true_east_m true_north_m\n";
-    const int n = static_cast<int>(std::floor(sc.duration * cfg.gnss_rate_hz + 1e-9));
-    double sum = 0, mx = 0, hmin = 1e9, hmax = 0;
-    int valid = 0;
-    for (int k = 0; k < n; ++k) {
-      const double tg = k / cfg.gnss_rate_hz;
-      world.set_time(tg);
-      const Eigen::Vector3d ant = sc.ego.body_to_enu(tg) * antenna_in_body;
-      const GnssFix f = gnss.fix(tg, ant);
+    for (std::size_t k = 0; k < drive.fixes.size(); ++k) {
+      const GnssFix& f = drive.fixes[k];
+      const Eigen::Vector3d& ant = drive.true_antenna[k];
       char line[400];
-      std::snprintf(line, sizeof line, "%.3f %.9f %.9f %.3f %.3f %.3f %d %.2f %.2f %d %.3f %.3f %.3f %.3f %.3f\n", tg,
+      std::snprintf(line, sizeof line, "%.3f %.9f %.9f %.3f %.3f %.3f %d %.2f %.2f %d %.3f %.3f %.3f %.3f %.3f\n", f.t,
                     f.lat_deg, f.lon_deg, f.alt_m, f.h_acc_m, f.v_acc_m, f.num_sats, f.hdop, f.pdop, f.valid ? 1 : 0,
                     f.enu_estimate.x(), f.enu_estimate.y(), f.enu_estimate.z(), ant.x(), ant.y());
       csv += line;
       fixes.push_back(f);
-      if (!f.valid) continue;
-      const double e = (f.enu_estimate.head<2>() - ant.head<2>()).norm();
-      sum += e;
-      mx = std::max(mx, e);
-      hmin = std::min(hmin, f.hdop);
-      hmax = std::max(hmax, f.hdop);
-      ++valid;
-      top.gnss_fixes.push_back(f.enu_estimate.head<2>());
+      if (f.valid) top.gnss_fixes.push_back(f.enu_estimate.head<2>());
     }
-    world.set_time(0.0);
+    const int valid = drive.valid;
     if (!write_text_file((root / "gnss_fixes.txt").string(), csv, err)) errors.push_back(err);
     summary.has_gnss = true;
     summary.gnss_fixes = valid;
-    summary.gnss_mean_h_error = valid ? sum / valid : 0.0;
-    summary.gnss_max_h_error = mx;
-    summary.hdop_min = valid ? hmin : 0.0;
-    summary.hdop_max = hmax;
+    summary.gnss_mean_h_error = drive.mean_h_error;
+    summary.gnss_max_h_error = drive.max_h_error;
+    summary.hdop_min = drive.hdop_min;
+    summary.hdop_max = drive.hdop_max;
     gnss_json = Json::object();
     gnss_json.set("file", "gnss_fixes.txt");
     gnss_json.set("note", "truth-side diagnostics of the GNSS model; the ego receives the fixes on CAN");
     gnss_json.set("rate_hz", cfg.gnss_rate_hz);
+    gnss_json.set("epoch_offset_s", sc.gnss_epoch_offset_s);
     gnss_json.set("antenna_in_body", Json::array_of(std::vector<double>{antenna_in_body.x(), antenna_in_body.y(), antenna_in_body.z()}));
     gnss_json.set("valid_fixes", valid);
     gnss_json.set("mean_horizontal_error_m", summary.gnss_mean_h_error);

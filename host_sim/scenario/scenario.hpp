@@ -27,6 +27,9 @@ struct Scenario {
   std::string description;
   double duration = 24.0;    // s
   double frame_rate = 10.0;  // Hz (ego LiDAR sweeps, stereo frames, ground truth)
+  // Each drive is recorded at its own time of day: the GNSS constellation snapshot (and so the
+  // canyon's blocking pattern) differs between scenarios, as between real drives.
+  double gnss_epoch_offset_s = 0.0;
   Trajectory ego;
   std::vector<Trajectory> agents;  // always two (they exist in the world in every permutation)
   int frame_count() const { return static_cast<int>(duration * frame_rate + 0.5); }

@@ -1,7 +1,8 @@
-// v2xloc-eval RECORDING_DIR... [--json] [--plots DIR] [--estimates DIR] [--frames N]
+// v2xloc-eval RECORDING_DIR... [--json] [--plots DIR] [--estimates DIR] [--trace DIR] [--frames N]
 //   [--gate fixed-lag|causal|off] [--no-gnss-gate] [--no-odometry] [--quiet]
 // Runs the localizer offline over each recording and prints the paper's Table 1 (unaligned and
 // aligned) with the paper's numbers beside ours; --json prints one JSON object instead.
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -20,7 +21,7 @@ v2xloc::Localizer g_localizer;  // hundreds of MB of static buffers: never on th
 
 int usage() {
   std::fprintf(stderr,
-               "usage: v2xloc-eval RECORDING_DIR... [--json] [--plots DIR] [--estimates DIR]\n"
+               "usage: v2xloc-eval RECORDING_DIR... [--json] [--plots DIR] [--estimates DIR] [--trace DIR]\n"
                "                   [--frames N] [--gate fixed-lag|causal|off] [--no-gnss-gate]\n"
                "                   [--no-odometry] [--no-vehicle] [--quiet]\n");
   return 2;
@@ -43,12 +44,39 @@ bool write_estimates(const std::string& dir, const std::string& name,
   return v2xloc::sim::write_tum(dir + "/" + name + "_fused.tum", fused, error);
 }
 
+// One line per frame: what the localizer did and how far each output is from the truth (debugging
+// and the closing notes' per-frame analyses).
+bool write_trace(const std::string& path, const std::vector<v2xloc::eval::FrameRecord>& records, std::string& error) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (!f) {
+    error = "cannot write " + path;
+    return false;
+  }
+  std::fprintf(f, "# frame t mode attempted status fitness rmse fused gate_decided gate_valid err_fused_xy "
+                  "err_reg_xy err_ungated_xy err_fused_yaw_deg sigma_xy initialized odom_ok\n");
+  for (const auto& r : records) {
+    const auto& o = r.out;
+    const Eigen::Vector3d truth = r.truth.translation();
+    auto err_xy = [&](const v2xloc::Mat4d& T) { return (T.topRightCorner<2, 1>() - truth.head<2>()).norm(); };
+    const Eigen::Matrix3d dr = r.truth.linear().transpose() * o.fused_pose.topLeftCorner<3, 3>();
+    const double yaw_err = std::atan2(dr(1, 0), dr(0, 0)) * 180.0 / M_PI;
+    std::fprintf(f, "%u %.3f %d %d %d %.4f %.4f %d %d %d %.4f %.4f %.4f %.3f %.4f %d %d\n", o.frame, r.t,
+                 static_cast<int>(o.mode), o.registration_attempted ? 1 : 0, static_cast<int>(o.registration_status),
+                 o.fitness, o.inlier_rmse, o.registration_fused ? 1 : 0, r.gate_decided ? 1 : 0, r.gate_valid ? 1 : 0,
+                 err_xy(o.fused_pose), o.registration_attempted ? err_xy(o.registration_pose) : -1.0,
+                 err_xy(o.fused_pose_ungated), yaw_err, std::sqrt(0.5 * (o.sigma_x * o.sigma_x + o.sigma_y * o.sigma_y)),
+                 o.filter_initialized ? 1 : 0, o.odometry_ok ? 1 : 0);
+  }
+  std::fclose(f);
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::vector<std::string> dirs;
   bool json = false;
-  std::string plots_dir, estimates_dir;
+  std::string plots_dir, estimates_dir, trace_dir;
   v2xloc::eval::RunOptions options;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -62,6 +90,7 @@ int main(int argc, char** argv) {
     if (a == "--json") json = true;
     else if (a == "--plots") plots_dir = next("--plots");
     else if (a == "--estimates") estimates_dir = next("--estimates");
+    else if (a == "--trace") trace_dir = next("--trace");
     else if (a == "--frames") options.max_frames = std::atoi(next("--frames"));
     else if (a == "--quiet") options.quiet = true;
     else if (a == "--no-gnss-gate") options.params.ekf.gates.gnss_gate_enabled = false;
@@ -114,6 +143,13 @@ int main(int argc, char** argv) {
       std::filesystem::create_directories(estimates_dir);
       if (!write_estimates(estimates_dir, name, records, error)) {
         std::fprintf(stderr, "v2xloc-eval: estimates: %s\n", error.c_str());
+        return 1;
+      }
+    }
+    if (!trace_dir.empty()) {
+      std::filesystem::create_directories(trace_dir);
+      if (!write_trace(trace_dir + "/" + name + "_trace.txt", records, error)) {
+        std::fprintf(stderr, "v2xloc-eval: trace: %s\n", error.c_str());
         return 1;
       }
     }
