@@ -139,19 +139,38 @@ struct Pass {
 
 enum class PassMode { kEvaluateOnly, kPointToPoint, kPointToPlane };
 
+// Float search bound that admits every point the double gate (d2 <= max_d2) accepts: the query
+// is rounded to float (error ~ |pt| 2^-24 per axis) and the float distance adds a few ulps, so
+// the radius is widened by 1e-5 (1 + |pt|_inf). The gate itself stays the double test below,
+// so the matches are those of an unbounded nearest search followed by the gate.
+float search_bound(const Vec3d& pt, double max_distance) {
+  const double extent = std::abs(pt.x()) > std::abs(pt.y())
+                            ? (std::abs(pt.x()) > std::abs(pt.z()) ? std::abs(pt.x()) : std::abs(pt.z()))
+                            : (std::abs(pt.y()) > std::abs(pt.z()) ? std::abs(pt.y()) : std::abs(pt.z()));
+  const double d = max_distance + 1e-5 * (1.0 + extent);
+  return static_cast<float>(d * d);
+}
+
+// hints (optional, one per source point): last pass's match, seeds the search (same result).
 void run_pass(std::span<const Vec3f> source, const IcpTarget& target, const Mat4d& transform,
-              double max_distance, const RobustKernel& kernel, PassMode mode, Pass& pass) {
+              double max_distance, const RobustKernel& kernel, PassMode mode, Pass& pass,
+              std::span<std::uint32_t> hints = {}) {
   const Mat3d r = transform.topLeftCorner<3, 3>();
   const Vec3d t = transform.topRightCorner<3, 1>();
   const double max_d2 = max_distance * max_distance;
-  for (const Vec3f& pf : source) {
+  const bool use_hints = hints.size() >= source.size();
+  for (std::size_t k = 0; k < source.size(); ++k) {
+    const Vec3f& pf = source[k];
     if (!pf.allFinite()) continue;
     ++pass.valid_source;
     const Vec3d p = pf.cast<double>();
     const Vec3d pt = r * p + t;
     Neighbor nn{};
-    const KdQueryResult qr = target.tree->nearest(pt.cast<float>(), nn);
+    const std::uint32_t hint = use_hints ? hints[k] : KdTree<Vec3f>::kNoHint;
+    const KdQueryResult qr =
+        target.tree->nearest_within(pt.cast<float>(), search_bound(pt, max_distance), hint, nn);
     if (qr.visit_cap_hit) ++pass.search_truncated;
+    if (use_hints) hints[k] = qr.count == 0 ? KdTree<Vec3f>::kNoHint : nn.index;
     if (qr.count == 0) continue;
     const Vec3d q = target.points[nn.index].cast<double>();
     const Vec3d e = pt - q;
@@ -220,7 +239,7 @@ RegistrationResult evaluate_registration(std::span<const Vec3f> source, const Ic
 }
 
 RegistrationResult icp(std::span<const Vec3f> source, const IcpTarget& target, const Mat4d& initial,
-                       const IcpParams& params) {
+                       const IcpParams& params, std::span<std::uint32_t> neighbor_scratch) {
   RegistrationResult result;
   result.transform = initial;
   const bool plane = params.method == IcpMethod::kPointToPlane;
@@ -239,11 +258,15 @@ RegistrationResult icp(std::span<const Vec3f> source, const IcpTarget& target, c
                                                                  : config::kIcpMaxIterations;
   const PassMode mode = plane ? PassMode::kPointToPlane : PassMode::kPointToPoint;
 
+  if (neighbor_scratch.size() >= source.size()) {
+    for (std::size_t k = 0; k < source.size(); ++k) neighbor_scratch[k] = KdTree<Vec3f>::kNoHint;
+  }
   Mat4d transform = initial;
   double prev_fitness = 0.0, prev_rmse = 0.0;
   for (std::uint32_t k = 0;; ++k) {
     Pass pass;
-    run_pass(source, target, transform, params.max_correspondence_distance, params.kernel, mode, pass);
+    run_pass(source, target, transform, params.max_correspondence_distance, params.kernel, mode, pass,
+             neighbor_scratch);
     result.search_truncated += pass.search_truncated;
     result.transform = transform;
     fill_from_pass(pass, result);

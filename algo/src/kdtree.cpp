@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace v2xloc {
 namespace {
@@ -57,12 +58,18 @@ inline float squared_distance_bounded(const float* a, const float* b, float boun
   }
 }
 
-// Strict total order of neighbours: distance, then index (deterministic ties). A function
-// object, so the heap algorithms inline it.
+// Strict total order of neighbours: distance, then index (deterministic ties). Squared
+// distances are >= +0 (sums of squares; never -0 or NaN for finite points), and for those the
+// IEEE-754 bit pattern orders like the value: (bits << 32 | index) is the order as one integer
+// compare. A function object, so the heap and sort algorithms inline it.
+inline std::uint64_t order_key(const Neighbor& n) {
+  std::uint32_t bits;
+  std::memcpy(&bits, &n.squared_distance, sizeof bits);
+  return (static_cast<std::uint64_t>(bits) << 32) | n.index;
+}
 struct Closer {
   bool operator()(const Neighbor& a, const Neighbor& b) const {
-    return a.squared_distance < b.squared_distance ||
-           (a.squared_distance == b.squared_distance && a.index < b.index);
+    return order_key(a) < order_key(b);
   }
 };
 inline bool closer(const Neighbor& a, const Neighbor& b) { return Closer{}(a, b); }
@@ -129,38 +136,44 @@ void traverse(const KdNode* nodes, const float* q, std::size_t max_visits, Prune
   Task stack[kTraversalStack];
   std::size_t top = 0;
   stack[top++] = {Task::kVisit, 0, 0, 0.0f, 0.0f};
+  // The float-accumulated cell bound may be a few ulps high: shrink it so pruning stays exact.
+  const auto prunable = [&prune](float cell_bound) { return cell_bound * 0.99999f > prune(); };
   while (top > 0) {
     const Task t = stack[--top];
     if (t.kind == Task::kRestore) {
       off[t.axis] = t.value;
       continue;
     }
-    // The float-accumulated cell bound may be a few ulps high: shrink it so pruning stays exact.
-    if (t.cell_bound * 0.99999f > prune()) continue;
-    if (r.node_visits >= max_visits) {
-      r.visit_cap_hit = true;
-      return;
-    }
-    ++r.node_visits;
+    if (prunable(t.cell_bound)) continue;
     if (t.kind == Task::kFar) off[t.axis] = t.value;
-    const KdNode& node = nodes[t.node];
-    if (node.axis == KdNode::kLeaf) {
-      leaf(node);
-      continue;
+    // Descend along near children without touching the stack; a far child is pushed only if
+    // it cannot be pruned yet (the bound only shrinks, so a prunable one stays prunable).
+    std::uint32_t id = t.node;
+    for (;;) {
+      if (r.node_visits >= max_visits) {
+        r.visit_cap_hit = true;
+        return;
+      }
+      ++r.node_visits;
+      const KdNode& node = nodes[id];
+      if (node.axis == KdNode::kLeaf) {
+        leaf(node);
+        break;
+      }
+      const float x = q[node.axis];
+      const float to_left = x - node.left_max;    // > 0: query right of the left cell
+      const float to_right = x - node.right_min;  // < 0: query left of the right cell
+      const bool left_first = to_left + to_right < 0.0f;
+      const float cut = left_first ? to_right * to_right : to_left * to_left;
+      const float old = off[node.axis];
+      const float far_bound = t.cell_bound - old + cut;
+      if (!prunable(far_bound) && top + 2 <= kTraversalStack) {  // depth <= kKdMaxDepth
+        stack[top++] = {Task::kRestore, 0, node.axis, 0.0f, old};
+        stack[top++] = {Task::kFar, left_first ? node.second : node.first, node.axis, far_bound,
+                        cut};
+      }
+      id = left_first ? node.first : node.second;
     }
-    const float x = q[node.axis];
-    const float to_left = x - node.left_max;    // > 0: query right of the left cell
-    const float to_right = x - node.right_min;  // < 0: query left of the right cell
-    const bool left_first = to_left + to_right < 0.0f;
-    const std::uint32_t near_child = left_first ? node.first : node.second;
-    const std::uint32_t far_child = left_first ? node.second : node.first;
-    const float cut = left_first ? to_right * to_right : to_left * to_left;
-    const float old = off[node.axis];
-    const float far_bound = t.cell_bound - old + cut;
-    if (top + 3 > kTraversalStack) continue;  // cannot happen: depth <= kKdMaxDepth
-    stack[top++] = {Task::kRestore, 0, node.axis, 0.0f, old};
-    stack[top++] = {Task::kFar, far_child, node.axis, far_bound, cut};
-    stack[top++] = {Task::kVisit, near_child, node.axis, t.cell_bound, 0.0f};
   }
 }
 
@@ -178,6 +191,7 @@ KdBuildResult KdTree<P>::build(std::span<const P> points, std::span<std::uint32_
                                std::span<KdNode> node_storage, const KdBuildParams& params) {
   KdBuildResult result;
   points_ = points;
+  projections_ = nullptr;
   indices_ = index_storage.data();
   nodes_ = node_storage.data();
   num_nodes_ = 0;
@@ -241,6 +255,27 @@ KdBuildResult KdTree<P>::build(std::span<const P> points, std::span<std::uint32_
       if (hi[d] - lo[d] > extent) {
         extent = hi[d] - lo[d];
         axis = d;
+      }
+    }
+    if constexpr (kDim > 8) {
+      // High dimension: split on the largest variance instead (extents are set by a few
+      // outliers; FPFH spreads over many bins). Serial double sums: deterministic.
+      double sum[kDim] = {};
+      double sum2[kDim] = {};
+      for (std::uint32_t s = t.begin; s < t.end; ++s) {
+        const float* p = points[idx[s]].data();
+        for (int d = 0; d < kDim; ++d) {
+          sum[d] += p[d];
+          sum2[d] += static_cast<double>(p[d]) * p[d];
+        }
+      }
+      double best = -1.0;
+      for (int d = 0; d < kDim; ++d) {
+        const double var = sum2[d] - sum[d] * sum[d] / static_cast<double>(count);
+        if (var > best && hi[d] > lo[d]) {
+          best = var;
+          axis = d;
+        }
       }
     }
     if (extent <= 0.0f) {  // all points identical: nothing to split
@@ -345,16 +380,29 @@ KdQueryResult KdTree<P>::hybrid(const P& query, float radius, std::size_t max_nn
 }
 
 template <class P>
-KdQueryResult KdTree<P>::nearest(const P& query, Neighbor& out) const {
+bool KdTree<P>::projection_rejects(const float* qp, std::uint32_t i, float bound) const {
+  const float* cp = projections_ + static_cast<std::size_t>(i) * projection_stride_;
+  float lb = 0.0f;
+  for (int k = 0; k < kProjectionDim; ++k) {
+    const float t = qp[k] - cp[k];
+    lb += t * t;
+  }
+  // Margin: 1e-4 relative (float distance and lower-bound sums: ~1e-6) plus the absolute
+  // projection-rounding term of set_projections; only truly farther points are rejected.
+  return lb * 0.9999f > bound + projection_margin_;
+}
+
+template <class P>
+KdQueryResult KdTree<P>::nearest_seeded(const P& query, Neighbor best, bool found,
+                                        Neighbor& out, const float* qp) const {
   KdQueryResult r;
-  if (num_nodes_ == 0 || !is_finite_point(query)) return r;
   const float* q = query.data();
-  Neighbor best{0, INFINITY};
-  bool found = false;
+  const bool filter = qp != nullptr && projections_ != nullptr;
   const auto prune = [&]() { return best.squared_distance; };
   const auto leaf = [&](const KdNode& node) {
     for (std::uint32_t s = node.first; s < node.second; ++s) {
       const std::uint32_t i = indices_[s];
+      if (filter && found && projection_rejects(qp, i, best.squared_distance)) continue;
       const float d2 = squared_distance_bounded<kDim>(q, points_[i].data(), best.squared_distance);
       const Neighbor cand{i, d2};
       if (!found || closer(cand, best)) {
@@ -371,7 +419,152 @@ KdQueryResult KdTree<P>::nearest(const P& query, Neighbor& out) const {
   return r;
 }
 
+template <class P>
+KdQueryResult KdTree<P>::nearest(const P& query, Neighbor& out) const {
+  if (num_nodes_ == 0 || !is_finite_point(query)) return {};
+  return nearest_seeded(query, Neighbor{0, INFINITY}, false, out);
+}
+
+template <class P>
+KdQueryResult KdTree<P>::nearest(const P& query, std::uint32_t hint, Neighbor& out) const {
+  if (num_nodes_ == 0 || !is_finite_point(query)) return {};
+  // Only an indexed point may seed the bound (a non-finite one is not in the tree).
+  if (hint >= points_.size() || !is_finite_point(points_[hint])) {
+    return nearest_seeded(query, Neighbor{0, INFINITY}, false, out);
+  }
+  const Neighbor seed{hint, squared_distance_bounded<kDim>(query.data(), points_[hint].data(), INFINITY)};
+  return nearest_seeded(query, seed, true, out);
+}
+
+template <class P>
+KdQueryResult KdTree<P>::nearest_within(const P& query, float max_squared_distance,
+                                        std::uint32_t hint, Neighbor& out) const {
+  if (num_nodes_ == 0 || !is_finite_point(query) || !(max_squared_distance >= 0.0f)) return {};
+  if (max_squared_distance == 0.0f) max_squared_distance = 0.0f;  // -0 -> +0 (see order_key)
+  // A sentinel at the bound with the largest index: closer() accepts exactly d2 <= bound.
+  Neighbor seed{kNoHint, max_squared_distance};
+  if (hint < points_.size() && is_finite_point(points_[hint])) {
+    const float d2 = squared_distance_bounded<kDim>(query.data(), points_[hint].data(), INFINITY);
+    if (d2 <= max_squared_distance) seed = {hint, d2};
+  }
+  Neighbor best{};
+  KdQueryResult r = nearest_seeded(query, seed, true, best);
+  if (best.index == kNoHint) {
+    r.count = 0;
+    return r;
+  }
+  out = best;
+  return r;
+}
+
+template <class P>
+KdQueryResult KdTree<P>::nearest(const P& query, const float* query_projection,
+                                 Neighbor& out) const {
+  if (num_nodes_ == 0 || !is_finite_point(query)) return {};
+  return nearest_seeded(query, Neighbor{0, INFINITY}, false, out, query_projection);
+}
+
+template <class P>
+KdQueryResult KdTree<P>::has_closer(const P& query, const Neighbor& bound, bool& found) const {
+  return has_closer(query, nullptr, bound, found);
+}
+
+template <class P>
+KdQueryResult KdTree<P>::has_closer(const P& query, const float* qp, const Neighbor& bound,
+                                    bool& found) const {
+  KdQueryResult r;
+  found = false;
+  if (num_nodes_ == 0 || !is_finite_point(query)) return r;
+  const float* q = query.data();
+  const bool filter = qp != nullptr && projections_ != nullptr;
+  // Once found, a negative bound prunes every remaining task (cell bounds are >= 0).
+  const auto prune = [&]() { return found ? -1.0f : bound.squared_distance; };
+  const auto leaf = [&](const KdNode& node) {
+    for (std::uint32_t s = node.first; s < node.second && !found; ++s) {
+      const std::uint32_t i = indices_[s];
+      if (filter && projection_rejects(qp, i, bound.squared_distance)) continue;
+      const float d2 = squared_distance_bounded<kDim>(q, points_[i].data(), bound.squared_distance);
+      found = closer(Neighbor{i, d2}, bound);
+    }
+  };
+  traverse<kDim>(nodes_, q, max_node_visits_, prune, leaf, r);
+  r.count = found ? 1u : 0u;
+  return r;
+}
+
+template <class P>
+float KdTree<P>::squared_distance(const P& a, const P& b) {
+  return squared_distance_bounded<kDim>(a.data(), b.data(), INFINITY);
+}
+
 template class KdTree<Vec3f>;
 template class KdTree<Feature33>;
+
+}  // namespace v2xloc
+
+namespace v2xloc {
+
+static_assert(config::kMaxNeighbors < 255, "KdNeighborhoods stores list lengths in 8 bits");
+
+void KdNeighborhoods::build(float radius, std::size_t max_nn, std::span<Slot> entries,
+                            std::span<std::uint32_t> begin, std::span<std::uint8_t> count) {
+  radius_ = radius;
+  max_nn_ = max_nn < config::kMaxNeighbors ? max_nn : config::kMaxNeighbors;
+  entries_ = entries.data();
+  begin_ = begin.data();
+  count_ = count.data();
+  cached_points_ = 0;
+  not_cached_ = 0;
+  build_search_ = {};
+  const std::span<const Vec3f> points = tree_->points();
+  const std::size_t n = points.size();
+  if (entries.empty() || begin.size() < n || count.size() < n || n > kMaxTreePoints ||
+      !(radius > 0.0f) || max_nn_ == 0) {
+    count_ = nullptr;  // nothing cached: every get() searches
+    not_cached_ = static_cast<std::uint32_t>(n);
+    return;
+  }
+  Neighbor buffer[config::kMaxNeighbors];
+  std::size_t used = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const KdQueryResult r = tree_->hybrid(points[i], radius, max_nn_,
+                                          std::span<Neighbor>(buffer, max_nn_));
+    build_search_.add(r);
+    if (used + r.count > entries.size()) {  // pool full: this and the rest are searched later
+      for (std::size_t rest = i; rest < n; ++rest) count[rest] = kNotCached;
+      not_cached_ += static_cast<std::uint32_t>(n - i);
+      break;
+    }
+    begin[i] = static_cast<std::uint32_t>(used);
+    count[i] = static_cast<std::uint8_t>(r.count);
+    for (std::uint32_t k = 0; k < r.count; ++k) {
+      entries[used++] = static_cast<Slot>(buffer[k].index);
+    }
+    ++cached_points_;
+  }
+}
+
+KdQueryResult KdNeighborhoods::get(std::size_t i, float radius, std::size_t max_nn,
+                                   std::span<Neighbor> out) const {
+  const std::span<const Vec3f> points = tree_->points();
+  if (count_ == nullptr || count_[i] == kNotCached || !(radius <= radius_) || max_nn > max_nn_ ||
+      out.size() < max_nn) {
+    return tree_->hybrid(points[i], radius, max_nn, out);
+  }
+  KdQueryResult r;
+  const float r2 = radius * radius;
+  const Vec3f& p = points[i];
+  const Slot* list = entries_ + begin_[i];
+  const std::uint32_t n = count_[i];
+  std::uint32_t k = 0;
+  for (std::uint32_t e = 0; e < n && k < max_nn; ++e) {
+    const std::uint32_t j = list[e];
+    const float d2 = KdTree<Vec3f>::squared_distance(p, points[j]);
+    if (!(d2 < r2)) break;  // ascending: the rest is outside the smaller radius too
+    out[k++] = {j, d2};
+  }
+  r.count = k;
+  return r;
+}
 
 }  // namespace v2xloc

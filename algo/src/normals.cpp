@@ -76,7 +76,13 @@ void symmetric_eigen3(const Mat3d& input, Vec3d& eigenvalues, Mat3d& eigenvector
 
 NormalsResult estimate_normals(const KdTree<Vec3f>& tree, const NormalParams& params,
                                std::span<Vec3f> normals, std::span<NormalQuality> quality) {
+  return estimate_normals(KdNeighborhoods(tree), params, normals, quality);
+}
+
+NormalsResult estimate_normals(const KdNeighborhoods& neighborhoods, const NormalParams& params,
+                               std::span<Vec3f> normals, std::span<NormalQuality> quality) {
   NormalsResult r;
+  const KdTree<Vec3f>& tree = neighborhoods.tree();
   const std::span<const Vec3f> points = tree.points();
   if (tree.empty()) {
     r.status = NormalsStatus::kEmptyTree;
@@ -105,7 +111,7 @@ NormalsResult estimate_normals(const KdTree<Vec3f>& tree, const NormalParams& pa
       continue;
     }
     const KdQueryResult kr =
-        tree.hybrid(p, params.radius, max_nn, std::span<Neighbor>(neighbors, max_nn));
+        neighborhoods.get(i, params.radius, max_nn, std::span<Neighbor>(neighbors, max_nn));
     r.search.add(kr);
     Vec3d normal(0.0, 0.0, 1.0);
     if (kr.count < 3) {

@@ -1,5 +1,6 @@
 #include "v2xloc/algo/register_clouds.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace v2xloc {
@@ -61,7 +62,8 @@ RegisterCloudsResult register_clouds(std::span<const Vec3f> source, std::span<co
   const float voxel = params.voxel_size;
   if (!std::isfinite(voxel) || !(voxel > 0.0f) || !initial.allFinite() ||
       !(params.normal_radius_voxels > 0.0f) || !(params.fpfh_radius_voxels > 0.0f) ||
-      !(params.ransac_distance_voxels > 0.0) || !(params.icp_distance_voxels > 0.0)) {
+      !(params.ransac_distance_voxels > 0.0) || !(params.icp_distance_voxels > 0.0) ||
+      !(params.icp_kernel_voxels > 0.0)) {
     reg.status = RegistrationStatus::kInvalidInput;
     out.coarse.status = reg.status;
     return out;
@@ -104,45 +106,59 @@ RegisterCloudsResult register_clouds(std::span<const Vec3f> source, std::span<co
   const std::span<const Vec3f> tgt = ws.target_down.span();
   if (is_collinear(src) || is_collinear(tgt)) return finish(RegistrationStatus::kDegenerate);
 
-  // 2. Trees and normals (source normals only feed FPFH).
+  // 2./3. Trees, normals, FPFH. In global mode each cloud is searched once at the FPFH radius
+  // and the lists feed its normals (a prefix, see KdNeighborhoods) and both FPFH passes; the
+  // list storage is reused for the second cloud. ICP-only mode needs just the target normals.
   const bool global = params.mode == RegistrationMode::kGlobal;
-  const KdBuildResult tb = ws.target_tree.build(tgt);
-  if (tb.status != KdBuildStatus::kOk) return finish(RegistrationStatus::kNotEnoughPoints);
   NormalParams np;
   np.radius = params.normal_radius_voxels * voxel;
   np.max_nn = params.normal_max_nn;
-  np.viewpoint = params.target_viewpoint;
-  const NormalsResult nt = estimate_normals(ws.target_tree.tree, np,
-                                            std::span<Vec3f>(ws.target_normals, tgt.size()));
-  stats.search_cap_hits += nt.search.visit_cap_hits;
-  if (global) {
-    const KdBuildResult sb = ws.source_tree.build(src);
-    if (sb.status != KdBuildStatus::kOk) return finish(RegistrationStatus::kNotEnoughPoints);
-    np.viewpoint = params.source_viewpoint;
-    const NormalsResult ns = estimate_normals(ws.source_tree.tree, np,
-                                              std::span<Vec3f>(ws.source_normals, src.size()));
-    stats.search_cap_hits += ns.search.visit_cap_hits;
+  FpfhParams fp;
+  fp.radius = params.fpfh_radius_voxels * voxel;
+  fp.max_nn = params.fpfh_max_nn;
+  const std::span<Feature33> scratch(ws.spfh_scratch, RegistrationWorkspace::kMaxPoints);
+  const std::span<Feature33> fsrc(ws.source_features, src.size());
+  const std::span<Feature33> ftgt(ws.target_features, tgt.size());
+  // Normals (and, in global mode, features) of one cloud; false: the tree could not be built.
+  const auto describe = [&](std::span<const Vec3f> cloud, KdTreeStorage<Vec3f, RegistrationWorkspace::kMaxPoints>& tree,
+                            const Vec3f& viewpoint, Vec3f* normals_out, std::span<Feature33> features,
+                            FpfhStatus& fpfh_status) {
+    if (tree.build(cloud).status != KdBuildStatus::kOk) return false;
+    const std::span<Vec3f> normals(normals_out, cloud.size());
+    np.viewpoint = viewpoint;
+    KdNeighborhoods lists(tree.tree);
+    if (global) {
+      lists.build(fp.radius > np.radius ? fp.radius : np.radius,
+                  fp.max_nn > np.max_nn ? fp.max_nn : np.max_nn,
+                  std::span<KdNeighborhoods::Slot>(ws.neighborhood_entries, RegistrationWorkspace::kListEntries),
+                  std::span<std::uint32_t>(ws.mutual_scratch, RegistrationWorkspace::kMaxPoints),
+                  std::span<std::uint8_t>(ws.neighborhood_count, RegistrationWorkspace::kListPoints));
+      stats.search_cap_hits += lists.build_search().visit_cap_hits;
+      stats.neighborhoods_not_cached += lists.not_cached();
+      timer.lap(RegisterStage::kFpfh);
+    }
+    const NormalsResult nr = estimate_normals(lists, np, normals);
+    stats.search_cap_hits += nr.search.visit_cap_hits;
+    timer.lap(RegisterStage::kNormals);
+    if (global) {
+      const FpfhResult fr = compute_fpfh(lists, normals, fp, scratch, features);
+      stats.search_cap_hits += fr.search.visit_cap_hits;
+      fpfh_status = fr.status;
+      timer.lap(RegisterStage::kFpfh);
+    }
+    return true;
+  };
+  FpfhStatus fpfh_source = FpfhStatus::kOk, fpfh_target = FpfhStatus::kOk;
+  if (global && !describe(src, ws.source_tree, params.source_viewpoint, ws.source_normals, fsrc, fpfh_source)) {
+    return finish(RegistrationStatus::kNotEnoughPoints);
   }
-  timer.lap(RegisterStage::kNormals);
+  if (!describe(tgt, ws.target_tree, params.target_viewpoint, ws.target_normals, ftgt, fpfh_target)) {
+    return finish(RegistrationStatus::kNotEnoughPoints);
+  }
 
   Mat4d start = initial;
   if (global) {
-    // 3. FPFH on both clouds.
-    FpfhParams fp;
-    fp.radius = params.fpfh_radius_voxels * voxel;
-    fp.max_nn = params.fpfh_max_nn;
-    const std::span<Feature33> scratch(ws.spfh_scratch, RegistrationWorkspace::kMaxPoints);
-    const std::span<Feature33> fsrc(ws.source_features, src.size());
-    const std::span<Feature33> ftgt(ws.target_features, tgt.size());
-    const FpfhResult fs = compute_fpfh(ws.source_tree.tree,
-                                       std::span<const Vec3f>(ws.source_normals, src.size()), fp,
-                                       scratch, fsrc);
-    const FpfhResult ft = compute_fpfh(ws.target_tree.tree,
-                                       std::span<const Vec3f>(ws.target_normals, tgt.size()), fp,
-                                       scratch, ftgt);
-    stats.search_cap_hits += fs.search.visit_cap_hits + ft.search.visit_cap_hits;
-    timer.lap(RegisterStage::kFpfh);
-    if (fs.status != FpfhStatus::kOk || ft.status != FpfhStatus::kOk) {
+    if (fpfh_source != FpfhStatus::kOk || fpfh_target != FpfhStatus::kOk) {
       return finish(RegistrationStatus::kInvalidInput);
     }
 
@@ -153,8 +169,23 @@ RegisterCloudsResult register_clouds(std::span<const Vec3f> source, std::span<co
       ws.source_feature_tree.build(std::span<const Feature33>(fsrc));
       source_feature_tree = &ws.source_feature_tree.tree;
     }
+    // Exact projection pre-filter for the 33-D searches: principal axes of both feature sets;
+    // the SPFH scratch is free once the features exist: first the Jacobi matrices, then the
+    // projections (source point i at spfh_scratch[i][0..7], target at [8..15]).
     CorrespondenceParams cp;
     cp.mutual_filter = params.mutual_filter;
+    compute_feature_basis(fsrc, ftgt, 4, scratch, ws.feature_basis);
+    float* const projections = ws.spfh_scratch[0].data();
+    constexpr std::size_t kStride = sizeof(Feature33) / sizeof(float);
+    static_assert(kStride == kFpfhBins && 2 * FeatureBasis::kAxes <= kFpfhBins);
+    const float max_abs =
+        std::max(project_features(fsrc, ws.feature_basis, projections, kStride),
+                 project_features(ftgt, ws.feature_basis, projections + FeatureBasis::kAxes, kStride));
+    cp.projections = {projections, projections + FeatureBasis::kAxes, kStride};
+    ws.target_feature_tree.tree.set_projections(cp.projections.target, kStride, max_abs);
+    if (source_feature_tree != nullptr) {
+      ws.source_feature_tree.tree.set_projections(cp.projections.source, kStride, max_abs);
+    }
     const CorrespondenceResult cr = match_features(
         fsrc, ws.target_feature_tree.tree, cp, ws.correspondences, source_feature_tree,
         std::span<std::uint32_t>(ws.mutual_scratch, RegistrationWorkspace::kMaxPoints));
@@ -183,11 +214,14 @@ RegisterCloudsResult register_clouds(std::span<const Vec3f> source, std::span<co
   // 6. ICP refinement against the target view.
   IcpParams ip = params.icp;
   ip.max_correspondence_distance = params.icp_distance_voxels * voxel;
+  ip.kernel.scale = params.icp_kernel_voxels * voxel;
   IcpTarget view;
   view.points = tgt;
   view.normals = std::span<const Vec3f>(ws.target_normals, tgt.size());
   view.tree = &ws.target_tree.tree;
-  const RegistrationResult fine = icp(src, view, start, ip);
+  // The mutual-match scratch is free by now: it holds the per-point warm-start matches.
+  const RegistrationResult fine =
+      icp(src, view, start, ip, std::span<std::uint32_t>(ws.mutual_scratch, RegistrationWorkspace::kMaxPoints));
   timer.lap(RegisterStage::kIcp);
   stats.icp_iterations = fine.iterations;
   stats.search_cap_hits += fine.search_truncated;

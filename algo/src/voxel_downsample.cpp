@@ -59,6 +59,8 @@ VoxelDownsampleResult voxel_downsample(std::span<const Vec3f> points, float voxe
   // Pass 2: accumulate per voxel, voxels numbered in order of first occurrence.
   const std::size_t mask = num_slots - 1;
   std::size_t num_voxels = 0;
+  VoxelAccumulator* last = nullptr;  // voxel of the previous accepted point
+  std::int32_t last_ix = 0, last_iy = 0, last_iz = 0;
   for (const Vec3f& p : points) {
     if (!finite3(p)) continue;
     double ref[3];
@@ -74,6 +76,14 @@ VoxelDownsampleResult voxel_downsample(std::span<const Vec3f> points, float voxe
     const auto ix = static_cast<std::int32_t>(ref[0]);
     const auto iy = static_cast<std::int32_t>(ref[1]);
     const auto iz = static_cast<std::int32_t>(ref[2]);
+    // Consecutive returns of a scan usually fall in the same voxel: skip the table lookup.
+    if (last != nullptr && ix == last_ix && iy == last_iy && iz == last_iz) {
+      last->sum[0] += p.x();
+      last->sum[1] += p.y();
+      last->sum[2] += p.z();
+      ++last->count;
+      continue;
+    }
     std::size_t s = voxel_hash(ix, iy, iz) & mask;
     std::uint32_t probes = 0;
     VoxelAccumulator* acc = nullptr;
@@ -108,6 +118,10 @@ VoxelDownsampleResult voxel_downsample(std::span<const Vec3f> points, float voxe
     acc->sum[1] += p.y();
     acc->sum[2] += p.z();
     ++acc->count;
+    last = acc;
+    last_ix = ix;
+    last_iy = iy;
+    last_iz = iz;
   }
 
   // Centroids, and leave the hash table empty for the next call.

@@ -2,10 +2,11 @@
 // (../shared/data/outdoor_lidar_pair), with the parameters tools/bench/compare_open3d.py gives
 // Open3D: voxel 0.25 m, normals 2 voxels / 30 nn, FPFH 5 voxels / 100 nn, mutual matching,
 // RANSAC 1.5 voxels (edge 0.9 + distance checkers, 100000 iterations, confidence 0.999),
-// point-to-plane ICP at 1 voxel. The full-pipeline benchmarks report the error vs the reference
+// point-to-plane ICP at 1 voxel with Tukey k = 0.5 voxel. The full-pipeline benchmarks report the error vs the reference
 // as counters (te_m, re_deg, success).
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -125,28 +126,66 @@ void BM_RegistrationDownsample(benchmark::State& state) {
 }
 BENCHMARK(BM_RegistrationDownsample)->Unit(benchmark::kMillisecond);
 
+// The pipeline's flow per cloud: tree, one FPFH-radius search per point (KdNeighborhoods),
+// normals from its prefix; BM_RegistrationFpfh then times the features from the same lists
+// (in register_clouds the list search is booked to the FPFH stage).
+KdNeighborhoods describe_lists(KdTreeStorage<Vec3f, RegistrationWorkspace::kMaxPoints>& tree,
+                               BoundedVector<Vec3f>& cloud) {
+  tree.build(cloud.span());
+  KdNeighborhoods lists(tree.tree);
+  lists.build(5.0f * kVoxel, config::kFpfhMaxNeighbors,
+              std::span<KdNeighborhoods::Slot>(g_ws.neighborhood_entries, RegistrationWorkspace::kListEntries),
+              std::span<std::uint32_t>(g_ws.mutual_scratch, RegistrationWorkspace::kMaxPoints),
+              std::span<std::uint8_t>(g_ws.neighborhood_count, RegistrationWorkspace::kListPoints));
+  return lists;
+}
+
 void BM_RegistrationNormals(benchmark::State& state) {
   if (!prepare(state)) return;
   NormalParams np;
   np.radius = 2.0f * kVoxel;
   for (auto _ : state) {
-    g_ws.source_tree.build(g_ws.source_down.span());
-    g_ws.target_tree.build(g_ws.target_down.span());
-    estimate_normals(g_ws.source_tree.tree, np, std::span<Vec3f>(g_ws.source_normals, g_ws.source_down.size()));
-    estimate_normals(g_ws.target_tree.tree, np, std::span<Vec3f>(g_ws.target_normals, g_ws.target_down.size()));
+    const KdNeighborhoods s = describe_lists(g_ws.source_tree, g_ws.source_down);
+    estimate_normals(s, np, std::span<Vec3f>(g_ws.source_normals, g_ws.source_down.size()));
+    const KdNeighborhoods t = describe_lists(g_ws.target_tree, g_ws.target_down);
+    estimate_normals(t, np, std::span<Vec3f>(g_ws.target_normals, g_ws.target_down.size()));
   }
 }
 BENCHMARK(BM_RegistrationNormals)->Unit(benchmark::kMillisecond);
+
+void BM_RegistrationNeighborhoods(benchmark::State& state) {
+  if (!prepare(state)) return;
+  std::uint64_t visits = 0, queries = 0;
+  for (auto _ : state) {
+    const KdNeighborhoods s = describe_lists(g_ws.source_tree, g_ws.source_down);
+    const KdNeighborhoods t = describe_lists(g_ws.target_tree, g_ws.target_down);
+    visits = s.build_search().node_visits + t.build_search().node_visits;
+    queries = s.build_search().queries + t.build_search().queries;
+  }
+  state.counters["visits_per_query"] = double(visits) / double(queries);
+  std::uint32_t entries = 0;
+  for (std::size_t i = 0; i < g_ws.target_down.size(); ++i) entries += g_ws.neighborhood_count[i];
+  state.counters["list_length"] = double(entries) / double(g_ws.target_down.size());
+}
+BENCHMARK(BM_RegistrationNeighborhoods)->Unit(benchmark::kMillisecond);
 
 void BM_RegistrationFpfh(benchmark::State& state) {
   if (!prepare(state)) return;
   FpfhParams fp;
   fp.radius = 5.0f * kVoxel;
   const std::size_t ns = g_ws.source_down.size(), nt = g_ws.target_down.size();
+  // The list storage holds one cloud at a time (as in register_clouds): rebuild it per cloud,
+  // outside the timed region (BM_RegistrationNeighborhoods times that).
   for (auto _ : state) {
-    compute_fpfh(g_ws.source_tree.tree, std::span<const Vec3f>(g_ws.source_normals, ns), fp,
+    state.PauseTiming();
+    const KdNeighborhoods s = describe_lists(g_ws.source_tree, g_ws.source_down);
+    state.ResumeTiming();
+    compute_fpfh(s, std::span<const Vec3f>(g_ws.source_normals, ns), fp,
                  std::span<Feature33>(g_ws.spfh_scratch, ns), std::span<Feature33>(g_ws.source_features, ns));
-    compute_fpfh(g_ws.target_tree.tree, std::span<const Vec3f>(g_ws.target_normals, nt), fp,
+    state.PauseTiming();
+    const KdNeighborhoods t = describe_lists(g_ws.target_tree, g_ws.target_down);
+    state.ResumeTiming();
+    compute_fpfh(t, std::span<const Vec3f>(g_ws.target_normals, nt), fp,
                  std::span<Feature33>(g_ws.spfh_scratch, nt), std::span<Feature33>(g_ws.target_features, nt));
   }
 }
@@ -157,14 +196,28 @@ void BM_RegistrationCorrespondences(benchmark::State& state) {
   const std::size_t ns = g_ws.source_down.size(), nt = g_ws.target_down.size();
   CorrespondenceParams cp;
   cp.mutual_filter = true;
+  CorrespondenceResult cr;
   for (auto _ : state) {
     g_ws.source_feature_tree.build(std::span<const Feature33>(g_ws.source_features, ns));
     g_ws.target_feature_tree.build(std::span<const Feature33>(g_ws.target_features, nt));
-    match_features(std::span<const Feature33>(g_ws.source_features, ns), g_ws.target_feature_tree.tree, cp,
+    compute_feature_basis(std::span<const Feature33>(g_ws.source_features, ns),
+                          std::span<const Feature33>(g_ws.target_features, nt), 4,
+                          std::span<Feature33>(g_ws.spfh_scratch, RegistrationWorkspace::kMaxPoints),
+                          g_ws.feature_basis);
+    float* const proj = g_ws.spfh_scratch[0].data();
+    const float max_abs = std::max(
+        project_features(std::span<const Feature33>(g_ws.source_features, ns), g_ws.feature_basis, proj, kFpfhBins),
+        project_features(std::span<const Feature33>(g_ws.target_features, nt), g_ws.feature_basis, proj + 8, kFpfhBins));
+    cp.projections = {proj, proj + 8, kFpfhBins};
+    g_ws.source_feature_tree.tree.set_projections(proj, kFpfhBins, max_abs);
+    g_ws.target_feature_tree.tree.set_projections(proj + 8, kFpfhBins, max_abs);
+    cr = match_features(std::span<const Feature33>(g_ws.source_features, ns), g_ws.target_feature_tree.tree, cp,
                    g_ws.correspondences, &g_ws.source_feature_tree.tree,
                    std::span<std::uint32_t>(g_ws.mutual_scratch, RegistrationWorkspace::kMaxPoints));
   }
   state.counters["correspondences"] = double(g_ws.correspondences.size());
+  state.counters["queries"] = double(cr.search.queries);
+  state.counters["visits_per_query"] = double(cr.search.node_visits) / double(cr.search.queries);
 }
 BENCHMARK(BM_RegistrationCorrespondences)->Unit(benchmark::kMillisecond);
 
@@ -190,10 +243,14 @@ void BM_RegistrationIcp(benchmark::State& state) {
   view.points = g_ws.target_down.span();
   view.normals = std::span<const Vec3f>(g_ws.target_normals, g_ws.target_down.size());
   view.tree = &g_ws.target_tree.tree;
-  IcpParams ip;
+  IcpParams ip = pipeline_params().icp;  // the pipeline's kernel type
   ip.max_correspondence_distance = kVoxel;
+  ip.kernel.scale = 0.5 * kVoxel;
   RegistrationResult r;
-  for (auto _ : state) r = icp(g_ws.source_down.span(), view, g_coarse, ip);
+  for (auto _ : state) {
+    r = icp(g_ws.source_down.span(), view, g_coarse, ip,
+            std::span<std::uint32_t>(g_ws.mutual_scratch, RegistrationWorkspace::kMaxPoints));
+  }
   state.counters["iterations"] = r.iterations;
   state.counters["fitness"] = r.fitness;
 }

@@ -32,8 +32,8 @@ bool read_matrix4(const std::string& path, Mat4d& matrix, std::string& error);
 struct RegisterTimings {
   double read_source_ms = 0.0;
   double read_target_ms = 0.0;
-  double stage_ms[static_cast<int>(RegisterStage::kCount)] = {};
-  double registration_ms = 0.0;  // whole register_clouds call
+  double stage_ms[static_cast<int>(RegisterStage::kCount)] = {};  // thread CPU time
+  double registration_ms = 0.0;  // whole register_clouds call, thread CPU time
 };
 
 // One JSON object (single line + newline): status, transform (4 rows), fitness, inlier_rmse,

@@ -112,6 +112,41 @@ TEST_F(FpfhOpen3d, FpfhMatchesOpen3dOnSameNormals) {
   EXPECT_EQ(r.search.truncated, 0u);
 }
 
+static KdNeighborhoods::Slot list_entries[kMax * 100];
+static std::uint32_t list_begin[kMax];
+static std::uint8_t list_count[kMax];
+
+// The pipeline's path (one FPFH-radius search per point shared by normals and both FPFH passes)
+// gives the same bits as the plain per-stage searches, with full and with overflowing storage.
+TEST_F(FpfhOpen3d, SharedNeighborhoodsGiveIdenticalNormalsAndFeatures) {
+  NormalParams np;
+  np.radius = fx.normal_radius;
+  np.max_nn = fx.normal_max_nn;
+  np.viewpoint = fx.viewpoint;
+  FpfhParams fp;
+  fp.radius = fx.fpfh_radius;
+  fp.max_nn = fx.fpfh_max_nn;
+  const std::size_t n = fx.points.size();
+  static Vec3f plain_normals[kMax], cached_normals[kMax];
+  static Feature33 cached[kMax];
+  estimate_normals(tree.tree, np, std::span<Vec3f>(plain_normals, n));
+  compute_fpfh(tree.tree, fx.normals, fp, spfh, features);
+  for (const std::size_t capacity : {kMax * 100, n * 10}) {
+    KdNeighborhoods lists(tree.tree);
+    lists.build(fp.radius, fp.max_nn, std::span<KdNeighborhoods::Slot>(list_entries, capacity),
+                list_begin, list_count);
+    if (capacity < kMax * 100) {
+      EXPECT_GT(lists.not_cached(), 0u);
+    }
+    const NormalsResult nr = estimate_normals(lists, np, std::span<Vec3f>(cached_normals, n));
+    ASSERT_EQ(nr.status, NormalsStatus::kOk);
+    EXPECT_EQ(std::memcmp(plain_normals, cached_normals, sizeof(Vec3f) * n), 0);
+    const FpfhResult fr = compute_fpfh(lists, fx.normals, fp, spfh, cached);
+    ASSERT_EQ(fr.status, FpfhStatus::kOk);
+    EXPECT_EQ(std::memcmp(features, cached, sizeof(Feature33) * n), 0);
+  }
+}
+
 TEST_F(FpfhOpen3d, DeterministicAndPairFeatureConventions) {
   FpfhParams fp;
   fp.radius = fx.fpfh_radius;

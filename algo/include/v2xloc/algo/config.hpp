@@ -40,6 +40,11 @@ inline constexpr std::size_t kMaxNeighbors = 128;       // kNN / hybrid result b
 inline constexpr std::size_t kNormalMaxNeighbors = 30;  // Open3D's KDTreeSearchParamHybrid default
 inline constexpr std::size_t kFpfhMaxNeighbors = 100;   // Open3D examples: radius 5 voxels, 100 nn
 inline constexpr std::uint32_t kJacobiMaxSweeps = 16;   // 3x3 symmetric eigen; converges in <= ~6
+// Neighbour lists shared by normals and both FPFH passes (one search per point, 16-bit indices,
+// 2 B each): ~50-entry lists (outdoor LiDAR, FPFH radius 5 voxels) of ~20k points. Points beyond
+// are searched again (same result, slower; counted). Embedded: none (RAM over speed; every list
+// is searched per stage as before).
+inline constexpr std::size_t kNeighborhoodCacheEntries = kEmbeddedProfile ? 0 : 1048576;
 
 // ---- Correspondences / RANSAC ---------------------------------------------------------------
 inline constexpr std::size_t kMaxCorrespondences = kMaxDownsampledPoints;

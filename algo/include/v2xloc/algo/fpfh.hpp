@@ -59,5 +59,10 @@ PairFeature fpfh_pair_feature(const Vec3d& p1, const Vec3d& n1, const Vec3d& p2,
 FpfhResult compute_fpfh(const KdTree<Vec3f>& tree, std::span<const Vec3f> normals,
                         const FpfhParams& params, std::span<Feature33> spfh_scratch,
                         std::span<Feature33> features);
+// Same, with both passes reading the neighbourhoods from a shared cache (built with this
+// radius / max_nn or larger ones): the same features, bit for bit, one search per point.
+FpfhResult compute_fpfh(const KdNeighborhoods& neighborhoods, std::span<const Vec3f> normals,
+                        const FpfhParams& params, std::span<Feature33> spfh_scratch,
+                        std::span<Feature33> features);
 
 }  // namespace v2xloc

@@ -2,15 +2,20 @@
 // caller-owned index and node storage: building and querying never allocate.
 //
 // Build: median split (selection by (coordinate, index), a strict total order, so the tree is the
-// same on every machine) on the axis of largest spread; leaves hold <= leaf_size points;
-// O(N log N). Non-finite points are not indexed (counted).
+// same on every machine) on the axis of largest spread (3-D: extent; 33-D: variance, which
+// extents set by a few outliers misjudge); leaves hold <= leaf_size points; O(N log N).
+// Non-finite points are not indexed (counted).
 // Queries write into caller buffers and return a KdQueryResult:
 //   knn      k nearest, ascending (squared_distance, index)
 //   radius   all with squared distance < radius^2 (strict, like nanoflann), ascending; if the
 //            buffer is too small the nearest out.size() are kept, the rest counted in `truncated`
 //   hybrid   Open3D 0.16 KDTreeSearchParamHybrid: of the max_nn nearest, those with squared
 //            distance < radius^2, ascending
-//   nearest  the single nearest neighbour (fast path)
+//   nearest  the single nearest neighbour (fast path); optionally warm-started from a hint
+//            point (e.g. last ICP iteration's match): its distance is the initial bound, which
+//            prunes most of the tree, and the result is still the exact nearest
+//   has_closer  whether any point is strictly closer (distance, then index) than a given
+//            neighbour; stops at the first one found (mutual-match checks)
 // Pruning uses the incremental cell distance of Arya & Mount (nanoflann): the squared distance
 // from the query to a node's cell accumulated over all axes.
 // Traversal is bounded: an explicit stack of 2 * config::kKdMaxDepth entries and at most
@@ -113,6 +118,41 @@ class KdTree {
                        std::span<Neighbor> out) const;
   // count == 0 when the tree is empty (out untouched) or the query is not finite.
   KdQueryResult nearest(const P& query, Neighbor& out) const;
+  // Same result as nearest(); `hint` (an index into points(), ignored when out of range or not
+  // finite) seeds the search bound.
+  KdQueryResult nearest(const P& query, std::uint32_t hint, Neighbor& out) const;
+  // The nearest neighbour if its squared distance is <= max_squared_distance (count 1), else
+  // count 0: the same neighbour nearest() gives whenever that one is within the bound, found
+  // without exploring beyond it (ICP correspondences with a distance gate). hint as above.
+  KdQueryResult nearest_within(const P& query, float max_squared_distance, std::uint32_t hint,
+                               Neighbor& out) const;
+  static constexpr std::uint32_t kNoHint = 0xFFFFFFFFu;
+  // found = some indexed point n has (d2(query, n), n.index) < (bound.squared_distance,
+  // bound.index). count = 1 when found.
+  KdQueryResult has_closer(const P& query, const Neighbor& bound, bool& found) const;
+
+  // Optional exact pre-filter of leaf scans (high dimension): per point its coordinates in
+  // kProjectionDim orthonormal directions (e.g. the features' principal axes), point i at
+  // first[i * stride]. The squared distance of two projections is a lower bound of the full
+  // one, so most candidates are rejected after kProjectionDim terms instead of 16 or 33; a
+  // margin above the rounding error keeps every result exactly that of the plain search.
+  // Queries pass their own projection (same basis); nullptr: no filter for that query.
+  static constexpr int kProjectionDim = 8;
+  // max_abs: the largest |coordinate| among the stored and the query projections (sets the
+  // absolute rounding margin). A rebuild clears the projections.
+  void set_projections(const float* first, std::size_t stride, float max_abs) {
+    projections_ = first;
+    projection_stride_ = stride;
+    // Projections rounded to float (relative 2^-24 ~ 6e-8 of <= max_abs) move the lower bound
+    // by <= ~11.3e-7 max_abs sqrt(lb); that stays below 1e-4 lb + 4e-9 max_abs^2 for all lb.
+    projection_margin_ = 4e-9f * max_abs * max_abs + 1e-30f;
+  }
+  KdQueryResult nearest(const P& query, const float* query_projection, Neighbor& out) const;
+  KdQueryResult has_closer(const P& query, const float* query_projection, const Neighbor& bound,
+                           bool& found) const;
+  // The squared distance exactly as the queries compute it (float, fixed summation order):
+  // comparing it with a query's squared_distance is bit-exact.
+  static float squared_distance(const P& a, const P& b);
 
   bool empty() const { return num_nodes_ == 0; }
   std::size_t size() const { return num_indexed_; }
@@ -125,6 +165,10 @@ class KdTree {
   // exact_count: count every point within r2 (pruning by radius only) for truncation reports.
   KdQueryResult search(const P& query, std::size_t keep, float r2, bool exact_count,
                        std::size_t requested, std::span<Neighbor> out) const;
+  KdQueryResult nearest_seeded(const P& query, Neighbor best, bool found, Neighbor& out,
+                               const float* query_projection = nullptr) const;
+  // True when the projections prove squared_distance(query, point i) > bound.
+  bool projection_rejects(const float* query_projection, std::uint32_t i, float bound) const;
 
   std::span<const P> points_{};
   const std::uint32_t* indices_ = nullptr;
@@ -132,6 +176,9 @@ class KdTree {
   std::size_t num_nodes_ = 0;
   std::size_t num_indexed_ = 0;
   std::size_t max_node_visits_ = config::kKdMaxNodeVisits;
+  const float* projections_ = nullptr;
+  std::size_t projection_stride_ = 0;
+  float projection_margin_ = 0.0f;
 };
 
 extern template class KdTree<Vec3f>;
@@ -157,6 +204,53 @@ struct KdTreeStorage {
     return tree.build(points, std::span<std::uint32_t>(indices, N),
                       std::span<KdNode>(nodes, kd_max_nodes(N, LeafSize)), params);
   }
+};
+
+}  // namespace v2xloc
+
+namespace v2xloc {
+
+// Hybrid-search neighbourhoods (radius, max_nn) of every point of a 3-D tree, searched once and
+// shared by the stages that need them (normals and both FPFH passes: one search per point
+// instead of three). A consumer asking for (radius', max_nn') with radius' <= radius and
+// max_nn' <= max_nn gets the prefix of the cached list with squared distance < radius'^2, which
+// is exactly what hybrid(radius', max_nn') returns (the list is sorted by (distance, index)).
+// Lists are stored as 16-bit indices in caller storage; a point whose list does not fit (storage
+// exhausted, tree > 65536 points) is re-searched on request (counted in not_cached): the
+// results never depend on the capacity. Squared distances are recomputed bit-exactly.
+class KdNeighborhoods {
+ public:
+  using Slot = std::uint16_t;
+  static constexpr std::size_t kMaxTreePoints = 65536;
+
+  // Without storage: every request is a search (the stages' plain entry points use this).
+  explicit KdNeighborhoods(const KdTree<Vec3f>& tree) : tree_(&tree) {}
+
+  // Searches every point of tree.points() (non-finite points get an empty list). entries: the
+  // index pool; begin / count: one per point (>= tree.points().size(), else nothing is cached).
+  void build(float radius, std::size_t max_nn, std::span<Slot> entries,
+             std::span<std::uint32_t> begin, std::span<std::uint8_t> count);
+
+  // Neighbours of point i within radius (strict) / the max_nn nearest, ascending, into out
+  // (out.size() >= max_nn), as tree().hybrid(points[i], radius, max_nn, out).
+  KdQueryResult get(std::size_t i, float radius, std::size_t max_nn, std::span<Neighbor> out) const;
+
+  const KdTree<Vec3f>& tree() const { return *tree_; }
+  std::uint32_t cached_points() const { return cached_points_; }
+  std::uint32_t not_cached() const { return not_cached_; }   // points left to re-search
+  const KdQueryCounters& build_search() const { return build_search_; }
+
+ private:
+  static constexpr std::uint8_t kNotCached = 0xFF;
+  const KdTree<Vec3f>* tree_;
+  float radius_ = 0.0f;
+  std::size_t max_nn_ = 0;
+  const Slot* entries_ = nullptr;
+  const std::uint32_t* begin_ = nullptr;
+  const std::uint8_t* count_ = nullptr;
+  std::uint32_t cached_points_ = 0;
+  std::uint32_t not_cached_ = 0;
+  KdQueryCounters build_search_{};
 };
 
 }  // namespace v2xloc

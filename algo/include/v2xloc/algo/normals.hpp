@@ -56,6 +56,11 @@ struct NormalsResult {
 NormalsResult estimate_normals(const KdTree<Vec3f>& tree, const NormalParams& params,
                                std::span<Vec3f> normals,
                                std::span<NormalQuality> quality = {});
+// Same, with the neighbourhoods taken from a shared cache (e.g. the FPFH search, when
+// params.radius / max_nn do not exceed the cache's): the same normals, bit for bit.
+NormalsResult estimate_normals(const KdNeighborhoods& neighborhoods, const NormalParams& params,
+                               std::span<Vec3f> normals,
+                               std::span<NormalQuality> quality = {});
 
 // Smallest-eigenvalue eigenvector of a symmetric 3x3 matrix (unit length) and the eigenvalues
 // ascending. Exposed for tests and for other stages (e.g. plane fits).

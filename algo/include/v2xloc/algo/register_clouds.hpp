@@ -2,7 +2,11 @@
 // correspondences -> RANSAC -> ICP (mode kGlobal), or downsampling -> normals -> ICP from an
 // initial guess (mode kIcpOnly). Parameters derive from the voxel size as in Open3D's global
 // registration tutorial (normals radius 2 voxels / 30 nn, FPFH 5 voxels / 100 nn, RANSAC
-// distance 1.5 voxels); all storage lives in a RegistrationWorkspace the caller owns:
+// distance 1.5 voxels; final point-to-plane ICP gated at 1 voxel with Tukey's biweight at 0.5
+// voxel). In global mode each cloud is searched once per point (KdNeighborhoods) for its normals
+// and FPFH; the 33-D feature searches use a principal-axis projection pre-filter. Both are exact:
+// the same results as separate searches. All storage lives in a RegistrationWorkspace the caller
+// owns:
 //   static RegistrationWorkspace ws;   // once; large (see sizeof), never on the stack
 //   RegisterCloudsResult r = register_clouds(source, target, params, Mat4d::Identity(), ws);
 // Times are ticks of a caller-supplied clock (algo has no OS); null -> all zero.
@@ -39,10 +43,20 @@ struct RegisterCloudsParams {
   bool mutual_filter = true;                // raises the RANSAC inlier ratio a lot outdoors
   double ransac_distance_voxels = 1.5;      // Open3D tutorial
   double icp_distance_voxels = 1.0;         // final refinement gate
+  // Scale k of the final ICP's robust kernel (icp.kernel.type, Tukey's biweight by default)
+  // [voxels]. Plain least squares inside a 1-voxel gate lets residuals up to the gate (parts
+  // of one scan the other does not see) pull the fit: on the outdoor pair at voxel 0.5 m it
+  // drifts from a 0.6 deg RANSAC start into a 1.2 deg limit cycle (Open3D 0.16 does the same);
+  // Tukey with k = 0.5 voxel ignores them (Babin et al. 2019) and converges on the true pose.
+  double icp_kernel_voxels = 0.5;
   Vec3f source_viewpoint = Vec3f::Zero();   // normals orientation (sensor origins)
   Vec3f target_viewpoint = Vec3f::Zero();
   RansacParams ransac{};                    // distances overwritten from the *_voxels fields
-  IcpParams icp{};                          // max_correspondence_distance overwritten
+  IcpParams icp = [] {                      // max_correspondence_distance, kernel.scale
+    IcpParams p;                            // overwritten from the *_voxels fields
+    p.kernel.type = RobustKernelType::kTukey;
+    return p;
+  }();
   TickClock clock = nullptr;
 };
 
@@ -63,6 +77,7 @@ struct RegisterStageStats {
   std::uint32_t ransac_correspondence_inliers = 0;
   std::uint32_t icp_iterations = 0;
   std::uint64_t search_cap_hits = 0;       // k-d tree queries stopped at the visit cap
+  std::uint32_t neighborhoods_not_cached = 0;  // FPFH/normal lists re-searched (cache full)
 };
 
 struct RegisterCloudsResult {
@@ -70,6 +85,10 @@ struct RegisterCloudsResult {
   RegistrationResult coarse;         // RANSAC result (global mode), else the initial guess
   RegisterStageStats stats;
 };
+
+// The projection pre-filter stores float coordinates in the SPFH scratch (a Feature33 array is
+// a plain float array: 33 floats per element, no padding).
+static_assert(sizeof(Feature33) == kFpfhBins * sizeof(float));
 
 // All storage of the pipeline. ~tens of MB in the host profile: make it static.
 struct RegistrationWorkspace {
@@ -79,6 +98,12 @@ struct RegistrationWorkspace {
   FixedVector<Vec3f, kMaxPoints> target_down;
   KdTreeStorage<Vec3f, kMaxPoints> source_tree;
   KdTreeStorage<Vec3f, kMaxPoints> target_tree;
+  // Normals/FPFH neighbour lists of one cloud at a time (KdNeighborhoods storage; the list
+  // offsets live in mutual_scratch, which is free until the feature matching).
+  static constexpr std::size_t kListEntries = config::kNeighborhoodCacheEntries;
+  static constexpr std::size_t kListPoints = kListEntries > 0 ? kMaxPoints : 0;
+  KdNeighborhoods::Slot neighborhood_entries[kListEntries > 0 ? kListEntries : 1];
+  std::uint8_t neighborhood_count[kListPoints > 0 ? kListPoints : 1];
   Vec3f source_normals[kMaxPoints];
   Vec3f target_normals[kMaxPoints];
   Feature33 spfh_scratch[kMaxPoints];
@@ -86,7 +111,8 @@ struct RegistrationWorkspace {
   Feature33 target_features[kMaxPoints];
   KdTreeStorage<Feature33, kMaxPoints> source_feature_tree;
   KdTreeStorage<Feature33, kMaxPoints> target_feature_tree;
-  std::uint32_t mutual_scratch[kMaxPoints];
+  FeatureBasis feature_basis;   // principal axes of the features (projection pre-filter)
+  std::uint32_t mutual_scratch[kMaxPoints];   // list offsets, then mutual matching, then ICP hints
   FixedVector<Correspondence, config::kMaxCorrespondences> correspondences;
 };
 
