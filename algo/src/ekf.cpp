@@ -84,11 +84,17 @@ void Ekf::initialize(double t, const EkfState& state, const EkfCovariance& covar
   P_ = 0.5 * (covariance + covariance.transpose());
   time_ = t;
   initialized_ = true;
-  counters_ = {};
   log_size_ = 0;
   snap_first_ = 0;
   snap_count_ = 0;
   take_snapshot(0);
+}
+
+void Ekf::reset() {
+  initialized_ = false;
+  log_size_ = 0;
+  snap_first_ = 0;
+  snap_count_ = 0;
 }
 
 EkfFuseStatus Ekf::on_vehicle_signals(double t, double wheel_speed, double yaw_rate) {
@@ -347,8 +353,11 @@ EkfFuseStatus Ekf::apply(const Event& e) {
       Eigen::Matrix<double, 2, 2> R = Eigen::Matrix<double, 2, 2>::Zero();
       R(0, 0) = e.R[0][0];
       R(1, 1) = e.R[1][1];
-      const EkfFuseStatus s = fuse<2>(y, H, R, 0.0, nullptr);
+      const double gate =
+          params_.gates.odometry_gate_enabled ? params_.gates.odometry_nis_threshold : 0.0;
+      const EkfFuseStatus s = fuse<2>(y, H, R, gate, nullptr);
       if (count && s == EkfFuseStatus::kFused) ++counters_.odometry_fused;
+      if (count && s == EkfFuseStatus::kRejectedGate) ++counters_.odometry_rejected;
       return s;
     }
     case EkfEventType::kGnss: {

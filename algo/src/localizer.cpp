@@ -40,6 +40,8 @@ void Localizer::configure(const LocalizerParams& params, const GeodeticOrigin& o
   ekf_all_ = Ekf(params.ekf);
   fixed_lag_gate_ = FixedLagValidityGate(params.gate);
   causal_gate_ = CausalValidityGate(params.gate);
+  stereo_gate_ = CausalValidityGate(params.gate);
+  stereo_down_.clear();
   for (auto& p : pending_) p = {};
   frame_ = 0;
   gate_pushes_ = 0;
@@ -47,12 +49,17 @@ void Localizer::configure(const LocalizerParams& params, const GeodeticOrigin& o
   nis_rejections_ = 0;
   nis_rejections_ungated_ = 0;
   frames_since_global_ = params.global_retry_frames;  // allow a search at the first frame
+  candidate_ = {};
+  track_count_ = 0;
+  odom_T_body_ = Mat4d::Identity();
+  gnss_divergent_fixes_ = 0;
   have_gnss_ = false;
   have_frame_ = false;
   last_frame_t_ = 0.0;
   last_speed_ = 0.0;
   last_yaw_rate_ = 0.0;
   have_vehicle_ = false;
+  have_vehicle_delta_ = false;
   odometry_.configure(params.odometry);
   odometry_.reset();
   map_.configure(params.map);
@@ -83,6 +90,18 @@ void Localizer::on_gnss(const GnssInput& in) {
   have_gnss_ = true;
   last_gnss_enu_ = enu;
   last_gnss_sigma_ = in.h_acc;
+  if (ekf_.initialized()) {
+    const EkfState s = ekf_.state();
+    const double dx = s.pos_x - enu.x(), dy = s.pos_y - enu.y();
+    const double limit = params_.gnss_divergence_sigmas * in.h_acc > params_.gnss_divergence_distance
+                             ? params_.gnss_divergence_sigmas * in.h_acc
+                             : params_.gnss_divergence_distance;
+    gnss_divergent_fixes_ = dx * dx + dy * dy > limit * limit ? gnss_divergent_fixes_ + 1 : 0;
+    if (params_.gnss_divergence_fixes > 0 && gnss_divergent_fixes_ >= params_.gnss_divergence_fixes) {
+      lose_track();
+      return;
+    }
+  }
   if (!params_.use_gnss || !ekf_.initialized()) return;
   ekf_.on_gnss(in.t, enu, in.h_acc, in.v_acc);
   ekf_all_.on_gnss(in.t, enu, in.h_acc, in.v_acc);
@@ -100,7 +119,10 @@ const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
   body_T_lidar_ = in.body_T_lidar;
   if (std::isfinite(in.t) && (!have_frame_ || in.t > last_frame_t_)) {
     prepare_scan(in);
+    stereo_down_.clear();
+    if (params_.use_stereo && !in.stereo.disparity.empty()) prepare_stereo(in.stereo);
     run_odometry(in);
+    push_track_sample();
     if (ekf_.initialized()) {
       ekf_.predict_to(in.t);
       ekf_all_.predict_to(in.t);
@@ -140,21 +162,20 @@ void Localizer::prepare_scan(const EgoScanInput& in) {
   counters_.scan_points_dropped += dropped;
 
   scan_deskewed_count_ = scan_filtered_.size();
-  const bool deskew_now = params_.deskew && has_times && have_vehicle_;
-  if (deskew_now) {
-    // Constant-velocity model from the wheel speed and yaw rate (the EKF's bias-corrected values
-    // once it runs), not from the odometry's last estimate: a deskew driven by the estimate it
-    // feeds is a feedback loop, and it has no motion at all for the first scan.
-    double v = last_speed_, w = last_yaw_rate_;
-    if (ekf_.initialized()) {
-      const EkfState s = ekf_.state();
-      v = s.speed;
-      w = s.yaw_rate;
-    }
+  // Sensor motion over one frame from the latest wheel speed and yaw rate (constant velocity).
+  // Raw vehicle signals, not the EKF's or the odometry's estimates: the deskewed scan feeds both,
+  // and a deskew driven by what it feeds is a feedback loop (measured: at Sim 3's turn an
+  // under-rotated odometry lowered the fused yaw rate, which under-deskewed the next scan...).
+  have_vehicle_delta_ = have_vehicle_ && params_.use_vehicle_signals;
+  if (have_vehicle_delta_) {
     Vec6d xi = Vec6d::Zero();
-    xi(0) = v * params_.frame_period;
-    xi(5) = w * params_.frame_period;
-    const Mat4d delta = se3_inverse(in.body_T_lidar) * se3_exp(xi) * in.body_T_lidar;
+    xi(0) = last_speed_ * params_.frame_period;
+    xi(5) = last_yaw_rate_ * params_.frame_period;
+    vehicle_delta_lidar_ = se3_inverse(in.body_T_lidar) * se3_exp(xi) * in.body_T_lidar;
+  }
+  const bool deskew_now = params_.deskew && has_times && have_vehicle_delta_;
+  if (deskew_now) {
+    const Mat4d& delta = vehicle_delta_lidar_;
     DeskewParams dp;
     dp.reference_time = 0.0;
     dp.delta_duration = params_.frame_period;
@@ -175,12 +196,23 @@ IcpTarget Localizer::map_target() const {
 
 void Localizer::run_odometry(const EgoScanInput& in) {
   const std::span<const Vec3f> scan(scan_deskewed_, scan_deskewed_count_);
-  const OdometryResult r = odometry_.register_frame(scan);
+  // Prediction from the vehicle signals over the actual frame gap (a dropped scan doubles it).
+  Mat4d predicted = Mat4d::Identity();
+  const bool predict = have_vehicle_delta_ && have_frame_ && in.t - last_frame_t_ < 1.0;
+  if (predict) {
+    const double dt = in.t - last_frame_t_;
+    Vec6d xi = Vec6d::Zero();
+    xi(0) = last_speed_ * dt;
+    xi(5) = last_yaw_rate_ * dt;
+    predicted = se3_inverse(in.body_T_lidar) * se3_exp(xi) * in.body_T_lidar;
+  }
+  const OdometryResult r = odometry_.register_frame(scan, predict ? &predicted : nullptr);
   const bool ok = r.status == OdometryStatus::kOk || r.status == OdometryStatus::kFirstFrame;
   if (!ok) ++counters_.odometry_failures;
   const Mat4d lidar_T_body = se3_inverse(in.body_T_lidar);
   output_.odometry_ok = ok;
   output_.odometry_pose = r.pose * lidar_T_body;
+  odom_T_body_ = output_.odometry_pose;
   if (r.status != OdometryStatus::kOk || !have_frame_ || !params_.use_odometry ||
       !ekf_.initialized()) {
     return;
@@ -238,6 +270,11 @@ void Localizer::register_scan(double t) {
     if (result.ok() && result.inlier_rmse > params_.max_inlier_rmse) {
       result.status = RegistrationStatus::kDidNotConverge;  // counted as a failed frame
     }
+    if (result.ok() && params_.audit_period_frames > 0 && ++frames_since_audit_ >= params_.audit_period_frames) {
+      frames_since_audit_ = 0;
+      if (!audit_basin(result)) result.status = RegistrationStatus::kDidNotConverge;
+    }
+    if (result.ok() && stereo_down_.size() >= params_.stereo_min_points) register_stereo(t);
   } else {
     output_.mode = LocalizationMode::kGlobalSearch;
     if (!have_gnss_ || frames_since_global_ < params_.global_retry_frames) {
@@ -271,8 +308,9 @@ void Localizer::register_scan(double t) {
 bool Localizer::global_search(double t, RegistrationResult& result) {
   ++counters_.global_searches;
   const IcpTarget target = map_target();
-  const double region = params_.global_gnss_gate_sigmas *
-                        (last_gnss_sigma_ * params_.ekf.gates.gnss_sigma_inflation + 1.0);
+  double region = params_.global_gnss_gate_sigmas *
+                  (last_gnss_sigma_ * params_.ekf.gates.gnss_sigma_inflation + 1.0);
+  if (region < params_.global_min_region) region = params_.global_min_region;
   // (1) Exhaustive, GNSS-seeded search over position and heading.
   PoseSearchParams sp = params_.search;
   sp.radius = region < sp.radius ? region : sp.radius;
@@ -281,7 +319,18 @@ bool Localizer::global_search(double t, RegistrationResult& result) {
   const bool distinct = searched.best_tight_fitness > 0.0 &&
                         searched.runner_up_tight_fitness <
                             params_.global_max_ambiguity * searched.best_tight_fitness;
-  if (!distinct) best.status = RegistrationStatus::kDidNotConverge;
+  if (!distinct) {
+    best.status = RegistrationStatus::kDidNotConverge;
+    double d_best = 0.0, d_other = 0.0;
+    if (searched.best.ok() && searched.runner_up.ok() && track_gnss_distance(searched.best.transform, d_best) &&
+        track_gnss_distance(searched.runner_up.transform, d_other)) {
+      const double lo = d_best < d_other ? d_best : d_other, hi = d_best < d_other ? d_other : d_best;
+      if (lo < params_.track_distance_ratio * hi && hi - lo > params_.track_distance_margin) {
+        best = d_best < d_other ? searched.best : searched.runner_up;
+        ++counters_.ambiguities_resolved;
+      }
+    }
+  }
   // (2) The paper's FPFH + RANSAC against the map around the fix, with the same prior.
   if (params_.use_fpfh_ransac) {
     map_crop_.clear();
@@ -312,16 +361,150 @@ bool Localizer::global_search(double t, RegistrationResult& result) {
   // Final refinement with the tracking ICP, then the acceptance checks.
   result = icp(scan_down_.span(), target, best.transform, params_.icp);
   if (!result.ok()) return false;
+  double track_distance = 0.0;
+  const bool track_known = params_.use_gnss && track_gnss_distance(result.transform, track_distance);
   if (result.fitness < params_.global_min_fitness || result.inlier_rmse > params_.max_inlier_rmse ||
-      (params_.use_gnss && horizontal_distance(result.transform, last_gnss_enu_) > region)) {
+      (params_.use_gnss && horizontal_distance(result.transform, last_gnss_enu_) > region) ||
+      (track_known && track_distance > params_.track_max_distance)) {
     result.status = RegistrationStatus::kDidNotConverge;
     return false;
   }
   ++counters_.global_accepted;
   if (!ekf_.initialized() || failed_frames_ > params_.max_failed_frames) {
+    // An unconfirmed candidate is reported (Reg. column) but neither gated nor fused.
+    if (!confirm_global(result.transform, track_known)) return false;
     initialize_filters(t, result.transform);
   }
   return true;
+}
+
+bool Localizer::confirm_global(const Mat4d& pose, bool output) {
+  if (params_.global_confirm_window == 0) return true;
+  if (candidate_.valid && frame_ - candidate_.frame <= params_.global_confirm_window) {
+    const Mat4d predicted = candidate_.pose * se3_inverse(candidate_.odom) * odom_T_body_;
+    const double dyaw = det::wrap_pi(yaw_of(pose.topLeftCorner<3, 3>()) - yaw_of(predicted.topLeftCorner<3, 3>()));
+    if (horizontal_distance(pose, predicted.topRightCorner<3, 1>()) <= params_.global_confirm_distance &&
+        std::abs(dyaw) <= params_.global_confirm_yaw) {
+      candidate_.valid = false;
+      ++counters_.global_confirmed;
+      return true;
+    }
+    ++counters_.global_inconsistent;
+  }
+  candidate_.valid = true;
+  candidate_.frame = frame_;
+  candidate_.pose = pose;
+  candidate_.odom = odom_T_body_;
+  candidate_.output = output;
+  return false;
+}
+
+void Localizer::push_track_sample() {
+  if (!output_.odometry_ok) {
+    track_count_ = 0;  // the odometry track is broken: start a new one
+    return;
+  }
+  TrackSample& s = track_[track_count_ % kTrackFrames];
+  s.odom_x = odom_T_body_(0, 3);
+  s.odom_y = odom_T_body_(1, 3);
+  s.gnss = have_gnss_;
+  s.gnss_x = last_gnss_enu_.x();
+  s.gnss_y = last_gnss_enu_.y();
+  ++track_count_;
+}
+
+bool Localizer::track_gnss_distance(const Mat4d& pose, double& mean_distance) const {
+  const std::uint32_t limit = params_.track_frames < kTrackFrames ? params_.track_frames
+                                                                  : static_cast<std::uint32_t>(kTrackFrames);
+  const std::uint32_t n = track_count_ < limit ? track_count_ : limit;
+  const Mat4d world_T_odom = pose * se3_inverse(odom_T_body_);
+  double sum = 0.0;
+  std::uint32_t m = 0;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const TrackSample& s = track_[(track_count_ - 1 - i) % kTrackFrames];
+    if (!s.gnss) continue;
+    const double x = world_T_odom(0, 0) * s.odom_x + world_T_odom(0, 1) * s.odom_y + world_T_odom(0, 3);
+    const double y = world_T_odom(1, 0) * s.odom_x + world_T_odom(1, 1) * s.odom_y + world_T_odom(1, 3);
+    sum += std::sqrt((x - s.gnss_x) * (x - s.gnss_x) + (y - s.gnss_y) * (y - s.gnss_y));
+    ++m;
+  }
+  if (m < params_.track_min_fixes) return false;
+  mean_distance = sum / m;
+  return true;
+}
+
+// Disparity -> points in the body frame with depth sigmas, the noisy far ones dropped, then
+// downsampled like the LiDAR scan.
+void Localizer::prepare_stereo(const StereoInput& stereo) {
+  StereoParams sp = params_.stereo;
+  if (stereo.disparity_sigma > 0.0) sp.disparity_sigma = stereo.disparity_sigma;
+  const StereoCloudResult r =
+      stereo_to_cloud(stereo.disparity, stereo.scale, stereo.width, stereo.height, stereo.calibration, sp, std::span<Vec3f>(stereo_points_, config::kMaxStereoPoints),
+                      std::span<float>(stereo_sigma_, config::kMaxStereoPoints));
+  if (r.status == StereoStatus::kInvalidInput || r.points_out == 0) return;
+  double sum = 0.0;
+  for (std::uint32_t i = 0; i < r.points_out; ++i) sum += stereo_sigma_[i];
+  stereo_mean_sigma_ = sum / r.points_out;
+  voxel_.run(std::span<const Vec3f>(stereo_points_, r.points_out), params_.stereo_voxel, stereo_down_);
+}
+
+// The stereo cloud registered to the map from the same prediction, gated causally, fused at the
+// frame's time stamp with a covariance no tighter than its depth noise allows.
+void Localizer::register_stereo(double t) {
+  ++counters_.stereo_registrations;
+  const RegistrationResult r = icp(stereo_down_.span(), map_target(), ekf_.state().pose(), params_.stereo_icp);
+  output_.stereo_attempted = true;
+  output_.stereo_pose = r.transform;
+  output_.stereo_fitness = r.fitness;
+  output_.stereo_points = static_cast<std::uint32_t>(stereo_down_.size());
+  const GateDecision d = stereo_gate_.push(GateSample{r.fitness, r.inlier_rmse, r.ok()});
+  if (!d.valid || !r.ok()) return;
+  const double sigma = r.inlier_rmse > stereo_mean_sigma_ ? r.inlier_rmse : stereo_mean_sigma_;
+  RegistrationCovarianceParams cp = params_.registration_covariance;
+  cp.scale *= params_.stereo_covariance_scale;
+  const Eigen::Matrix<double, 4, 4> cov = registration_covariance(r.information, sigma, r.transform, cp);
+  ekf_all_.on_registration(t, r.transform, cov);
+  if (ekf_.on_registration(t, r.transform, cov) == EkfFuseStatus::kFused) {
+    output_.stereo_fused = true;
+    ++counters_.stereo_fused;
+  }
+}
+
+bool Localizer::audit_basin(const RegistrationResult& tracked) {
+  ++counters_.basin_audits;
+  const IcpTarget target = map_target();
+  PoseSearchParams sp = params_.search;
+  sp.radius = params_.audit_radius;
+  const PoseSearchResult s = search_pose(scan_down_.span(), target, tracked.transform.topRightCorner<3, 1>(), sp);
+  if (!s.best.ok()) return true;
+  const Mat4d d = se3_inverse(tracked.transform) * s.best.transform;
+  const bool distinct = std::sqrt(d(0, 3) * d(0, 3) + d(1, 3) * d(1, 3)) >= sp.distinct_distance ||
+                        std::abs(det::wrap_pi(yaw_of(d.topLeftCorner<3, 3>()))) >= sp.distinct_yaw;
+  if (!distinct) return true;
+  const double tracked_tight = evaluate_registration(scan_down_.span(), target, tracked.transform,
+                                                     sp.select_distance).fitness;
+  if (!(s.best_tight_fitness > params_.audit_switch_ratio * tracked_tight)) return true;
+  ++counters_.basin_switches;
+  lose_track();
+  candidate_.valid = true;  // a global search must confirm it before the filter restarts
+  candidate_.output = true;  // found next to a tracked pose: a better estimate than GNSS
+  candidate_.frame = frame_;
+  candidate_.pose = s.best.transform;
+  candidate_.odom = odom_T_body_;
+  return false;
+}
+
+// Tracking is lost (GNSS divergence monitor or basin audit): both filters start over globally.
+void Localizer::lose_track() {
+  ekf_.reset();
+  ekf_all_.reset();
+  candidate_.valid = false;
+  failed_frames_ = 0;
+  nis_rejections_ = 0;
+  nis_rejections_ungated_ = 0;
+  gnss_divergent_fixes_ = 0;
+  frames_since_global_ = params_.global_retry_frames;
+  ++counters_.track_losses;
 }
 
 void Localizer::restart_filter(Ekf& ekf, double t, const Mat4d& pose) {
@@ -428,10 +611,15 @@ void Localizer::fill_output(double t) {
   output_.t = t;
   output_.filter_initialized = ekf_.initialized();
   if (!ekf_.initialized()) {
-    Mat4d gnss_pose = Mat4d::Identity();
-    gnss_pose.topRightCorner<3, 1>() = last_gnss_enu_;
-    output_.fused_pose = gnss_pose;
-    output_.fused_pose_ungated = gnss_pose;
+    // Best estimate without a filter: an unconfirmed global candidate carried by the odometry,
+    // else the GNSS fix. Either way not localized, with the GNSS sigma.
+    Mat4d pose = Mat4d::Identity();
+    pose.topRightCorner<3, 1>() = last_gnss_enu_;
+    if (candidate_.valid && candidate_.output && frame_ - candidate_.frame <= params_.global_confirm_window) {
+      pose = candidate_.pose * se3_inverse(candidate_.odom) * odom_T_body_;
+    }
+    output_.fused_pose = pose;
+    output_.fused_pose_ungated = pose;
     output_.sigma_x = output_.sigma_y = have_gnss_ ? last_gnss_sigma_ : 1e3;
     output_.sigma_z = output_.sigma_x;
     output_.sigma_yaw = det::kPi;

@@ -123,7 +123,7 @@ double LidarOdometry::model_sigma() const {
   return std::sqrt(deviation_sse_ / static_cast<double>(deviation_samples_));
 }
 
-OdometryResult LidarOdometry::register_frame(std::span<const Vec3f> scan) {
+OdometryResult LidarOdometry::register_frame(std::span<const Vec3f> scan, const Mat4d* predicted_delta) {
   OdometryResult r;
   // Range filter (also drops NaN / Inf).
   in_range_.clear();
@@ -149,7 +149,8 @@ OdometryResult LidarOdometry::register_frame(std::span<const Vec3f> scan) {
                                coarse.range_overflow;
   r.source_points = static_cast<std::uint32_t>(frame_coarse_.size());
 
-  const Mat4d prediction = pose_ * delta_;
+  const bool use_given = predicted_delta != nullptr && predicted_delta->allFinite();
+  const Mat4d prediction = pose_ * (use_given ? *predicted_delta : delta_);
   if (frame_coarse_.empty()) {
     r.status = OdometryStatus::kEmptyScan;
     pose_ = prediction;

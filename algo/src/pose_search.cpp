@@ -36,6 +36,33 @@ double estimate_ground(std::span<const Vec3f> map, const Vec3d& center, double r
   return best < 0 ? center.z() : center.z() - 40.0 + 0.2 * (best + 0.5);
 }
 
+bool same_basin(const Candidate& a, const Candidate& b, const PoseSearchParams& params) {
+  const double dx = a.x - b.x, dy = a.y - b.y;
+  return dx * dx + dy * dy < params.distinct_distance * params.distinct_distance &&
+         std::abs(det::wrap_pi(a.yaw - b.yaw)) < params.distinct_yaw;
+}
+
+// Keeps the best kPoseSearchRefine hypotheses, sorted, at most one per basin (non-maximum
+// suppression): otherwise the neighbours of one strong basin fill the list, the refinement never
+// sees the alternatives and the ambiguity check has no runner-up to measure.
+void keep_distinct_best(Candidate (&top)[kPoseSearchRefine], const Candidate& c, const PoseSearchParams& params) {
+  constexpr int kLast = static_cast<int>(kPoseSearchRefine) - 1;
+  int slot = kLast;  // the entry the new candidate replaces: its basin's, else the worst
+  for (int i = 0; i <= kLast; ++i) {
+    if (top[i].score < 0.0 || !same_basin(top[i], c, params)) continue;
+    if (top[i].score >= c.score) return;  // its basin already has a better hypothesis
+    slot = i;
+    break;
+  }
+  if (c.score <= top[slot].score) return;
+  int j = slot;
+  while (j > 0 && top[j - 1].score < c.score) {
+    top[j] = top[j - 1];
+    --j;
+  }
+  top[j] = c;
+}
+
 Mat4d pose_of(double x, double y, double z, double yaw) {
   Mat4d t = Mat4d::Identity();
   t.topLeftCorner<3, 3>() = rot_z(yaw);
@@ -79,9 +106,10 @@ PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& 
       const double ox = ix * params.step, oy = iy * params.step;
       if (ox * ox + oy * oy > params.radius * params.radius) continue;
       for (std::uint32_t k = 0; k < params.yaw_steps; ++k) {
+        const double yaw = 2.0 * det::kPi * k / params.yaw_steps;
+        if (params.use_yaw_prior && std::abs(det::wrap_pi(yaw - params.yaw_prior)) > params.yaw_prior_tolerance) continue;
         if (out.hypotheses >= params.max_hypotheses) break;
         ++out.hypotheses;
-        const double yaw = 2.0 * det::kPi * k / params.yaw_steps;
         const double c = det::cos(yaw), s = det::sin(yaw);
         const double x = center.x() + ox, y = center.y() + oy;
         std::uint32_t hits = 0;
@@ -94,14 +122,7 @@ PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& 
           if (map.tree->nearest(q, nb).count > 0 && nb.squared_distance <= d2max) ++hits;
         }
         const double score = static_cast<double>(hits) / n;
-        // Keep the best kPoseSearchRefine (insertion into a sorted fixed array).
-        if (score <= top[kPoseSearchRefine - 1].score) continue;
-        int j = static_cast<int>(kPoseSearchRefine) - 1;
-        while (j > 0 && top[j - 1].score < score) {
-          top[j] = top[j - 1];
-          --j;
-        }
-        top[j] = Candidate{score, x, y, yaw};
+        keep_distinct_best(top, Candidate{score, x, y, yaw}, params);
       }
     }
   }
@@ -117,6 +138,11 @@ PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& 
         icp(scan_body, map, pose_of(cand.x, cand.y, out.ground_z, cand.yaw), params.icp);
     if (!coarse.ok()) continue;
     refined[i] = icp(scan_body, map, coarse.transform, params.fine_icp);
+    if (refined[i].ok() && params.use_yaw_prior &&
+        std::abs(det::wrap_pi(yaw_of(refined[i].transform.topLeftCorner<3, 3>()) - params.yaw_prior)) >
+            params.yaw_prior_tolerance) {
+      refined[i].status = RegistrationStatus::kDidNotConverge;  // slid out of the prior
+    }
     if (refined[i].ok() && refined[i].fitness > best_fitness) best_fitness = refined[i].fitness;
   }
   // The winner: the highest fitness at a tight threshold (an aliased pose explains the scan at
@@ -145,7 +171,10 @@ PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& 
     const double dist = std::sqrt(d(0, 3) * d(0, 3) + d(1, 3) * d(1, 3));
     const double dyaw = std::abs(det::wrap_pi(yaw_of(d.topLeftCorner<3, 3>())));
     if (dist < params.distinct_distance && dyaw < params.distinct_yaw) continue;
-    if (tight[i] > out.runner_up_tight_fitness) out.runner_up_tight_fitness = tight[i];
+    if (tight[i] > out.runner_up_tight_fitness) {
+      out.runner_up_tight_fitness = tight[i];
+      out.runner_up = refined[i];
+    }
   }
   return out;
 }

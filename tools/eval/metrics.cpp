@@ -29,14 +29,17 @@ Eigen::Vector3d position(const Mat4d& m) { return m.topRightCorner<3, 1>(); }
 RowMetrics compute_metrics(const std::vector<FrameRecord>& records) {
   RowMetrics row;
   row.frames = static_cast<int>(records.size());
-  Series slam, gps, reg, reg_valid, fused, fused_valid, fused_ungated;
+  Series slam, gps, gps_3d, reg, reg_valid, fused, fused_valid, fused_ungated;
   if (records.empty()) return row;
   const Eigen::Isometry3d anchor = records.front().truth *
                                    Eigen::Isometry3d(records.front().out.odometry_pose).inverse();
   for (const FrameRecord& r : records) {
     const Eigen::Vector3d truth = r.truth.translation();
     slam.add(anchor * position(r.out.odometry_pose), truth);
-    if (r.has_gnss) gps.add(r.gnss_body, truth);
+    if (r.has_gnss) {
+      gps.add(Eigen::Vector3d(r.gnss_body.x(), r.gnss_body.y(), truth.z()), truth);
+      gps_3d.add(r.gnss_body, truth);
+    }
     const bool reg_ok = r.out.registration_attempted && r.out.registration_status == RegistrationStatus::kOk;
     if (reg_ok) {
       ++row.reg_ok_frames;
@@ -55,6 +58,7 @@ RowMetrics compute_metrics(const std::vector<FrameRecord>& records) {
     ColumnErrors& c = align ? row.aligned : row.unaligned;
     c.slam = slam.mean_error(align);
     c.gps = gps.mean_error(align);
+    c.gps_3d = gps_3d.mean_error(align);
     c.reg = reg.mean_error(align);
     c.reg_valid = reg_valid.mean_error(align);
     c.fused = fused.mean_error(align);

@@ -85,6 +85,7 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
   cloud_io::PointCloud cloud, scan;
   std::vector<Vec3f> scan_points;
   std::vector<float> scan_times;
+  sim::Image16 disparity;
   using Clock = std::chrono::steady_clock;
 
   for (int i = 0; i < frames; ++i) {
@@ -151,6 +152,20 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
       in.point_times = std::span<const float>(scan.time.data(), scan.time.size());
     }
     in.body_T_lidar = reader.ego_lidar_mount().matrix();
+    if (options.params.use_stereo && reader.has_stereo()) {
+      if (!reader.disparity(i, disparity, error)) return false;
+      const sim::StereoCalibrationInfo& cal = reader.stereo_calibration();
+      in.stereo.disparity = std::span<const std::uint16_t>(disparity.pixels.data(), disparity.pixels.size());
+      in.stereo.width = static_cast<std::uint32_t>(disparity.width);
+      in.stereo.height = static_cast<std::uint32_t>(disparity.height);
+      in.stereo.calibration.fx = cal.fx;
+      in.stereo.calibration.fy = cal.fy;
+      in.stereo.calibration.cx = cal.cx;
+      in.stereo.calibration.cy = cal.cy;
+      in.stereo.calibration.baseline = cal.baseline;
+      in.stereo.calibration.vehicle_T_camera = cal.camera_to_body.matrix();
+      in.stereo.disparity_sigma = cal.disparity_sigma_px;
+    }
     const auto t0 = Clock::now();
     rec.out = localizer.on_ego_scan(in);
     frame_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
@@ -174,10 +189,11 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
     const LocalizerCounters& c = stats.counters;
     std::fprintf(stderr,
                  "\n  global searches %u (accepted %u), tracking %u, registrations ok %u, fused %u, "
-                 "filter resets %u; EKF: registrations fused %llu rejected %llu, GNSS fused %llu "
+                 "filter resets %u, confirmed %u, inconsistent %u, track losses %u, audits %u, basin switches %u, ambiguities resolved %u, stereo %u (fused %u); EKF: registrations fused %llu rejected %llu, GNSS fused %llu "
                  "rejected %llu, too late %llu, invalid %llu, numeric %llu, history overflows %llu\n",
                  c.global_searches, c.global_accepted, c.tracking_registrations, c.registrations_ok,
-                 c.registrations_fused, c.filter_resets,
+                 c.registrations_fused, c.filter_resets, c.global_confirmed, c.global_inconsistent, c.track_losses,
+                 c.basin_audits, c.basin_switches, c.ambiguities_resolved, c.stereo_registrations, c.stereo_fused,
                  static_cast<unsigned long long>(localizer.ekf().counters().registration_fused),
                  static_cast<unsigned long long>(localizer.ekf().counters().registration_rejected),
                  static_cast<unsigned long long>(localizer.ekf().counters().gnss_fused),

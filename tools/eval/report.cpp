@@ -27,7 +27,7 @@ std::string number(double v) {
 std::string columns_json(const ColumnErrors& c) {
   return "{\"slam\":" + number(c.slam) + ",\"gps\":" + number(c.gps) + ",\"reg\":" + number(c.reg) +
          ",\"reg_valid\":" + number(c.reg_valid) + ",\"fused\":" + number(c.fused) +
-         ",\"fused_valid\":" + number(c.fused_valid) + ",\"fused_ungated\":" + number(c.fused_ungated) + "}";
+         ",\"fused_valid\":" + number(c.fused_valid) + ",\"fused_ungated\":" + number(c.fused_ungated) + ",\"gps_3d\":" + number(c.gps_3d) + "}";
 }
 
 }  // namespace
@@ -53,6 +53,12 @@ std::string format_table(const std::vector<RowReport>& rows, bool aligned) {
                   cell(c.fused_valid, p->fused_valid).c_str());
     out += buf;
   }
+  out += "GPS = horizontal error of the fixes; with the vertical error (3-D):";
+  for (const RowReport& r : rows) {
+    std::snprintf(buf, sizeof buf, " %.1f", aligned ? r.metrics.aligned.gps_3d : r.metrics.unaligned.gps_3d);
+    out += buf;
+  }
+  out += " m\n";
   return out;
 }
 

@@ -9,6 +9,7 @@
 //  - every frame after initialization within 0.25 m (no divergence).
 //  - zero heap allocations inside the localizer's calls after configure().
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <cstdlib>
@@ -47,7 +48,8 @@ Localizer g_localizer;
 
 TEST(LocalizerScenario, ShortDriveFusesToCentimetres) {
   const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / "v2xloc_localizer_scenario_sim0_2infra";
+      std::filesystem::temp_directory_path() /
+      ("v2xloc_localizer_scenario_sim0_2infra_" + std::to_string(::getpid()));  // parallel runs
   std::filesystem::remove_all(dir);
   sim::RecorderConfig cfg;
   cfg.scenario = 0;

@@ -21,6 +21,8 @@ inline constexpr bool kEmbeddedProfile = false;
 inline constexpr std::size_t kMaxScanPoints = kEmbeddedProfile ? 16384 : 131072;
 // After voxel downsampling (registration works on these).
 inline constexpr std::size_t kMaxDownsampledPoints = kEmbeddedProfile ? 4096 : 32768;
+// Ego stereo cloud (subsampled disparity pixels kept within the depth-noise limit).
+inline constexpr std::size_t kMaxStereoPoints = kEmbeddedProfile ? 4096 : 65536;
 // Reference map (fused infrastructure + agent clouds, downsampled).
 inline constexpr std::size_t kMaxMapPoints = kEmbeddedProfile ? 8192 : 131072;
 

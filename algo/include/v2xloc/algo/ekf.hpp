@@ -99,8 +99,12 @@ struct EkfGateParams {
   // when y^T S^-1 y exceeds them (multipath outliers, wrong registrations).
   double gnss_nis_threshold = 16.27;
   double registration_nis_threshold = 18.47;
+  // LiDAR odometry rates (2 DoF: 13.82) against the wheel speed / gyro the filter already has: a
+  // scan match that slipped (e.g. under-rotated at a turn's onset) must not drag the yaw rate.
+  double odometry_nis_threshold = 13.82;
   bool gnss_gate_enabled = true;
   bool registration_gate_enabled = true;
+  bool odometry_gate_enabled = true;
 };
 
 struct EkfParams {
@@ -145,6 +149,7 @@ struct EkfCounters {
   std::uint64_t registration_fused = 0;
   std::uint64_t registration_rejected = 0;
   std::uint64_t odometry_fused = 0;
+  std::uint64_t odometry_rejected = 0;
   std::uint64_t signals_fused = 0;
   std::uint64_t late_events = 0;        // fused through rollback + replay
   std::uint64_t too_late = 0;           // rejected: older than the history
@@ -170,6 +175,8 @@ class Ekf {
   // Starts (or restarts) the filter at time t [s]; clears the history.
   void initialize(double t, const EkfState& state, const EkfCovariance& covariance);
   bool initialized() const { return initialized_; }
+  // Back to uninitialized (the localizer lost track); the history is dropped, counters are kept.
+  void reset();
 
   // Measurements, each at its own time stamp t [s]; t older than the filter time -> rollback.
   EkfFuseStatus on_vehicle_signals(double t, double wheel_speed, double yaw_rate);

@@ -1,8 +1,12 @@
 // The localizer: one object wiring an ego frame through every stage (paper Fig. 1):
 //   map clouds (infra/agents) -> map_fusion -> reference map (+normals, k-d tree, FPFH on demand)
-//   ego scan -> deskew -> LiDAR odometry (relative) -> registration to the map (ICP from the EKF
-//   prediction when confident, FPFH + RANSAC within the GNSS region otherwise) -> validity gate
-//   -> EKF (wheel speed / yaw rate, GNSS with NIS gate, odometry, valid registrations).
+//   ego scan -> deskew (wheel speed + yaw rate) -> LiDAR odometry (relative, predicted from the
+//   same signals) -> registration to the map -> validity gate -> EKF (wheel speed / yaw rate,
+//   GNSS and odometry with NIS gates, valid registrations); optional stereo registration.
+// Registration modes: tracking = ICP from the EKF prediction, audited every few frames by a
+// local exhaustive search (aliased basins); global = GNSS-seeded exhaustive search + FPFH/RANSAC,
+// ambiguities resolved by the GNSS track, and a candidate starts the filter only when a second
+// search agrees through the odometry. Lost track (GNSS divergence, audit) -> global again.
 // Inputs arrive through on_*() calls in time order per source; the caller decides the event
 // order, and the same order gives the same bits (offline evaluator and firmware share it).
 // All storage is inside the object (hundreds of MB on the host profile): make it static.
@@ -23,6 +27,7 @@
 #include "v2xloc/algo/icp.hpp"
 #include "v2xloc/algo/kdtree.hpp"
 #include "v2xloc/algo/localizer_params.hpp"
+#include "v2xloc/algo/stereo_cloud.hpp"
 #include "v2xloc/algo/odometry.hpp"
 #include "v2xloc/algo/register_clouds.hpp"
 #include "v2xloc/algo/voxel_downsample.hpp"
@@ -53,11 +58,21 @@ struct MapCloudInput {
   std::span<const Vec3f> points{};  // sensor frame
 };
 
+// The ego stereo pair's rectified disparity of the same frame (optional).
+struct StereoInput {
+  std::span<const std::uint16_t> disparity{};  // row-major width x height; raw 0 = no match
+  double scale = 1.0 / 256.0;                  // [px] per raw unit (16-bit PNG convention)
+  std::uint32_t width = 0, height = 0;
+  StereoCalibration calibration{};             // vehicle_T_camera: left camera in the body frame
+  double disparity_sigma = 0.0;                // [px] matching noise if known; 0: the params' value
+};
+
 struct EgoScanInput {
   double t = 0.0;                // [s] frame time; point times are relative to it
   std::span<const Vec3f> points{};      // LiDAR sensor frame
   std::span<const float> point_times{}; // [s] per point, empty if the sensor has none
   Mat4d body_T_lidar = Mat4d::Identity();
+  StereoInput stereo{};          // used when LocalizerParams::use_stereo and disparity is given
 };
 
 enum class LocalizationMode : std::uint8_t {
@@ -83,6 +98,12 @@ struct LocalizerFrameOutput {
   double fitness = 0.0;
   double inlier_rmse = 0.0;
   bool registration_fused = false;          // passed the gate (causal) and the EKF's NIS gate
+  // Stereo registration (tracking only, LiDAR + stereo configuration).
+  bool stereo_attempted = false;
+  bool stereo_fused = false;
+  Mat4d stereo_pose = Mat4d::Identity();
+  double stereo_fitness = 0.0;
+  std::uint32_t stereo_points = 0;          // after the depth-noise filter and downsampling
   // Fixed-lag gate decision that became available at this frame (for frame decided_frame).
   bool gate_decided = false;
   std::uint32_t gate_decided_frame = 0;
@@ -106,6 +127,14 @@ struct LocalizerCounters {
   std::uint32_t odometry_failures = 0;
   std::uint32_t pending_overflow = 0;          // fixed-lag registrations that found no slot
   std::uint32_t filter_resets = 0;             // filter restarted at a registration
+  std::uint32_t global_confirmed = 0;          // global solutions confirmed by a second search
+  std::uint32_t global_inconsistent = 0;       // second search disagreed: candidate replaced
+  std::uint32_t track_losses = 0;              // filter dropped (GNSS divergence or basin audit)
+  std::uint32_t basin_audits = 0;              // exhaustive checks of the tracked basin
+  std::uint32_t basin_switches = 0;            // audits that found a clearly better pose
+  std::uint32_t ambiguities_resolved = 0;      // ambiguous searches decided by the GNSS track
+  std::uint32_t stereo_registrations = 0;
+  std::uint32_t stereo_fused = 0;              // passed the stereo gate and the EKF's NIS gate
 };
 
 class Localizer {
@@ -148,7 +177,16 @@ class Localizer {
   IcpTarget map_target() const;                  // the reference map as an ICP target
   void run_odometry(const EgoScanInput& input);
   void register_scan(double t);
+  void prepare_stereo(const StereoInput& stereo);  // disparity -> body-frame cloud, downsampled
+  void register_stereo(double t);
   bool global_search(double t, RegistrationResult& result);
+  bool confirm_global(const Mat4d& pose, bool output);  // true: agrees with the candidate
+  void push_track_sample();
+  // Mean horizontal distance between the GNSS fixes of the recent frames and the track a pose
+  // hypothesis of this frame implies through the odometry; false when too few fixes.
+  bool track_gnss_distance(const Mat4d& pose, double& mean_distance) const;
+  void lose_track();
+  bool audit_basin(const RegistrationResult& tracked);  // false: tracking is in a wrong basin
   void fuse_gated(double t, const RegistrationResult& result, bool attempted_ok);
   void fuse_registration(Ekf& ekf, const PendingRegistration& reg, bool& fused);
   void initialize_filters(double t, const Mat4d& pose);
@@ -172,6 +210,24 @@ class Localizer {
   std::uint32_t nis_rejections_ = 0;          // consecutive NIS rejections (main filter)
   std::uint32_t nis_rejections_ungated_ = 0;
   std::uint32_t frames_since_global_ = 0;
+  struct GlobalCandidate {  // an accepted but unconfirmed global solution
+    bool valid = false;
+    std::uint32_t frame = 0;
+    Mat4d pose = Mat4d::Identity();  // world_T_body
+    Mat4d odom = Mat4d::Identity();  // odom_T_body at that frame
+    bool output = false;             // unambiguous: a better estimate than the GNSS fix
+  };
+  struct TrackSample {               // per frame: odometry and latest GNSS position (2-D)
+    double odom_x = 0.0, odom_y = 0.0, gnss_x = 0.0, gnss_y = 0.0;
+    bool gnss = false;
+  };
+  static constexpr std::size_t kTrackFrames = 32;
+  TrackSample track_[kTrackFrames];
+  std::uint32_t track_count_ = 0;    // consecutive samples pushed (reset by odometry failures)
+  GlobalCandidate candidate_{};
+  Mat4d odom_T_body_ = Mat4d::Identity();  // this frame's odometry pose
+  std::uint32_t gnss_divergent_fixes_ = 0;
+  std::uint32_t frames_since_audit_ = 0;
   bool have_gnss_ = false;
   Vec3d last_gnss_enu_ = Vec3d::Zero();
   double last_gnss_sigma_ = 10.0;
@@ -180,6 +236,8 @@ class Localizer {
   double last_speed_ = 0.0;        // [m/s] latest wheel speed (filter initialization)
   double last_yaw_rate_ = 0.0;     // [rad/s]
   bool have_vehicle_ = false;
+  bool have_vehicle_delta_ = false;
+  Mat4d vehicle_delta_lidar_ = Mat4d::Identity();  // this frame's sensor motion from the signals
   Mat4d body_T_lidar_ = Mat4d::Identity();
 
   // Odometry (drifting, in its own frame).
@@ -203,6 +261,11 @@ class Localizer {
   FixedVector<Vec3f, config::kMaxDownsampledPoints> scan_down_;
   VoxelDownsampleStorage<config::kVoxelHashSlots, config::kMaxDownsampledPoints> voxel_;
   FixedVector<Vec3f, config::kMaxMapPoints> map_crop_;
+  Vec3f stereo_points_[config::kMaxStereoPoints];
+  float stereo_sigma_[config::kMaxStereoPoints];
+  FixedVector<Vec3f, config::kMaxDownsampledPoints> stereo_down_;
+  double stereo_mean_sigma_ = 0.0;  // [m] mean depth sigma of this frame's stereo points
+  CausalValidityGate stereo_gate_{};
   RegistrationWorkspace global_workspace_;
 };
 

@@ -10,6 +10,7 @@
 #include "v2xloc/algo/odometry.hpp"
 #include "v2xloc/algo/pose_search.hpp"
 #include "v2xloc/algo/register_clouds.hpp"
+#include "v2xloc/algo/stereo_cloud.hpp"
 #include "v2xloc/algo/validity_gate.hpp"
 
 namespace v2xloc {
@@ -42,6 +43,10 @@ struct LocalizerParams {
   bool use_fpfh_ransac = true;        // try FPFH + RANSAC too; the better ICP fitness wins
   double global_map_radius = 70.0;    // [m] map crop around the GNSS fix for the global search
   double global_gnss_gate_sigmas = 4.0;  // accept a global solution within this many GNSS sigmas
+  // ... but never closer than this [m]: a canyon receiver reports sigma_uere * HDOP (3-8 m) while
+  // NLOS errors reach 20-30 m (host_sim GNSS: mean 8-17 m, max 32 m); a region built from the
+  // reported sigma excluded the true pose (measured at Sim 0's first frames).
+  double global_min_region = 30.0;
   double global_min_fitness = 0.3;    // and with at least this ICP fitness
   // ... and distinct: runner-up basin's tight fitness / winner's below this. Far from the
   // intersection the sparse map makes aliased poses along the street nearly as good; we wait
@@ -54,10 +59,64 @@ struct LocalizerParams {
   double tracking_max_sigma_xy = 0.5; // [m] EKF position sigma above which we search globally
   std::uint32_t max_failed_frames = 10;  // consecutive unfused registrations -> global search
   std::uint32_t global_retry_frames = 2;  // frames between two global searches (bounded cost)
+  // A global solution starts the filter only when a second, independent search within this many
+  // frames agrees with it through the odometry's relative motion. Why: a straight street matches
+  // itself turned by 180 deg; such a flipped pose predicts the opposite motion and fails the
+  // check within a metre of travel (measured: an unconfirmed flip at Sim 3's approach tracked
+  // backwards for 10 s). Until confirmed the output is the candidate, flagged not localized.
+  // 0: the first accepted search starts the filter.
+  std::uint32_t global_confirm_window = 10;
+  double global_confirm_distance = 0.5;   // [m] horizontal disagreement allowed
+  double global_confirm_yaw = 0.035;      // [rad] (2 deg) heading disagreement allowed
+  // Basin audit while tracking: every audit_period frames an exhaustive pose search within
+  // audit_radius of the tracked pose; a distinct pose explaining clearly more of the scan at the
+  // tight threshold (ratio) means tracking sits in an aliased basin (facade detail repeats along
+  // a street; measured: a 4 m offset tracked at fitness 0.7 through Sim 3's intersection). The
+  // filter then restarts from that pose once a global search confirms it. 0: off.
+  std::uint32_t audit_period_frames = 10;
+  double audit_radius = 8.0;              // [m]
+  double audit_switch_ratio = 1.15;
+  // Ambiguity resolution by the GNSS track: when the two best basins explain the scan equally
+  // well (a symmetric intersection matches itself turned by 180 deg some 25 m away), each is
+  // carried back along the odometry track of the last frames and compared with the GNSS fixes
+  // there; the one whose track is closer on average wins if it is closer by both a factor and a
+  // margin. Many fixes average the canyon's NLOS errors down; one fix does not.
+  std::uint32_t track_frames = 30;           // <= kTrackFrames (3 s at 10 Hz)
+  std::uint32_t track_min_fixes = 10;        // frames with a fix needed to decide
+  double track_distance_ratio = 0.6;         // winner's mean distance < ratio * loser's
+  double track_distance_margin = 5.0;        // [m] and smaller by at least this
+  // Any global solution whose track lies farther than this from the fixes on average is wrong
+  // (the canyon's mean GNSS error is 8-17 m); one without enough fixes yet is kept as a
+  // candidate but not output (the GNSS fix is).
+  double track_max_distance = 25.0;          // [m]
+  // Lost-track monitor: this many GNSS fixes in a row farther from the filter than
+  // max(distance, sigmas * reported h_acc) mean the filter, not the GNSS, is wrong (canyon fixes
+  // are off by 8-17 m on average, rarely 30 m, never for seconds in a row): restart globally.
+  double gnss_divergence_distance = 30.0;  // [m]
+  double gnss_divergence_sigmas = 6.0;
+  std::uint32_t gnss_divergence_fixes = 10;  // 2 s at 5 Hz
+
+  // ---- Stereo modality (LiDAR + stereo configuration) ----
+  // While tracking, the stereo cloud is registered to the map like the LiDAR scan (own ICP from
+  // the same prediction, own causal validity gate) and fused as a second pose measurement whose
+  // covariance uses max(inlier RMSE, mean depth sigma): z-noise grows with z^2 (stereo_cloud.hpp),
+  // so points beyond max_depth_sigma are dropped and the rest weigh by their noise.
+  bool use_stereo = false;
+  StereoParams stereo = default_stereo();
+  float stereo_voxel = 0.3f;          // [m]
+  std::uint32_t stereo_min_points = 200;
+  // Stereo point-to-plane residuals are correlated along each disparity row (one matching error
+  // moves a whole surface patch), so its ICP covariance is far more optimistic than LiDAR's:
+  // measured 0.1-1.8 m errors at a few-cm ICP sigma on the 1/8-resolution rig.
+  double stereo_covariance_scale = 25.0;
+  IcpParams stereo_icp = default_icp();
 
   // ---- Validity gate and fusion ----
   GateMode gate_mode = GateMode::kFixedLag;
-  ValidityGateParams gate{};
+  // The paper's envelope test plus one absolute floor: below 30 % of the scan within 1 m of the
+  // map, the map covers too little of the scan to pin the pose (measured on Sim 0 / 2_infra:
+  // 20 of 24 registrations off by > 10 cm had fitness < 0.3, none of 159 within 3 cm did).
+  ValidityGateParams gate = default_gate();
   EkfParams ekf{};
   RegistrationCovarianceParams registration_covariance{};
   std::uint32_t reset_after_rejections = 3;  // NIS-rejected registrations in a row -> restart
@@ -89,6 +148,19 @@ struct LocalizerParams {
     p.ransac.prior.max_tilt = 0.087;  // [rad] 5 deg
     return p;
   }
+  static ValidityGateParams default_gate() {
+    ValidityGateParams p;
+    p.min_fitness = 0.3;
+    return p;
+  }
+  static StereoParams default_stereo() {
+    StereoParams p;
+    p.stride = 4;                   // every 4th pixel in u and v: ~1/16 of the image
+    p.min_disparity = 2.0;          // [px]
+    p.disparity_sigma = 0.5;        // [px] overridden by the calibration's value when known
+    p.max_depth_sigma = 0.3;        // [m] ~15-20 m range for the ego rig
+    return p;
+  }
   static PoseSearchParams default_search() {
     PoseSearchParams p;
     p.icp.method = IcpMethod::kPointToPlane;
@@ -98,6 +170,7 @@ struct LocalizerParams {
     p.icp.kernel.scale = 1.0;
     p.yaw_steps = 24;               // 15 deg; the coarse ICP pulls in +-7.5 deg
     p.step = 3.0;
+    p.radius = 30.0;                // [m] = global_min_region (bounded work: ~8k hypotheses)
     p.score_points = 96;
     p.fine_icp = default_icp();
     return p;

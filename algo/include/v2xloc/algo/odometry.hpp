@@ -1,6 +1,7 @@
 // Online LiDAR odometry after KISS-ICP (Vizzo et al., "KISS-ICP: In Defense of Point-to-Point ICP",
 // RA-L 2023), our own allocation-free code:
 //   1. constant-velocity prediction  T_pred = T_{k-1} * delta_{k-1}                      (Sec. III-A)
+//      (or the caller's prediction from wheel speed and yaw rate when it has one)
 //   2. double voxelisation of the (deskewed) scan: 0.5 v for the map, 1.5 v as ICP source (III-B)
 //   3. adaptive threshold: model deviation dT = T_pred^-1 T_k, delta = 2 r_max sin(theta/2) + |t|,
 //      sigma = sqrt(mean delta^2 over frames with motion), tau = 3 sigma          (eqs. 4-6, III-C)
@@ -80,8 +81,10 @@ class LidarOdometry {
   void configure(const OdometryParams& params);
   // Clears the map; the next frame starts at `initial` (world_T_sensor).
   void reset(const Mat4d& initial = Mat4d::Identity());
-  // One deskewed scan in the sensor frame.
-  OdometryResult register_frame(std::span<const Vec3f> scan);
+  // One deskewed scan in the sensor frame. predicted_delta (optional): the sensor's motion since
+  // the last frame from other sensors (wheel speed + gyro); replaces the constant-velocity
+  // prediction, which lags a whole frame at a turn's onset.
+  OdometryResult register_frame(std::span<const Vec3f> scan, const Mat4d* predicted_delta = nullptr);
 
   const Mat4d& pose() const { return pose_; }
   const Mat4d& last_delta() const { return delta_; }

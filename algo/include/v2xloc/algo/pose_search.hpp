@@ -31,6 +31,11 @@ struct PoseSearchParams {
   double select_distance = 0.3;    // [m] this threshold among those within 0.1 of the best
   double distinct_distance = 2.0;  // [m] a runner-up farther than this (or distinct_yaw) is
   double distinct_yaw = 0.17;      // [rad] another basin: its score measures the ambiguity
+  // Optional heading prior (e.g. the odometry track fitted to the GNSS track): hypotheses and
+  // refined results farther than yaw_prior_tolerance from yaw_prior are not considered.
+  bool use_yaw_prior = false;
+  double yaw_prior = 0.0;            // [rad]
+  double yaw_prior_tolerance = 1.05; // [rad] (60 deg)
 };
 
 struct PoseSearchResult {
@@ -40,6 +45,7 @@ struct PoseSearchResult {
   double ground_z = 0.0;           // [m] map ground height used for the hypotheses
   double best_tight_fitness = 0.0;       // winner's fitness at select_distance
   double runner_up_tight_fitness = 0.0;  // best other basin (0 when none): ambiguity check
+  RegistrationResult runner_up;          // that basin's refined pose (status kOk when found)
 };
 
 inline constexpr std::uint32_t kPoseSearchRefine = 10;  // hypotheses refined by ICP
