@@ -149,7 +149,15 @@ void FirmwareApp::publish_pose(const LocalizerFrameOutput& out) {
   const PoseFrames frames = pose_encoder_.encode(out, decoder_.last_frame_index(), decoder_.gnss_used_in_last_frame());
   send(frames.position);
   send(frames.attitude);
-  send(frames.sigma);  // last: the replayer's lockstep waits for it
+  send(frames.sigma);
+  // Diagnostics (registration, gate decision, odometry) after the pose; odometry attitude last:
+  // the replayer's lockstep waits for it.
+  const DiagnosticFrames diagnostics = diagnostic_encoder_.encode(out, decoder_.last_frame_index());
+  send(diagnostics.registration_position);
+  send(diagnostics.registration_quality);
+  send(diagnostics.gate);
+  send(diagnostics.odometry_position);
+  send(diagnostics.odometry_attitude);
   ++counters_.frames_published;
   if (hal_.led != nullptr && out.localized != led_on_) {
     led_on_ = out.localized;

@@ -1,6 +1,6 @@
 // The ECU application loop: polls the HAL, decodes (InputDecoder), runs the localizer, publishes
-// the fused pose on CAN after every ego scan, drives the "localized" LED, disciplines the clock on
-// GNSS PPS edges and sends a 1 Hz heartbeat. It only knows hal/ interfaces; main() picks backends.
+// the fused pose and the diagnostic frames on CAN after every ego scan, drives the "localized" LED,
+// disciplines the clock on GNSS PPS edges and sends a 1 Hz heartbeat. It only knows hal/ interfaces; main() picks backends.
 // Event order: before a completed cloud is handed to the localizer, every pending CAN frame is
 // decoded first, so inputs reach the localizer in the canonical order of the replay event stream
 // (host_sim/replay/event_stream.hpp). No allocation: all buffers are members of static objects.
@@ -9,6 +9,7 @@
 #include <array>
 #include <cstdint>
 
+#include "firmware/app/diagnostic_frames.hpp"
 #include "firmware/app/input_decoder.hpp"
 #include "firmware/app/pose_frames.hpp"
 #include "hal/can_bus.hpp"
@@ -88,6 +89,7 @@ class FirmwareApp {
   FirmwareConfig config_;
   FirmwareCounters counters_{};
   PoseFrameEncoder pose_encoder_{};
+  DiagnosticFrameEncoder diagnostic_encoder_{};
   LocalizerFrameOutput latest_{};
   bool has_output_ = false;
   bool led_on_ = false;

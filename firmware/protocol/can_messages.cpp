@@ -48,8 +48,26 @@ constexpr Signal kErrorFlags{4, 4, false, 1.0, 0.0, 0.0, 15.0};
 constexpr Signal kUptime{8, 24, false, 0.1, 0.0, 0.0, 1677721.5};
 constexpr Signal kCanRxErrors{32, 8, false, 1.0, 0.0, 0.0, 255.0};
 constexpr Signal kUdpDropped{40, 8, false, 1.0, 0.0, 0.0, 255.0};
-constexpr unsigned kCounterBit48 = 48;  // VehicleMotion, PoseSigma, Heartbeat
-constexpr unsigned kCounterBit52 = 52;  // GnssStatus, PosePosition, PoseAttitude (flags in 48..51)
+// Diagnostics (0x210..0x214).
+constexpr Signal kRegX{0, 24, true, 0.001, 0.0, -8388.608, 8388.607};
+constexpr Signal kRegY{24, 24, true, 0.001, 0.0, -8388.608, 8388.607};
+constexpr Signal kRegZ{0, 16, true, 0.001, 0.0, -32.768, 32.767};
+constexpr Signal kRegFitness{16, 10, false, 0.001, 0.0, 0.0, 1.023};
+constexpr Signal kRegRmse{26, 10, false, 0.001, 0.0, 0.0, 1.023};
+constexpr Signal kRegFrameCounter{36, 16, false, 1.0, 0.0, 0.0, 65535.0};
+constexpr Signal kGateDecidedFrame{0, 16, false, 1.0, 0.0, 0.0, 65535.0};
+constexpr Signal kGateFrameCounter{16, 16, false, 1.0, 0.0, 0.0, 65535.0};
+constexpr Signal kGateMode{34, 2, false, 1.0, 0.0, 0.0, 2.0};
+constexpr Signal kOdomX{0, 24, true, 0.001, 0.0, -8388.608, 8388.607};
+constexpr Signal kOdomY{24, 24, true, 0.001, 0.0, -8388.608, 8388.607};
+constexpr Signal kOdomZ{0, 16, true, 0.001, 0.0, -32.768, 32.767};
+constexpr Signal kOdomYaw{16, 16, true, 0.0001, 0.0, -3.1416, 3.1416};
+constexpr Signal kOdomFrameCounter{32, 16, false, 1.0, 0.0, 0.0, 65535.0};
+constexpr unsigned kRegAttemptedBit = 48, kRegOkBit = 49, kRegClampedBit = 50;
+constexpr unsigned kGateDecidedBit = 32, kGateValidBit = 33, kGateFilterInitializedBit = 36;
+constexpr unsigned kOdomOkBit = 48, kOdomClampedBit = 49;
+constexpr unsigned kCounterBit48 = 48;  // VehicleMotion, PoseSigma, Heartbeat, GateDecision
+constexpr unsigned kCounterBit52 = 52;  // GnssStatus, Pose/Registration/Odometry frames (flags in 48..51)
 constexpr unsigned kFlagsBit = 48;
 constexpr unsigned kCrcByte = 7;
 
@@ -85,6 +103,20 @@ double decode(const std::uint8_t* data, const Signal& s, bool& out_of_range) {
   if (phys < s.min - tol || phys > s.max + tol) out_of_range = true;
   return phys;
 }
+
+void put_flag(std::uint8_t* data, unsigned bit, bool value) { put_bits_le(data, bit, 1, value ? 1u : 0u); }
+bool get_flag(const std::uint8_t* data, unsigned bit) { return get_bits_le(data, bit, 1) != 0u; }
+
+// Packs with a local count so the frame's own clamped flag can be set; forwards the count.
+struct SaturationScope {
+  PackStats local;
+  PackStats* outer;
+  explicit SaturationScope(PackStats* o) : outer(o) {}
+  bool any() const { return local.saturated != 0u; }
+  ~SaturationScope() {
+    if (outer != nullptr) outer->saturated += local.saturated;
+  }
+};
 
 void put_counter(std::uint8_t* data, unsigned bit, std::uint8_t counter) {
   put_bits_le(data, bit, 4, counter % kCounterModulo);
@@ -351,6 +383,134 @@ DecodeStatus unpack(const CanFrame& f, Heartbeat& m) {
   m.can_rx_errors = static_cast<std::uint8_t>(get_bits_le(f.data, kCanRxErrors.start, 8));
   m.udp_dropped = static_cast<std::uint8_t>(get_bits_le(f.data, kUdpDropped.start, 8));
   m.counter = static_cast<std::uint8_t>(get_bits_le(f.data, kCounterBit48, 4));
+  return range_status(oor);
+}
+
+// ---- Diagnostics ------------------------------------------------------------------------------
+CanFrame pack(const RegistrationPosition& m, PackStats* stats) {
+  CanFrame f = start_frame(kRegistrationPositionId);
+  SaturationScope sat(stats);
+  encode(f.data, kRegX, m.x_m, &sat.local);
+  encode(f.data, kRegY, m.y_m, &sat.local);
+  put_flag(f.data, kRegAttemptedBit, m.attempted);
+  put_flag(f.data, kRegOkBit, m.ok);
+  put_flag(f.data, kRegClampedBit, m.clamped || sat.any());
+  put_counter(f.data, kCounterBit52, m.counter);
+  seal(f);
+  return f;
+}
+
+DecodeStatus unpack(const CanFrame& f, RegistrationPosition& m) {
+  const DecodeStatus s = check(f, kRegistrationPositionId, true);
+  if (s != DecodeStatus::kOk) return s;
+  bool oor = false;
+  m.x_m = decode(f.data, kRegX, oor);
+  m.y_m = decode(f.data, kRegY, oor);
+  m.attempted = get_flag(f.data, kRegAttemptedBit);
+  m.ok = get_flag(f.data, kRegOkBit);
+  m.clamped = get_flag(f.data, kRegClampedBit);
+  m.counter = static_cast<std::uint8_t>(get_bits_le(f.data, kCounterBit52, 4));
+  return range_status(oor);
+}
+
+CanFrame pack(const RegistrationQuality& m, PackStats* stats) {
+  CanFrame f = start_frame(kRegistrationQualityId);
+  encode(f.data, kRegZ, m.z_m, stats);
+  encode(f.data, kRegFitness, m.fitness, stats);
+  encode(f.data, kRegRmse, m.inlier_rmse_m, stats);
+  encode(f.data, kRegFrameCounter, static_cast<double>(m.frame_counter), stats);
+  put_counter(f.data, kCounterBit52, m.counter);
+  seal(f);
+  return f;
+}
+
+DecodeStatus unpack(const CanFrame& f, RegistrationQuality& m) {
+  const DecodeStatus s = check(f, kRegistrationQualityId, true);
+  if (s != DecodeStatus::kOk) return s;
+  bool oor = false;
+  m.z_m = decode(f.data, kRegZ, oor);
+  m.fitness = decode(f.data, kRegFitness, oor);
+  m.inlier_rmse_m = decode(f.data, kRegRmse, oor);
+  m.frame_counter = static_cast<std::uint16_t>(get_bits_le(f.data, kRegFrameCounter.start, kRegFrameCounter.length));
+  m.counter = static_cast<std::uint8_t>(get_bits_le(f.data, kCounterBit52, 4));
+  return range_status(oor);
+}
+
+CanFrame pack(const GateDecision& m, PackStats* stats) {
+  CanFrame f = start_frame(kGateDecisionId);
+  encode(f.data, kGateDecidedFrame, static_cast<double>(m.decided_frame), stats);
+  encode(f.data, kGateFrameCounter, static_cast<double>(m.frame_counter), stats);
+  put_flag(f.data, kGateDecidedBit, m.decided);
+  put_flag(f.data, kGateValidBit, m.valid);
+  encode(f.data, kGateMode, static_cast<double>(static_cast<std::uint8_t>(m.mode)), stats);
+  put_flag(f.data, kGateFilterInitializedBit, m.filter_initialized);
+  put_counter(f.data, kCounterBit48, m.counter);
+  seal(f);
+  return f;
+}
+
+DecodeStatus unpack(const CanFrame& f, GateDecision& m) {
+  const DecodeStatus s = check(f, kGateDecisionId, true);
+  if (s != DecodeStatus::kOk) return s;
+  bool oor = false;
+  m.decided_frame = static_cast<std::uint16_t>(get_bits_le(f.data, kGateDecidedFrame.start, kGateDecidedFrame.length));
+  m.frame_counter = static_cast<std::uint16_t>(get_bits_le(f.data, kGateFrameCounter.start, kGateFrameCounter.length));
+  m.decided = get_flag(f.data, kGateDecidedBit);
+  m.valid = get_flag(f.data, kGateValidBit);
+  m.mode = static_cast<LocalizerModeCode>(static_cast<std::uint8_t>(decode(f.data, kGateMode, oor)));
+  m.filter_initialized = get_flag(f.data, kGateFilterInitializedBit);
+  m.counter = static_cast<std::uint8_t>(get_bits_le(f.data, kCounterBit48, 4));
+  return range_status(oor);
+}
+
+CanFrame pack(const OdometryPosition& m, PackStats* stats) {
+  CanFrame f = start_frame(kOdometryPositionId);
+  SaturationScope sat(stats);
+  encode(f.data, kOdomX, m.x_m, &sat.local);
+  encode(f.data, kOdomY, m.y_m, &sat.local);
+  put_flag(f.data, kOdomOkBit, m.odometry_ok);
+  put_flag(f.data, kOdomClampedBit, m.clamped || sat.any());
+  put_counter(f.data, kCounterBit52, m.counter);
+  seal(f);
+  return f;
+}
+
+DecodeStatus unpack(const CanFrame& f, OdometryPosition& m) {
+  const DecodeStatus s = check(f, kOdometryPositionId, true);
+  if (s != DecodeStatus::kOk) return s;
+  bool oor = false;
+  m.x_m = decode(f.data, kOdomX, oor);
+  m.y_m = decode(f.data, kOdomY, oor);
+  m.odometry_ok = get_flag(f.data, kOdomOkBit);
+  m.clamped = get_flag(f.data, kOdomClampedBit);
+  m.counter = static_cast<std::uint8_t>(get_bits_le(f.data, kCounterBit52, 4));
+  return range_status(oor);
+}
+
+CanFrame pack(const OdometryAttitude& m, PackStats* stats) {
+  CanFrame f = start_frame(kOdometryAttitudeId);
+  SaturationScope sat(stats);
+  encode(f.data, kOdomZ, m.z_m, &sat.local);
+  // An angle wraps instead of saturating (as PoseYaw).
+  encode(f.data, kOdomYaw, std::isfinite(m.yaw_rad) ? det::wrap_pi(m.yaw_rad) : m.yaw_rad, &sat.local);
+  encode(f.data, kOdomFrameCounter, static_cast<double>(m.frame_counter), &sat.local);
+  put_flag(f.data, kOdomOkBit, m.odometry_ok);
+  put_flag(f.data, kOdomClampedBit, m.clamped || sat.any());
+  put_counter(f.data, kCounterBit52, m.counter);
+  seal(f);
+  return f;
+}
+
+DecodeStatus unpack(const CanFrame& f, OdometryAttitude& m) {
+  const DecodeStatus s = check(f, kOdometryAttitudeId, true);
+  if (s != DecodeStatus::kOk) return s;
+  bool oor = false;
+  m.z_m = decode(f.data, kOdomZ, oor);
+  m.yaw_rad = decode(f.data, kOdomYaw, oor);
+  m.frame_counter = static_cast<std::uint16_t>(get_bits_le(f.data, kOdomFrameCounter.start, kOdomFrameCounter.length));
+  m.odometry_ok = get_flag(f.data, kOdomOkBit);
+  m.clamped = get_flag(f.data, kOdomClampedBit);
+  m.counter = static_cast<std::uint8_t>(get_bits_le(f.data, kCounterBit52, 4));
   return range_status(oor);
 }
 

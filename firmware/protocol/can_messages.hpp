@@ -19,6 +19,12 @@ inline constexpr std::uint32_t kGnssTimeDopId = 0x132;
 inline constexpr std::uint32_t kPosePositionId = 0x200;
 inline constexpr std::uint32_t kPoseAttitudeId = 0x201;
 inline constexpr std::uint32_t kPoseSigmaId = 0x202;
+// Diagnostics out, once per ego frame after the pose frames (evaluation / logging; 0x210-0x21F).
+inline constexpr std::uint32_t kRegistrationPositionId = 0x210;
+inline constexpr std::uint32_t kRegistrationQualityId = 0x211;
+inline constexpr std::uint32_t kGateDecisionId = 0x212;
+inline constexpr std::uint32_t kOdometryPositionId = 0x213;
+inline constexpr std::uint32_t kOdometryAttitudeId = 0x214;
 inline constexpr std::uint32_t kHeartbeatId = 0x300;
 
 inline constexpr std::uint8_t kCounterModulo = 16;  // 4-bit rolling counters
@@ -108,6 +114,58 @@ struct PoseSigma {
   std::uint8_t counter = 0;
 };
 
+// ---- Diagnostics out (0x210..0x214, once per ego frame, after the pose frames) ----------------
+// What the paper's Table 1 needs beyond the fused pose: this frame's registration, the fixed-lag
+// gate decision that became available, and the odometry pose. Every value that does not fit its
+// signal is clamped and the frame's `clamped` flag is set (in addition to PackStats): a receiver
+// never sees a silently wrapped number.
+struct RegistrationPosition {
+  double x_m = 0.0;             // world (local ENU), [-8388.608, 8388.607], 1 mm
+  double y_m = 0.0;
+  bool attempted = false;       // a registration ran this frame
+  bool ok = false;              // it returned RegistrationStatus::kOk
+  bool clamped = false;         // a signal of 0x210 or 0x211 of this frame was saturated
+  std::uint8_t counter = 0;
+};
+
+struct RegistrationQuality {
+  double z_m = 0.0;             // [-32.768, 32.767], 1 mm
+  double fitness = 0.0;         // [0, 1.023], 0.001 (inlier fraction)
+  double inlier_rmse_m = 0.0;   // [0, 1.023], 1 mm
+  std::uint16_t frame_counter = 0;
+  std::uint8_t counter = 0;
+};
+
+enum class LocalizerModeCode : std::uint8_t { kUninitialized = 0, kGlobalSearch = 1, kTracking = 2 };
+inline constexpr std::uint8_t kLocalizerModeMax = 2;
+
+struct GateDecision {
+  std::uint16_t decided_frame = 0;  // frame index (mod 65536) the decision is about
+  std::uint16_t frame_counter = 0;  // the frame that published it
+  bool decided = false;             // a decision became available at this frame
+  bool valid = false;               // the decided frame's registration passed the envelope
+  LocalizerModeCode mode = LocalizerModeCode::kUninitialized;
+  bool filter_initialized = false;  // the fused pose comes from the EKF (else: the GNSS fix)
+  std::uint8_t counter = 0;
+};
+
+struct OdometryPosition {
+  double x_m = 0.0;             // odom frame (LiDAR frame of the first scan), [-8388.608, 8388.607], 1 mm
+  double y_m = 0.0;
+  bool odometry_ok = false;
+  bool clamped = false;         // a signal of 0x213 or 0x214 of this frame was saturated
+  std::uint8_t counter = 0;
+};
+
+struct OdometryAttitude {
+  double z_m = 0.0;             // [-32.768, 32.767], 1 mm
+  double yaw_rad = 0.0;         // [-3.1416, 3.1416], 1e-4 rad (wrapped, never clamped)
+  std::uint16_t frame_counter = 0;
+  bool odometry_ok = false;
+  bool clamped = false;
+  std::uint8_t counter = 0;
+};
+
 // ---- Status / heartbeat (0x300, 1 Hz) --------------------------------------------------------
 enum class LocalizerState : std::uint8_t {
   kInit = 0, kWaitingForGnss = 1, kLocalizing = 2, kLocalized = 3, kDegraded = 4, kFault = 5
@@ -132,6 +190,12 @@ CanFrame pack(const PosePosition& m, PackStats* stats = nullptr);
 CanFrame pack(const PoseAttitude& m, PackStats* stats = nullptr);
 CanFrame pack(const PoseSigma& m, PackStats* stats = nullptr);
 CanFrame pack(const Heartbeat& m, PackStats* stats = nullptr);
+// Diagnostics: a saturated signal also sets the frame's clamped flag (where the frame has one).
+CanFrame pack(const RegistrationPosition& m, PackStats* stats = nullptr);
+CanFrame pack(const RegistrationQuality& m, PackStats* stats = nullptr);
+CanFrame pack(const GateDecision& m, PackStats* stats = nullptr);
+CanFrame pack(const OdometryPosition& m, PackStats* stats = nullptr);
+CanFrame pack(const OdometryAttitude& m, PackStats* stats = nullptr);
 
 // Unpacking checks id, DLC (exactly 8), CRC where present, and DBC ranges. On kWrongId /
 // kWrongDlc / kBadChecksum the output is left untouched.
@@ -143,6 +207,11 @@ DecodeStatus unpack(const CanFrame& f, PosePosition& m);
 DecodeStatus unpack(const CanFrame& f, PoseAttitude& m);
 DecodeStatus unpack(const CanFrame& f, PoseSigma& m);
 DecodeStatus unpack(const CanFrame& f, Heartbeat& m);
+DecodeStatus unpack(const CanFrame& f, RegistrationPosition& m);
+DecodeStatus unpack(const CanFrame& f, RegistrationQuality& m);
+DecodeStatus unpack(const CanFrame& f, GateDecision& m);
+DecodeStatus unpack(const CanFrame& f, OdometryPosition& m);
+DecodeStatus unpack(const CanFrame& f, OdometryAttitude& m);
 
 // Receiver-side rolling-counter supervision (one per message id): counts frames lost in between
 // and repeated (stale) frames.

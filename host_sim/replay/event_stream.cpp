@@ -197,6 +197,7 @@ bool WireEventDecoder::feed(const WireEvent& event, DecodedFrame& frame) {
       frame.frame = static_cast<int>(decoder_.last_frame_index());
       frame.output = *out;
       frame.pose = encoder_.encode(*out, decoder_.last_frame_index(), decoder_.gnss_used_in_last_frame());
+      frame.diagnostics = diagnostic_encoder_.encode(*out, decoder_.last_frame_index());
       produced = true;
     }
   }

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "firmware/app/diagnostic_frames.hpp"
 #include "firmware/app/input_decoder.hpp"
 #include "firmware/app/pose_frames.hpp"
 #include "firmware/app/wire_conventions.hpp"
@@ -84,11 +85,12 @@ class EventStream {
 };
 
 // Wire events -> localizer inputs through the firmware's InputDecoder (same decode, same order),
-// and the ego frames' outputs encoded as the firmware's pose CAN frames.
+// and the ego frames' outputs encoded as the firmware's pose and diagnostic CAN frames.
 struct DecodedFrame {
   int frame = -1;
   LocalizerFrameOutput output{};
   firmware::PoseFrames pose{};
+  firmware::DiagnosticFrames diagnostics{};
 };
 
 class WireEventDecoder {
@@ -102,6 +104,7 @@ class WireEventDecoder {
   firmware::InputDecoder& decoder_;
   firmware::LocalizerPort& localizer_;
   firmware::PoseFrameEncoder encoder_{};
+  firmware::DiagnosticFrameEncoder diagnostic_encoder_{};
 };
 
 // The offline evaluator's loop: the whole event stream in-process. `decoder` is large (make it

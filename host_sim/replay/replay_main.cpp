@@ -110,8 +110,10 @@ int main(int argc, char** argv) {
               result.wall_seconds > 0 ? result.frames.size() / result.wall_seconds : 0.0, result.can_frames_sent,
               result.datagrams_sent, s.map_clouds, s.ego_scans, (unsigned long long)s.points_dropped,
               (unsigned long long)s.times_clamped);
-  std::printf("v2xloc-replay: heartbeats %zu, pose decode errors %zu, timeouts %d, send retries %zu\n",
-              result.heartbeats, result.pose_decode_errors, result.timeouts, result.send_retries);
+  std::printf("v2xloc-replay: heartbeats %zu, pose decode errors %zu, diagnostic decode errors %zu, timeouts %d, "
+              "send retries %zu\n",
+              result.heartbeats, result.pose_decode_errors, result.diagnostic_decode_errors, result.timeouts,
+              result.send_retries);
 
   const StampedTrajectory estimate = pose_frames_to_trajectory(result.frames);
   if (!out_dir.empty()) {

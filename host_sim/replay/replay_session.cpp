@@ -247,11 +247,20 @@ bool replay_recording(const RecordingReader& reader, const ReplayOptions& option
       }
     }
 
-    // Lockstep: wait for this frame's pose (position, attitude with frame counter i, sigma).
+    // Lockstep: wait for this frame's pose (position, attitude with frame counter i, sigma) and
+    // diagnostics (the frames with a frame counter must name i; odometry attitude comes last).
     ReplayedFrame frame;
     frame.frame = i;
     frame.t = reader.frame_time(i);
-    bool have_position = false, have_attitude = false, done = false;
+    const auto counter_i = static_cast<std::uint16_t>(i & 0xFFFF);
+    bool have_position = false, have_attitude = false, have_sigma = false, done = false;
+    bool have_reg_position = false, have_reg_quality = false, have_gate = false, have_odom_position = false;
+    auto diagnostic = [&](protocol::CanFrame& slot, const protocol::CanFrame& f, auto& decoded) {
+      slot = f;
+      const bool ok = protocol::unpack(f, decoded) == protocol::DecodeStatus::kOk;
+      if (!ok) ++result.diagnostic_decode_errors;
+      return ok;
+    };
     const auto wait0 = Clock::now();
     while (!done) {
       hal::CanRxFrame rx;
@@ -281,19 +290,38 @@ bool replay_recording(const RecordingReader& reader, const ReplayOptions& option
           break;
         case protocol::kPoseSigmaId:
           frame.pose.sigma = rx.frame;
-          if (protocol::unpack(rx.frame, frame.sigma) != protocol::DecodeStatus::kOk) ++result.pose_decode_errors;
-          done = have_position && have_attitude;
+          have_sigma = protocol::unpack(rx.frame, frame.sigma) == protocol::DecodeStatus::kOk;
+          if (!have_sigma) ++result.pose_decode_errors;
+          break;
+        case protocol::kRegistrationPositionId:
+          have_reg_position = diagnostic(frame.diagnostics.registration_position, rx.frame, frame.registration_position);
+          break;
+        case protocol::kRegistrationQualityId:
+          have_reg_quality = diagnostic(frame.diagnostics.registration_quality, rx.frame, frame.registration_quality) &&
+                             frame.registration_quality.frame_counter == counter_i;
+          break;
+        case protocol::kGateDecisionId:
+          have_gate = diagnostic(frame.diagnostics.gate, rx.frame, frame.gate) && frame.gate.frame_counter == counter_i;
+          break;
+        case protocol::kOdometryPositionId:
+          have_odom_position = diagnostic(frame.diagnostics.odometry_position, rx.frame, frame.odometry_position);
+          break;
+        case protocol::kOdometryAttitudeId:
+          done = diagnostic(frame.diagnostics.odometry_attitude, rx.frame, frame.odometry_attitude) &&
+                 frame.odometry_attitude.frame_counter == counter_i && have_position && have_attitude && have_sigma &&
+                 have_reg_position && have_reg_quality && have_gate && have_odom_position;
           break;
         default: break;
       }
     }
     if (!done) {
       ++result.timeouts;
-      error = "timeout waiting for the pose of frame " + std::to_string(i) + " (" +
+      error = "timeout waiting for the pose and diagnostic frames of frame " + std::to_string(i) + " (" +
               std::to_string(options.frame_timeout_s) + " s)";
       return finish(false);
     }
     result.frames.push_back(frame);
+    if (options.on_frame) options.on_frame(frame);
     if (options.verbose) {
       std::fprintf(stderr, "frame %4d  x %9.3f y %9.3f yaw %7.4f  sigma %.3f  flags %d%d%d%d\n", i, frame.position.x_m,
                    frame.position.y_m, frame.attitude.yaw_rad, frame.sigma.sigma_x_m, frame.position.flags.pose_valid,

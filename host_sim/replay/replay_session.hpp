@@ -6,15 +6,19 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
+#include "firmware/app/diagnostic_frames.hpp"
 #include "firmware/app/pose_frames.hpp"
 #include "host_sim/eval/trajectory.hpp"
 #include "host_sim/recording/recording_reader.hpp"
 #include "host_sim/replay/event_stream.hpp"
 
 namespace v2xloc::sim::replay {
+
+struct ReplayedFrame;
 
 struct ReplayOptions {
   std::string firmware_path;           // non-empty: fork/exec `firmware_path --emulated ...`
@@ -24,10 +28,11 @@ struct ReplayOptions {
   std::uint16_t firmware_cloud_port = 0;
   std::uint16_t local_can_port = 0;    // our CAN-over-UDP port (0 = ephemeral; connect mode: the
                                        // firmware's --can-peer-port)
-  double frame_timeout_s = 60.0;       // per frame, waiting for the pose
+  double frame_timeout_s = 60.0;       // per frame, waiting for the pose and diagnostic frames
   double startup_timeout_s = 30.0;
   EventStreamConfig stream;
   bool verbose = false;
+  std::function<void(const ReplayedFrame&)> on_frame;  // optional: called per completed frame
 };
 
 struct ReplayedFrame {
@@ -37,6 +42,12 @@ struct ReplayedFrame {
   protocol::PosePosition position{};
   protocol::PoseAttitude attitude{};
   protocol::PoseSigma sigma{};
+  firmware::DiagnosticFrames diagnostics{};  // the five diagnostic CAN frames as received
+  protocol::RegistrationPosition registration_position{};
+  protocol::RegistrationQuality registration_quality{};
+  protocol::GateDecision gate{};
+  protocol::OdometryPosition odometry_position{};
+  protocol::OdometryAttitude odometry_attitude{};
 };
 
 struct ReplayResult {
@@ -44,6 +55,7 @@ struct ReplayResult {
   int timeouts = 0;
   std::size_t heartbeats = 0;
   std::size_t pose_decode_errors = 0;
+  std::size_t diagnostic_decode_errors = 0;
   std::size_t datagrams_sent = 0, can_frames_sent = 0, send_retries = 0;
   EventStreamStats stream_stats{};
   std::string firmware_output;         // the started firmware's stdout (memory, counters)

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "host_sim/eval/trajectory.hpp"
+#include "tools/eval/firmware_run.hpp"
 #include "tools/eval/metrics.hpp"
 #include "tools/eval/offline_run.hpp"
 #include "tools/eval/plots.hpp"
@@ -23,7 +24,10 @@ int usage() {
   std::fprintf(stderr,
                "usage: v2xloc-eval RECORDING_DIR... [--json] [--plots DIR] [--estimates DIR] [--trace DIR]\n"
                "                   [--frames N] [--gate fixed-lag|causal|off] [--no-gnss-gate]\n"
-               "                   [--no-odometry] [--no-vehicle] [--quiet]\n");
+               "                   [--no-odometry] [--no-vehicle] [--stereo] [--quiet]\n"
+               "                   [--firmware PATH_TO_v2xloc-firmware]  (replay through the firmware over\n"
+               "                   emulated CAN/UDP instead of the in-process localizer; localizer options\n"
+               "                   other than --frames do not apply)\n");
   return 2;
 }
 
@@ -53,19 +57,31 @@ bool write_trace(const std::string& path, const std::vector<v2xloc::eval::FrameR
     return false;
   }
   std::fprintf(f, "# frame t mode attempted status fitness rmse fused gate_decided gate_valid err_fused_xy "
-                  "err_reg_xy err_ungated_xy err_fused_yaw_deg sigma_xy initialized odom_ok\n");
-  for (const auto& r : records) {
+                  "err_reg_xy err_ungated_xy err_fused_yaw_deg sigma_xy initialized odom_ok odom_step_err odom_step_yaw_err_deg err_stereo_xy stereo_fused\n");
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    const auto& r = records[i];
+    // Odometry's frame-to-frame motion against the truth's (drift per step).
+    double step_err = 0.0, step_yaw_err = 0.0;
+    if (i > 0) {
+      const Eigen::Isometry3d odo = Eigen::Isometry3d(records[i - 1].out.odometry_pose).inverse() *
+                                    Eigen::Isometry3d(r.out.odometry_pose);
+      const Eigen::Isometry3d tru = records[i - 1].truth.inverse() * r.truth;
+      const Eigen::Isometry3d e = tru.inverse() * odo;
+      step_err = e.translation().norm();
+      step_yaw_err = std::atan2(e.linear()(1, 0), e.linear()(0, 0)) * 180.0 / M_PI;
+    }
     const auto& o = r.out;
     const Eigen::Vector3d truth = r.truth.translation();
     auto err_xy = [&](const v2xloc::Mat4d& T) { return (T.topRightCorner<2, 1>() - truth.head<2>()).norm(); };
     const Eigen::Matrix3d dr = r.truth.linear().transpose() * o.fused_pose.topLeftCorner<3, 3>();
     const double yaw_err = std::atan2(dr(1, 0), dr(0, 0)) * 180.0 / M_PI;
-    std::fprintf(f, "%u %.3f %d %d %d %.4f %.4f %d %d %d %.4f %.4f %.4f %.3f %.4f %d %d\n", o.frame, r.t,
+    std::fprintf(f, "%u %.3f %d %d %d %.4f %.4f %d %d %d %.4f %.4f %.4f %.3f %.4f %d %d %.4f %.3f %.4f %d\n", o.frame, r.t,
                  static_cast<int>(o.mode), o.registration_attempted ? 1 : 0, static_cast<int>(o.registration_status),
                  o.fitness, o.inlier_rmse, o.registration_fused ? 1 : 0, r.gate_decided ? 1 : 0, r.gate_valid ? 1 : 0,
                  err_xy(o.fused_pose), o.registration_attempted ? err_xy(o.registration_pose) : -1.0,
                  err_xy(o.fused_pose_ungated), yaw_err, std::sqrt(0.5 * (o.sigma_x * o.sigma_x + o.sigma_y * o.sigma_y)),
-                 o.filter_initialized ? 1 : 0, o.odometry_ok ? 1 : 0);
+                 o.filter_initialized ? 1 : 0, o.odometry_ok ? 1 : 0, step_err, step_yaw_err,
+                 o.stereo_attempted ? err_xy(o.stereo_pose) : -1.0, o.stereo_fused ? 1 : 0);
   }
   std::fclose(f);
   return true;
@@ -77,6 +93,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> dirs;
   bool json = false;
   std::string plots_dir, estimates_dir, trace_dir;
+  std::string firmware_path;  // --firmware: table from the firmware's CAN output (tools/eval/firmware_run.hpp)
   v2xloc::eval::RunOptions options;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -91,11 +108,13 @@ int main(int argc, char** argv) {
     else if (a == "--plots") plots_dir = next("--plots");
     else if (a == "--estimates") estimates_dir = next("--estimates");
     else if (a == "--trace") trace_dir = next("--trace");
+    else if (a == "--firmware") firmware_path = next("--firmware");
     else if (a == "--frames") options.max_frames = std::atoi(next("--frames"));
     else if (a == "--quiet") options.quiet = true;
     else if (a == "--no-gnss-gate") options.params.ekf.gates.gnss_gate_enabled = false;
     else if (a == "--no-odometry") options.params.use_odometry = false;
     else if (a == "--no-vehicle") options.params.use_vehicle_signals = false;
+    else if (a == "--stereo") options.params.use_stereo = true;
     else if (a == "--gate") {
       const std::string g = next("--gate");
       if (g == "fixed-lag") options.params.gate_mode = v2xloc::GateMode::kFixedLag;
@@ -125,11 +144,23 @@ int main(int argc, char** argv) {
     row.dir = dir;
     if (!options.quiet) std::fprintf(stderr, "Sim %d %s (%s)\n", row.sim, row.permutation.c_str(), dir.c_str());
     std::vector<v2xloc::eval::FrameRecord> records;
-    if (!v2xloc::eval::run_offline(reader, g_localizer, options, records, row.stats, error)) {
+    bool ran = false;
+    if (!firmware_path.empty()) {
+      v2xloc::eval::FirmwareRunOptions fw;
+      fw.firmware_path = firmware_path;
+      fw.max_frames = options.max_frames;
+      fw.gnss_antenna_in_body = options.gnss_antenna_in_body;
+      fw.quiet = options.quiet;
+      ran = v2xloc::eval::run_firmware(reader, fw, records, row.stats, error);
+    } else {
+      ran = v2xloc::eval::run_offline(reader, g_localizer, options, records, row.stats, error);
+    }
+    if (!ran) {
       std::fprintf(stderr, "v2xloc-eval: %s: %s\n", dir.c_str(), error.c_str());
       return 1;
     }
     row.metrics = v2xloc::eval::compute_metrics(records);
+    if (!firmware_path.empty()) v2xloc::eval::mark_columns_not_on_can(row.metrics);
     const std::string name = "sim" + std::to_string(row.sim) + "_" + row.permutation;
     if (!plots_dir.empty()) {
       std::filesystem::create_directories(plots_dir);

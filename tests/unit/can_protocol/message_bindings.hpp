@@ -155,6 +155,96 @@ inline std::vector<MessageBinding> message_bindings() {
                       {"SigmaYaw", m.sigma_yaw_rad}, {"Counter", m.counter}};
                  return st;
                }});
+  b.push_back({kRegistrationPositionId,
+               [](const Values& v, PackStats* s) {
+                 RegistrationPosition m;
+                 m.x_m = get(v, "RegX");
+                 m.y_m = get(v, "RegY");
+                 m.attempted = get(v, "RegAttempted") != 0.0;
+                 m.ok = get(v, "RegOk") != 0.0;
+                 m.clamped = get(v, "RegClamped") != 0.0;
+                 m.counter = as<std::uint8_t>(v, "Counter");
+                 return pack(m, s);
+               },
+               [](const CanFrame& f, Values& v) {
+                 RegistrationPosition m;
+                 const auto st = unpack(f, m);
+                 v = {{"RegX", m.x_m}, {"RegY", m.y_m}, {"RegAttempted", m.attempted}, {"RegOk", m.ok},
+                      {"RegClamped", m.clamped}, {"Counter", m.counter}};
+                 return st;
+               }});
+  b.push_back({kRegistrationQualityId,
+               [](const Values& v, PackStats* s) {
+                 RegistrationQuality m;
+                 m.z_m = get(v, "RegZ");
+                 m.fitness = get(v, "RegFitness");
+                 m.inlier_rmse_m = get(v, "RegRmse");
+                 m.frame_counter = as<std::uint16_t>(v, "FrameCounter");
+                 m.counter = as<std::uint8_t>(v, "Counter");
+                 return pack(m, s);
+               },
+               [](const CanFrame& f, Values& v) {
+                 RegistrationQuality m;
+                 const auto st = unpack(f, m);
+                 v = {{"RegZ", m.z_m}, {"RegFitness", m.fitness}, {"RegRmse", m.inlier_rmse_m},
+                      {"FrameCounter", m.frame_counter}, {"Counter", m.counter}};
+                 return st;
+               }});
+  b.push_back({kGateDecisionId,
+               [](const Values& v, PackStats* s) {
+                 GateDecision m;
+                 m.decided_frame = as<std::uint16_t>(v, "DecidedFrame");
+                 m.frame_counter = as<std::uint16_t>(v, "FrameCounter");
+                 m.decided = get(v, "GateDecided") != 0.0;
+                 m.valid = get(v, "GateValid") != 0.0;
+                 m.mode = static_cast<LocalizerModeCode>(as<std::uint8_t>(v, "Mode"));
+                 m.filter_initialized = get(v, "FilterInitialized") != 0.0;
+                 m.counter = as<std::uint8_t>(v, "Counter");
+                 return pack(m, s);
+               },
+               [](const CanFrame& f, Values& v) {
+                 GateDecision m;
+                 const auto st = unpack(f, m);
+                 v = {{"DecidedFrame", m.decided_frame}, {"FrameCounter", m.frame_counter}, {"GateDecided", m.decided},
+                      {"GateValid", m.valid}, {"Mode", static_cast<double>(m.mode)},
+                      {"FilterInitialized", m.filter_initialized}, {"Counter", m.counter}};
+                 return st;
+               }});
+  b.push_back({kOdometryPositionId,
+               [](const Values& v, PackStats* s) {
+                 OdometryPosition m;
+                 m.x_m = get(v, "OdomX");
+                 m.y_m = get(v, "OdomY");
+                 m.odometry_ok = get(v, "OdometryOk") != 0.0;
+                 m.clamped = get(v, "OdomClamped") != 0.0;
+                 m.counter = as<std::uint8_t>(v, "Counter");
+                 return pack(m, s);
+               },
+               [](const CanFrame& f, Values& v) {
+                 OdometryPosition m;
+                 const auto st = unpack(f, m);
+                 v = {{"OdomX", m.x_m}, {"OdomY", m.y_m}, {"OdometryOk", m.odometry_ok}, {"OdomClamped", m.clamped},
+                      {"Counter", m.counter}};
+                 return st;
+               }});
+  b.push_back({kOdometryAttitudeId,
+               [](const Values& v, PackStats* s) {
+                 OdometryAttitude m;
+                 m.z_m = get(v, "OdomZ");
+                 m.yaw_rad = get(v, "OdomYaw");
+                 m.frame_counter = as<std::uint16_t>(v, "FrameCounter");
+                 m.odometry_ok = get(v, "OdometryOk") != 0.0;
+                 m.clamped = get(v, "OdomClamped") != 0.0;
+                 m.counter = as<std::uint8_t>(v, "Counter");
+                 return pack(m, s);
+               },
+               [](const CanFrame& f, Values& v) {
+                 OdometryAttitude m;
+                 const auto st = unpack(f, m);
+                 v = {{"OdomZ", m.z_m}, {"OdomYaw", m.yaw_rad}, {"FrameCounter", m.frame_counter},
+                      {"OdometryOk", m.odometry_ok}, {"OdomClamped", m.clamped}, {"Counter", m.counter}};
+                 return st;
+               }});
   b.push_back({kHeartbeatId,
                [](const Values& v, PackStats* s) {
                  Heartbeat m;

@@ -119,10 +119,18 @@ TEST(FirmwareAppLoop, NoHeapAllocationAfterStartUpAndOnePosePerFrame) {
   EXPECT_GE(fw_sim_bus.time_frames(), static_cast<std::uint64_t>(kFrames));
   EXPECT_EQ(clock.monotonic_ns(), (kFrames - 1) * 100'000'000LL + 1);
 
-  // The pose frames arrive on the test's side of the emulated bus, frame counters 0..kFrames-1.
-  int poses = 0;
+  // The pose frames arrive on the test's side of the emulated bus, frame counters 0..kFrames-1,
+  // each followed by its diagnostic frames (odometry attitude last, same frame counter).
+  int poses = 0, diagnostics = 0;
   hal::CanRxFrame rx;
   while (tx_bus.receive(rx) == hal::Status::kOk) {
+    if (rx.frame.id == protocol::kOdometryAttitudeId) {
+      protocol::OdometryAttitude o;
+      ASSERT_EQ(protocol::unpack(rx.frame, o), protocol::DecodeStatus::kOk);
+      EXPECT_EQ(o.frame_counter, diagnostics);
+      EXPECT_EQ(poses, diagnostics + 1);  // after this frame's pose
+      ++diagnostics;
+    }
     if (rx.frame.id != protocol::kPoseAttitudeId) continue;
     protocol::PoseAttitude a;
     ASSERT_EQ(protocol::unpack(rx.frame, a), protocol::DecodeStatus::kOk);
@@ -130,6 +138,7 @@ TEST(FirmwareAppLoop, NoHeapAllocationAfterStartUpAndOnePosePerFrame) {
     ++poses;
   }
   EXPECT_EQ(poses, kFrames);
+  EXPECT_EQ(diagnostics, kFrames);
 }
 
 }  // namespace

@@ -1,0 +1,191 @@
+#include "tools/eval/firmware_run.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+#include "firmware/protocol/can_messages.hpp"
+#include "v2xloc/algo/geodesy.hpp"
+
+namespace v2xloc::eval {
+namespace {
+
+// world_T_body (or odom_T_body) from what the DBC carries: position and heading; roll = pitch = 0.
+Mat4d pose_from_xyz_yaw(double x, double y, double z, double yaw) {
+  Mat4d T = Mat4d::Identity();
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T.topLeftCorner<3, 3>() = R;
+  T(0, 3) = x;
+  T(1, 3) = y;
+  T(2, 3) = z;
+  return T;
+}
+
+// Frame index of a 16-bit counter that is at most 65535 frames older than `now`.
+std::uint32_t unwrap_counter(std::uint16_t counter, std::uint32_t now) {
+  const auto back = static_cast<std::uint16_t>(static_cast<std::uint16_t>(now & 0xFFFFu) - counter);
+  return back <= now ? now - back : 0u;
+}
+
+LocalizationMode mode_from_code(protocol::LocalizerModeCode code) {
+  switch (code) {
+    case protocol::LocalizerModeCode::kGlobalSearch: return LocalizationMode::kGlobalSearch;
+    case protocol::LocalizerModeCode::kTracking: return LocalizationMode::kTracking;
+    case protocol::LocalizerModeCode::kUninitialized: break;
+  }
+  return LocalizationMode::kUninitialized;
+}
+
+// The GNSS fixes of the recording's CAN log, assembled as the in-process path does (position,
+// status and time/DOP frames of one stamp; valid = 2D/3D fix), in ENU minus the lever arm.
+class GnssTrack {
+ public:
+  GnssTrack(const GeodeticOrigin& origin, const Eigen::Vector3d& lever) : origin_(origin), lever_(lever) {}
+
+  void push(const sim::CanLogFrame& f) {
+    protocol::CanFrame frame;
+    frame.id = f.id;
+    frame.dlc = f.dlc;
+    for (int b = 0; b < 8; ++b) frame.data[b] = f.data[b];
+    if (f.id == protocol::kGnssPositionId) {
+      if (protocol::unpack(frame, position_) == protocol::DecodeStatus::kOk) position_t_ = f.t;
+    } else if (f.id == protocol::kGnssStatusId) {
+      if (protocol::unpack(frame, status_) == protocol::DecodeStatus::kOk) status_t_ = f.t;
+    } else if (f.id == protocol::kGnssTimeDopId) {
+      protocol::GnssTimeDop time;
+      if (protocol::unpack(frame, time) != protocol::DecodeStatus::kOk) return;
+      if (std::abs(position_t_ - f.t) > 1e-4 || std::abs(status_t_ - f.t) > 1e-4) return;
+      const bool valid = status_.fix_type == protocol::GnssFixType::kFix3D ||
+                         status_.fix_type == protocol::GnssFixType::kFix2D;
+      if (!valid) return;
+      const Vec3d enu = geodetic_to_enu(origin_, GeodeticPoint{position_.lat_deg, position_.lon_deg, status_.alt_m});
+      body_ = enu - lever_;  // roll = pitch = 0: the lever is vertical
+      has_fix_ = true;
+    }
+  }
+  bool has_fix() const { return has_fix_; }
+  const Eigen::Vector3d& body() const { return body_; }
+
+ private:
+  GeodeticOrigin origin_;
+  Eigen::Vector3d lever_;
+  protocol::GnssPosition position_{};
+  protocol::GnssStatus status_{};
+  double position_t_ = -1.0, status_t_ = -2.0;
+  bool has_fix_ = false;
+  Eigen::Vector3d body_ = Eigen::Vector3d::Zero();
+};
+
+}  // namespace
+
+LocalizerFrameOutput output_from_can(const sim::replay::ReplayedFrame& f, std::uint32_t frame_index) {
+  LocalizerFrameOutput out;
+  out.frame = frame_index;
+  out.t = f.t;
+  // Fused pose, sigmas and flags (0x200..0x202).
+  out.fused_pose = pose_from_xyz_yaw(f.position.x_m, f.position.y_m, f.attitude.z_m, f.attitude.yaw_rad);
+  out.fused_pose_ungated = out.fused_pose;  // the shadow filter is not on the wire
+  out.sigma_x = f.sigma.sigma_x_m;
+  out.sigma_y = f.sigma.sigma_y_m;
+  out.sigma_z = f.sigma.sigma_z_m;
+  out.sigma_yaw = f.sigma.sigma_yaw_rad;
+  out.localized = f.position.flags.pose_valid;
+  out.registration_fused = f.position.flags.registration_valid;
+  // Registration (0x210, 0x211): position only; a failure's exact status is not carried.
+  out.registration_attempted = f.registration_position.attempted;
+  if (f.registration_position.ok) out.registration_status = RegistrationStatus::kOk;
+  else if (f.registration_position.attempted) out.registration_status = RegistrationStatus::kDidNotConverge;
+  // (not attempted: the output's default status, as the localizer leaves it)
+  out.registration_pose = pose_from_xyz_yaw(f.registration_position.x_m, f.registration_position.y_m,
+                                            f.registration_quality.z_m, 0.0);
+  out.fitness = f.registration_quality.fitness;
+  out.inlier_rmse = f.registration_quality.inlier_rmse_m;
+  // Gate decision and localizer state (0x212).
+  out.mode = mode_from_code(f.gate.mode);
+  out.filter_initialized = f.gate.filter_initialized;
+  out.gate_decided = f.gate.decided;
+  out.gate_decided_valid = f.gate.decided && f.gate.valid;
+  out.gate_decided_frame = f.gate.decided ? unwrap_counter(f.gate.decided_frame, frame_index) : 0u;
+  // Odometry (0x213, 0x214).
+  out.odometry_ok = f.odometry_position.odometry_ok;
+  out.odometry_pose = pose_from_xyz_yaw(f.odometry_position.x_m, f.odometry_position.y_m, f.odometry_attitude.z_m,
+                                        f.odometry_attitude.yaw_rad);
+  return out;
+}
+
+bool records_from_outputs(const sim::RecordingReader& reader, const std::vector<LocalizerFrameOutput>& outputs,
+                          const Eigen::Vector3d& gnss_antenna_in_body, std::vector<FrameRecord>& records,
+                          std::string& error) {
+  std::vector<sim::CanLogFrame> can;
+  if (!reader.can_frames(can, error)) return false;
+  if (outputs.size() > reader.ground_truth().size()) {
+    error = "more frames than ground-truth poses";
+    return false;
+  }
+  GnssTrack gnss(make_geodetic_origin(reader.origin_lat_deg(), reader.origin_lon_deg(), reader.origin_alt_m()),
+                 gnss_antenna_in_body);
+  records.assign(outputs.size(), FrameRecord{});
+  std::size_t next_can = 0;
+  for (std::size_t i = 0; i < outputs.size(); ++i) {
+    FrameRecord& rec = records[i];
+    rec.t = reader.frame_time(static_cast<int>(i));
+    rec.truth = reader.ground_truth()[i].pose;
+    for (; next_can < can.size() && can[next_can].t <= rec.t + 1e-9; ++next_can) gnss.push(can[next_can]);
+    rec.has_gnss = gnss.has_fix();
+    rec.gnss_body = gnss.body();
+    rec.out = outputs[i];
+  }
+  // A fixed-lag decision published at frame i is about an earlier frame.
+  for (const FrameRecord& rec : records) {
+    if (rec.out.gate_decided && rec.out.gate_decided_frame < records.size()) {
+      records[rec.out.gate_decided_frame].gate_decided = true;
+      records[rec.out.gate_decided_frame].gate_valid = rec.out.gate_decided_valid;
+    }
+  }
+  return true;
+}
+
+bool run_firmware(const sim::RecordingReader& reader, const FirmwareRunOptions& options,
+                  std::vector<FrameRecord>& records, RunStats& stats, std::string& error) {
+  stats = {};
+  sim::replay::ReplayOptions replay;
+  replay.firmware_path = options.firmware_path;
+  replay.frame_timeout_s = options.frame_timeout_s;
+  replay.stream.max_frames = options.max_frames;
+  const int total = options.max_frames < 0 ? reader.frame_count() : std::min(options.max_frames, reader.frame_count());
+  if (!options.quiet) {
+    replay.on_frame = [&](const sim::replay::ReplayedFrame& f) {
+      std::fprintf(stderr, "\r  firmware frame %4d/%d  x %9.3f y %9.3f  reg %d%d fit %.3f  ", f.frame + 1, total,
+                   f.position.x_m, f.position.y_m, f.registration_position.attempted ? 1 : 0,
+                   f.registration_position.ok ? 1 : 0, f.registration_quality.fitness);
+    };
+  }
+  sim::replay::ReplayResult result;
+  if (!sim::replay::replay_recording(reader, replay, result, error)) {
+    if (!result.firmware_output.empty()) error += "\nfirmware output:\n" + result.firmware_output;
+    return false;
+  }
+  std::vector<LocalizerFrameOutput> outputs;
+  outputs.reserve(result.frames.size());
+  for (std::size_t i = 0; i < result.frames.size(); ++i) {
+    outputs.push_back(output_from_can(result.frames[i], static_cast<std::uint32_t>(i)));
+  }
+  if (!records_from_outputs(reader, outputs, options.gnss_antenna_in_body, records, error)) return false;
+  stats.seconds = result.wall_seconds;
+  stats.can_decode_errors = result.pose_decode_errors + result.diagnostic_decode_errors;
+  stats.map_clouds = result.stream_stats.map_clouds;
+  if (!options.quiet) {
+    std::fprintf(stderr,
+                 "\n  firmware replay: %zu frames in %.1f s, %zu CAN frames + %zu datagrams sent, %zu heartbeats, "
+                 "decode errors %zu, firmware exit %d\n",
+                 result.frames.size(), result.wall_seconds, result.can_frames_sent, result.datagrams_sent,
+                 result.heartbeats, stats.can_decode_errors, result.firmware_exit_code);
+  }
+  return true;
+}
+
+void mark_columns_not_on_can(RowMetrics& metrics) {
+  metrics.unaligned.fused_ungated = -1.0;
+  metrics.aligned.fused_ungated = -1.0;
+}
+
+}  // namespace v2xloc::eval
