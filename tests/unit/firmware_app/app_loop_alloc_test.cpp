@@ -125,9 +125,9 @@ TEST(FirmwareAppLoop, NoHeapAllocationAfterStartUpAndOnePosePerFrame) {
   hal::CanRxFrame rx;
   while (tx_bus.receive(rx) == hal::Status::kOk) {
     if (rx.frame.id == protocol::kOdometryAttitudeId) {
-      protocol::OdometryAttitude o;
-      ASSERT_EQ(protocol::unpack(rx.frame, o), protocol::DecodeStatus::kOk);
-      EXPECT_EQ(o.frame_counter, diagnostics);
+      protocol::OdometryAttitude odo;
+      ASSERT_EQ(protocol::unpack(rx.frame, odo), protocol::DecodeStatus::kOk);
+      EXPECT_EQ(odo.frame_counter, diagnostics);
       EXPECT_EQ(poses, diagnostics + 1);  // after this frame's pose
       ++diagnostics;
     }
