@@ -58,6 +58,15 @@ TEST(RegistrationAccuracy, SyntheticUrbanPairsGlobalPlusIcp) {
 
 std::string data_dir() { return std::string(V2XLOC_SHARED_DATA_DIR); }
 
+// ../shared/data/outdoor_lidar_pair: both scans and the reference p_target = T p_source.
+void load_outdoor_pair(const std::string& dir, std::vector<Vec3f>& source, std::vector<Vec3f>& target,
+                       Mat4d& reference) {
+  std::string error;
+  ASSERT_TRUE(testing::read_ply_xyz(dir + "/source.ply", source, error)) << error;
+  ASSERT_TRUE(testing::read_ply_xyz(dir + "/target.ply", target, error)) << error;
+  ASSERT_TRUE(testing::read_matrix4(dir + "/T_target_source.txt", reference, error)) << error;
+}
+
 // Issue 2, item 2: the real scans, from >= 20 seeded initial offsets (up to 5 m, 30 deg), global
 // pipeline then ICP, within 5 cm / 0.5 deg of the reference transform.
 TEST(RegistrationAccuracy, OutdoorLidarPairFromPerturbedStarts) {
@@ -65,10 +74,8 @@ TEST(RegistrationAccuracy, OutdoorLidarPairFromPerturbedStarts) {
   if (!testing::file_exists(dir + "/source.ply")) GTEST_SKIP() << "no data at " << dir;
   std::vector<Vec3f> source, target;
   Mat4d reference;
-  std::string error;
-  ASSERT_TRUE(testing::read_ply_xyz(dir + "/source.ply", source, error)) << error;
-  ASSERT_TRUE(testing::read_ply_xyz(dir + "/target.ply", target, error)) << error;
-  ASSERT_TRUE(testing::read_matrix4(dir + "/T_target_source.txt", reference, error)) << error;
+  load_outdoor_pair(dir, source, target, reference);
+  if (HasFatalFailure()) return;
   RegisterCloudsParams params;
   params.voxel_size = 0.25f;
   constexpr int kTrials = 20;
@@ -102,10 +109,8 @@ TEST(RegistrationAccuracy, OutdoorLidarPairAtVoxelHalfMetreConvergesOnTruePose) 
   if (!testing::file_exists(dir + "/source.ply")) GTEST_SKIP() << "no data at " << dir;
   std::vector<Vec3f> source, target;
   Mat4d reference;
-  std::string error;
-  ASSERT_TRUE(testing::read_ply_xyz(dir + "/source.ply", source, error)) << error;
-  ASSERT_TRUE(testing::read_ply_xyz(dir + "/target.ply", target, error)) << error;
-  ASSERT_TRUE(testing::read_matrix4(dir + "/T_target_source.txt", reference, error)) << error;
+  load_outdoor_pair(dir, source, target, reference);
+  if (HasFatalFailure()) return;
   RegisterCloudsParams params;
   params.voxel_size = 0.5f;
   int plain_failures = 0;

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include "random_points.hpp"
+
 #include <algorithm>
 #include <random>
 #include <vector>
@@ -10,16 +12,7 @@
 namespace v2xloc {
 namespace {
 
-template <class P>
-std::vector<P> random_points(std::size_t n, std::uint32_t seed, float scale) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(-scale, scale);
-  std::vector<P> pts(n);
-  for (auto& p : pts) {
-    for (int d = 0; d < P::RowsAtCompileTime; ++d) p[d] = u(rng);
-  }
-  return pts;
-}
+using test::random_points;
 
 template <class P>
 float sq(const P& a, const P& b) {
