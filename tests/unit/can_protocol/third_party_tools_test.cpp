@@ -8,6 +8,9 @@
 #include <fstream>
 #include <random>
 #include <sstream>
+#include <string>
+
+#include <unistd.h>
 
 #include "dbc_reader.hpp"
 #include "host_sim/canlog/candump_log.hpp"
@@ -19,7 +22,8 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path work_dir() {
-  const fs::path d = fs::path(V2XLOC_BINARY_DIR) / "test_work" / "can_protocol";
+  // Per process: ctest -j runs these tests concurrently, each in its own process.
+  const fs::path d = fs::path(V2XLOC_BINARY_DIR) / "test_work" / ("can_protocol_" + std::to_string(::getpid()));
   fs::create_directories(d);
   return d;
 }

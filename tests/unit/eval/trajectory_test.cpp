@@ -2,6 +2,9 @@
 #include "host_sim/eval/trajectory.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <string>
 
 #include <cmath>
 #include <cstdio>
@@ -23,7 +26,7 @@ StampedTrajectory make_curve(std::size_t n) {
 }
 
 TEST(StampedTrajectory, TumRoundTrip) {
-  const auto path = std::filesystem::temp_directory_path() / "v2xloc_tum_roundtrip.tum";
+  const auto path = std::filesystem::temp_directory_path() / ("v2xloc_tum_roundtrip_" + std::to_string(::getpid()) + ".tum");
   const StampedTrajectory in = make_curve(50);
   std::string error;
   ASSERT_TRUE(write_tum(path.string(), in, error)) << error;
@@ -39,7 +42,7 @@ TEST(StampedTrajectory, TumRoundTrip) {
 }
 
 TEST(StampedTrajectory, MalformedTumIsAnErrorWithLineNumber) {
-  const auto path = std::filesystem::temp_directory_path() / "v2xloc_tum_bad.tum";
+  const auto path = std::filesystem::temp_directory_path() / ("v2xloc_tum_bad_" + std::to_string(::getpid()) + ".tum");
   std::FILE* f = std::fopen(path.string().c_str(), "w");
   std::fputs("# header\n0 1 2 3 0 0 0 1\n0.1 1 2\n", f);
   std::fclose(f);
