@@ -53,7 +53,10 @@ void Localizer::configure(const LocalizerParams& params, const GeodeticOrigin& o
   track_count_ = 0;
   odom_T_body_ = Mat4d::Identity();
   gnss_divergent_fixes_ = 0;
+  frames_since_audit_ = 0;
   have_gnss_ = false;
+  last_gnss_enu_ = Vec3d::Zero();
+  last_gnss_sigma_ = 10.0;
   have_frame_ = false;
   last_frame_t_ = 0.0;
   last_speed_ = 0.0;
@@ -472,6 +475,7 @@ void Localizer::register_stereo(double t) {
 
 bool Localizer::audit_basin(const RegistrationResult& tracked) {
   ++counters_.basin_audits;
+  output_.basin_audited = true;
   const IcpTarget target = map_target();
   PoseSearchParams sp = params_.search;
   sp.radius = params_.audit_radius;

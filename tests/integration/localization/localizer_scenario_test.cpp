@@ -94,6 +94,32 @@ TEST(LocalizerScenario, ShortDriveFusesToCentimetres) {
   std::printf("init frame %d, valid %d, fused(valid) %.4f m, reg(valid) %.4f m, worst %.3f m, "
               "GNSS %.2f m\n", first, m.valid_frames, m.unaligned.fused_valid, m.unaligned.reg_valid,
               worst, m.unaligned.gps);
+
+  // configure() must reset every piece of state: a partial run (23 frames: the tracking audit's
+  // phase, the gates' windows, the odometry map all mid-way) followed by the full run again gives
+  // the first run's bits. (It once did not: the audit phase survived and changed later rows.)
+  const LocalizerCounters first_counters = stats.counters;
+  eval::RunOptions partial = options;
+  partial.max_frames = 23;
+  std::vector<eval::FrameRecord> scratch, again;
+  ASSERT_TRUE(eval::run_offline(reader, g_localizer, partial, scratch, stats, error)) << error;
+  ASSERT_TRUE(eval::run_offline(reader, g_localizer, options, again, stats, error)) << error;
+  ASSERT_EQ(again.size(), records.size());
+  int audits_first = 0, audits_again = 0;
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    audits_first += records[i].out.basin_audited ? 1 : 0;
+    audits_again += again[i].out.basin_audited ? 1 : 0;
+  }
+  std::printf("audits: first run %d, after a partial run %d\n", audits_first, audits_again);
+  EXPECT_EQ(stats.counters.basin_audits, first_counters.basin_audits);
+  EXPECT_EQ(stats.counters.global_searches, first_counters.global_searches);
+  EXPECT_EQ(stats.counters.tracking_registrations, first_counters.tracking_registrations);
+  EXPECT_EQ(stats.counters.registrations_fused, first_counters.registrations_fused);
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    EXPECT_TRUE(again[i].out.fused_pose == records[i].out.fused_pose) << "frame " << i;
+    EXPECT_EQ(again[i].out.registration_status, records[i].out.registration_status) << "frame " << i;
+    EXPECT_EQ(again[i].out.basin_audited, records[i].out.basin_audited) << "frame " << i;
+  }
   std::filesystem::remove_all(dir);
 }
 

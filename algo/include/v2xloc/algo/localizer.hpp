@@ -98,6 +98,7 @@ struct LocalizerFrameOutput {
   double fitness = 0.0;
   double inlier_rmse = 0.0;
   bool registration_fused = false;          // passed the gate (causal) and the EKF's NIS gate
+  bool basin_audited = false;               // the tracked basin was audited this frame
   // Stereo registration (tracking only, LiDAR + stereo configuration).
   bool stereo_attempted = false;
   bool stereo_fused = false;
