@@ -57,6 +57,9 @@ void Localizer::configure(const LocalizerParams& params, const GeodeticOrigin& o
   have_gnss_ = false;
   last_gnss_enu_ = Vec3d::Zero();
   last_gnss_sigma_ = 10.0;
+  have_heading_ = false;
+  heading_yaw_ = 0.0;
+  heading_t_ = 0.0;
   have_frame_ = false;
   last_frame_t_ = 0.0;
   last_speed_ = 0.0;
@@ -93,6 +96,7 @@ void Localizer::on_gnss(const GnssInput& in) {
   have_gnss_ = true;
   last_gnss_enu_ = enu;
   last_gnss_sigma_ = in.h_acc;
+  update_gnss_heading(in);
   if (ekf_.initialized()) {
     const EkfState s = ekf_.state();
     const double dx = s.pos_x - enu.x(), dy = s.pos_y - enu.y();
@@ -108,6 +112,27 @@ void Localizer::on_gnss(const GnssInput& in) {
   if (!params_.use_gnss || !ekf_.initialized()) return;
   ekf_.on_gnss(in.t, enu, in.h_acc, in.v_acc);
   ekf_all_.on_gnss(in.t, enu, in.h_acc, in.v_acc);
+}
+
+void Localizer::update_gnss_heading(const GnssInput& in) {
+  if (!params_.use_gnss_heading || !in.velocity_valid || !std::isfinite(in.vel_east) ||
+      !std::isfinite(in.vel_north) || !std::isfinite(in.speed_acc) || in.speed_acc < 0.0) {
+    return;
+  }
+  const double speed = std::sqrt(in.vel_east * in.vel_east + in.vel_north * in.vel_north);
+  // Forward motion only (reversing flips the course); the wheel speed must agree it is moving.
+  if (speed < params_.heading_min_speed || !have_vehicle_ || last_speed_ < params_.heading_min_speed) return;
+  if (det::atan2(in.speed_acc, speed) > params_.heading_max_sigma) return;
+  have_heading_ = true;
+  heading_yaw_ = det::atan2(in.vel_north, in.vel_east);  // ENU yaw: 0 = east, counter-clockwise
+  heading_t_ = in.t;
+  ++counters_.gnss_headings;
+}
+
+bool Localizer::gnss_heading_at(double t, double& yaw) const {
+  if (!have_heading_ || !(std::abs(t - heading_t_) <= params_.heading_max_age)) return false;
+  yaw = det::wrap_pi(heading_yaw_ + last_yaw_rate_ * (t - heading_t_));
+  return true;
 }
 
 MapInsertResult Localizer::on_map_cloud(const MapCloudInput& in) {
@@ -317,7 +342,21 @@ bool Localizer::global_search(double t, RegistrationResult& result) {
   // (1) Exhaustive, GNSS-seeded search over position and heading.
   PoseSearchParams sp = params_.search;
   sp.radius = region < sp.radius ? region : sp.radius;
+  double course = 0.0;
+  const bool heading_known = gnss_heading_at(t, course);
+  if (heading_known) {
+    sp.use_yaw_prior = true;
+    sp.yaw_prior = course;
+    sp.yaw_prior_tolerance = params_.heading_search_tolerance;
+    ++counters_.heading_searches;
+  }
   const PoseSearchResult searched = search_pose(scan_down_.span(), target, last_gnss_enu_, sp);
+  output_.searched = true;
+  output_.search_heading_used = heading_known;
+  output_.search_best_tight = searched.best_tight_fitness;
+  output_.search_runner_up_tight = searched.runner_up_tight_fitness;
+  output_.search_best_pose = searched.best.transform;
+  output_.search_runner_up_pose = searched.runner_up.transform;
   RegistrationResult best = searched.best;
   const bool distinct = searched.best_tight_fitness > 0.0 &&
                         searched.runner_up_tight_fitness <
@@ -366,7 +405,11 @@ bool Localizer::global_search(double t, RegistrationResult& result) {
   if (!result.ok()) return false;
   double track_distance = 0.0;
   const bool track_known = params_.use_gnss && track_gnss_distance(result.transform, track_distance);
+  const bool heading_agrees =
+      heading_known &&
+      std::abs(det::wrap_pi(yaw_of(result.transform.topLeftCorner<3, 3>()) - course)) <= params_.heading_search_tolerance;
   if (result.fitness < params_.global_min_fitness || result.inlier_rmse > params_.max_inlier_rmse ||
+      (heading_known && !heading_agrees) ||
       (params_.use_gnss && horizontal_distance(result.transform, last_gnss_enu_) > region) ||
       (track_known && track_distance > params_.track_max_distance)) {
     result.status = RegistrationStatus::kDidNotConverge;
@@ -375,7 +418,7 @@ bool Localizer::global_search(double t, RegistrationResult& result) {
   ++counters_.global_accepted;
   if (!ekf_.initialized() || failed_frames_ > params_.max_failed_frames) {
     // An unconfirmed candidate is reported (Reg. column) but neither gated nor fused.
-    if (!confirm_global(result.transform, track_known)) return false;
+    if (!confirm_global(result.transform, track_known || heading_agrees)) return false;
     initialize_filters(t, result.transform);
   }
   return true;

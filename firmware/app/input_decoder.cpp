@@ -33,12 +33,16 @@ CanInputKind InputDecoder::on_can(const protocol::CanFrame& frame, std::int64_t 
       if (protocol::unpack(frame, gnss_status_) != protocol::DecodeStatus::kOk) return rejected();
       have_status_ = true;
       return CanInputKind::kGnssPart;
+    case protocol::kGnssVelocityId:
+      if (protocol::unpack(frame, gnss_velocity_) != protocol::DecodeStatus::kOk) return rejected();
+      have_velocity_ = true;
+      return CanInputKind::kGnssPart;
     case protocol::kGnssTimeDopId: {
       // The time/DOP frame closes a fix (sent last: position, status, time). A fix without its
       // status frame is incomplete; without a position it is forwarded as invalid (no fix).
       if (protocol::unpack(frame, gnss_time_) != protocol::DecodeStatus::kOk) return rejected();
       if (!have_status_) {
-        have_position_ = false;
+        have_position_ = have_velocity_ = false;
         ++counters_.gnss_incomplete;
         return CanInputKind::kInvalid;
       }
@@ -56,7 +60,13 @@ CanInputKind InputDecoder::on_can(const protocol::CanFrame& frame, std::int64_t 
       g.v_acc = gnss_status_.v_acc_m;
       g.num_sats = gnss_status_.num_sats;
       g.hdop = gnss_time_.hdop;
-      have_position_ = have_status_ = false;
+      if (have_velocity_ && gnss_velocity_.valid) {
+        g.velocity_valid = true;
+        g.vel_east = gnss_velocity_.vel_east_mps;
+        g.vel_north = gnss_velocity_.vel_north_mps;
+        g.speed_acc = gnss_velocity_.speed_acc_mps;
+      }
+      have_position_ = have_status_ = have_velocity_ = false;
       sink.on_gnss(g);
       ++counters_.gnss_inputs;
       gnss_since_last_scan_ = true;

@@ -1,4 +1,4 @@
-// Wire -> localizer inputs. CAN frames (vehicle motion, GNSS position/status/time) are decoded with
+// Wire -> localizer inputs. CAN frames (vehicle motion, GNSS position/status/velocity/time) are decoded with
 // the DBC codec; point-cloud datagrams are reassembled and dequantized into an ego scan or a map
 // share. The firmware loop and the offline evaluator both feed this one class, so the offline
 // path applies exactly the firmware's quantization and decoding (bit-identical inputs).
@@ -89,9 +89,11 @@ class InputDecoder {
 
   protocol::GnssPosition gnss_position_{};
   protocol::GnssStatus gnss_status_{};
+  protocol::GnssVelocity gnss_velocity_{};
   protocol::GnssTimeDop gnss_time_{};
   bool have_position_ = false;
   bool have_status_ = false;
+  bool have_velocity_ = false;
   bool gnss_since_last_scan_ = false;
   bool gnss_flag_for_frame_ = false;
   std::uint32_t last_frame_index_ = 0;

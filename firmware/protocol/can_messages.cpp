@@ -29,6 +29,11 @@ constexpr Signal kHAcc{20, 12, false, 0.05, 0.0, 0.0, 204.75};
 constexpr Signal kVAcc{32, 12, false, 0.05, 0.0, 0.0, 204.75};
 constexpr Signal kNumSats{44, 6, false, 1.0, 0.0, 0.0, 63.0};
 constexpr Signal kFixType{50, 2, false, 1.0, 0.0, 0.0, 3.0};
+constexpr Signal kVelEast{0, 16, true, 0.01, 0.0, -327.68, 327.67};
+constexpr Signal kVelNorth{16, 16, true, 0.01, 0.0, -327.68, 327.67};
+constexpr Signal kVelUp{32, 11, true, 0.01, 0.0, -10.24, 10.23};
+constexpr Signal kSpeedAcc{43, 8, false, 0.02, 0.0, 0.0, 5.1};
+constexpr unsigned kVelocityValidBit = 51;
 constexpr Signal kGnssStatusCounter{52, 4, false, 1.0, 0.0, 0.0, 15.0};
 constexpr Signal kTimeOfWeek{0, 32, false, 0.001, 0.0, 0.0, 604799.999};
 constexpr Signal kWeek{32, 16, false, 1.0, 0.0, 0.0, 65535.0};
@@ -267,6 +272,31 @@ DecodeStatus unpack(const CanFrame& f, GnssStatus& m) {
   m.num_sats = static_cast<std::uint8_t>(decode(f.data, kNumSats, oor));
   m.fix_type = static_cast<GnssFixType>(get_bits_le(f.data, kFixType.start, kFixType.length));
   m.counter = static_cast<std::uint8_t>(get_bits_le(f.data, kGnssStatusCounter.start, 4));
+  return range_status(oor);
+}
+
+CanFrame pack(const GnssVelocity& m, PackStats* stats) {
+  CanFrame f = start_frame(kGnssVelocityId);
+  encode(f.data, kVelEast, m.vel_east_mps, stats);
+  encode(f.data, kVelNorth, m.vel_north_mps, stats);
+  encode(f.data, kVelUp, m.vel_up_mps, stats);
+  encode(f.data, kSpeedAcc, m.speed_acc_mps, stats);
+  put_flag(f.data, kVelocityValidBit, m.valid);
+  put_counter(f.data, kCounterBit52, m.counter);
+  seal(f);
+  return f;
+}
+
+DecodeStatus unpack(const CanFrame& f, GnssVelocity& m) {
+  const DecodeStatus s = check(f, kGnssVelocityId, true);
+  if (s != DecodeStatus::kOk) return s;
+  bool oor = false;
+  m.vel_east_mps = decode(f.data, kVelEast, oor);
+  m.vel_north_mps = decode(f.data, kVelNorth, oor);
+  m.vel_up_mps = decode(f.data, kVelUp, oor);
+  m.speed_acc_mps = decode(f.data, kSpeedAcc, oor);
+  m.valid = get_flag(f.data, kVelocityValidBit);
+  m.counter = static_cast<std::uint8_t>(get_bits_le(f.data, kCounterBit52, 4));
   return range_status(oor);
 }
 

@@ -16,6 +16,7 @@ inline constexpr std::uint32_t kVehicleMotionId = 0x120;
 inline constexpr std::uint32_t kGnssPositionId = 0x130;
 inline constexpr std::uint32_t kGnssStatusId = 0x131;
 inline constexpr std::uint32_t kGnssTimeDopId = 0x132;
+inline constexpr std::uint32_t kGnssVelocityId = 0x133;
 inline constexpr std::uint32_t kPosePositionId = 0x200;
 inline constexpr std::uint32_t kPoseAttitudeId = 0x201;
 inline constexpr std::uint32_t kPoseSigmaId = 0x202;
@@ -59,7 +60,7 @@ struct VehicleMotion {
   std::uint8_t counter = 0;      // 0..15
 };
 
-// ---- GNSS (0x130 position, 0x131 status, 0x132 time + DOP), 1-10 Hz ---------------------------
+// ---- GNSS (0x130 position, 0x131 status, 0x133 velocity, 0x132 time + DOP), 1-10 Hz ----------
 struct GnssPosition {
   double lat_deg = 0.0;  // [-90, 90], 1e-7 deg
   double lon_deg = 0.0;  // [-180, 180], 1e-7 deg
@@ -73,6 +74,17 @@ struct GnssStatus {
   double v_acc_m = 0.0;      // [0, 204.75], 0.05 m
   std::uint8_t num_sats = 0; // [0, 63]
   GnssFixType fix_type = GnssFixType::kNoFix;
+  std::uint8_t counter = 0;
+};
+
+// Doppler velocity of the same fix (0x133, sent before the closing 0x132): what a receiver's
+// NAV-PVT-style output carries; its course over ground is a heading while the vehicle moves.
+struct GnssVelocity {
+  double vel_east_mps = 0.0;   // [-327.68, 327.67], 0.01 m/s
+  double vel_north_mps = 0.0;  // [-327.68, 327.67], 0.01 m/s
+  double vel_up_mps = 0.0;     // [-10.24, 10.23], 0.01 m/s
+  double speed_acc_mps = 0.0;  // [0, 5.1], 0.02 m/s, receiver-reported 1 sigma per axis (saturates)
+  bool valid = false;          // the receiver has a velocity solution
   std::uint8_t counter = 0;
 };
 
@@ -186,6 +198,7 @@ CanFrame pack(const VehicleMotion& m, PackStats* stats = nullptr);
 CanFrame pack(const GnssPosition& m, PackStats* stats = nullptr);
 CanFrame pack(const GnssStatus& m, PackStats* stats = nullptr);
 CanFrame pack(const GnssTimeDop& m, PackStats* stats = nullptr);
+CanFrame pack(const GnssVelocity& m, PackStats* stats = nullptr);
 CanFrame pack(const PosePosition& m, PackStats* stats = nullptr);
 CanFrame pack(const PoseAttitude& m, PackStats* stats = nullptr);
 CanFrame pack(const PoseSigma& m, PackStats* stats = nullptr);
@@ -203,6 +216,7 @@ DecodeStatus unpack(const CanFrame& f, VehicleMotion& m);
 DecodeStatus unpack(const CanFrame& f, GnssPosition& m);
 DecodeStatus unpack(const CanFrame& f, GnssStatus& m);
 DecodeStatus unpack(const CanFrame& f, GnssTimeDop& m);
+DecodeStatus unpack(const CanFrame& f, GnssVelocity& m);
 DecodeStatus unpack(const CanFrame& f, PosePosition& m);
 DecodeStatus unpack(const CanFrame& f, PoseAttitude& m);
 DecodeStatus unpack(const CanFrame& f, PoseSigma& m);

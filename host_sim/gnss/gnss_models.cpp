@@ -1,6 +1,7 @@
 #include "host_sim/gnss/gnss_models.hpp"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
 
 #include "v2xloc/algo/det_math.hpp"
@@ -92,6 +93,66 @@ WlsSolution solve_position_wls(const std::vector<PseudorangeObservation>& obs,
   sol.vdop = std::sqrt(q(2, 2));
   sol.pdop = std::sqrt(q(0, 0) + q(1, 1) + q(2, 2));
   if (!std::isfinite(sol.pdop) || q(0, 0) < 0.0 || q(1, 1) < 0.0 || q(2, 2) < 0.0) sol.converged = false;
+  return sol;
+}
+
+VelocitySolution solve_velocity_wls(const std::vector<RangeRateObservation>& obs,
+                                    const v2xloc::GeodeticOrigin& frame, double exclusion_sigmas,
+                                    int max_exclusions, int min_used) {
+  VelocitySolution sol;
+  const std::size_t n = obs.size();
+  std::vector<bool> active(n, true);
+  // Model: rate_i = u_i . (v_sat_i - v_rx) + drift  ->  rate_i - u_i . v_sat_i = [-u_i 1] [v_rx; drift].
+  for (int pass = 0; pass <= max_exclusions; ++pass) {
+    Eigen::Matrix4d normal = Eigen::Matrix4d::Zero();
+    Eigen::Vector4d rhs = Eigen::Vector4d::Zero();
+    int used = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!active[i]) continue;
+      Eigen::Vector4d h;
+      h << -obs[i].los_ecef, 1.0;
+      const double w = 1.0 / (obs[i].sigma_mps * obs[i].sigma_mps);
+      normal += w * h * h.transpose();
+      rhs += w * h * (obs[i].range_rate_mps - obs[i].los_ecef.dot(obs[i].sat_vel_ecef));
+      ++used;
+    }
+    if (used < 4) return sol;
+    const Eigen::LDLT<Eigen::Matrix4d> ldlt(normal);
+    if (ldlt.info() != Eigen::Success) return sol;
+    const Eigen::Vector4d x = ldlt.solve(rhs);
+    if (!x.allFinite()) return sol;
+    // Largest normalized residual of the active observations.
+    double worst = 0.0, wssr = 0.0;
+    std::size_t worst_i = n;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!active[i]) continue;
+      const double predicted = obs[i].los_ecef.dot(obs[i].sat_vel_ecef - x.head<3>()) + x(3);
+      const double z = std::abs(obs[i].range_rate_mps - predicted) / obs[i].sigma_mps;
+      wssr += z * z;
+      if (z > worst) {
+        worst = z;
+        worst_i = i;
+      }
+    }
+    sol.vel_enu = frame.enu_from_ecef * x.head<3>();
+    sol.clock_drift_mps = x(3);
+    sol.used = used;
+    sol.unit_weight_sigma = used > 4 ? std::sqrt(wssr / (used - 4)) : 1.0;
+    sol.valid = true;
+    // Horizontal velocity DOP from the unweighted geometry (as the position's HDOP).
+    Eigen::Matrix4d hth = Eigen::Matrix4d::Zero();
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!active[i]) continue;
+      Eigen::Vector4d h;
+      h << -(frame.enu_from_ecef * obs[i].los_ecef), 1.0;
+      hth += h * h.transpose();
+    }
+    const Eigen::Matrix4d q = hth.ldlt().solve(Eigen::Matrix4d::Identity());
+    sol.hdop = std::sqrt(std::max(0.0, q(0, 0) + q(1, 1)));
+    if (worst <= exclusion_sigmas || used - 1 < min_used || pass == max_exclusions) break;
+    active[worst_i] = false;
+    ++sol.excluded;
+  }
   return sol;
 }
 

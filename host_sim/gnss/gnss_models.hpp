@@ -58,4 +58,29 @@ WlsSolution solve_position_wls(const std::vector<PseudorangeObservation>& obs,
                                const Eigen::Vector4d& initial, int max_iterations,
                                const v2xloc::GeodeticOrigin& frame);
 
+// One Doppler measurement as a range rate (m/s): d/dt of the pseudorange, i.e. the projection of
+// the satellite-receiver relative velocity on the line of sight plus the receiver clock drift.
+struct RangeRateObservation {
+  Eigen::Vector3d los_ecef;       // unit vector receiver -> satellite (from the receiver's fix)
+  Eigen::Vector3d sat_vel_ecef;   // broadcast-ephemeris satellite velocity
+  double range_rate_mps = 0.0;
+  double sigma_mps = 0.1;         // a-priori sigma (same weighting model as the code)
+};
+
+struct VelocitySolution {
+  Eigen::Vector3d vel_enu = Eigen::Vector3d::Zero();
+  double clock_drift_mps = 0.0;
+  double hdop = 0.0;              // velocity DOP of the used geometry (horizontal)
+  double unit_weight_sigma = 1.0; // a-posteriori: sqrt(weighted residual sum / (used - 4)), 1 if used = 4
+  int used = 0, excluded = 0;     // observations in the solution / dropped by the residual test
+  bool valid = false;
+};
+
+// Weighted least squares for receiver velocity + clock drift (linear: one solve), with receiver-
+// style fault exclusion: while the largest normalized residual exceeds exclusion_sigmas and more
+// than min_used observations remain, drop it and solve again (at most max_exclusions times).
+VelocitySolution solve_velocity_wls(const std::vector<RangeRateObservation>& obs,
+                                    const v2xloc::GeodeticOrigin& frame, double exclusion_sigmas = 4.0,
+                                    int max_exclusions = 3, int min_used = 5);
+
 }  // namespace v2xloc::sim::gnss

@@ -27,7 +27,8 @@ double apriori_sigma(double sigma_uere, double sin_el, double cn0_dbhz) {
 
 GnssSimulator::GnssSimulator(const GnssConfig& config, const RayCaster& world,
                              const v2xloc::GeodeticOrigin& origin, std::uint64_t seed)
-    : cfg_(config), world_(world), origin_(origin), rng_(derive_seed(seed, {0x474E5353ull})) {  // "GNSS"
+    : cfg_(config), world_(world), origin_(origin), rng_(derive_seed(seed, {0x474E5353ull})),  // "GNSS"
+      doppler_rng_(derive_seed(seed, {0x444F50ull})) {                                  // "DOP"
   // Walker-like constellations: planes evenly spaced in RAAN, satellites evenly in argument of
   // latitude with a per-plane phase offset (GPS 24/6, Galileo Walker 24/3/1).
   auto add_constellation = [&](bool galileo, int planes, int per_plane, double radius, double incl_deg,
@@ -66,6 +67,12 @@ Eigen::Vector3d GnssSimulator::satellite_ecef(const Satellite& sat, double t) co
   return sat.radius_m * Eigen::Vector3d(cu * co - su * so * ci, cu * so + su * co * ci, su * si);
 }
 
+// Central difference of the orbit model (the receiver gets the same from the broadcast ephemeris).
+Eigen::Vector3d GnssSimulator::satellite_velocity_ecef(const Satellite& sat, double t) const {
+  constexpr double kHalfStep = 0.5;  // s
+  return (satellite_ecef(sat, t + kHalfStep) - satellite_ecef(sat, t - kHalfStep)) / (2.0 * kHalfStep);
+}
+
 void GnssSimulator::propagate_errors(double dt) {
   for (Satellite& s : sats_) {
     s.sisre_m = gnss::gauss_markov_step(s.sisre_m, cfg_.sisre_sigma_m, cfg_.sisre_tau_s, dt, rng_.gaussian());
@@ -101,8 +108,8 @@ void GnssSimulator::discover_facades(const Eigen::Vector3d& antenna_enu) {
 }
 
 void GnssSimulator::find_reflections(const Eigen::Vector3d& antenna_enu, const Eigen::Vector3d& los,
-                                     std::vector<double>& excess_m) const {
-  excess_m.clear();
+                                     std::vector<Reflection>& out) const {
+  out.clear();
   const Eigen::Vector3d start = antenna_enu + Eigen::Vector3d(0, 0, kRayStartLift);
   for (const Facade& f : facades_) {
     const double s_dot_n = los.dot(f.normal);
@@ -119,11 +126,11 @@ void GnssSimulator::find_reflections(const Eigen::Vector3d& antenna_enu, const E
     const Eigen::Vector3d bounce = start + hit.range * d + 0.01 * f.normal;
     RayHit sky;
     if (world_.cast(bounce, los, kSkyRayRange, sky)) continue;
-    excess_m.push_back(2.0 * h * s_dot_n);          // image-antenna geometry: 2 h cos(incidence)
+    out.push_back({2.0 * h * s_dot_n, d});          // image-antenna geometry: 2 h cos(incidence)
   }
 }
 
-GnssFix GnssSimulator::fix(double t, const Eigen::Vector3d& antenna_enu) {
+GnssFix GnssSimulator::fix(double t, const Eigen::Vector3d& antenna_enu, const Eigen::Vector3d& antenna_velocity_enu) {
   const double dt = started_ ? t - last_t_ : 0.0;
   if (dt > 0.0) propagate_errors(dt);
   started_ = true;
@@ -163,30 +170,36 @@ GnssFix GnssSimulator::fix(double t, const Eigen::Vector3d& antenna_enu) {
 
   std::vector<gnss::PseudorangeObservation> obs;
   std::vector<gnss::ReflectedPath> paths;
+  std::vector<gnss::RangeRateObservation> rates;
   for (const Candidate& c : visible) {
     Satellite& sat = sats_[c.index];
     const double sin_el = det::sin(c.elevation);
     const Eigen::Vector3d start = antenna_enu + Eigen::Vector3d(0, 0, kRayStartLift);
     RayHit block;
     const bool los_clear = !world_.cast(start, c.los_enu, kSkyRayRange, block);
-    find_reflections(antenna_enu, c.los_enu, excess_scratch_);
+    find_reflections(antenna_enu, c.los_enu, reflections_);
     double cn0 = cfg_.cn0_zenith_dbhz - kCn0ElevationSpanDb * (1.0 - sin_el);
     paths.clear();
     double path_error = 0.0;
+    Eigen::Vector3d arrival = c.los_enu;  // direction the tracked signal comes from
     if (los_clear) {
       // Multipath on a line-of-sight signal, paper eq. 1. a_k: the facade's reflection coefficient
       // scaled by the correlator's in-phase share (1 + cos theta_k) / 2, theta_k the carrier phase
       // of the reflected path; phi_k: the reflection's half-cycle phase shift as range (lambda / 2).
-      for (double excess : excess_scratch_) {
+      for (const Reflection& r : reflections_) {
+        const double excess = r.excess_m;
         const double theta = 2.0 * det::kPi * excess / wavelength + det::kPi;
         const double a = std::clamp(cfg_.reflection_amplitude * 0.5 * (1.0 + det::cos(theta)), 1e-3, 1.0);
         paths.push_back({a, excess, 0.5 * wavelength});
       }
       path_error = gnss::multipath_delay_m(paths.data(), paths.size());
-    } else if (!excess_scratch_.empty()) {
+    } else if (!reflections_.empty()) {
       // NLOS: the receiver tracks the shortest reflection alone (a = 1 in eq. 1), weaker signal.
-      const double excess = *std::min_element(excess_scratch_.begin(), excess_scratch_.end());
-      paths.push_back({1.0, excess, 0.5 * wavelength});
+      const Reflection& shortest = *std::min_element(
+          reflections_.begin(), reflections_.end(),
+          [](const Reflection& a, const Reflection& b) { return a.excess_m < b.excess_m; });
+      arrival = shortest.arrival_dir;
+      paths.push_back({1.0, shortest.excess_m, 0.5 * wavelength});
       path_error = gnss::multipath_delay_m(paths.data(), paths.size());
       cn0 -= cfg_.reflection_loss_db - 20.0 * std::log10(std::max(cfg_.reflection_amplitude, 1e-3));
       ++out.num_nlos;
@@ -217,6 +230,18 @@ GnssFix GnssSimulator::fix(double t, const Eigen::Vector3d& antenna_enu) {
     o.pseudorange_m = pseudorange - iono_model - zenith_model * mapping;
     o.sigma_m = apriori_sigma(cfg_.sigma_uere_m, sin_el, cfg_.cn0_weighting ? cn0 : 45.0);
     obs.push_back(o);
+
+    // Range rate: the satellite's motion along the true line of sight, the antenna's along the
+    // arrival direction (mirrored for NLOS), the clock drift, and tracking-loop noise.
+    const Eigen::Vector3d u_ecef = (c.sat_ecef - rx_ecef).normalized();
+    const Eigen::Vector3d sat_vel = satellite_velocity_ecef(sats_[c.index], t);
+    const double rate_noise = cfg_.doppler_noise_mps_at_45dbhz * std::pow(10.0, (45.0 - cn0) / 20.0);
+    gnss::RangeRateObservation rr;
+    rr.sat_vel_ecef = sat_vel;
+    rr.range_rate_mps = u_ecef.dot(sat_vel) - arrival.dot(antenna_velocity_enu) + clock_drift_mps_ +
+                        rate_noise * doppler_rng_.gaussian();
+    rr.sigma_mps = apriori_sigma(cfg_.sigma_doppler_uere_mps, sin_el, cfg_.cn0_weighting ? cn0 : 45.0);
+    rates.push_back(rr);
   }
 
   out.num_sats = static_cast<int>(obs.size());
@@ -237,6 +262,22 @@ GnssFix GnssSimulator::fix(double t, const Eigen::Vector3d& antenna_enu) {
   out.v_acc_m = cfg_.sigma_uere_m * sol.vdop;
   out.enu_estimate = v2xloc::ecef_to_enu(origin_, sol.state.head<3>());
   out.valid = geo.status != v2xloc::GeodesyStatus::kInvalidInput && sol.pdop < 50.0;
+
+  // Velocity: line-of-sight vectors from the receiver's own position solution.
+  for (std::size_t i = 0; i < rates.size(); ++i) {
+    rates[i].los_ecef = (obs[i].sat_ecef - sol.state.head<3>()).normalized();
+  }
+  const gnss::VelocitySolution vel = gnss::solve_velocity_wls(rates, origin_, cfg_.doppler_exclusion_sigmas);
+  out.num_velocity_excluded = vel.excluded;
+  if (out.valid && vel.valid) {
+    out.vel_east = vel.vel_enu.x();
+    out.vel_north = vel.vel_enu.y();
+    out.vel_up = vel.vel_enu.z();
+    // Reported accuracy: DOP times the a-priori sigma, inflated by the fit's residuals (a receiver
+    // sees inconsistent range rates even when it cannot tell which one is reflected).
+    out.speed_acc_mps = cfg_.sigma_doppler_uere_mps * vel.hdop * std::max(1.0, vel.unit_weight_sigma);
+    out.velocity_valid = true;
+  }
   return out;
 }
 

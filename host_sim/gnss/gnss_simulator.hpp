@@ -9,6 +9,10 @@
 //         code-carrier filter + white code noise scaled by C/N0.
 // Direct path blocked: tracked through the strongest facade reflection (NLOS, full excess delay,
 // lower C/N0), or lost when no reflection reaches the antenna.
+// Doppler per satellite as a range rate: u . (v_sat - v_rx) + clock drift + noise scaled by C/N0;
+// an NLOS signal's rate is that of the mirrored antenna, u . v_sat - d . v_rx with d the reflected
+// arrival direction (no error when driving parallel to the facade, 2 (v.n)(u.n) towards it).
+// Velocity fix: weighted least squares with residual-based exclusion (receiver FDE).
 #pragma once
 
 #include <Eigen/Core>
@@ -64,6 +68,9 @@ struct GnssConfig {
   // reduce its weight in the fix (true = RTKLIB-style C/N0 weighting, a survey-grade receiver).
   bool cn0_weighting = false;
   int max_lsq_iterations = 10;
+  double doppler_noise_mps_at_45dbhz = 0.05;  // white range-rate noise (PLL/FLL), C/N0 scaled
+  double sigma_doppler_uere_mps = 0.1;        // what the receiver believes its range-rate error is
+  double doppler_exclusion_sigmas = 4.0;      // FDE: normalized residual that drops a satellite
 };
 
 struct GnssFix {
@@ -73,19 +80,26 @@ struct GnssFix {
   int num_sats = 0;                       // used in the fix
   double hdop = 0.0, pdop = 0.0;
   bool valid = false;
+  // Doppler velocity (ENU, m/s) and its reported accuracy (sigma_doppler_uere * velocity HDOP,
+  // inflated by the a-posteriori unit-weight sigma when the range rates disagree).
+  double vel_east = 0.0, vel_north = 0.0, vel_up = 0.0;
+  double speed_acc_mps = 0.0;
+  bool velocity_valid = false;
   // Truth-side diagnostics for tests (not on the wire):
   Eigen::Vector3d enu_estimate = Eigen::Vector3d::Zero();
   int num_visible = 0;   // above the elevation mask (before blocking)
   int num_nlos = 0;      // tracked through a reflection only
   int num_blocked = 0;   // lost: blocked with no reflection
+  int num_velocity_excluded = 0;  // range rates dropped by the velocity fix's residual test
 };
 
 class GnssSimulator {
  public:
   GnssSimulator(const GnssConfig& config, const RayCaster& world, const v2xloc::GeodeticOrigin& origin,
                 std::uint64_t seed);
-  // Fix at time t (seconds, increasing) for the true antenna position in the world's ENU frame.
-  GnssFix fix(double t, const Eigen::Vector3d& antenna_enu);
+  // Fix at time t (seconds, increasing) for the true antenna position and velocity in the world's
+  // ENU frame.
+  GnssFix fix(double t, const Eigen::Vector3d& antenna_enu, const Eigen::Vector3d& antenna_velocity_enu);
 
  private:
   struct Satellite {
@@ -105,18 +119,24 @@ class GnssSimulator {
 
   void propagate_errors(double dt);
   Eigen::Vector3d satellite_ecef(const Satellite& sat, double t) const;
+  Eigen::Vector3d satellite_velocity_ecef(const Satellite& sat, double t) const;
   void discover_facades(const Eigen::Vector3d& antenna_enu);
-  // Specular facade reflections that reach the antenna from direction los: excess path lengths.
+  struct Reflection {
+    double excess_m = 0.0;           // extra path length over the direct one
+    Eigen::Vector3d arrival_dir;     // ENU direction the reflected signal arrives from
+  };
+  // Specular facade reflections that reach the antenna from direction los.
   void find_reflections(const Eigen::Vector3d& antenna_enu, const Eigen::Vector3d& los,
-                        std::vector<double>& excess_m) const;
+                        std::vector<Reflection>& out) const;
 
   GnssConfig cfg_;
   const RayCaster& world_;
   v2xloc::GeodeticOrigin origin_;
   Rng rng_;
+  Rng doppler_rng_;  // own stream: adding Doppler left the position errors' draws unchanged
   std::vector<Satellite> sats_;
   std::vector<Facade> facades_;
-  std::vector<double> excess_scratch_;
+  std::vector<Reflection> reflections_;
   double last_t_ = 0.0;
   double tropo_true_scale_ = 1.0;  // true zenith delay / receiver's model (drawn per run)
   bool started_ = false;

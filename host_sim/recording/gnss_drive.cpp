@@ -25,7 +25,13 @@ GnssDrive simulate_gnss_drive(const Scenario& scenario, World& world, const v2xl
     const double t = k / rate_hz;
     world.set_time(t);
     const Eigen::Vector3d antenna = scenario.ego.body_to_enu(t) * antenna_in_body;
-    const GnssFix fix = gnss.fix(t, antenna);
+    // Antenna velocity by a central difference of the trajectory (includes the lever arm's part).
+    constexpr double kHalfStep = 0.005;  // s
+    const Eigen::Vector3d velocity = (scenario.ego.body_to_enu(t + kHalfStep) * antenna_in_body -
+                                      scenario.ego.body_to_enu(t - kHalfStep) * antenna_in_body) /
+                                     (2.0 * kHalfStep);
+    const GnssFix fix = gnss.fix(t, antenna, velocity);
+    out.true_velocity.push_back(velocity);
     out.fixes.push_back(fix);
     out.true_antenna.push_back(antenna);
     if (!fix.valid) continue;
@@ -35,7 +41,15 @@ GnssDrive simulate_gnss_drive(const Scenario& scenario, World& world, const v2xl
     hmin = std::min(hmin, fix.hdop);
     out.hdop_max = std::max(out.hdop_max, fix.hdop);
     ++out.valid;
+    if (fix.velocity_valid) {
+      const Eigen::Vector2d v(fix.vel_east, fix.vel_north);
+      const double ve = (v - velocity.head<2>()).norm();
+      out.mean_velocity_error += ve;
+      out.max_velocity_error = std::max(out.max_velocity_error, ve);
+      ++out.velocity_valid;
+    }
   }
+  if (out.velocity_valid > 0) out.mean_velocity_error /= out.velocity_valid;
   world.set_time(0.0);
   if (out.valid > 0) {
     out.mean_h_error = sum / out.valid;

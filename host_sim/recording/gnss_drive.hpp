@@ -16,7 +16,10 @@ namespace v2xloc::sim {
 struct GnssDrive {
   std::vector<GnssFix> fixes;                 // one per epoch (invalid ones included)
   std::vector<Eigen::Vector3d> true_antenna;  // ENU, same index as fixes
+  std::vector<Eigen::Vector3d> true_velocity; // ENU m/s, same index
   int valid = 0;
+  int velocity_valid = 0;
+  double mean_velocity_error = 0.0, max_velocity_error = 0.0;  // horizontal, m/s
   double mean_h_error = 0.0, max_h_error = 0.0;
   double hdop_min = 0.0, hdop_max = 0.0;      // over valid fixes
 };

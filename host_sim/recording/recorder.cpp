@@ -264,14 +264,18 @@ bool generate_recording(const RecorderConfig& cfg, RecordingSummary& summary, st
   {
     const v2xloc::GeodeticOrigin origin = v2xloc::make_geodetic_origin(cfg.origin_lat_deg, cfg.origin_lon_deg, cfg.origin_alt_m);
     const GnssDrive drive = simulate_gnss_drive(sc, world, origin, cfg.seed, cfg.gnss_rate_hz, antenna_in_body);
-    std::string csv = "# t lat_deg lon_deg alt_m h_acc_m v_acc_m num_sats hdop pdop valid east_m north_m up_m true_east_m true_north_m\n";
+    std::string csv = "# t lat_deg lon_deg alt_m h_acc_m v_acc_m num_sats hdop pdop valid east_m north_m up_m true_east_m true_north_m"
+                      " vel_east vel_north speed_acc velocity_valid true_vel_east true_vel_north\n";
     for (std::size_t k = 0; k < drive.fixes.size(); ++k) {
       const GnssFix& f = drive.fixes[k];
       const Eigen::Vector3d& ant = drive.true_antenna[k];
-      char line[400];
-      std::snprintf(line, sizeof line, "%.3f %.9f %.9f %.3f %.3f %.3f %d %.2f %.2f %d %.3f %.3f %.3f %.3f %.3f\n", f.t,
+      const Eigen::Vector3d& vel = drive.true_velocity[k];
+      char line[512];
+      std::snprintf(line, sizeof line,
+                    "%.3f %.9f %.9f %.3f %.3f %.3f %d %.2f %.2f %d %.3f %.3f %.3f %.3f %.3f %.3f %.3f %.3f %d %.3f %.3f\n", f.t,
                     f.lat_deg, f.lon_deg, f.alt_m, f.h_acc_m, f.v_acc_m, f.num_sats, f.hdop, f.pdop, f.valid ? 1 : 0,
-                    f.enu_estimate.x(), f.enu_estimate.y(), f.enu_estimate.z(), ant.x(), ant.y());
+                    f.enu_estimate.x(), f.enu_estimate.y(), f.enu_estimate.z(), ant.x(), ant.y(), f.vel_east, f.vel_north,
+                    f.speed_acc_mps, f.velocity_valid ? 1 : 0, vel.x(), vel.y());
       csv += line;
       fixes.push_back(f);
       if (f.valid) top.gnss_fixes.push_back(f.enu_estimate.head<2>());
@@ -295,6 +299,8 @@ bool generate_recording(const RecorderConfig& cfg, RecordingSummary& summary, st
     gnss_json.set("max_horizontal_error_m", summary.gnss_max_h_error);
     gnss_json.set("hdop_min", summary.hdop_min);
     gnss_json.set("hdop_max", summary.hdop_max);
+    gnss_json.set("mean_velocity_error_mps", drive.mean_velocity_error);
+    gnss_json.set("max_velocity_error_mps", drive.max_velocity_error);
   }
 
 #if V2XLOC_SIM_HAVE_CANLOG && V2XLOC_SIM_HAVE_VEHICLE
@@ -343,9 +349,17 @@ bool generate_recording(const RecorderConfig& cfg, RecordingSummary& summary, st
       td.time_of_week_s = gps_s - 604800.0 * td.week;
       td.hdop = f.hdop;
       td.pdop = f.pdop;
+      protocol::GnssVelocity vel;
+      vel.vel_east_mps = f.vel_east;
+      vel.vel_north_mps = f.vel_north;
+      vel.vel_up_mps = f.vel_up;
+      vel.speed_acc_mps = f.speed_acc_mps;
+      vel.valid = f.velocity_valid;
+      vel.counter = status.counter;  // one counter step per fix, like the status frame
       if (f.valid) out.push_back({us, 1, protocol::pack(pos)});
       out.push_back({us, 2, protocol::pack(status)});
-      out.push_back({us, 3, protocol::pack(td)});
+      out.push_back({us, 3, protocol::pack(vel)});
+      out.push_back({us, 4, protocol::pack(td)});
     }
     std::stable_sort(out.begin(), out.end(),
                      [](const Timed& a, const Timed& b) { return a.us < b.us || (a.us == b.us && a.order < b.order); });
@@ -359,7 +373,7 @@ bool generate_recording(const RecorderConfig& cfg, RecordingSummary& summary, st
     can_json.set("format", "candump -L: (unix_seconds.microseconds) can0 ID#HEXDATA");
     can_json.set("frames", writer.frames_written());
     can_json.set("vehicle_motion", "0x120 at 100 Hz (wheel speed, yaw rate)");
-    can_json.set("gnss", "0x130 position, 0x131 status, 0x132 time + DOP at the GNSS rate");
+    can_json.set("gnss", "0x130 position, 0x131 status, 0x133 velocity, 0x132 time + DOP at the GNSS rate");
     can_json.set("codec", "firmware/protocol/can_messages.hpp");
   }
 #endif

@@ -3,7 +3,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 
+#include "firmware/app/input_decoder.hpp"
 #include "firmware/protocol/can_messages.hpp"
 #include "tools/cloud_io/point_cloud.hpp"
 
@@ -12,48 +14,35 @@ namespace {
 
 Mat4d to_mat(const Eigen::Isometry3d& iso) { return iso.matrix(); }
 
-// GNSS arrives as three CAN frames (position, status, time/DOP) with the same stamp; a fix is
-// complete when all three of one stamp were seen.
-class GnssAssembler {
+// The decoder's sink: forwards to the localizer and accounts the time spent in it.
+class TimedPort final : public firmware::LocalizerPort {
  public:
-  bool push(const sim::CanLogFrame& f, GnssInput& out, std::size_t& errors) {
-    protocol::CanFrame frame;
-    frame.id = f.id;
-    frame.dlc = f.dlc;
-    for (int i = 0; i < 8; ++i) frame.data[i] = f.data[i];
-    if (f.id == protocol::kGnssPositionId) {
-      if (protocol::unpack(frame, pos_) != protocol::DecodeStatus::kOk) return fail(errors);
-      pos_t_ = f.t;
-    } else if (f.id == protocol::kGnssStatusId) {
-      if (protocol::unpack(frame, status_) != protocol::DecodeStatus::kOk) return fail(errors);
-      status_t_ = f.t;
-    } else if (f.id == protocol::kGnssTimeDopId) {
-      if (protocol::unpack(frame, time_) != protocol::DecodeStatus::kOk) return fail(errors);
-      if (std::abs(pos_t_ - f.t) > 1e-4 || std::abs(status_t_ - f.t) > 1e-4) return false;
-      out.t = f.t;
-      out.lat_deg = pos_.lat_deg;
-      out.lon_deg = pos_.lon_deg;
-      out.alt_m = status_.alt_m;
-      out.h_acc = status_.h_acc_m;
-      out.v_acc = status_.v_acc_m;
-      out.num_sats = status_.num_sats;
-      out.hdop = time_.hdop;
-      out.valid = status_.fix_type == protocol::GnssFixType::kFix3D ||
-                  status_.fix_type == protocol::GnssFixType::kFix2D;
-      return true;
-    }
-    return false;
+  explicit TimedPort(Localizer& localizer) : localizer_(localizer) {}
+  void on_vehicle(const VehicleInput& in) override { timed([&] { localizer_.on_vehicle(in); }); }
+  void on_gnss(const GnssInput& in) override {
+    timed([&] { localizer_.on_gnss(in); });
+    last_gnss = in;
+    ++gnss_inputs;
   }
+  MapInsertResult on_map_cloud(const MapCloudInput& in) override { return localizer_.on_map_cloud(in); }
+  const LocalizerFrameOutput& on_ego_scan(const EgoScanInput& in) override { return localizer_.on_ego_scan(in); }
+  double take_seconds() {
+    const double s = seconds_;
+    seconds_ = 0.0;
+    return s;
+  }
+  GnssInput last_gnss{};
+  std::size_t gnss_inputs = 0;
 
  private:
-  bool fail(std::size_t& errors) {
-    ++errors;
-    return false;
+  template <class F>
+  void timed(F&& f) {
+    const auto t0 = std::chrono::steady_clock::now();
+    f();
+    seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
-  protocol::GnssPosition pos_;
-  protocol::GnssStatus status_;
-  protocol::GnssTimeDop time_;
-  double pos_t_ = -1.0, status_t_ = -2.0;
+  Localizer& localizer_;
+  double seconds_ = 0.0;
 };
 
 std::uint32_t source_id_of(const sim::MapCloudInfo& info) {
@@ -79,7 +68,9 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
                                             : std::min(options.max_frames, reader.frame_count());
   records.assign(static_cast<std::size_t>(frames), FrameRecord{});
   std::size_t next_can = 0, next_cloud = 0;
-  GnssAssembler gnss_assembler;
+  // CAN goes through the firmware's decoder (same DBC decoding, same fix assembly, same checks).
+  auto decoder = std::make_unique<firmware::InputDecoder>(0);
+  TimedPort port(localizer);
   bool has_gnss = false;
   Eigen::Vector3d gnss_body = Eigen::Vector3d::Zero();
   cloud_io::PointCloud cloud, scan;
@@ -97,34 +88,21 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
     // 1. CAN frames up to t.
     for (; next_can < can.size() && can[next_can].t <= t + 1e-9; ++next_can) {
       const sim::CanLogFrame& f = can[next_can];
-      if (f.id == protocol::kVehicleMotionId) {
-        protocol::CanFrame frame;
-        frame.id = f.id;
-        frame.dlc = f.dlc;
-        for (int b = 0; b < 8; ++b) frame.data[b] = f.data[b];
-        protocol::VehicleMotion m;
-        if (protocol::unpack(frame, m) != protocol::DecodeStatus::kOk) {
-          ++stats.can_decode_errors;
-          continue;
-        }
-        if (!m.speed_valid || !m.yaw_rate_valid) continue;
-        const auto t0 = Clock::now();
-        localizer.on_vehicle(VehicleInput{f.t, m.wheel_speed_mps, m.yaw_rate_rps});
-        frame_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
-        continue;
-      }
-      GnssInput fix;
-      if (gnss_assembler.push(f, fix, stats.can_decode_errors)) {
-        const auto t0 = Clock::now();
-        localizer.on_gnss(fix);
-        frame_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
-        if (fix.valid) {
-          const Vec3d enu = geodetic_to_enu(origin, GeodeticPoint{fix.lat_deg, fix.lon_deg, fix.alt_m});
-          gnss_body = enu - options.gnss_antenna_in_body;  // roll = pitch = 0: the lever is vertical
-          has_gnss = true;
-        }
+      protocol::CanFrame frame;
+      frame.id = f.id;
+      frame.dlc = f.dlc;
+      for (int b = 0; b < 8; ++b) frame.data[b] = f.data[b];
+      const firmware::CanInputKind kind =
+          decoder->on_can(frame, static_cast<std::int64_t>(std::llround(f.t * 1e9)), port);
+      if (kind == firmware::CanInputKind::kRejected) ++stats.can_decode_errors;
+      if (kind == firmware::CanInputKind::kGnssFix && port.last_gnss.valid) {
+        const GnssInput& fix = port.last_gnss;
+        const Vec3d enu = geodetic_to_enu(origin, GeodeticPoint{fix.lat_deg, fix.lon_deg, fix.alt_m});
+        gnss_body = enu - options.gnss_antenna_in_body;  // roll = pitch = 0: the lever is vertical
+        has_gnss = true;
       }
     }
+    frame_seconds += port.take_seconds();
     rec.has_gnss = has_gnss;
     rec.gnss_body = gnss_body;
     // 2. Map clouds up to t.

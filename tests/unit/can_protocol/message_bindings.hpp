@@ -105,6 +105,24 @@ inline std::vector<MessageBinding> message_bindings() {
                  v = {{"TimeOfWeek", m.time_of_week_s}, {"Week", m.week}, {"Hdop", m.hdop}, {"Pdop", m.pdop}};
                  return st;
                }});
+  b.push_back({kGnssVelocityId,
+               [](const Values& v, PackStats* s) {
+                 GnssVelocity m;
+                 m.vel_east_mps = get(v, "VelEast");
+                 m.vel_north_mps = get(v, "VelNorth");
+                 m.vel_up_mps = get(v, "VelUp");
+                 m.speed_acc_mps = get(v, "SpeedAccuracy");
+                 m.valid = get(v, "VelocityValid") != 0.0;
+                 m.counter = as<std::uint8_t>(v, "Counter");
+                 return pack(m, s);
+               },
+               [](const CanFrame& f, Values& v) {
+                 GnssVelocity m;
+                 const auto st = unpack(f, m);
+                 v = {{"VelEast", m.vel_east_mps}, {"VelNorth", m.vel_north_mps}, {"VelUp", m.vel_up_mps},
+                      {"SpeedAccuracy", m.speed_acc_mps}, {"VelocityValid", m.valid ? 1.0 : 0.0}, {"Counter", m.counter}};
+                 return st;
+               }});
   b.push_back({kPosePositionId,
                [](const Values& v, PackStats* s) {
                  PosePosition m;

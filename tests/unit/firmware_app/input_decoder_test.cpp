@@ -112,6 +112,7 @@ TEST(InputDecoder, GnssFixIsAssembledFromPositionStatusAndTime) {
   EXPECT_NEAR(g.h_acc, 2.5, 0.05);
   EXPECT_EQ(g.num_sats, 11);
   EXPECT_NEAR(g.hdop, 1.2, 0.05);
+  EXPECT_FALSE(g.velocity_valid) << "no velocity frame in this fix";
 
   // No position frame (receiver without a fix): forwarded as invalid.
   st.fix_type = protocol::GnssFixType::kNoFix;
@@ -119,6 +120,41 @@ TEST(InputDecoder, GnssFixIsAssembledFromPositionStatusAndTime) {
   EXPECT_EQ(dec->on_can(protocol::pack(td), kEpoch + 400'000'000, sink), CanInputKind::kGnssFix);
   ASSERT_EQ(sink.gnss.size(), 2u);
   EXPECT_FALSE(sink.gnss[1].valid);
+
+  // A fix with its Doppler velocity (0x133 before the closing time frame).
+  st.fix_type = protocol::GnssFixType::kFix3D;
+  protocol::GnssVelocity vel;
+  vel.vel_east_mps = 7.25;
+  vel.vel_north_mps = -3.5;
+  vel.speed_acc_mps = 0.14;
+  vel.valid = true;
+  dec->on_can(protocol::pack(pos), kEpoch + 600'000'000, sink);
+  dec->on_can(protocol::pack(st), kEpoch + 600'000'000, sink);
+  EXPECT_EQ(dec->on_can(protocol::pack(vel), kEpoch + 600'000'000, sink), CanInputKind::kGnssPart);
+  EXPECT_EQ(dec->on_can(protocol::pack(td), kEpoch + 600'000'000, sink), CanInputKind::kGnssFix);
+  ASSERT_EQ(sink.gnss.size(), 3u);
+  EXPECT_TRUE(sink.gnss[2].velocity_valid);
+  EXPECT_NEAR(sink.gnss[2].vel_east, 7.25, 0.005);
+  EXPECT_NEAR(sink.gnss[2].vel_north, -3.5, 0.005);
+  EXPECT_NEAR(sink.gnss[2].speed_acc, 0.14, 0.01);
+  // The velocity belongs to that fix only: the next fix without 0x133 has none.
+  dec->on_can(protocol::pack(pos), kEpoch + 800'000'000, sink);
+  dec->on_can(protocol::pack(st), kEpoch + 800'000'000, sink);
+  dec->on_can(protocol::pack(td), kEpoch + 800'000'000, sink);
+  ASSERT_EQ(sink.gnss.size(), 4u);
+  EXPECT_FALSE(sink.gnss[3].velocity_valid);
+  // A corrupted velocity frame is rejected and counted; the fix still arrives without it.
+  protocol::CanFrame bad = protocol::pack(vel);
+  bad.data[0] ^= 0x01;
+  const auto rejected_before = dec->counters().can_rejected;
+  dec->on_can(protocol::pack(pos), kEpoch + 1'000'000'000, sink);
+  dec->on_can(protocol::pack(st), kEpoch + 1'000'000'000, sink);
+  EXPECT_EQ(dec->on_can(bad, kEpoch + 1'000'000'000, sink), CanInputKind::kRejected);
+  dec->on_can(protocol::pack(td), kEpoch + 1'000'000'000, sink);
+  EXPECT_EQ(dec->counters().can_rejected, rejected_before + 1);
+  ASSERT_EQ(sink.gnss.size(), 5u);
+  EXPECT_TRUE(sink.gnss[4].valid);
+  EXPECT_FALSE(sink.gnss[4].velocity_valid);
 }
 
 TEST(InputDecoder, CloudsSurviveTruncatedCorruptAndDuplicateFragments) {

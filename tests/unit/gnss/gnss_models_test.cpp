@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <vector>
 
 namespace v2xloc::sim::gnss {
 namespace {
@@ -69,6 +70,52 @@ TEST(GnssModels, WlsRecoversPositionAndClockExactly) {
   EXPECT_GT(sol.pdop, sol.hdop);
   obs.resize(3);
   EXPECT_FALSE(solve_position_wls(obs, init, 10, origin).converged);
+}
+
+// Range rates from a known receiver velocity and drift over a spread geometry.
+std::vector<RangeRateObservation> range_rates(const v2xloc::GeodeticOrigin& origin, const Eigen::Vector3d& vel_enu,
+                                              double drift) {
+  const Eigen::Vector3d vel_ecef = origin.enu_from_ecef.transpose() * vel_enu;
+  std::vector<RangeRateObservation> obs;
+  const double az_deg[] = {10, 70, 130, 190, 250, 310, 40, 220};
+  const double el_deg[] = {15, 35, 60, 25, 45, 80, 20, 30};
+  for (int i = 0; i < 8; ++i) {
+    const double az = az_deg[i] * M_PI / 180.0, el = el_deg[i] * M_PI / 180.0;
+    const Eigen::Vector3d los_enu(std::cos(el) * std::sin(az), std::cos(el) * std::cos(az), std::sin(el));
+    RangeRateObservation o;
+    o.los_ecef = origin.enu_from_ecef.transpose() * los_enu;
+    o.sat_vel_ecef = Eigen::Vector3d(1000.0 * i, -2500.0, 3000.0 - 500.0 * i);
+    o.range_rate_mps = o.los_ecef.dot(o.sat_vel_ecef - vel_ecef) + drift;
+    o.sigma_mps = 0.1;
+    obs.push_back(o);
+  }
+  return obs;
+}
+
+TEST(GnssModels, VelocityWlsRecoversVelocityAndExcludesAFault) {
+  const auto origin = v2xloc::make_geodetic_origin(48.1, 11.5, 500.0);
+  const Eigen::Vector3d truth(3.0, -7.5, 0.2);
+  std::vector<RangeRateObservation> obs = range_rates(origin, truth, 1.5);
+  const VelocitySolution exact = solve_velocity_wls(obs, origin);
+  ASSERT_TRUE(exact.valid);
+  EXPECT_LT((exact.vel_enu - truth).norm(), 1e-9);
+  EXPECT_NEAR(exact.clock_drift_mps, 1.5, 1e-9);
+  EXPECT_EQ(exact.excluded, 0);
+  EXPECT_GT(exact.hdop, 0.0);
+  // One reflected signal 6 m/s off (driving towards a facade): excluded, solution restored.
+  obs[3].range_rate_mps += 6.0;
+  const VelocitySolution faulty = solve_velocity_wls(obs, origin);
+  ASSERT_TRUE(faulty.valid);
+  EXPECT_EQ(faulty.excluded, 1);
+  EXPECT_EQ(faulty.used, 7);
+  EXPECT_LT((faulty.vel_enu - truth).norm(), 1e-9);
+  // Without exclusion the fault spreads into the solution and the residuals say so.
+  const VelocitySolution kept = solve_velocity_wls(obs, origin, 4.0, 0);
+  EXPECT_GT((kept.vel_enu - truth).norm(), 0.5);
+  EXPECT_GT(kept.unit_weight_sigma, 5.0);
+  // Too few observations: no solution.
+  obs.resize(3);
+  EXPECT_FALSE(solve_velocity_wls(obs, origin).valid);
 }
 
 }  // namespace

@@ -15,7 +15,10 @@ namespace {
 struct DriveStats {
   double mean_h = 0.0, max_h = 0.0, mean_hdop = 0.0, min_hdop = 1e9, max_hdop = 0.0;
   double lag1_autocorr = 0.0, mean_sats = 0.0, mean_nlos = 0.0, mean_h_acc = 0.0;
-  int valid = 0, total = 0;
+  double mean_vel_err = 0.0, max_heading_err_deg = 0.0, mean_heading_err_deg = 0.0, mean_speed_acc = 0.0;
+  int valid = 0, total = 0, velocity_valid = 0;
+  int heading_outside_3sigma = 0;
+  int heading_over_45deg = 0;  // heading error beyond 3x the reported heading sigma (+1 deg)
   std::vector<GnssFix> fixes;
   std::vector<Eigen::Vector3d> truth;
 };
@@ -36,7 +39,8 @@ DriveStats drive(const RayCaster& world, std::uint64_t seed, double rate_hz = 10
   for (int i = 0; i < n; ++i) {
     const double t = i / rate_hz;
     const Eigen::Vector3d truth(1.75, -150.0 + 10.0 * t, 1.8);
-    const GnssFix f = sim.fix(t, truth);
+    const Eigen::Vector3d velocity(0.0, 10.0, 0.0);
+    const GnssFix f = sim.fix(t, truth, velocity);
     s.fixes.push_back(f);
     s.truth.push_back(truth);
     ++s.total;
@@ -54,6 +58,22 @@ DriveStats drive(const RayCaster& world, std::uint64_t seed, double rate_hz = 10
     s.mean_sats += f.num_sats;
     s.mean_nlos += f.num_nlos;
     s.mean_h_acc += f.h_acc_m;
+    if (f.velocity_valid) {
+      ++s.velocity_valid;
+      s.mean_vel_err += std::hypot(f.vel_east - velocity.x(), f.vel_north - velocity.y());
+      const double heading_err = std::abs(std::atan2(f.vel_east, f.vel_north)) * 180.0 / 3.14159265358979;
+      s.mean_heading_err_deg += heading_err;
+      s.max_heading_err_deg = std::max(s.max_heading_err_deg, heading_err);
+      s.mean_speed_acc += f.speed_acc_mps;
+      const double heading_sigma_deg = std::atan2(f.speed_acc_mps, 10.0) * 180.0 / 3.14159265358979;
+      if (heading_err > 3.0 * heading_sigma_deg + 1.0) ++s.heading_outside_3sigma;
+      if (heading_err > 45.0) ++s.heading_over_45deg;
+    }
+  }
+  if (s.velocity_valid > 0) {
+    s.mean_vel_err /= s.velocity_valid;
+    s.mean_heading_err_deg /= s.velocity_valid;
+    s.mean_speed_acc /= s.velocity_valid;
   }
   if (s.valid > 0) {
     s.mean_h /= s.valid;
@@ -81,9 +101,10 @@ DriveStats drive(const RayCaster& world, std::uint64_t seed, double rate_hz = 10
 
 void print(const char* name, const DriveStats& s) {
   std::printf("%-8s valid %d/%d  mean h err %.2f m  max %.2f m  HDOP %.2f..%.2f (mean %.2f)  sats %.1f  nlos %.1f  "
-              "h_acc %.2f  lag1 %.3f\n",
+              "h_acc %.2f  lag1 %.3f  vel err %.3f m/s (s_acc %.3f)  heading err mean %.2f max %.2f deg (> 3 sigma: %d, > 45 deg: %d)\n",
               name, s.valid, s.total, s.mean_h, s.max_h, s.min_hdop, s.max_hdop, s.mean_hdop, s.mean_sats,
-              s.mean_nlos, s.mean_h_acc, s.lag1_autocorr);
+              s.mean_nlos, s.mean_h_acc, s.lag1_autocorr, s.mean_vel_err, s.mean_speed_acc, s.mean_heading_err_deg,
+              s.max_heading_err_deg, s.heading_outside_3sigma, s.heading_over_45deg);
 }
 
 TEST(GnssSimulator, CanyonErrorInPaperBandOpenSkySmall) {
@@ -113,6 +134,14 @@ TEST(GnssSimulator, CanyonErrorInPaperBandOpenSkySmall) {
     lag1_sum += c.lag1_autocorr;
     h_acc_sum += c.mean_h_acc;
     EXPECT_GT(o.lag1_autocorr, 0.9) << "open-sky errors are time-correlated";
+    // Doppler velocity: reflections hardly bias it along a street (the facades are parallel to the
+    // motion), so the course over ground stays a usable heading where the position does not.
+    EXPECT_EQ(c.velocity_valid, c.valid);
+    EXPECT_LT(o.mean_vel_err, 0.1) << "seed " << seed;
+    EXPECT_LT(o.max_heading_err_deg, 2.0) << "seed " << seed;
+    EXPECT_LT(c.mean_heading_err_deg, 5.0) << "seed " << seed;
+    EXPECT_LE(c.heading_over_45deg, c.velocity_valid / 50) << "seed " << seed;
+    EXPECT_GT(c.mean_vel_err, o.mean_vel_err) << "NLOS range rates must cost something";
   }
   const double canyon_mean = canyon_sum / n;
   std::printf("canyon mean over %d drives: %.2f m\n", n, canyon_mean);
@@ -141,7 +170,7 @@ TEST(GnssSimulator, DeterministicPerSeedAndSeedsDiffer) {
 TEST(GnssSimulator, FixFieldsAreConsistent) {
   const test::OpenSky open;
   GnssSimulator sim(GnssConfig{}, open, munich(), 5);
-  const GnssFix f = sim.fix(0.0, Eigen::Vector3d(10.0, 20.0, 1.8));
+  const GnssFix f = sim.fix(0.0, Eigen::Vector3d(10.0, 20.0, 1.8), Eigen::Vector3d(3.0, -4.0, 0.0));
   ASSERT_TRUE(f.valid);
   EXPECT_GE(f.num_sats, 10);
   EXPECT_LE(f.num_sats, 20);

@@ -155,11 +155,11 @@ TEST_F(HostSimRecording, CanLogHoldsVehicleAndGnssFramesInTimeOrder) {
     EXPECT_GE(f.t, last - 1e-9);
     last = f.t;
     motion += f.id == 0x120 ? 1 : 0;
-    gnss += (f.id >= 0x130 && f.id <= 0x132) ? 1 : 0;
+    gnss += (f.id >= 0x130 && f.id <= 0x133) ? 1 : 0;
     EXPECT_EQ(f.dlc, 8);
   }
   EXPECT_EQ(motion, 100u);  // 100 Hz over 1 s
-  EXPECT_GE(gnss, 10u);     // 5 Hz x (status + time/DOP [+ position])
+  EXPECT_GE(gnss, 15u);     // 5 Hz x (status + velocity + time/DOP [+ position])
   EXPECT_LT(last, 1.0);
 }
 

@@ -48,6 +48,11 @@ struct GnssInput {
   std::uint8_t num_sats = 0;
   double hdop = 99.0;
   bool valid = false;
+  // Doppler velocity of the same fix (optional): its course over ground is the only absolute
+  // heading the vehicle has before the map registration starts.
+  bool velocity_valid = false;
+  double vel_east = 0.0, vel_north = 0.0;  // [m/s] local ENU
+  double speed_acc = 0.0;                  // [m/s] receiver-reported 1 sigma per axis
 };
 
 struct MapCloudInput {
@@ -99,6 +104,13 @@ struct LocalizerFrameOutput {
   double inlier_rmse = 0.0;
   bool registration_fused = false;          // passed the gate (causal) and the EKF's NIS gate
   bool basin_audited = false;               // the tracked basin was audited this frame
+  // Global search diagnostics (this frame's exhaustive search, if one ran).
+  bool searched = false;
+  bool search_heading_used = false;         // the GNSS course limited the search's yaw
+  double search_best_tight = 0.0;           // best basin's fitness at the tight threshold
+  double search_runner_up_tight = 0.0;      // best other basin's (0: none)
+  Mat4d search_best_pose = Mat4d::Identity();
+  Mat4d search_runner_up_pose = Mat4d::Identity();
   // Stereo registration (tracking only, LiDAR + stereo configuration).
   bool stereo_attempted = false;
   bool stereo_fused = false;
@@ -134,6 +146,8 @@ struct LocalizerCounters {
   std::uint32_t basin_audits = 0;              // exhaustive checks of the tracked basin
   std::uint32_t basin_switches = 0;            // audits that found a clearly better pose
   std::uint32_t ambiguities_resolved = 0;      // ambiguous searches decided by the GNSS track
+  std::uint32_t gnss_headings = 0;             // fixes whose course over ground was usable
+  std::uint32_t heading_searches = 0;          // global searches with the course as yaw window
   std::uint32_t stereo_registrations = 0;
   std::uint32_t stereo_fused = 0;              // passed the stereo gate and the EKF's NIS gate
 };
@@ -186,6 +200,9 @@ class Localizer {
   // Mean horizontal distance between the GNSS fixes of the recent frames and the track a pose
   // hypothesis of this frame implies through the odometry; false when too few fixes.
   bool track_gnss_distance(const Mat4d& pose, double& mean_distance) const;
+  void update_gnss_heading(const GnssInput& in);
+  // The course over ground carried to time t by the yaw rate; false when none is usable.
+  bool gnss_heading_at(double t, double& yaw) const;
   void lose_track();
   bool audit_basin(const RegistrationResult& tracked);  // false: tracking is in a wrong basin
   void fuse_gated(double t, const RegistrationResult& result, bool attempted_ok);
@@ -232,6 +249,9 @@ class Localizer {
   bool have_gnss_ = false;
   Vec3d last_gnss_enu_ = Vec3d::Zero();
   double last_gnss_sigma_ = 10.0;
+  bool have_heading_ = false;      // a usable GNSS course over ground (ENU yaw)
+  double heading_yaw_ = 0.0;       // [rad]
+  double heading_t_ = 0.0;         // [s]
   double last_frame_t_ = 0.0;
   bool have_frame_ = false;
   double last_speed_ = 0.0;        // [m/s] latest wheel speed (filter initialization)

@@ -89,6 +89,19 @@ struct LocalizerParams {
   // (the canyon's mean GNSS error is 8-17 m); one without enough fixes yet is kept as a
   // candidate but not output (the GNSS fix is).
   double track_max_distance = 25.0;          // [m]
+  // Start-up heading from the GNSS Doppler velocity: while the vehicle drives forward, the course
+  // over ground is its heading (antenna on the body axis, side slip of a car at urban speeds
+  // < 2 deg). Doppler survives the canyon far better than the position does (an NLOS range rate
+  // is biased only by the motion towards the reflecting facade: measured 1-3 deg mean error where
+  // the position is 8-17 m off), so it rules out the intersection's 180-deg mirror at the first
+  // frame instead of after 3 s of GNSS track. Used as a yaw window on the global search.
+  bool use_gnss_heading = true;
+  double heading_min_speed = 3.0;         // [m/s] Doppler speed and wheel speed both above this
+  double heading_max_sigma = 0.17;        // [rad] reported course sigma atan(speed_acc / speed)
+  double heading_max_age = 1.0;           // [s] a course older than this is not used
+  double heading_search_tolerance = 0.79; // [rad] (45 deg) yaw window around the course
+  // A candidate found with that yaw window is output before confirmation (as a GNSS-track-
+  // checked one is): it cannot be the mirror, and it is centimetres, not metres, off.
   // Lost-track monitor: this many GNSS fixes in a row farther from the filter than
   // max(distance, sigmas * reported h_acc) mean the filter, not the GNSS, is wrong (canyon fixes
   // are off by 8-17 m on average, rarely 30 m, never for seconds in a row): restart globally.
