@@ -31,11 +31,16 @@ CorrespondenceResult match_features(std::span<const Feature33> source_features,
   if (params.mutual_filter) {
     for (std::size_t j = 0; j < num_target; ++j) scratch[j] = kNone;
   }
+  // Consecutive sources are usually spatial neighbours (downsampled clouds come out in voxel
+  // order) with similar features: the previous match seeds the bound. The exact result does
+  // not depend on it; under a visit budget (approximate search) it improves the answer.
+  std::uint32_t hint = KdTree<Feature33>::kNoHint;
   for (std::size_t i = 0; i < source_features.size(); ++i) {
     Neighbor nn{};
     const FeatureProjections& fp = params.projections;
     const float* qp = fp.source != nullptr ? fp.source + i * fp.stride : nullptr;
-    const KdQueryResult kr = target_tree.nearest(source_features[i], qp, nn);
+    const KdQueryResult kr = target_tree.nearest(source_features[i], qp, hint, nn);
+    if (kr.count > 0) hint = nn.index;
     r.search.add(kr);
     if (kr.count == 0) {
       ++r.no_match;

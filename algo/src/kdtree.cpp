@@ -465,6 +465,17 @@ KdQueryResult KdTree<P>::nearest(const P& query, const float* query_projection,
 }
 
 template <class P>
+KdQueryResult KdTree<P>::nearest(const P& query, const float* query_projection,
+                                 std::uint32_t hint, Neighbor& out) const {
+  if (num_nodes_ == 0 || !is_finite_point(query)) return {};
+  if (hint >= points_.size() || !is_finite_point(points_[hint])) {
+    return nearest_seeded(query, Neighbor{0, INFINITY}, false, out, query_projection);
+  }
+  const Neighbor seed{hint, squared_distance_bounded<kDim>(query.data(), points_[hint].data(), INFINITY)};
+  return nearest_seeded(query, seed, true, out, query_projection);
+}
+
+template <class P>
 KdQueryResult KdTree<P>::has_closer(const P& query, const Neighbor& bound, bool& found) const {
   return has_closer(query, nullptr, bound, found);
 }

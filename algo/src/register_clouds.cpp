@@ -186,12 +186,22 @@ RegisterCloudsResult register_clouds(std::span<const Vec3f> source, std::span<co
     if (source_feature_tree != nullptr) {
       ws.source_feature_tree.tree.set_projections(cp.projections.source, kStride, max_abs);
     }
+    const bool approximate = params.feature_search_visits > 0 &&
+                             params.feature_search_visits < config::kKdMaxNodeVisits;
+    const std::size_t visits =
+        approximate ? params.feature_search_visits : config::kKdMaxNodeVisits;
+    ws.target_feature_tree.tree.set_max_node_visits(visits);
+    ws.source_feature_tree.tree.set_max_node_visits(visits);
     const CorrespondenceResult cr = match_features(
         fsrc, ws.target_feature_tree.tree, cp, ws.correspondences, source_feature_tree,
         std::span<std::uint32_t>(ws.mutual_scratch, RegistrationWorkspace::kMaxPoints));
     stats.correspondences = cr.count;
     stats.correspondences_truncated = cr.truncated;
-    stats.search_cap_hits += cr.search.visit_cap_hits;
+    if (approximate) {
+      stats.feature_queries_cut += cr.search.visit_cap_hits;
+    } else {
+      stats.search_cap_hits += cr.search.visit_cap_hits;
+    }
     timer.lap(RegisterStage::kCorrespondences);
     if (cr.count < 3) {
       out.coarse.status = RegistrationStatus::kNoCorrespondences;

@@ -191,7 +191,8 @@ void BM_RegistrationFpfh(benchmark::State& state) {
 }
 BENCHMARK(BM_RegistrationFpfh)->Unit(benchmark::kMillisecond);
 
-void BM_RegistrationCorrespondences(benchmark::State& state) {
+// visits: the feature trees' node-visit budget per query (0 = exact, as the default pipeline).
+void run_correspondences(benchmark::State& state, std::size_t visits) {
   if (!prepare(state)) return;
   const std::size_t ns = g_ws.source_down.size(), nt = g_ws.target_down.size();
   CorrespondenceParams cp;
@@ -211,6 +212,10 @@ void BM_RegistrationCorrespondences(benchmark::State& state) {
     cp.projections = {proj, proj + 8, kFpfhBins};
     g_ws.source_feature_tree.tree.set_projections(proj, kFpfhBins, max_abs);
     g_ws.target_feature_tree.tree.set_projections(proj + 8, kFpfhBins, max_abs);
+    if (visits > 0) {
+      g_ws.source_feature_tree.tree.set_max_node_visits(visits);
+      g_ws.target_feature_tree.tree.set_max_node_visits(visits);
+    }
     cr = match_features(std::span<const Feature33>(g_ws.source_features, ns), g_ws.target_feature_tree.tree, cp,
                    g_ws.correspondences, &g_ws.source_feature_tree.tree,
                    std::span<std::uint32_t>(g_ws.mutual_scratch, RegistrationWorkspace::kMaxPoints));
@@ -218,8 +223,13 @@ void BM_RegistrationCorrespondences(benchmark::State& state) {
   state.counters["correspondences"] = double(g_ws.correspondences.size());
   state.counters["queries"] = double(cr.search.queries);
   state.counters["visits_per_query"] = double(cr.search.node_visits) / double(cr.search.queries);
+  state.counters["queries_cut"] = double(cr.search.visit_cap_hits);
 }
+void BM_RegistrationCorrespondences(benchmark::State& state) { run_correspondences(state, 0); }
 BENCHMARK(BM_RegistrationCorrespondences)->Unit(benchmark::kMillisecond);
+// RegisterCloudsParams::feature_search_visits = 24 (v2xloc-register --feature-visits 24).
+void BM_RegistrationCorrespondencesVisits24(benchmark::State& state) { run_correspondences(state, 24); }
+BENCHMARK(BM_RegistrationCorrespondencesVisits24)->Unit(benchmark::kMillisecond);
 
 void BM_RegistrationRansac(benchmark::State& state) {
   if (!prepare(state)) return;

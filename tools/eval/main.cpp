@@ -1,5 +1,5 @@
 // v2xloc-eval RECORDING_DIR... [--json] [--plots DIR] [--estimates DIR] [--trace DIR] [--frames N]
-//   [--gate fixed-lag|causal|off] [--no-gnss-gate] [--no-odometry] [--quiet]
+//   [--gate fixed-lag|causal|off] [--no-gnss-gate] [--no-odometry] [--no-gnss-heading] [--quiet]
 // Runs the localizer offline over each recording and prints the paper's Table 1 (unaligned and
 // aligned) with the paper's numbers beside ours; --json prints one JSON object instead.
 #include <cmath>
@@ -24,7 +24,7 @@ int usage() {
   std::fprintf(stderr,
                "usage: v2xloc-eval RECORDING_DIR... [--json] [--plots DIR] [--estimates DIR] [--trace DIR]\n"
                "                   [--frames N] [--gate fixed-lag|causal|off] [--no-gnss-gate]\n"
-               "                   [--no-odometry] [--no-vehicle] [--stereo] [--quiet]\n"
+               "                   [--no-odometry] [--no-vehicle] [--no-gnss-heading] [--stereo] [--quiet]\n"
                "                   [--firmware PATH_TO_v2xloc-firmware]  (replay through the firmware over\n"
                "                   emulated CAN/UDP instead of the in-process localizer; localizer options\n"
                "                   other than --frames do not apply)\n");
@@ -119,6 +119,7 @@ int main(int argc, char** argv) {
     else if (a == "--no-gnss-gate") options.params.ekf.gates.gnss_gate_enabled = false;
     else if (a == "--no-odometry") options.params.use_odometry = false;
     else if (a == "--no-vehicle") options.params.use_vehicle_signals = false;
+    else if (a == "--no-gnss-heading") options.params.use_gnss_heading = false;
     else if (a == "--stereo") options.params.use_stereo = true;
     else if (a == "--gate") {
       const std::string g = next("--gate");

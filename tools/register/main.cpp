@@ -70,6 +70,7 @@ int main(int argc, char** argv) {
   params.mode = options.mode;
   if (options.voxel) params.voxel_size = *options.voxel;
   if (options.seed) params.ransac.seed = *options.seed;
+  if (options.feature_visits) params.feature_search_visits = *options.feature_visits;
   if (source.has_viewpoint) params.source_viewpoint = source.sensor_origin;
   if (target.has_viewpoint) params.target_viewpoint = target.sensor_origin;
   params.clock = &thread_cpu_ns;

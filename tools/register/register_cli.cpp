@@ -77,12 +77,14 @@ void append_registration(std::string& out, const RegistrationResult& r) {
 
 const char* register_usage() {
   return "usage: v2xloc-register SOURCE TARGET [--voxel M] [--init FILE_4x4] [--mode global|icp] "
-         "[--seed N]\n"
+         "[--seed N] [--feature-visits N]\n"
          "  SOURCE, TARGET  .pcd (ascii/binary/binary_compressed), .ply or KITTI .bin\n"
          "  --voxel M       voxel size in metres (default 0.5); other radii scale with it\n"
          "  --init FILE     4x4 row-major initial guess p_target = T p_source (--mode icp)\n"
          "  --mode          global: FPFH + RANSAC + ICP (default); icp: ICP from --init\n"
          "  --seed N        RANSAC random seed\n"
+         "  --feature-visits N  node-visit budget per feature query (0 = exact, default;\n"
+         "                      24: approximate, ~2x faster matching)\n"
          "Prints one JSON object. Exit 0: registered, 1: registration failed, 2: usage/IO error.\n";
 }
 
@@ -120,6 +122,13 @@ bool parse_register_args(const std::vector<std::string>& args, RegisterOptions& 
           return false;
         }
         options.seed = s;
+      } else if (a == "--feature-visits") {
+        std::uint64_t v = 0;
+        if (!parse_whole(value, v) || v > 1000000) {
+          error = "--feature-visits needs an integer 0..1000000, got '" + value + "'";
+          return false;
+        }
+        options.feature_visits = static_cast<std::size_t>(v);
       } else {
         error = "unknown option " + a;
         return false;
@@ -181,6 +190,7 @@ std::string register_json(const RegisterOptions& options, const RegisterCloudsPa
   out += ",\"voxel\":";
   append_number(out, params.voxel_size);
   out += ",\"seed\":" + std::to_string(params.ransac.seed);
+  out += ",\"feature_search_visits\":" + std::to_string(params.feature_search_visits);
   out += ",\"source\":" + quoted(options.source_path) + ",\"target\":" + quoted(options.target_path);
   out += ",\"coarse\":{";
   append_registration(out, result.coarse);
@@ -197,7 +207,8 @@ std::string register_json(const RegisterOptions& options, const RegisterCloudsPa
          ",\"target_truncated\":" + std::to_string(s.target_truncated) +
          ",\"downsample_overflow\":" + std::to_string(s.downsample_overflow) +
          ",\"correspondences_truncated\":" + std::to_string(s.correspondences_truncated) +
-         ",\"search_cap_hits\":" + std::to_string(s.search_cap_hits) + "}";
+         ",\"search_cap_hits\":" + std::to_string(s.search_cap_hits) +
+         ",\"feature_queries_cut\":" + std::to_string(s.feature_queries_cut) + "}";
   out += ",\"ransac_validations\":" + std::to_string(s.ransac_validations) +
          ",\"icp_iterations\":" + std::to_string(s.icp_iterations);
   static constexpr const char* kStageNames[] = {"downsample", "normals", "fpfh", "correspondences",

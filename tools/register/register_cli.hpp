@@ -17,6 +17,7 @@ struct RegisterOptions {
   std::optional<std::string> init_path;  // 4x4 row-major text file (16 numbers)
   RegistrationMode mode = RegistrationMode::kGlobal;
   std::optional<std::uint64_t> seed;     // RANSAC PRNG seed
+  std::optional<std::size_t> feature_visits;  // feature-query node-visit budget (0 = exact)
 };
 
 const char* register_usage();

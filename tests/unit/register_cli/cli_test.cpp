@@ -13,19 +13,22 @@ TEST(RegisterCli, ParsesEveryOption) {
   RegisterOptions o;
   std::string error;
   ASSERT_TRUE(parse_register_args({"a.pcd", "--voxel", "0.25", "b.ply", "--mode", "icp", "--init",
-                                   "t.txt", "--seed", "42"}, o, error)) << error;
+                                   "t.txt", "--seed", "42", "--feature-visits", "24"}, o, error))
+      << error;
   EXPECT_EQ(o.source_path, "a.pcd");
   EXPECT_EQ(o.target_path, "b.ply");
   EXPECT_EQ(*o.voxel, 0.25f);
   EXPECT_EQ(o.mode, RegistrationMode::kIcpOnly);
   EXPECT_EQ(*o.init_path, "t.txt");
   EXPECT_EQ(*o.seed, 42u);
+  EXPECT_EQ(*o.feature_visits, 24u);
 }
 
 TEST(RegisterCli, RejectsBadUsageWithAMessage) {
   const std::vector<std::vector<std::string>> bad = {
       {}, {"a.pcd"}, {"a", "b", "c"}, {"a", "b", "--voxel"}, {"a", "b", "--voxel", "-1"},
       {"a", "b", "--voxel", "x"}, {"a", "b", "--mode", "ndt"}, {"a", "b", "--seed", "-3"},
+      {"a", "b", "--feature-visits", "x"},
       {"a", "b", "--frobnicate", "1"}};
   for (const auto& args : bad) {
     RegisterOptions o;

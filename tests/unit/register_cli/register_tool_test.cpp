@@ -98,6 +98,20 @@ TEST_F(RegisterTool, GlobalModeRecoversTheOutdoorReference) {
   std::printf("  %s", r.out.c_str());
 }
 
+// Approximate feature matching (a node-visit budget per 33-D query): cut queries are counted
+// separately from search-cap hits, and the outdoor pair is still recovered.
+TEST_F(RegisterTool, ApproximateFeatureSearchRecoversTheOutdoorReference) {
+  const ToolRun r =
+      run(kPair + "/source.ply " + kPair + "/target.ply --voxel 0.25 --seed 7 --feature-visits 24");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_NE(r.out.find("\"feature_search_visits\":24"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"search_cap_hits\":0,"), std::string::npos) << r.out;
+  const std::size_t cut = r.out.find("\"feature_queries_cut\":");
+  ASSERT_NE(cut, std::string::npos) << r.out;
+  EXPECT_GT(std::stoul(r.out.substr(cut + 22)), 0u) << r.out;
+  expect_close_to_reference(r.out);
+}
+
 TEST_F(RegisterTool, IcpModeFromAPerturbedInitialGuess) {
   Eigen::Matrix4d reference;
   std::ifstream ref_file(kPair + "/T_target_source.txt");

@@ -165,6 +165,17 @@ TEST(Correspondences, ProjectionFilterGivesIdenticalMatches) {
     tgt_tree.tree.nearest(src[i], nn);
     EXPECT_EQ(out[i].target, nn.index);
   }
+  // A hint (any point, or none) with the projection filter seeds the bound, never the answer.
+  for (std::size_t i = 0; i < src.size(); i += 7) {
+    Neighbor plain_nn{}, hinted{}, unhinted{};
+    tgt_tree.tree.nearest(src[i], plain_nn);
+    const auto hint = static_cast<std::uint32_t>((i * 37) % tgt.size());
+    ASSERT_EQ(tgt_tree.tree.nearest(src[i], src_proj + 8 * i, hint, hinted).count, 1u);
+    tgt_tree.tree.nearest(src[i], src_proj + 8 * i, KdTree<Feature33>::kNoHint, unhinted);
+    EXPECT_EQ(hinted.index, plain_nn.index);
+    EXPECT_EQ(hinted.squared_distance, plain_nn.squared_distance);
+    EXPECT_EQ(unhinted.index, plain_nn.index);
+  }
 }
 
 }  // namespace

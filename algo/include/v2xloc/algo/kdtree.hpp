@@ -148,6 +148,10 @@ class KdTree {
     projection_margin_ = 4e-9f * max_abs * max_abs + 1e-30f;
   }
   KdQueryResult nearest(const P& query, const float* query_projection, Neighbor& out) const;
+  // Both: the projection filter and a hint that seeds the bound (e.g. the match of a similar
+  // query). Same result as nearest(query, out); a good hint only saves work.
+  KdQueryResult nearest(const P& query, const float* query_projection, std::uint32_t hint,
+                        Neighbor& out) const;
   KdQueryResult has_closer(const P& query, const float* query_projection, const Neighbor& bound,
                            bool& found) const;
   // The squared distance exactly as the queries compute it (float, fixed summation order):
