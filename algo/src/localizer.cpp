@@ -583,25 +583,26 @@ void Localizer::fuse_gated(double t, const RegistrationResult& result, bool atte
   reg.frame = frame_;
   reg.t = t;
   reg.pose = result.transform;
+  reg.odom = odom_T_body_;
   reg.ok = attempted_ok && result.ok();
   if (reg.ok) {
     reg.covariance = registration_covariance(result.information, result.inlier_rmse, result.transform,
                                              params_.registration_covariance);
     bool fused_all = false;
-    fuse_registration(ekf_all_, reg, fused_all);
+    fuse_registration(ekf_all_, reg, t, fused_all);
   }
   const GateSample sample{result.fitness, result.inlier_rmse, reg.ok};
   bool fused = false;
   switch (params_.gate_mode) {
     case GateMode::kOff:
-      if (reg.ok) fuse_registration(ekf_, reg, fused);
+      if (reg.ok) fuse_registration(ekf_, reg, t, fused);
       break;
     case GateMode::kCausal: {
       const GateDecision d = causal_gate_.push(sample);
       output_.gate_decided = d.available;
       output_.gate_decided_frame = static_cast<std::uint32_t>(d.frame);
       output_.gate_decided_valid = d.valid;
-      if (d.valid && reg.ok) fuse_registration(ekf_, reg, fused);
+      if (d.valid && reg.ok) fuse_registration(ekf_, reg, t, fused);
       break;
     }
     case GateMode::kFixedLag: {
@@ -616,7 +617,7 @@ void Localizer::fuse_gated(double t, const RegistrationResult& result, bool atte
           output_.gate_decided = true;
           output_.gate_decided_frame = late.frame;
           output_.gate_decided_valid = d.valid;
-          if (d.valid && late.ok) fuse_registration(ekf_, late, fused);
+          if (d.valid && late.ok) fuse_registration(ekf_, late, t, fused);
         }
       }
       break;
@@ -636,7 +637,7 @@ void Localizer::fuse_gated(double t, const RegistrationResult& result, bool atte
 // A registration the validity gate accepted but the filter's NIS gate keeps rejecting means the
 // filter, not the registration, is wrong (it drifted on odometry while over-confident): after
 // reset_after_rejections such frames in a row the filter restarts at the registration.
-void Localizer::fuse_registration(Ekf& ekf, const PendingRegistration& reg, bool& fused) {
+void Localizer::fuse_registration(Ekf& ekf, const PendingRegistration& reg, double now, bool& fused) {
   if (!ekf.initialized()) return;
   const EkfFuseStatus status = ekf.on_registration(reg.t, reg.pose, reg.covariance);
   fused = status == EkfFuseStatus::kFused;
@@ -650,7 +651,10 @@ void Localizer::fuse_registration(Ekf& ekf, const PendingRegistration& reg, bool
   if (++rejections < params_.reset_after_rejections) return;
   rejections = 0;
   ++counters_.filter_resets;
-  restart_filter(ekf, reg.t, reg.pose);
+  // A fixed-lag registration is w/2 frames old: restart at the current frame with its pose
+  // carried forward by the odometry (restarting at its own time stamp would leave the output
+  // behind by the distance driven since, ~3 m at 6 m/s).
+  restart_filter(ekf, now, reg.pose * se3_inverse(reg.odom) * odom_T_body_);
   fused = true;
 }
 

@@ -182,6 +182,7 @@ class Localizer {
     std::uint64_t gate_index = 0;  // push index in the fixed-lag gate
     double t = 0.0;
     Mat4d pose = Mat4d::Identity();
+    Mat4d odom = Mat4d::Identity();  // odometry pose at that frame: carries a late restart to now
     Eigen::Matrix<double, 4, 4> covariance = Eigen::Matrix<double, 4, 4>::Identity();
     bool ok = false;
   };
@@ -206,7 +207,7 @@ class Localizer {
   void lose_track();
   bool audit_basin(const RegistrationResult& tracked);  // false: tracking is in a wrong basin
   void fuse_gated(double t, const RegistrationResult& result, bool attempted_ok);
-  void fuse_registration(Ekf& ekf, const PendingRegistration& reg, bool& fused);
+  void fuse_registration(Ekf& ekf, const PendingRegistration& reg, double now, bool& fused);
   void initialize_filters(double t, const Mat4d& pose);
   void restart_filter(Ekf& ekf, double t, const Mat4d& pose);
   void fill_output(double t);
