@@ -109,6 +109,28 @@ double MapFusion::consistency(std::size_t slot, std::uint32_t& overlap_points) {
   return overlap_points > 0 ? static_cast<double>(inliers) / overlap_points : 1.0;
 }
 
+std::uint32_t MapFusion::drop_covered_by_trusted(std::size_t slot) {
+  if (++stamp_ == 0) {
+    for (Cell& c : cells_) c.stamp = 0;
+    stamp_ = 1;
+  }
+  bool any = false;
+  for (std::size_t i = 0; i < num_points_; ++i) {
+    const std::size_t src = point_source_[i];
+    if (src == slot || !sources_[src].trusted) continue;
+    std::int32_t key[3];
+    if (cell_key(points_[i], params_.agent_fill_cell, 2, key)) any = mark(key) || any;
+  }
+  if (!any) return 0;
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < candidate_.size(); ++k) {
+    if (!occupied_around(candidate_[k], params_.agent_fill_cell, 2)) candidate_[kept++] = candidate_[k];
+  }
+  const auto dropped = static_cast<std::uint32_t>(candidate_.size() - kept);
+  candidate_.resize(kept);
+  return dropped;
+}
+
 MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
                                   const Mat4d& world_T_sensor, std::span<const Vec3f> points,
                                   bool trusted) {
@@ -179,6 +201,11 @@ MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
     if (r.overlap_points < params_.min_overlap_points) r.consistency_fitness = 1.0;
   }
 
+  if (!trusted && params_.agent_fill_cell > 0.0) {
+    r.covered_dropped = drop_covered_by_trusted(known ? slot : config::kMaxMapSources);
+    counters_.agent_points_covered += r.covered_dropped;
+  }
+
   if (known || displace) remove_source_points(slot);
   if (displace) ++counters_.sources_evicted_slot;
   std::uint32_t stored = 0;
@@ -199,6 +226,7 @@ MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
   info.world_T_sensor = world_T_sensor;
   info.points = stored;
   info.active = true;
+  info.trusted = trusted;
   r.stored_points = stored;
   r.status = known ? MapInsertStatus::kReplaced : MapInsertStatus::kInserted;
   if (known) ++counters_.replaced;

@@ -84,6 +84,43 @@ TEST(MapFusion, ReplacementStaleAndAgeing) {
   delete out;
 }
 
+// Agents fill gaps: where a trusted (infrastructure) source already sees, an agent's points are
+// dropped and counted; elsewhere they are kept; agent_fill_cell = 0 keeps every agent point.
+TEST(MapFusion, AgentPointsOnlyWhereTheInfrastructureDoesNotSee) {
+  const auto scene = corner_scene();
+  std::vector<Vec3d> near_half;  // the infrastructure sees x < 5 m: most of two of three planes
+  for (const Vec3d& p : scene) {
+    if (p.x() < 5.0) near_half.push_back(p);
+  }
+  const Mat4d infra = sensor_pose(2.0, 2.0, 0.5);
+  const Mat4d agent = sensor_pose(8.0, 3.0, 1.0);
+  std::uint32_t agent_all = 0;
+  for (const double cell : {0.0, 0.5}) {
+    MapFusionParams params;
+    params.agent_fill_cell = cell;
+    MapFusion& map = fresh_map(params);
+    ASSERT_EQ(map.insert(1, 1.0, infra, in_sensor_frame(near_half, infra), true).status,
+              MapInsertStatus::kInserted);
+    const std::size_t infra_points = map.point_count();
+    const MapInsertResult r = map.insert(2, 1.0, agent, in_sensor_frame(scene, agent), false);
+    ASSERT_EQ(r.status, MapInsertStatus::kInserted);
+    EXPECT_EQ(map.point_count(), infra_points + r.stored_points);
+    EXPECT_EQ(map.counters().agent_points_covered, r.covered_dropped);
+    if (cell == 0.0) {
+      EXPECT_EQ(r.covered_dropped, 0u);
+      agent_all = r.stored_points;
+    } else {
+      EXPECT_GT(r.covered_dropped, 0u);
+      EXPECT_EQ(r.stored_points + r.covered_dropped, agent_all);
+      // Kept: the far halves of the wall and the ground (x >= 5 m), about a third of the scene.
+      EXPECT_LT(r.stored_points, agent_all / 2);
+      EXPECT_GT(r.stored_points, agent_all / 5);
+      // A trusted source is never thinned by the agent's presence.
+      EXPECT_EQ(map.insert(1, 2.0, infra, in_sensor_frame(near_half, infra), true).covered_dropped, 0u);
+    }
+  }
+}
+
 TEST(MapFusion, InconsistentSourceRejected) {
   MapFusion& map = fresh_map();
   const auto scene = corner_scene();

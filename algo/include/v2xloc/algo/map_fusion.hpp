@@ -39,6 +39,11 @@ struct MapFusionParams {
   // scores > 0.95 (test: 0.99); a 1.5 m / 5 deg pose error still scores ~0.5 on planar scenes
   // (points slide along walls and ground), so the bar sits between.
   double min_fitness = 0.7;
+  // Agents fill gaps only: an agent's points within ~agent_fill_cell of a trusted (surveyed
+  // infrastructure) point are dropped. Agents place their clouds by their own localization
+  // (cm bias, tenths of a degree); where the infrastructure already sees a surface, the agent's
+  // copy only blurs and biases it. 0 keeps every agent point.
+  double agent_fill_cell = 0.5;  // [m]
 };
 
 enum class MapInsertStatus : std::uint8_t {
@@ -57,6 +62,7 @@ struct MapInsertResult {
   std::uint32_t stored_points = 0;      // after downsampling
   std::uint32_t capacity_dropped = 0;   // staging, downsampling or map capacity exceeded
   std::uint32_t overlap_points = 0;     // consistency check: points in the others' region
+  std::uint32_t covered_dropped = 0;    // agent points where the infrastructure already sees
   double consistency_fitness = 1.0;     // inliers / overlap_points (1 when no verdict)
 };
 
@@ -66,6 +72,7 @@ struct MapSourceInfo {
   Mat4d world_T_sensor = Mat4d::Identity();
   std::uint32_t points = 0;
   bool active = false;
+  bool trusted = false;                 // surveyed infrastructure
 };
 
 struct MapFusionCounters {
@@ -78,6 +85,7 @@ struct MapFusionCounters {
   std::uint64_t sources_evicted_slot = 0;   // oldest source displaced by a new one
   std::uint64_t points_dropped_capacity = 0;
   std::uint64_t non_finite_dropped = 0;
+  std::uint64_t agent_points_covered = 0;   // agent points dropped where infrastructure sees
 };
 
 struct MapExtractResult {
@@ -131,6 +139,8 @@ class MapFusion {
   bool occupied_around(const Vec3f& p, double cell, std::int32_t level) const;
   // Fraction of candidate points near other sources' points (see header), excluding `slot`.
   double consistency(std::size_t slot, std::uint32_t& overlap_points);
+  // Drops candidate points near a trusted source's point (agent_fill_cell); returns how many.
+  std::uint32_t drop_covered_by_trusted(std::size_t slot);
 
   MapFusionParams params_;
   MapSourceInfo sources_[config::kMaxMapSources];
