@@ -427,13 +427,7 @@ KdQueryResult KdTree<P>::nearest(const P& query, Neighbor& out) const {
 
 template <class P>
 KdQueryResult KdTree<P>::nearest(const P& query, std::uint32_t hint, Neighbor& out) const {
-  if (num_nodes_ == 0 || !is_finite_point(query)) return {};
-  // Only an indexed point may seed the bound (a non-finite one is not in the tree).
-  if (hint >= points_.size() || !is_finite_point(points_[hint])) {
-    return nearest_seeded(query, Neighbor{0, INFINITY}, false, out);
-  }
-  const Neighbor seed{hint, squared_distance_bounded<kDim>(query.data(), points_[hint].data(), INFINITY)};
-  return nearest_seeded(query, seed, true, out);
+  return nearest(query, nullptr, hint, out);
 }
 
 template <class P>
@@ -460,14 +454,14 @@ KdQueryResult KdTree<P>::nearest_within(const P& query, float max_squared_distan
 template <class P>
 KdQueryResult KdTree<P>::nearest(const P& query, const float* query_projection,
                                  Neighbor& out) const {
-  if (num_nodes_ == 0 || !is_finite_point(query)) return {};
-  return nearest_seeded(query, Neighbor{0, INFINITY}, false, out, query_projection);
+  return nearest(query, query_projection, kNoHint, out);
 }
 
 template <class P>
 KdQueryResult KdTree<P>::nearest(const P& query, const float* query_projection,
                                  std::uint32_t hint, Neighbor& out) const {
   if (num_nodes_ == 0 || !is_finite_point(query)) return {};
+  // Only an indexed point may seed the bound (a non-finite one is not in the tree).
   if (hint >= points_.size() || !is_finite_point(points_[hint])) {
     return nearest_seeded(query, Neighbor{0, INFINITY}, false, out, query_projection);
   }

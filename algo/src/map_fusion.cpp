@@ -84,13 +84,17 @@ bool MapFusion::occupied_around(const Vec3f& p, double cell, std::int32_t level)
   return false;
 }
 
-double MapFusion::consistency(std::size_t slot, std::uint32_t& overlap_points) {
-  overlap_points = 0;
-  // Fresh table generation: marks from earlier calls become empty without clearing.
+// Fresh table generation: marks from earlier calls become empty without clearing.
+void MapFusion::new_cell_generation() {
   if (++stamp_ == 0) {
     for (Cell& c : cells_) c.stamp = 0;
     stamp_ = 1;
   }
+}
+
+double MapFusion::consistency(std::size_t slot, std::uint32_t& overlap_points) {
+  overlap_points = 0;
+  new_cell_generation();
   // Fine cells of size inlier_distance / 2: a candidate with another source's point in its 27
   // neighbour cells has one within ~0.87 * inlier_distance * ... (<= 1.5 cells per axis).
   const double fine = 0.5 * params_.inlier_distance;
@@ -110,10 +114,7 @@ double MapFusion::consistency(std::size_t slot, std::uint32_t& overlap_points) {
 }
 
 std::uint32_t MapFusion::drop_covered_by_trusted(std::size_t slot) {
-  if (++stamp_ == 0) {
-    for (Cell& c : cells_) c.stamp = 0;
-    stamp_ = 1;
-  }
+  new_cell_generation();
   bool any = false;
   for (std::size_t i = 0; i < num_points_; ++i) {
     const std::size_t src = point_source_[i];

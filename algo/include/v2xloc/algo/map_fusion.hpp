@@ -134,6 +134,7 @@ class MapFusion {
 
   void remove_source_points(std::size_t slot);
   bool cell_key(const Vec3f& p, double cell, std::int32_t level, std::int32_t key[3]) const;
+  void new_cell_generation();  // empties the cell table (O(1) except on stamp wrap-around)
   bool mark(const std::int32_t key[3]);
   bool occupied(const std::int32_t key[3]) const;
   bool occupied_around(const Vec3f& p, double cell, std::int32_t level) const;

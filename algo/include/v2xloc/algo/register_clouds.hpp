@@ -6,8 +6,8 @@
 // voxel). In global mode each cloud is searched once per point (KdNeighborhoods) for its normals
 // and FPFH (exact: the same results as separate searches); the 33-D feature searches use an
 // exact principal-axis projection pre-filter and optionally a node-visit budget that makes
-// them approximate (feature_search_visits; 0 = exact, the default). All storage lives in a RegistrationWorkspace the caller
-// owns:
+// them approximate (feature_search_visits; 0 = exact, the default). All storage lives in a
+// RegistrationWorkspace the caller owns:
 //   static RegistrationWorkspace ws;   // once; large (see sizeof), never on the stack
 //   RegisterCloudsResult r = register_clouds(source, target, params, Mat4d::Identity(), ws);
 // Times are ticks of a caller-supplied clock (algo has no OS); null -> all zero.
