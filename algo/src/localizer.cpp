@@ -36,6 +36,7 @@ void Localizer::configure(const LocalizerParams& params, const GeodeticOrigin& o
   origin_ = origin;
   counters_ = {};
   output_ = {};
+  backfill_.reset();
   ekf_ = Ekf(params.ekf);
   ekf_all_ = Ekf(params.ekf);
   fixed_lag_gate_ = FixedLagValidityGate(params.gate);
@@ -161,6 +162,13 @@ const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
     have_frame_ = true;
   }
   fill_output(in.t);
+  BackfillSample sample;
+  sample.frame = frame_;
+  sample.odom_T_body = odom_T_body_;
+  sample.world_T_body = output_.fused_pose;
+  sample.anchored = output_.filter_initialized;
+  sample.odometry_ok = output_.odometry_ok;
+  output_.revised_frames = backfill_.push(sample);
   ++frame_;
   return output_;
 }
@@ -663,9 +671,20 @@ void Localizer::fill_output(double t) {
   output_.filter_initialized = ekf_.initialized();
   if (!ekf_.initialized()) {
     // Best estimate without a filter: an unconfirmed global candidate carried by the odometry,
-    // else the GNSS fix. Either way not localized, with the GNSS sigma.
+    // else the GNSS fix, set on the map's road surface (the vehicle is on the road; a canyon's
+    // GNSS altitude is off by more than its horizontal position) and turned to the course over
+    // ground when there is one. Either way not localized, with the GNSS sigma.
     Mat4d pose = Mat4d::Identity();
     pose.topRightCorner<3, 1>() = last_gnss_enu_;
+    double road_z = 0.0;
+    if (have_gnss_ && map_ready_ &&
+        road_height(map_points_.span(), last_gnss_enu_, params_.global_map_radius, road_z,
+                    params_.road_height_min_points)) {
+      pose(2, 3) = road_z;
+      ++counters_.road_height_outputs;
+    }
+    double course = 0.0;
+    if (gnss_heading_at(t, course)) pose.topLeftCorner<3, 3>() = rot_z(course);
     if (candidate_.valid && candidate_.output && frame_ - candidate_.frame <= params_.global_confirm_window) {
       pose = candidate_.pose * se3_inverse(candidate_.odom) * odom_T_body_;
     }

@@ -14,28 +14,6 @@ struct Candidate {
   double x = 0.0, y = 0.0, yaw = 0.0;
 };
 
-// Most populated 0.2 m height bin of the map near the centre: the road surface.
-double estimate_ground(std::span<const Vec3f> map, const Vec3d& center, double radius) {
-  constexpr int kBins = 400;  // [-40, 40] m around the centre height
-  std::uint32_t hist[kBins] = {};
-  const double r2 = radius * radius;
-  for (const Vec3f& p : map) {
-    const double dx = p.x() - center.x(), dy = p.y() - center.y();
-    if (dx * dx + dy * dy > r2) continue;
-    const int b = static_cast<int>(std::floor((p.z() - center.z() + 40.0) / 0.2));
-    if (b >= 0 && b < kBins) ++hist[b];
-  }
-  int best = -1;
-  std::uint32_t count = 0;
-  for (int b = 0; b < kBins; ++b) {
-    if (hist[b] > count) {
-      count = hist[b];
-      best = b;
-    }
-  }
-  return best < 0 ? center.z() : center.z() - 40.0 + 0.2 * (best + 0.5);
-}
-
 bool same_basin(const Candidate& a, const Candidate& b, const PoseSearchParams& params) {
   const double dx = a.x - b.x, dy = a.y - b.y;
   return dx * dx + dy * dy < params.distinct_distance * params.distinct_distance &&
@@ -74,6 +52,30 @@ Mat4d pose_of(double x, double y, double z, double yaw) {
 
 }  // namespace
 
+bool road_height(std::span<const Vec3f> map, const Vec3d& center, double radius, double& height,
+                 std::uint32_t min_points) {
+  constexpr int kBins = 400;  // [-40, 40] m around the centre height
+  std::uint32_t hist[kBins] = {};
+  const double r2 = radius * radius;
+  for (const Vec3f& p : map) {
+    const double dx = p.x() - center.x(), dy = p.y() - center.y();
+    if (dx * dx + dy * dy > r2) continue;
+    const int b = static_cast<int>(std::floor((p.z() - center.z() + 40.0) / 0.2));
+    if (b >= 0 && b < kBins) ++hist[b];
+  }
+  int best = -1;
+  std::uint32_t count = 0;
+  for (int b = 0; b < kBins; ++b) {
+    if (hist[b] > count) {
+      count = hist[b];
+      best = b;
+    }
+  }
+  const bool found = best >= 0 && count >= min_points;
+  height = found ? center.z() - 40.0 + 0.2 * (best + 0.5) : center.z();
+  return found;
+}
+
 PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& map,
                              const Vec3d& center, const PoseSearchParams& params) {
   PoseSearchResult out;
@@ -97,7 +99,7 @@ PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& 
     if (seen++ % stride == 0 && n < want) score_pts[n++] = p;
   }
 
-  out.ground_z = estimate_ground(map.points, center, params.radius + 10.0);
+  road_height(map.points, center, params.radius + 10.0, out.ground_z);
   Candidate top[kPoseSearchRefine];
   const double d2max = params.score_distance * params.score_distance;
   const int cells = static_cast<int>(std::floor(params.radius / params.step));

@@ -133,6 +133,7 @@ bool records_from_outputs(const sim::RecordingReader& reader, const std::vector<
     rec.has_gnss = gnss.has_fix();
     rec.gnss_body = gnss.body();
     rec.out = outputs[i];
+    rec.lagged_pose = rec.out.fused_pose;  // revisions are not on the wire
   }
   // A fixed-lag decision published at frame i is about an earlier frame.
   for (const FrameRecord& rec : records) {
@@ -186,6 +187,8 @@ bool run_firmware(const sim::RecordingReader& reader, const FirmwareRunOptions& 
 void mark_columns_not_on_can(RowMetrics& metrics) {
   metrics.unaligned.fused_ungated = -1.0;
   metrics.aligned.fused_ungated = -1.0;
+  metrics.unaligned.fused_lag = -1.0;
+  metrics.aligned.fused_lag = -1.0;
 }
 
 }  // namespace v2xloc::eval

@@ -29,7 +29,7 @@ Eigen::Vector3d position(const Mat4d& m) { return m.topRightCorner<3, 1>(); }
 RowMetrics compute_metrics(const std::vector<FrameRecord>& records) {
   RowMetrics row;
   row.frames = static_cast<int>(records.size());
-  Series slam, gps, gps_3d, reg, reg_valid, fused, fused_valid, fused_ungated;
+  Series slam, gps, gps_3d, reg, reg_valid, fused, fused_valid, fused_ungated, fused_lag;
   if (records.empty()) return row;
   const Eigen::Isometry3d anchor = records.front().truth *
                                    Eigen::Isometry3d(records.front().out.odometry_pose).inverse();
@@ -52,6 +52,8 @@ RowMetrics compute_metrics(const std::vector<FrameRecord>& records) {
     }
     fused.add(position(r.out.fused_pose), truth);
     fused_ungated.add(position(r.out.fused_pose_ungated), truth);
+    fused_lag.add(position(r.lagged_pose), truth);
+    row.revised_frames += r.revised ? 1 : 0;
     row.fused_max = std::max(row.fused_max, (position(r.out.fused_pose) - truth).norm());
   }
   for (bool align : {false, true}) {
@@ -64,6 +66,7 @@ RowMetrics compute_metrics(const std::vector<FrameRecord>& records) {
     c.fused = fused.mean_error(align);
     c.fused_valid = fused_valid.mean_error(align);
     c.fused_ungated = fused_ungated.mean_error(align);
+    c.fused_lag = fused_lag.mean_error(align);
   }
   return row;
 }

@@ -7,6 +7,8 @@
 //   reg_valid   registration pose, frames the fixed-lag validity gate accepted
 //   fused       gated EKF, every frame (before the first fix of the filter: the GNSS fix)
 //   fused_valid gated EKF, frames the validity gate accepted
+//   fused_lag   fused, every frame, as revised within the backfill lag (start-up frames carried
+//               back from the filter's first pose by the odometry; trajectory_backfill.hpp)
 // Aligned = the same after an SE(3) Umeyama alignment of the estimate onto the truth per column
 // (evo's APE --align, as the paper); unaligned is what the vehicle lives with.
 #pragma once
@@ -20,6 +22,7 @@ namespace v2xloc::eval {
 struct ColumnErrors {
   double slam = 0, gps = 0, reg = 0, reg_valid = 0, fused = 0, fused_valid = 0;
   double fused_ungated = 0;  // extra: EKF fed every ok registration (no envelope gate)
+  double fused_lag = 0;      // extra: fused after the backfill's revisions (not live)
   double gps_3d = 0;         // extra: GNSS 3-D error
 };
 
@@ -30,6 +33,7 @@ struct RowMetrics {
   ColumnErrors unaligned;
   ColumnErrors aligned;
   double fused_max = 0.0;   // unaligned worst frame of the gated EKF
+  int revised_frames = 0;   // frames the backfill revised
 };
 
 RowMetrics compute_metrics(const std::vector<FrameRecord>& records);

@@ -146,9 +146,16 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
     }
     const auto t0 = Clock::now();
     rec.out = localizer.on_ego_scan(in);
+    rec.lagged_pose = rec.out.fused_pose;
     frame_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
     stats.seconds += frame_seconds;
     stats.max_frame_ms = std::max(stats.max_frame_ms, frame_seconds * 1e3);
+    // Frames still in the backfill buffer take its latest pose: final once they leave it.
+    const TrajectoryBackfill& backfill = localizer.backfill();
+    for (std::size_t age = 0; age < backfill.size() && age <= static_cast<std::size_t>(i); ++age) {
+      FrameRecord& earlier = records[static_cast<std::size_t>(i) - age];
+      if (!backfill.pose(earlier.out.frame, earlier.lagged_pose, earlier.revised)) break;
+    }
     if (rec.out.gate_decided && rec.out.gate_decided_frame < records.size()) {
       records[rec.out.gate_decided_frame].gate_decided = true;
       records[rec.out.gate_decided_frame].gate_valid = rec.out.gate_decided_valid;

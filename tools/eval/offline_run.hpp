@@ -19,6 +19,10 @@ struct FrameRecord {
   bool has_gnss = false;
   Eigen::Vector3d gnss_body = Eigen::Vector3d::Zero();       // latest fix, antenna lever removed
   LocalizerFrameOutput out;                                  // the localizer's frame output
+  // The output as revised within the localizer's backfill lag (trajectory_backfill.hpp): the
+  // live output unless the filter's start revised this frame.
+  Mat4d lagged_pose = Mat4d::Identity();
+  bool revised = false;
   bool gate_valid = false;     // fixed-lag decision for this frame (arrives w/2 frames later)
   bool gate_decided = false;
 };

@@ -59,6 +59,9 @@ inline constexpr std::uint32_t kIcpMaxIterations = 64;
 // ---- Localization ---------------------------------------------------------------------------
 inline constexpr std::size_t kGateMaxWindow = 64;          // validity-gate window w (frames)
 inline constexpr std::size_t kEkfHistoryLength = 32;       // fixed-lag history (frames)
+// Output frames held for revision once the filter starts (trajectory_backfill.hpp): start-up
+// takes 1-2 s on the recordings, 6.4 s covers a slow one; ~17 kB.
+inline constexpr std::size_t kBackfillFrames = 64;
 inline constexpr std::size_t kOdometryMapPoints = kEmbeddedProfile ? 16384 : 131072;
 inline constexpr std::size_t kMaxMapSources = 16;          // infra units + agents tracked at once
 // EKF: events (measurements + frame markers) kept for out-of-sequence replay; ~16 per frame

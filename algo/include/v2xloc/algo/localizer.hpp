@@ -29,6 +29,7 @@
 #include "v2xloc/algo/localizer_params.hpp"
 #include "v2xloc/algo/stereo_cloud.hpp"
 #include "v2xloc/algo/odometry.hpp"
+#include "v2xloc/algo/trajectory_backfill.hpp"
 #include "v2xloc/algo/register_clouds.hpp"
 #include "v2xloc/algo/voxel_downsample.hpp"
 
@@ -123,6 +124,8 @@ struct LocalizerFrameOutput {
   bool gate_decided_valid = false;
   double sigma_x = 0.0, sigma_y = 0.0, sigma_z = 0.0, sigma_yaw = 0.0;  // fused 1-sigma
   bool localized = false;                   // fused sigma_xy below the localized threshold
+  // Earlier frames whose output the filter's start at this frame revised (Localizer::backfill()).
+  std::uint32_t revised_frames = 0;
 };
 
 struct LocalizerCounters {
@@ -150,6 +153,7 @@ struct LocalizerCounters {
   std::uint32_t heading_searches = 0;          // global searches with the course as yaw window
   std::uint32_t stereo_registrations = 0;
   std::uint32_t stereo_fused = 0;              // passed the stereo gate and the EKF's NIS gate
+  std::uint32_t road_height_outputs = 0;       // pre-filter outputs at the map's road height
 };
 
 class Localizer {
@@ -175,6 +179,8 @@ class Localizer {
   const MapFusion& map() const { return map_; }
   const LocalizerCounters& counters() const { return counters_; }
   std::span<const Vec3f> map_points() const { return map_points_.span(); }
+  // The last config::kBackfillFrames outputs, start-up frames revised once the filter starts.
+  const TrajectoryBackfill& backfill() const { return backfill_; }
 
  private:
   struct PendingRegistration {
@@ -216,6 +222,7 @@ class Localizer {
   GeodeticOrigin origin_{};
   LocalizerCounters counters_{};
   LocalizerFrameOutput output_{};
+  TrajectoryBackfill backfill_{};
 
   // Fusion.
   Ekf ekf_{};

@@ -48,6 +48,9 @@ struct LocalizerParams {
   // reported sigma excluded the true pose (measured at Sim 0's first frames).
   double global_min_region = 30.0;
   double global_min_fitness = 0.3;    // and with at least this ICP fitness
+  // Before the filter starts, the output's height is the map's road surface within
+  // global_map_radius of the fix when at least this many map points lie in its 0.2 m bin.
+  std::uint32_t road_height_min_points = 50;
   // ... and distinct: runner-up basin's tight fitness / winner's below this. Far from the
   // intersection the sparse map makes aliased poses along the street nearly as good; we wait
   // (GNSS only) until the answer is unambiguous instead of locking onto a wrong basin.

@@ -50,6 +50,12 @@ struct PoseSearchResult {
 
 inline constexpr std::uint32_t kPoseSearchRefine = 10;  // hypotheses refined by ICP
 
+// Height of the road surface near `center`: the most populated 0.2 m height bin (within +-40 m
+// of center.z) of the map points within `radius` horizontally. False when fewer than min_points
+// fall in that bin (the map does not reach there); height is then center.z.
+bool road_height(std::span<const Vec3f> map, const Vec3d& center, double radius, double& height,
+                 std::uint32_t min_points = 1);
+
 PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& map,
                              const Vec3d& center, const PoseSearchParams& params);
 
