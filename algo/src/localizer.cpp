@@ -678,7 +678,7 @@ void Localizer::fill_output(double t) {
     pose.topRightCorner<3, 1>() = last_gnss_enu_;
     double road_z = 0.0;
     if (have_gnss_ && map_ready_ &&
-        road_height(map_points_.span(), last_gnss_enu_, params_.global_map_radius, road_z,
+        road_height_near(map_points_.span(), last_gnss_enu_, params_.global_map_radius, road_z,
                     params_.road_height_min_points)) {
       pose(2, 3) = road_z;
       ++counters_.road_height_outputs;

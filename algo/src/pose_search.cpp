@@ -76,6 +76,26 @@ bool road_height(std::span<const Vec3f> map, const Vec3d& center, double radius,
   return found;
 }
 
+bool road_height_near(std::span<const Vec3f> map, const Vec3d& center, double radius, double& height,
+                      std::uint32_t min_points) {
+  const double r2 = radius * radius;
+  double sum = 0.0;
+  std::uint32_t n = 0;
+  for (const Vec3f& p : map) {
+    const double dx = p.x() - center.x(), dy = p.y() - center.y();
+    if (dx * dx + dy * dy > r2) continue;
+    sum += p.z();
+    ++n;
+  }
+  if (n == 0) {
+    height = center.z();
+    return false;
+  }
+  if (road_height(map, Vec3d(center.x(), center.y(), sum / n), radius, height, min_points)) return true;
+  height = center.z();
+  return false;
+}
+
 PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& map,
                              const Vec3d& center, const PoseSearchParams& params) {
   PoseSearchResult out;

@@ -54,6 +54,13 @@ std::uint32_t source_id_of(const sim::MapCloudInfo& info) {
 
 }  // namespace
 
+void take_revisions(const TrajectoryBackfill& backfill, std::size_t newest, std::vector<FrameRecord>& records) {
+  for (std::size_t age = 0; age < backfill.size() && age <= newest; ++age) {
+    FrameRecord& earlier = records[newest - age];
+    if (!backfill.pose(earlier.out.frame, earlier.lagged_pose, earlier.revised)) break;
+  }
+}
+
 bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const RunOptions& options,
                  std::vector<FrameRecord>& records, RunStats& stats, std::string& error) {
   std::vector<sim::CanLogFrame> can;
@@ -150,12 +157,7 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
     frame_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
     stats.seconds += frame_seconds;
     stats.max_frame_ms = std::max(stats.max_frame_ms, frame_seconds * 1e3);
-    // Frames still in the backfill buffer take its latest pose: final once they leave it.
-    const TrajectoryBackfill& backfill = localizer.backfill();
-    for (std::size_t age = 0; age < backfill.size() && age <= static_cast<std::size_t>(i); ++age) {
-      FrameRecord& earlier = records[static_cast<std::size_t>(i) - age];
-      if (!backfill.pose(earlier.out.frame, earlier.lagged_pose, earlier.revised)) break;
-    }
+    take_revisions(localizer.backfill(), static_cast<std::size_t>(i), records);
     if (rec.out.gate_decided && rec.out.gate_decided_frame < records.size()) {
       records[rec.out.gate_decided_frame].gate_decided = true;
       records[rec.out.gate_decided_frame].gate_valid = rec.out.gate_decided_valid;

@@ -43,6 +43,10 @@ struct RunStats {
   std::size_t map_clouds_rejected = 0;
 };
 
+// Copies the latest pose of every frame the backfill still holds (records up to `newest`) into
+// lagged_pose / revised: called after each frame, a record's value is final once it leaves.
+void take_revisions(const TrajectoryBackfill& backfill, std::size_t newest, std::vector<FrameRecord>& records);
+
 // `localizer` must be static storage (it holds every buffer). Returns false with `error` set
 // when the recording cannot be read.
 bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const RunOptions& options,

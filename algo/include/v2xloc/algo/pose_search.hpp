@@ -56,6 +56,11 @@ inline constexpr std::uint32_t kPoseSearchRefine = 10;  // hypotheses refined by
 bool road_height(std::span<const Vec3f> map, const Vec3d& center, double radius, double& height,
                  std::uint32_t min_points = 1);
 
+// The same without a height prior (a canyon's GNSS altitude can be tens of metres off): the
+// histogram is centred on the mean height of the map points within `radius` of center's x, y.
+bool road_height_near(std::span<const Vec3f> map, const Vec3d& center, double radius, double& height,
+                      std::uint32_t min_points = 1);
+
 PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& map,
                              const Vec3d& center, const PoseSearchParams& params);
 
