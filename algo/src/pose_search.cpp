@@ -91,7 +91,9 @@ bool road_height_near(std::span<const Vec3f> map, const Vec3d& center, double ra
     height = center.z();
     return false;
   }
-  if (road_height(map, Vec3d(center.x(), center.y(), sum / n), radius, height, min_points)) return true;
+  // Shifted by whole bins, so the bin edges stay those of a histogram centred on center.z.
+  const double shift = 0.2 * std::round((sum / n - center.z()) / 0.2);
+  if (road_height(map, Vec3d(center.x(), center.y(), center.z() + shift), radius, height, min_points)) return true;
   height = center.z();
   return false;
 }
@@ -119,7 +121,9 @@ PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& 
     if (seen++ % stride == 0 && n < want) score_pts[n++] = p;
   }
 
-  road_height(map.points, center, params.radius + 10.0, out.ground_z);
+  // Not around the fix's altitude: a canyon fix can be 50 m off vertically (measured: Sim 2's
+  // first fix), which put every hypothesis far above the road.
+  road_height_near(map.points, center, params.radius + 10.0, out.ground_z);
   Candidate top[kPoseSearchRefine];
   const double d2max = params.score_distance * params.score_distance;
   const int cells = static_cast<int>(std::floor(params.radius / params.step));

@@ -17,6 +17,10 @@
 #include "v2xloc/algo/odometry.hpp"
 #define V2XLOC_INFO_HAS_ODOMETRY 1
 #endif
+#if __has_include("v2xloc/algo/trajectory_backfill.hpp")
+#include "v2xloc/algo/trajectory_backfill.hpp"
+#define V2XLOC_INFO_HAS_BACKFILL 1
+#endif
 #if __has_include("v2xloc/algo/validity_gate.hpp")
 #include "v2xloc/algo/validity_gate.hpp"
 #define V2XLOC_INFO_HAS_GATE 1
@@ -62,6 +66,9 @@ std::vector<MemoryEntry> memory_entries() {
 #ifdef V2XLOC_INFO_HAS_GATE
   entries.push_back({"FixedLagValidityGate", sizeof(v2xloc::FixedLagValidityGate), false});
   entries.push_back({"CausalValidityGate", sizeof(v2xloc::CausalValidityGate), false});
+#endif
+#ifdef V2XLOC_INFO_HAS_BACKFILL
+  entries.push_back({"TrajectoryBackfill", sizeof(v2xloc::TrajectoryBackfill), false});
 #endif
   return entries;
 }

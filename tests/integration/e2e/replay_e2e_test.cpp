@@ -252,7 +252,12 @@ TEST_F(ReplayE2e, FirmwarePathRecordsMatchTheInProcessRecordsWithinCanResolution
     const double fused_tol = std::sqrt(2.0 * kMm * kMm + kCm * kCm);
     EXPECT_NEAR(cf.fused, cp.fused, fused_tol);
     EXPECT_NEAR(cf.fused_valid, cp.fused_valid, fused_tol);
+    // Fused (lag) revises start-up frames through the odometry pose, which the wire carries as
+    // x, y, z, yaw: its yaw step times <= 15 m of driving plus the dropped roll / pitch (< 0.1 deg
+    // on this flat road) over the same distance: 2 cm.
+    EXPECT_NEAR(cf.fused_lag, cp.fused_lag, 0.02);
   }
+  EXPECT_EQ(mf.revised_frames, mp.revised_frames);
 }
 
 TEST_F(ReplayE2e, ReplayCliWritesTumAndEvaluates) {

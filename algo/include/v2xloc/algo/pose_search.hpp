@@ -57,7 +57,8 @@ bool road_height(std::span<const Vec3f> map, const Vec3d& center, double radius,
                  std::uint32_t min_points = 1);
 
 // The same without a height prior (a canyon's GNSS altitude can be tens of metres off): the
-// histogram is centred on the mean height of the map points within `radius` of center's x, y.
+// histogram is centred on the mean height of the map points within `radius` of center's x, y
+// (moved by whole bins from center.z). search_pose uses this one.
 bool road_height_near(std::span<const Vec3f> map, const Vec3d& center, double radius, double& height,
                       std::uint32_t min_points = 1);
 
