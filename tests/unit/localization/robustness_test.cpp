@@ -143,6 +143,33 @@ TEST(PoseSearchRobustness, MirrorIsMeasuredAsRunnerUpAndExcludedByHeadingPrior) 
   EXPECT_LT(prior.runner_up_tight_fitness, 0.85 * prior.best_tight_fitness)
       << "with the heading prior the mirror is not a candidate";
   EXPECT_LT(prior.hypotheses, open.hypotheses) << "hypotheses outside the prior are not scored";
+
+  // A canyon fix can be 50 m off vertically (Sim 2's first fix): the hypotheses still sit on the
+  // map's road, not at the fix's altitude, and the search finds the same pose.
+  const PoseSearchResult high = search_pose(scan, target, Vec3d(gnss.x(), gnss.y(), 60.0), sp);
+  ASSERT_TRUE(high.best.ok());
+  EXPECT_NEAR(high.ground_z, 0.0, 0.11);  // half a 0.2 m bin
+  const Mat4d dh = se3_inverse(prior.best.transform) * high.best.transform;
+  EXPECT_LT(std::hypot(dh(0, 3), dh(1, 3)), 0.05);
+}
+
+TEST(PoseSearchRobustness, RoadHeightIgnoresTheFixAltitudeAndSaysWhenTheMapIsAbsent) {
+  std::mt19937_64 rng(9);
+  std::vector<Vec3f> map = courtyard(rng);
+  for (Vec3f& p : map) p.z() += 3.0f;  // road at +3 m
+  double h = 0.0;
+  EXPECT_TRUE(road_height(map, Vec3d(0.0, 0.0, 10.0), 20.0, h, 50));
+  EXPECT_NEAR(h, 3.0, 0.11);
+  // The fix 60 m high: the road is outside a window around it, not outside one around the map.
+  EXPECT_FALSE(road_height(map, Vec3d(0.0, 0.0, 60.0), 20.0, h, 50));
+  EXPECT_EQ(h, 60.0);
+  EXPECT_TRUE(road_height_near(map, Vec3d(0.0, 0.0, 60.0), 20.0, h, 50));
+  EXPECT_NEAR(h, 3.0, 0.11);
+  // No map within the radius: not found, and the height is the caller's.
+  EXPECT_FALSE(road_height_near(map, Vec3d(500.0, 0.0, 7.0), 20.0, h, 50));
+  EXPECT_EQ(h, 7.0);
+  // Too few points in the road bin for the caller's threshold.
+  EXPECT_FALSE(road_height_near(map, Vec3d(0.0, 0.0, 0.0), 20.0, h, 100000));
 }
 
 TEST(OdometryRobustness, GivenPredictionIsUsedAndNonFiniteOneIgnored) {
