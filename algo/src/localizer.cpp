@@ -350,6 +350,7 @@ bool Localizer::global_search(double t, RegistrationResult& result) {
   // (1) Exhaustive, GNSS-seeded search over position and heading.
   PoseSearchParams sp = params_.search;
   sp.radius = region < sp.radius ? region : sp.radius;
+  sp.sensor_in_body = body_T_lidar_.topRightCorner<3, 1>();
   double course = 0.0;
   const bool heading_known = gnss_heading_at(t, course);
   if (heading_known) {
@@ -363,6 +364,8 @@ bool Localizer::global_search(double t, RegistrationResult& result) {
   output_.search_heading_used = heading_known;
   output_.search_best_tight = searched.best_tight_fitness;
   output_.search_runner_up_tight = searched.runner_up_tight_fitness;
+  output_.search_best_conflicts = searched.best_conflicts;
+  output_.search_runner_up_conflicts = searched.runner_up_conflicts;
   output_.search_best_pose = searched.best.transform;
   output_.search_runner_up_pose = searched.runner_up.transform;
   RegistrationResult best = searched.best;
@@ -530,6 +533,7 @@ bool Localizer::audit_basin(const RegistrationResult& tracked) {
   const IcpTarget target = map_target();
   PoseSearchParams sp = params_.search;
   sp.radius = params_.audit_radius;
+  sp.sensor_in_body = body_T_lidar_.topRightCorner<3, 1>();
   const PoseSearchResult s = search_pose(scan_down_.span(), target, tracked.transform.topRightCorner<3, 1>(), sp);
   if (!s.best.ok()) return true;
   const Mat4d d = se3_inverse(tracked.transform) * s.best.transform;

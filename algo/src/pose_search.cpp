@@ -98,6 +98,49 @@ bool road_height_near(std::span<const Vec3f> map, const Vec3d& center, double ra
   return false;
 }
 
+double ray_conflict_ratio(std::span<const Vec3f> scan_body, const IcpTarget& map, const Mat4d& pose,
+                          double ground_z, const PoseSearchParams& params) {
+  if (map.tree == nullptr || !(params.conflict_step > 0.0) || params.conflict_rays == 0) return -1.0;
+  const Vec3d& s = params.sensor_in_body;
+  const double min_range2 = params.conflict_min_range * params.conflict_min_range;
+  std::uint32_t candidates = 0;
+  for (const Vec3f& p : scan_body) {
+    const Vec3d d = p.cast<double>() - s;
+    candidates += p.z() > params.min_height && d.squaredNorm() > min_range2 ? 1u : 0u;
+  }
+  const std::uint32_t want = params.conflict_rays < kPoseSearchMaxConflictRays ? params.conflict_rays
+                                                                                : kPoseSearchMaxConflictRays;
+  if (candidates == 0) return -1.0;
+  const std::uint32_t stride = candidates > want ? candidates / want : 1u;
+  const Mat3d R = pose.topLeftCorner<3, 3>();
+  const Vec3d origin = R * s + pose.topRightCorner<3, 1>();
+  const float r2 = static_cast<float>(params.conflict_radius * params.conflict_radius);
+  const double floor_z = ground_z + params.min_height;  // kerbs and the road itself are no walls
+  std::uint32_t rays = 0, conflicts = 0, seen = 0;
+  for (const Vec3f& p : scan_body) {
+    const Vec3d d = p.cast<double>() - s;
+    if (!(p.z() > params.min_height) || d.squaredNorm() <= min_range2) continue;
+    if (seen++ % stride != 0 || rays >= want) continue;
+    ++rays;
+    const double length = d.norm();
+    const Vec3d dir = R * (d / length);
+    const double free = length - params.conflict_margin;
+    std::uint32_t hint = KdTree<Vec3f>::kNoHint;
+    for (std::uint32_t k = 0; k < kPoseSearchMaxRaySteps; ++k) {
+      const double along = params.conflict_start + k * params.conflict_step;
+      if (along >= free) break;
+      const Vec3d q = origin + along * dir;
+      if (q.z() < floor_z) continue;
+      Neighbor nb{0, 0.0f};
+      if (map.tree->nearest_within(q.cast<float>(), r2, hint, nb).count > 0) {
+        ++conflicts;
+        break;
+      }
+    }
+  }
+  return rays > 0 ? static_cast<double>(conflicts) / rays : -1.0;
+}
+
 PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& map,
                              const Vec3d& center, const PoseSearchParams& params) {
   PoseSearchResult out;
@@ -172,14 +215,24 @@ PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& 
     if (refined[i].ok() && refined[i].fitness > best_fitness) best_fitness = refined[i].fitness;
   }
   // The winner: the highest fitness at a tight threshold (an aliased pose explains the scan at
-  // 1 m but not at 0.3 m; inlier RMSE at a loose threshold does not separate them).
+  // 1 m but not at 0.3 m; inlier RMSE at a loose threshold does not separate them), among the
+  // poses whose rays do not cross the map's surfaces (max_conflicts).
   double tight[kPoseSearchRefine];
+  double conflicts[kPoseSearchRefine];
   double best_tight = -1.0;
   std::uint32_t winner = kPoseSearchRefine;
   for (std::uint32_t i = 0; i < kPoseSearchRefine; ++i) {
     const RegistrationResult& r = refined[i];
     tight[i] = -1.0;
+    conflicts[i] = -1.0;
     if (!r.ok() || r.fitness < best_fitness - 0.1) continue;
+    if (params.max_conflicts > 0.0) {
+      conflicts[i] = ray_conflict_ratio(scan_body, map, r.transform, out.ground_z, params);
+      if (conflicts[i] > params.max_conflicts) {
+        ++out.conflict_rejected;
+        continue;
+      }
+    }
     tight[i] = evaluate_registration(scan_body, map, r.transform, params.select_distance).fitness;
     if (tight[i] > best_tight) {
       best_tight = tight[i];
@@ -200,8 +253,10 @@ PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& 
     if (tight[i] > out.runner_up_tight_fitness) {
       out.runner_up_tight_fitness = tight[i];
       out.runner_up = refined[i];
+      out.runner_up_conflicts = conflicts[i];
     }
   }
+  out.best_conflicts = conflicts[winner];
   return out;
 }
 

@@ -59,7 +59,7 @@ bool write_trace(const std::string& path, const std::vector<v2xloc::eval::FrameR
   std::fprintf(f, "# frame t mode attempted status fitness rmse fused gate_decided gate_valid err_fused_xy "
                   "err_reg_xy err_ungated_xy err_fused_yaw_deg sigma_xy initialized odom_ok odom_step_err odom_step_yaw_err_deg err_stereo_xy stereo_fused "
                   "searched heading_used best_tight runner_up_tight err_search_best_xy err_search_runner_up_xy "
-                  "err_fused_3d err_lag_3d revised\n");
+                  "err_fused_3d err_lag_3d revised best_conflicts runner_up_conflicts\n");
   for (std::size_t i = 0; i < records.size(); ++i) {
     const auto& r = records[i];
     // Odometry's frame-to-frame motion against the truth's (drift per step).
@@ -77,7 +77,7 @@ bool write_trace(const std::string& path, const std::vector<v2xloc::eval::FrameR
     auto err_xy = [&](const v2xloc::Mat4d& T) { return (T.topRightCorner<2, 1>() - truth.head<2>()).norm(); };
     const Eigen::Matrix3d dr = r.truth.linear().transpose() * o.fused_pose.topLeftCorner<3, 3>();
     const double yaw_err = std::atan2(dr(1, 0), dr(0, 0)) * 180.0 / M_PI;
-    std::fprintf(f, "%u %.3f %d %d %d %.4f %.4f %d %d %d %.4f %.4f %.4f %.3f %.4f %d %d %.4f %.3f %.4f %d %d %d %.4f %.4f %.3f %.3f %.4f %.4f %d\n",
+    std::fprintf(f, "%u %.3f %d %d %d %.4f %.4f %d %d %d %.4f %.4f %.4f %.3f %.4f %d %d %.4f %.3f %.4f %d %d %d %.4f %.4f %.3f %.3f %.4f %.4f %d %.3f %.3f\n",
                  o.frame, r.t,
                  static_cast<int>(o.mode), o.registration_attempted ? 1 : 0, static_cast<int>(o.registration_status),
                  o.fitness, o.inlier_rmse, o.registration_fused ? 1 : 0, r.gate_decided ? 1 : 0, r.gate_valid ? 1 : 0,
@@ -89,7 +89,8 @@ bool write_trace(const std::string& path, const std::vector<v2xloc::eval::FrameR
                  o.searched ? err_xy(o.search_best_pose) : -1.0,
                  o.searched && o.search_runner_up_tight > 0.0 ? err_xy(o.search_runner_up_pose) : -1.0,
                  (o.fused_pose.topRightCorner<3, 1>() - truth).norm(),
-                 (r.lagged_pose.topRightCorner<3, 1>() - truth).norm(), r.revised ? 1 : 0);
+                 (r.lagged_pose.topRightCorner<3, 1>() - truth).norm(), r.revised ? 1 : 0,
+                 o.search_best_conflicts, o.search_runner_up_conflicts);
   }
   std::fclose(f);
   return true;

@@ -172,6 +172,67 @@ TEST(PoseSearchRobustness, RoadHeightIgnoresTheFixAltitudeAndSaysWhenTheMapIsAbs
   EXPECT_FALSE(road_height_near(map, Vec3d(0.0, 0.0, 0.0), 20.0, h, 100000));
 }
 
+// A wall across the road at x = 10 (y in [-10, 10], 0-5 m high), the road surface, and a car
+// body around the sensor (as the infrastructure maps the ego vehicle).
+struct WallTarget {
+  std::vector<Vec3f> points;
+  KdTreeStorage<Vec3f, 16384> tree;
+  void build() {
+    for (float y = -10.0f; y <= 10.0f; y += 0.2f) {
+      for (float z = 0.0f; z <= 5.0f; z += 0.2f) points.emplace_back(10.0f, y, z);
+    }
+    for (float x = -20.0f; x <= 30.0f; x += 0.4f) {
+      for (float y = -10.0f; y <= 10.0f; y += 0.4f) points.emplace_back(x, y, 0.0f);
+    }
+    for (float x = -2.0f; x <= 2.0f; x += 0.2f) {
+      for (float y = -0.8f; y <= 0.8f; y += 0.2f) points.emplace_back(x, y, 1.5f);  // roof
+    }
+    ASSERT_EQ(tree.build(points).status, KdBuildStatus::kOk);
+  }
+};
+
+TEST(PoseSearchRobustness, RayConflictsCountRaysThroughWallsOnly) {
+  static WallTarget map;  // tree storage: static, not the stack
+  map.build();
+  const IcpTarget target{map.points, {}, &map.tree.tree};
+  PoseSearchParams p;
+  p.sensor_in_body = Vec3d(0.0, 0.0, 1.8);
+  auto pose_at = [](double x) {
+    Mat4d t = Mat4d::Identity();
+    t(0, 3) = x;
+    return t;
+  };
+  // Returns from the wall seen from x = 0 (body frame), plus low returns from the road ahead.
+  std::vector<Vec3f> wall_scan;
+  for (float y = -6.0f; y <= 6.0f; y += 0.5f) {
+    for (float z = 1.0f; z <= 4.0f; z += 1.0f) wall_scan.emplace_back(10.0f, y, z);
+  }
+  for (float x = 6.0f; x <= 9.0f; x += 0.5f) wall_scan.emplace_back(x, 2.0f, 0.6f);
+  // At the true pose no ray crosses a surface: the roof under the sensor and the road under the
+  // low rays are not walls.
+  EXPECT_EQ(ray_conflict_ratio(wall_scan, target, pose_at(0.0), 0.0, p), 0.0);
+  // Shifted back the rays stop short of the wall: nothing contradicts (absence of evidence).
+  // (Rays above the car body: at this pose the mapped car is an obstacle ahead.)
+  std::vector<Vec3f> high_rays;
+  for (const Vec3f& q : wall_scan) {
+    if (q.z() >= 2.0f) high_rays.push_back(q);
+  }
+  EXPECT_EQ(ray_conflict_ratio(high_rays, target, pose_at(-5.0), 0.0, p), 0.0);
+  // Shifted forward every wall ray passes through the wall before its return.
+  const double ahead = ray_conflict_ratio(wall_scan, target, pose_at(5.0), 0.0, p);
+  EXPECT_GT(ahead, 0.7);
+  // Returns from behind the wall (seen through an opening the map does not have) conflict too.
+  std::vector<Vec3f> behind;
+  for (float y = -6.0f; y <= 6.0f; y += 1.0f) behind.emplace_back(20.0f, y, 2.0f);
+  EXPECT_EQ(ray_conflict_ratio(behind, target, pose_at(0.0), 0.0, p), 1.0);
+  // Rays shorter than the minimum range, or none at all: not computed.
+  std::vector<Vec3f> near_only{Vec3f(2.0f, 0.0f, 1.5f)};
+  EXPECT_EQ(ray_conflict_ratio(near_only, target, pose_at(0.0), 0.0, p), -1.0);
+  // The ray budget is a hard cap.
+  p.conflict_rays = 4;
+  EXPECT_GE(ray_conflict_ratio(wall_scan, target, pose_at(5.0), 0.0, p), 0.0);
+}
+
 TEST(OdometryRobustness, GivenPredictionIsUsedAndNonFiniteOneIgnored) {
   static LidarOdometry odom;
   OdometryParams p;

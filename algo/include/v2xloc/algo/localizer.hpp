@@ -110,6 +110,8 @@ struct LocalizerFrameOutput {
   bool search_heading_used = false;         // the GNSS course limited the search's yaw
   double search_best_tight = 0.0;           // best basin's fitness at the tight threshold
   double search_runner_up_tight = 0.0;      // best other basin's (0: none)
+  double search_best_conflicts = -1.0;      // their ray conflict ratios (pose_search.hpp)
+  double search_runner_up_conflicts = -1.0;
   Mat4d search_best_pose = Mat4d::Identity();
   Mat4d search_runner_up_pose = Mat4d::Identity();
   // Stereo registration (tracking only, LiDAR + stereo configuration).

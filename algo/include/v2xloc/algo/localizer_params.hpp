@@ -193,6 +193,9 @@ struct LocalizerParams {
     p.step = 3.0;
     p.radius = 30.0;                // [m] = global_min_region (bounded work: ~8k hypotheses)
     p.score_points = 96;
+    // Poses whose rays cross the map's walls are not candidates (pose_search.hpp): the street's
+    // aliases 21-30 m along it fit the facades as well as the truth but look through them.
+    p.max_conflicts = 0.12;
     p.fine_icp = default_icp();
     return p;
   }
