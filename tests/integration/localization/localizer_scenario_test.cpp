@@ -99,7 +99,12 @@ TEST(LocalizerScenario, ShortDriveFusesToCentimetres) {
   EXPECT_LT(worst_revised, 0.25);
   const eval::RowMetrics m = eval::compute_metrics(records);
   EXPECT_EQ(m.revised_frames, first);
-  EXPECT_LE(m.unaligned.fused_lag, m.unaligned.fused);
+  EXPECT_LT(m.unaligned.fused_lag, 0.05);
+  // Every frame, start-up included (the paper's "Fused"): the start-up search puts the output on
+  // the map from the first frame (12 recordings: output from frame 0, filter from frame 2). One
+  // frame left at the GNSS fix (~10 m off) adds 0.2 m to a 50-frame mean, so 5 cm (5x the
+  // tracked error) fails exactly when the start-up falls back to the GNSS.
+  EXPECT_LT(m.unaligned.fused, 0.05);
   EXPECT_GT(m.valid_frames, 10);
   EXPECT_GE(m.unaligned.fused_valid, 0.0);
   EXPECT_LT(m.unaligned.fused_valid, 0.05);

@@ -193,6 +193,10 @@ struct LocalizerParams {
     p.step = 3.0;
     p.radius = 30.0;                // [m] = global_min_region (bounded work: ~8k hypotheses)
     p.score_points = 96;
+    // Half the grid cell's diagonal (step 3 m): with 1 m the true pose's cell, 1.5 m off, scored
+    // 0.1 and was not shortlisted (Sim 0's first frame); the aliases this lets in are removed
+    // by the ray check below.
+    p.score_distance = 2.0;
     // Poses whose rays cross the map's walls are not candidates (pose_search.hpp): the street's
     // aliases 21-30 m along it fit the facades as well as the truth but look through them.
     p.max_conflicts = 0.12;

@@ -37,8 +37,9 @@ struct PoseSearchParams {
   // the return). Fitness counts returns that land on the map; it cannot see a pose whose rays go
   // through walls (a street's facades repeat along it, the cross street's opening does not).
   // Refined poses above max_conflicts are not candidates (0: off, nothing computed). Rays:
-  // above-ground points beyond conflict_min_range. Measured on the 12 recordings' start-up
-  // searches: true poses 0.02-0.08, the street's aliases 21-30 m away 0.16-0.28.
+  // above-ground points beyond conflict_min_range. Measured on the recordings' start-up
+  // searches: true poses 0.02-0.11 (12 recordings), the street's aliases 21-30 m along it
+  // 0.16-0.36 (Sim 0-2, 2_infra, with this check off).
   double max_conflicts = 0.0;
   Vec3d sensor_in_body{0.0, 0.0, 1.8};   // [m] ray origin (the LiDAR) in the body frame
   std::uint32_t conflict_rays = 128;     // <= kPoseSearchMaxConflictRays
