@@ -429,9 +429,9 @@ bool Localizer::global_search(double t, RegistrationResult& result) {
   ++counters_.global_accepted;
   if (!ekf_.initialized() || failed_frames_ > params_.max_failed_frames) {
     // An unconfirmed candidate is reported (Reg. column) but neither gated nor fused.
-    // Output before confirmation when it cannot be the mirror: the course says so, the GNSS track
-    // does, or the search over every heading left no other pose standing (the ray check removed
-    // the rest, the mirror included).
+    // Output before confirmation when it is unlikely to be the mirror: the course says so, the
+    // GNSS track does, or the search over every heading left no other pose standing (the ray
+    // check removed the rest). Still flagged not localized until a second search confirms it.
     const bool sole = !heading_known && sp.max_conflicts > 0.0 && searched.best.ok() &&
                       searched.runner_up_tight_fitness <= 0.0;
     if (!confirm_global(result.transform, track_known || heading_agrees || sole)) return false;
