@@ -1,11 +1,11 @@
-// Classic CAN bus: send/receive protocol::CanFrame, acceptance filters, receive time stamps,
+// Classic CAN bus: send/receive CanFrame, acceptance filters, receive time stamps,
 // error frames. Non-blocking: receive() returns kWouldBlock when the queue is empty.
 #pragma once
 
 #include <cstdint>
 #include <span>
 
-#include "firmware/protocol/can_frame.hpp"
+#include "hal/can_frame.hpp"
 #include "hal/status.hpp"
 
 namespace v2xloc::hal {
@@ -16,8 +16,8 @@ namespace v2xloc::hal {
 struct CanFilter {
   std::uint32_t id = 0;
   std::uint32_t mask = 0;
-  static constexpr std::uint32_t kStandardMask = 0x7FFu | protocol::CanFrame::kExtendedFlag;
-  static constexpr std::uint32_t kExtendedMask = 0x1FFFFFFFu | protocol::CanFrame::kExtendedFlag;
+  static constexpr std::uint32_t kStandardMask = 0x7FFu | CanFrame::kExtendedFlag;
+  static constexpr std::uint32_t kExtendedMask = 0x1FFFFFFFu | CanFrame::kExtendedFlag;
 };
 inline constexpr std::size_t kMaxCanFilters = 32;
 
@@ -36,7 +36,7 @@ inline constexpr std::uint32_t kAll = 0x1FFFFFFFu;
 }  // namespace can_error
 
 struct CanRxFrame {
-  protocol::CanFrame frame;        // for error frames: data holds the error details
+  CanFrame frame;        // for error frames: data holds the error details
   std::int64_t timestamp_ns = 0;   // receive time on the CLOCK_MONOTONIC / Clock::monotonic_ns base
   bool remote = false;             // RTR frame (no data)
   bool error = false;              // error frame; error_class holds the can_error bits
@@ -55,7 +55,7 @@ struct CanCounters {
 class CanBus {
  public:
   virtual ~CanBus() = default;
-  virtual Status send(const protocol::CanFrame& frame) = 0;
+  virtual Status send(const CanFrame& frame) = 0;
   virtual Status receive(CanRxFrame& out) = 0;
   // Replaces all filters; an empty span accepts nothing, use accept_all() to receive everything.
   virtual Status set_filters(std::span<const CanFilter> filters) = 0;

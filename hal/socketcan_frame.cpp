@@ -7,14 +7,14 @@
 namespace v2xloc::hal {
 
 static_assert(sizeof(struct can_frame) == kSocketCanFrameBytes && CAN_MTU == kSocketCanFrameBytes);
-static_assert(CAN_EFF_FLAG == protocol::CanFrame::kExtendedFlag,
+static_assert(CAN_EFF_FLAG == CanFrame::kExtendedFlag,
               "CanFrame's extended bit is SocketCAN's CAN_EFF_FLAG, so filters map 1:1");
 
-Status encode_socketcan_frame(const protocol::CanFrame& frame, std::span<std::uint8_t, kSocketCanFrameBytes> out) {
+Status encode_socketcan_frame(const CanFrame& frame, std::span<std::uint8_t, kSocketCanFrameBytes> out) {
   if (frame.dlc > CAN_MAX_DLEN) return Status::kInvalidArgument;
   struct can_frame cf;
   std::memset(&cf, 0, sizeof cf);
-  const bool extended = (frame.id & protocol::CanFrame::kExtendedFlag) != 0;
+  const bool extended = (frame.id & CanFrame::kExtendedFlag) != 0;
   if (extended ? (frame.id & ~(CAN_EFF_FLAG | CAN_EFF_MASK)) != 0 : frame.id > CAN_SFF_MASK) {
     return Status::kInvalidArgument;
   }
@@ -42,7 +42,7 @@ Status decode_socketcan_frame(std::span<const std::uint8_t> bytes, CanRxFrame& o
   if (out.error) {
     out.frame.id = cf.can_id & CAN_ERR_MASK;
   } else if (cf.can_id & CAN_EFF_FLAG) {
-    out.frame.id = (cf.can_id & CAN_EFF_MASK) | protocol::CanFrame::kExtendedFlag;
+    out.frame.id = (cf.can_id & CAN_EFF_MASK) | CanFrame::kExtendedFlag;
   } else {
     out.frame.id = cf.can_id & CAN_SFF_MASK;
   }

@@ -1,4 +1,4 @@
-// The one place that converts between protocol::CanFrame and SocketCAN's `struct can_frame`
+// The one place that converts between CanFrame and SocketCAN's `struct can_frame`
 // (16 bytes, <linux/can.h>). Both the SocketCAN backend (bytes from read()) and the emulated
 // CAN-over-UDP backend (bytes from a datagram) decode through decode_socketcan_frame(), so the
 // emulated path is the real path.
@@ -15,7 +15,7 @@ namespace v2xloc::hal {
 inline constexpr std::size_t kSocketCanFrameBytes = 16;  // == CAN_MTU (static_assert in the .cpp)
 
 // Writes the 16 bytes of a struct can_frame (host byte order can_id, as the kernel uses).
-Status encode_socketcan_frame(const protocol::CanFrame& frame, std::span<std::uint8_t, kSocketCanFrameBytes> out);
+Status encode_socketcan_frame(const CanFrame& frame, std::span<std::uint8_t, kSocketCanFrameBytes> out);
 
 // kMalformed unless exactly 16 bytes with len <= 8. Sets remote / error / error_class; leaves
 // timestamp_ns untouched.

@@ -8,16 +8,16 @@
 #include <cstdint>
 
 #include "firmware/protocol/can_messages.hpp"
-#include "v2xloc/algo/localizer.hpp"
+#include "v2xloc/algo/localization/localizer.hpp"
 
 namespace v2xloc::firmware {
 
 struct DiagnosticFrames {
-  protocol::CanFrame registration_position;
-  protocol::CanFrame registration_quality;
-  protocol::CanFrame gate;
-  protocol::CanFrame odometry_position;
-  protocol::CanFrame odometry_attitude;  // last: the replayer's lockstep waits for it
+  hal::CanFrame registration_position;
+  hal::CanFrame registration_quality;
+  hal::CanFrame gate;
+  hal::CanFrame odometry_position;
+  hal::CanFrame odometry_attitude;  // last: the replayer's lockstep waits for it
 };
 
 // Stateful only in the 4-bit rolling counter (one per diagnostic message, advanced together).

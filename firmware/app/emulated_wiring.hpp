@@ -17,7 +17,7 @@ namespace v2xloc::firmware {
 class SimTimeCanBus final : public hal::CanBus {
  public:
   SimTimeCanBus(hal::CanBus& inner, hal::SimClock& clock) : inner_(inner), clock_(clock) {}
-  hal::Status send(const protocol::CanFrame& frame) override { return inner_.send(frame); }
+  hal::Status send(const hal::CanFrame& frame) override { return inner_.send(frame); }
   hal::Status receive(hal::CanRxFrame& out) override;
   hal::Status set_filters(std::span<const hal::CanFilter> filters) override { return inner_.set_filters(filters); }
   hal::Status accept_all() override { return inner_.accept_all(); }

@@ -135,7 +135,7 @@ std::size_t FirmwareApp::drain_datagrams() {
   return n;
 }
 
-void FirmwareApp::send(const protocol::CanFrame& frame) {
+void FirmwareApp::send(const hal::CanFrame& frame) {
   if (hal_.can.send(frame) == hal::Status::kOk) {
     ++counters_.can_tx;
   } else {

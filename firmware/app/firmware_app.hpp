@@ -78,7 +78,7 @@ class FirmwareApp {
   void maybe_heartbeat();
   void publish_pose(const LocalizerFrameOutput& out);
   void discipline_clock(std::int64_t rx_monotonic_ns);
-  void send(const protocol::CanFrame& frame);
+  void send(const hal::CanFrame& frame);
   std::int64_t disciplined(std::int64_t monotonic_ns) const {
     return monotonic_ns + (hal_.clock.time_ns() - hal_.clock.monotonic_ns());
   }

@@ -6,7 +6,7 @@
 
 namespace v2xloc::firmware {
 
-CanInputKind InputDecoder::on_can(const protocol::CanFrame& frame, std::int64_t time_ns, LocalizerPort& sink) {
+CanInputKind InputDecoder::on_can(const hal::CanFrame& frame, std::int64_t time_ns, LocalizerPort& sink) {
   ++counters_.can_frames;
   const double t = localizer_time_s(time_ns, epoch_ns_);
   const auto rejected = [this] {

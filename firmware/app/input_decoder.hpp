@@ -12,7 +12,7 @@
 #include "firmware/app/localizer_port.hpp"
 #include "firmware/protocol/can_messages.hpp"
 #include "firmware/protocol/pointcloud_udp.hpp"
-#include "v2xloc/algo/config.hpp"
+#include "v2xloc/algo/core/config.hpp"
 
 namespace v2xloc::firmware {
 
@@ -55,7 +55,7 @@ class InputDecoder {
   std::int64_t epoch_ns() const { return epoch_ns_; }
 
   // One CAN frame received at disciplined time time_ns.
-  CanInputKind on_can(const protocol::CanFrame& frame, std::int64_t time_ns, LocalizerPort& sink);
+  CanInputKind on_can(const hal::CanFrame& frame, std::int64_t time_ns, LocalizerPort& sink);
   // Latest GNSS time frame (valid after kGnssFix), for PPS discipline.
   const protocol::GnssTimeDop& last_gnss_time() const { return gnss_time_; }
 

@@ -5,9 +5,9 @@
 // on_ego_scan) without copying: the localizer object itself stays a static owned by main.
 #pragma once
 
-#include "v2xloc/algo/geodesy.hpp"
-#include "v2xloc/algo/localizer.hpp"
-#include "v2xloc/algo/map_fusion.hpp"
+#include "v2xloc/algo/core/geodesy.hpp"
+#include "v2xloc/algo/localization/localizer.hpp"
+#include "v2xloc/algo/localization/map_fusion.hpp"
 
 namespace v2xloc::firmware {
 

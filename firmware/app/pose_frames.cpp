@@ -1,6 +1,6 @@
 #include "firmware/app/pose_frames.hpp"
 
-#include "v2xloc/algo/det_math.hpp"
+#include "v2xloc/algo/core/det_math.hpp"
 
 namespace v2xloc::firmware {
 

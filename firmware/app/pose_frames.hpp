@@ -6,14 +6,14 @@
 #include <cstdint>
 
 #include "firmware/protocol/can_messages.hpp"
-#include "v2xloc/algo/localizer.hpp"
+#include "v2xloc/algo/localization/localizer.hpp"
 
 namespace v2xloc::firmware {
 
 struct PoseFrames {
-  protocol::CanFrame position;
-  protocol::CanFrame attitude;
-  protocol::CanFrame sigma;
+  hal::CanFrame position;
+  hal::CanFrame attitude;
+  hal::CanFrame sigma;
 };
 
 protocol::PoseFlags pose_flags(const LocalizerFrameOutput& out, bool gnss_used);

@@ -5,7 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "firmware/protocol/can_frame.hpp"
+#include "hal/can_frame.hpp"
 
 namespace v2xloc::firmware {
 
@@ -30,10 +30,10 @@ inline double localizer_time_s(std::int64_t time_ns, std::int64_t epoch_ns) {
 // The replayer drives the firmware's SimClock with this extended-id frame (8 data bytes: int64
 // monotonic ns, little-endian) sent before the data of that instant; the emulated backend wiring
 // in main consumes it, the application never sees it. A real bus never carries it.
-inline constexpr std::uint32_t kSimTimeCanId = protocol::CanFrame::kExtendedFlag | 0x1FFFFF00u;
+inline constexpr std::uint32_t kSimTimeCanId = hal::CanFrame::kExtendedFlag | 0x1FFFFF00u;
 
-inline protocol::CanFrame make_sim_time_frame(std::int64_t monotonic_ns) {
-  protocol::CanFrame f;
+inline hal::CanFrame make_sim_time_frame(std::int64_t monotonic_ns) {
+  hal::CanFrame f;
   f.id = kSimTimeCanId;
   f.dlc = 8;
   const auto v = static_cast<std::uint64_t>(monotonic_ns);
@@ -41,7 +41,7 @@ inline protocol::CanFrame make_sim_time_frame(std::int64_t monotonic_ns) {
   return f;
 }
 
-inline bool parse_sim_time_frame(const protocol::CanFrame& f, std::int64_t& monotonic_ns) {
+inline bool parse_sim_time_frame(const hal::CanFrame& f, std::int64_t& monotonic_ns) {
   if (f.id != kSimTimeCanId || f.dlc != 8) return false;
   std::uint64_t v = 0;
   for (std::size_t i = 0; i < 8; ++i) v |= static_cast<std::uint64_t>(f.data[i]) << (8 * i);

@@ -9,20 +9,20 @@
 #include <cstdint>
 #include <span>
 
-#include "v2xloc/algo/config.hpp"
-#include "v2xloc/algo/deskew.hpp"
-#include "v2xloc/algo/det_math.hpp"
-#include "v2xloc/algo/ekf.hpp"
-#include "v2xloc/algo/geodesy.hpp"
-#include "v2xloc/algo/kabsch.hpp"
-#include "v2xloc/algo/map_fusion.hpp"
-#include "v2xloc/algo/odometry.hpp"
-#include "v2xloc/algo/pose_search.hpp"
-#include "v2xloc/algo/prng.hpp"
-#include "v2xloc/algo/register_clouds.hpp"
-#include "v2xloc/algo/stereo_cloud.hpp"
-#include "v2xloc/algo/trajectory_backfill.hpp"
-#include "v2xloc/algo/validity_gate.hpp"
+#include "v2xloc/algo/core/config.hpp"
+#include "v2xloc/algo/localization/deskew.hpp"
+#include "v2xloc/algo/core/det_math.hpp"
+#include "v2xloc/algo/localization/ekf.hpp"
+#include "v2xloc/algo/core/geodesy.hpp"
+#include "v2xloc/algo/registration/kabsch.hpp"
+#include "v2xloc/algo/localization/map_fusion.hpp"
+#include "v2xloc/algo/localization/odometry.hpp"
+#include "v2xloc/algo/registration/pose_search.hpp"
+#include "v2xloc/algo/core/prng.hpp"
+#include "v2xloc/algo/registration/register_clouds.hpp"
+#include "v2xloc/algo/localization/stereo_cloud.hpp"
+#include "v2xloc/algo/localization/trajectory_backfill.hpp"
+#include "v2xloc/algo/localization/validity_gate.hpp"
 
 namespace {
 

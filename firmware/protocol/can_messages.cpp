@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "v2xloc/algo/det_math.hpp"
+#include "v2xloc/algo/core/det_math.hpp"
 
 namespace v2xloc::protocol {
 namespace {

@@ -7,9 +7,11 @@
 
 #include <cstdint>
 
-#include "firmware/protocol/can_frame.hpp"
+#include "hal/can_frame.hpp"
 
 namespace v2xloc::protocol {
+
+using hal::CanFrame;  // the frame type belongs to the hardware layer; codecs fill it
 
 // ---- Identifiers (lower id wins arbitration: motion first, then GNSS, pose, status) ----------
 inline constexpr std::uint32_t kVehicleMotionId = 0x120;

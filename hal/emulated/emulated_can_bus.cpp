@@ -11,7 +11,7 @@ EmulatedCanBus::EmulatedCanBus(DatagramLink& link, const Clock& clock) : link_(l
   accept_all();  // a fresh CAN_RAW socket receives everything too
 }
 
-Status EmulatedCanBus::send(const protocol::CanFrame& frame) {
+Status EmulatedCanBus::send(const CanFrame& frame) {
   std::array<std::uint8_t, kSocketCanFrameBytes> bytes{};
   const Status encoded = encode_socketcan_frame(frame, bytes);
   if (encoded != Status::kOk) return encoded;

@@ -18,7 +18,7 @@ class EmulatedCanBus final : public CanBus {
  public:
   EmulatedCanBus(DatagramLink& link, const Clock& clock);
 
-  Status send(const protocol::CanFrame& frame) override;
+  Status send(const CanFrame& frame) override;
   // Sends raw struct can_frame bytes (error or RTR frames, for tests and the replayer).
   Status send_raw(std::span<const std::uint8_t> can_frame_bytes);
   Status receive(CanRxFrame& out) override;

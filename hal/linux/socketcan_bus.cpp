@@ -79,7 +79,7 @@ Status SocketCanBus::open(const SocketCanOptions& options) {
   return Status::kOk;
 }
 
-Status SocketCanBus::send(const protocol::CanFrame& frame) {
+Status SocketCanBus::send(const CanFrame& frame) {
   if (fd_ < 0) return Status::kNotOpen;
   std::uint8_t bytes[kSocketCanFrameBytes];
   const Status encoded = encode_socketcan_frame(frame, bytes);

@@ -32,7 +32,7 @@ class SocketCanBus final : public CanBus {
   const char* last_error() const { return error_.c_str(); }
   bool kernel_timestamps() const { return timestamps_; }
 
-  Status send(const protocol::CanFrame& frame) override;
+  Status send(const CanFrame& frame) override;
   Status receive(CanRxFrame& out) override;
   Status set_filters(std::span<const CanFilter> filters) override;
   Status accept_all() override;

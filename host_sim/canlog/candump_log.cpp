@@ -40,7 +40,7 @@ std::int64_t candump_timestamp_us(double seconds) {
 
 std::string format_candump_line(const CandumpRecord& r) {
   char buf[96];
-  const bool extended = (r.frame.id & protocol::CanFrame::kExtendedFlag) != 0u;
+  const bool extended = (r.frame.id & hal::CanFrame::kExtendedFlag) != 0u;
   const std::int64_t ts = r.timestamp_us < 0 ? 0 : r.timestamp_us;
   int n = std::snprintf(buf, sizeof buf, "(%lld.%06lld) %s ", static_cast<long long>(ts / 1000000),
                         static_cast<long long>(ts % 1000000), r.interface.c_str());
@@ -123,7 +123,7 @@ bool parse_candump_line(std::string_view line, CandumpRecord& out, std::string& 
       error = "error/flag bits in the id are not supported";
       return false;
     }
-    id |= protocol::CanFrame::kExtendedFlag;
+    id |= hal::CanFrame::kExtendedFlag;
   }
   if (!data_text.empty() && data_text.front() == '#') {
     error = "CAN FD frames are not supported";
@@ -141,7 +141,7 @@ bool parse_candump_line(std::string_view line, CandumpRecord& out, std::string& 
     error = "more than 8 data bytes";
     return false;
   }
-  protocol::CanFrame frame;
+  hal::CanFrame frame;
   frame.id = id;
   frame.dlc = static_cast<std::uint8_t>(data_text.size() / 2);
   for (std::size_t i = 0; i < frame.dlc; ++i) {
@@ -186,7 +186,7 @@ CandumpLog read_candump_file(const std::string& path) {
 CandumpWriter::CandumpWriter(std::ostream& out, std::string interface)
     : out_(out), interface_(std::move(interface)) {}
 
-void CandumpWriter::write(std::int64_t timestamp_us, const protocol::CanFrame& frame) {
+void CandumpWriter::write(std::int64_t timestamp_us, const hal::CanFrame& frame) {
   CandumpRecord r;
   r.timestamp_us = timestamp_us;
   r.interface = interface_;

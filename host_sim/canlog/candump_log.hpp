@@ -9,14 +9,14 @@
 #include <string_view>
 #include <vector>
 
-#include "firmware/protocol/can_frame.hpp"
+#include "hal/can_frame.hpp"
 
 namespace v2xloc::sim {
 
 struct CandumpRecord {
   std::int64_t timestamp_us = 0;  // microseconds since the epoch (exact: no float round trip)
   std::string interface = "can0";
-  protocol::CanFrame frame;
+  hal::CanFrame frame;
 };
 
 // Seconds -> microseconds, rounded to nearest (for simulated time stamps).
@@ -48,8 +48,8 @@ CandumpLog read_candump_file(const std::string& path);  // errors[0] explains a 
 class CandumpWriter {
  public:
   explicit CandumpWriter(std::ostream& out, std::string interface = "can0");
-  void write(std::int64_t timestamp_us, const protocol::CanFrame& frame);
-  void write(double t_seconds, const protocol::CanFrame& frame) { write(candump_timestamp_us(t_seconds), frame); }
+  void write(std::int64_t timestamp_us, const hal::CanFrame& frame);
+  void write(double t_seconds, const hal::CanFrame& frame) { write(candump_timestamp_us(t_seconds), frame); }
   std::size_t frames_written() const { return frames_; }
 
  private:

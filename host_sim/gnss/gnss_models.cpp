@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "v2xloc/algo/det_math.hpp"
+#include "v2xloc/algo/core/det_math.hpp"
 
 namespace v2xloc::sim::gnss {
 

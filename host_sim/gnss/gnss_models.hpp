@@ -6,7 +6,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "v2xloc/algo/geodesy.hpp"
+#include "v2xloc/algo/core/geodesy.hpp"
 
 namespace v2xloc::sim::gnss {
 

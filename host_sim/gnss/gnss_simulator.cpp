@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "host_sim/gnss/gnss_models.hpp"
-#include "v2xloc/algo/det_math.hpp"
+#include "v2xloc/algo/core/det_math.hpp"
 
 namespace v2xloc::sim {
 namespace {

@@ -21,7 +21,7 @@
 
 #include "host_sim/common/rng.hpp"
 #include "host_sim/world/ray_caster.hpp"
-#include "v2xloc/algo/geodesy.hpp"
+#include "v2xloc/algo/core/geodesy.hpp"
 
 namespace v2xloc::sim {
 

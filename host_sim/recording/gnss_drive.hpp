@@ -9,7 +9,7 @@
 #include "host_sim/gnss/gnss_simulator.hpp"
 #include "host_sim/scenario/scenario.hpp"
 #include "host_sim/world/world.hpp"
-#include "v2xloc/algo/geodesy.hpp"
+#include "v2xloc/algo/core/geodesy.hpp"
 
 namespace v2xloc::sim {
 

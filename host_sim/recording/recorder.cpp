@@ -8,7 +8,7 @@
 #include "host_sim/scenario/simulation.hpp"
 #include "host_sim/sensors/lidar.hpp"
 #include "host_sim/sensors/stereo.hpp"
-#include "tools/cloud_io/pcd.hpp"
+#include "host_sim/cloud_io/pcd.hpp"
 
 #if V2XLOC_SIM_HAVE_GNSS
 #include "host_sim/gnss/gnss_simulator.hpp"
@@ -310,7 +310,7 @@ bool generate_recording(const RecorderConfig& cfg, RecordingSummary& summary, st
     struct Timed {
       std::int64_t us;
       int order;
-      protocol::CanFrame frame;
+      hal::CanFrame frame;
     };
     std::vector<Timed> out;
     VehicleSignalSimulator veh(VehicleSignalConfig{}, derive_seed(cfg.seed, {kVehicle}));

@@ -1,6 +1,6 @@
 #include "host_sim/recording/recording_reader.hpp"
 
-#include "tools/cloud_io/pcd.hpp"
+#include "host_sim/cloud_io/pcd.hpp"
 
 #include <algorithm>
 #include <charconv>

@@ -6,7 +6,7 @@
 #include "host_sim/common/json.hpp"
 #include "host_sim/common/png.hpp"
 #include "host_sim/recording/pose_io.hpp"
-#include "tools/cloud_io/point_cloud.hpp"
+#include "host_sim/cloud_io/point_cloud.hpp"
 
 #include <Eigen/Geometry>
 #include <cstdint>
@@ -35,7 +35,7 @@ struct MapCloudInfo {
 struct CanLogFrame {
   double t = 0;           // recording time (unix time - time_origin_unix_s)
   std::string interface;  // e.g. can0
-  std::uint32_t id = 0;   // with bit 31 set for 29-bit ids (as protocol::CanFrame)
+  std::uint32_t id = 0;   // with bit 31 set for 29-bit ids (as hal::CanFrame)
   std::uint8_t dlc = 0;
   std::uint8_t data[8] = {};
 };

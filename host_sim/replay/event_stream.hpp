@@ -3,7 +3,7 @@
 //   for each frame i at t_i: every CAN frame of the recording's candump log with t <= t_i not yet
 //   emitted (log order); then every map cloud (infra / agent) with stamp <= t_i not yet emitted
 //   (stamp order); then ego scan i.
-// Events are wire bytes: CAN frames as protocol::CanFrame, clouds as the UDP datagrams of the
+// Events are wire bytes: CAN frames as hal::CanFrame, clouds as the UDP datagrams of the
 // point-cloud fragmenter (quantized exactly as sent). WireEventDecoder turns them into localizer
 // inputs through the firmware's own InputDecoder, so the offline path sees the firmware's bits.
 // Time: every event carries its recording time in ns (the emulated firmware's SimClock time);
@@ -19,7 +19,7 @@
 #include "firmware/app/input_decoder.hpp"
 #include "firmware/app/pose_frames.hpp"
 #include "firmware/app/wire_conventions.hpp"
-#include "firmware/protocol/can_frame.hpp"
+#include "hal/can_frame.hpp"
 #include "host_sim/recording/recording_reader.hpp"
 
 namespace v2xloc::sim::replay {
@@ -28,7 +28,7 @@ struct WireEvent {
   enum class Kind : std::uint8_t { kCan, kMapCloud, kEgoScan };
   Kind kind = Kind::kCan;
   std::int64_t time_ns = 0;             // recording time [ns] (CAN log stamp, cloud stamp, frame stamp)
-  protocol::CanFrame can{};             // kCan
+  hal::CanFrame can{};             // kCan
   std::vector<std::vector<std::uint8_t>> datagrams;  // clouds: the fragments, in send order
   std::uint32_t sender_id = 0;          // clouds
   std::uint32_t points_sent = 0;        // clouds: after the fragmenter's drops
@@ -75,7 +75,7 @@ class EventStream {
   std::int64_t epoch_ns_ = 0;
   struct TimedCan {
     std::int64_t time_ns;
-    protocol::CanFrame frame;
+    hal::CanFrame frame;
   };
   std::vector<TimedCan> can_;
   std::size_t next_can_ = 0, next_cloud_ = 0;

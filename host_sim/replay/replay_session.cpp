@@ -214,7 +214,7 @@ bool replay_recording(const RecordingReader& reader, const ReplayOptions& option
   };
 
   std::int64_t last_time_sent = -1;
-  auto send_can = [&](const protocol::CanFrame& f) {
+  auto send_can = [&](const hal::CanFrame& f) {
     if (!send_with_retry([&] { return can.send(f); }, result.send_retries)) return false;
     ++result.can_frames_sent;
     return true;
@@ -255,7 +255,7 @@ bool replay_recording(const RecordingReader& reader, const ReplayOptions& option
     const auto counter_i = static_cast<std::uint16_t>(i & 0xFFFF);
     bool have_position = false, have_attitude = false, have_sigma = false, done = false;
     bool have_reg_position = false, have_reg_quality = false, have_gate = false, have_odom_position = false;
-    auto diagnostic = [&](protocol::CanFrame& slot, const protocol::CanFrame& f, auto& decoded) {
+    auto diagnostic = [&](hal::CanFrame& slot, const hal::CanFrame& f, auto& decoded) {
       slot = f;
       const bool ok = protocol::unpack(f, decoded) == protocol::DecodeStatus::kOk;
       if (!ok) ++result.diagnostic_decode_errors;

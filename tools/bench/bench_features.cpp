@@ -8,11 +8,11 @@
 #include <string>
 #include <vector>
 
-#include "v2xloc/algo/correspondences.hpp"
-#include "v2xloc/algo/fpfh.hpp"
-#include "v2xloc/algo/kdtree.hpp"
-#include "v2xloc/algo/normals.hpp"
-#include "v2xloc/algo/voxel_downsample.hpp"
+#include "v2xloc/algo/registration/correspondences.hpp"
+#include "v2xloc/algo/registration/fpfh.hpp"
+#include "v2xloc/algo/search/kdtree.hpp"
+#include "v2xloc/algo/registration/normals.hpp"
+#include "v2xloc/algo/registration/voxel_downsample.hpp"
 
 namespace v2xloc {
 namespace {

@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "v2xloc/algo/register_clouds.hpp"
+#include "v2xloc/algo/registration/register_clouds.hpp"
 
 namespace {
 

@@ -4,7 +4,7 @@
 #include <cstdio>
 
 #include "firmware/protocol/can_messages.hpp"
-#include "v2xloc/algo/geodesy.hpp"
+#include "v2xloc/algo/core/geodesy.hpp"
 
 namespace v2xloc::eval {
 namespace {
@@ -42,7 +42,7 @@ class GnssTrack {
   GnssTrack(const GeodeticOrigin& origin, const Eigen::Vector3d& lever) : origin_(origin), lever_(lever) {}
 
   void push(const sim::CanLogFrame& f) {
-    protocol::CanFrame frame;
+    hal::CanFrame frame;
     frame.id = f.id;
     frame.dlc = f.dlc;
     for (int b = 0; b < 8; ++b) frame.data[b] = f.data[b];

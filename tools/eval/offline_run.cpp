@@ -7,7 +7,7 @@
 
 #include "firmware/app/input_decoder.hpp"
 #include "firmware/protocol/can_messages.hpp"
-#include "tools/cloud_io/point_cloud.hpp"
+#include "host_sim/cloud_io/point_cloud.hpp"
 
 namespace v2xloc::eval {
 namespace {
@@ -95,7 +95,7 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
     // 1. CAN frames up to t.
     for (; next_can < can.size() && can[next_can].t <= t + 1e-9; ++next_can) {
       const sim::CanLogFrame& f = can[next_can];
-      protocol::CanFrame frame;
+      hal::CanFrame frame;
       frame.id = f.id;
       frame.dlc = f.dlc;
       for (int b = 0; b < 8; ++b) frame.data[b] = f.data[b];

@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "host_sim/recording/recording_reader.hpp"
-#include "v2xloc/algo/localizer.hpp"
-#include "v2xloc/algo/localizer_params.hpp"
+#include "v2xloc/algo/localization/localizer.hpp"
+#include "v2xloc/algo/localization/localizer_params.hpp"
 
 namespace v2xloc::eval {
 

@@ -2,7 +2,7 @@
 
 #include <cstdio>
 
-#include "host_sim/eval/paper_table.hpp"
+#include "tools/eval/paper_table.hpp"
 
 namespace v2xloc::eval {
 namespace {

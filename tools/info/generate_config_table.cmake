@@ -20,9 +20,9 @@ foreach(line IN LISTS lines)
   endif()
 endforeach()
 file(WRITE "${OUTPUT}.tmp"
-"// Generated from algo/include/v2xloc/algo/config.hpp by generate_config_table.cmake.\n"
+"// Generated from algo/include/v2xloc/algo/core/config.hpp by generate_config_table.cmake.\n"
 "#include \"tools/info/config_table.hpp\"\n\n"
-"#include \"v2xloc/algo/config.hpp\"\n\n"
+"#include \"v2xloc/algo/core/config.hpp\"\n\n"
 "namespace v2xloc::tools {\n\n"
 "std::span<const ConfigEntry> config_entries() {\n"
 "  static const ConfigEntry kEntries[] = {\n${entries}  };\n"

@@ -1,28 +1,28 @@
-// v2xloc-info [--json]: every capacity / iteration cap of algo/include/v2xloc/algo/config.hpp and
+// v2xloc-info [--json]: every capacity / iteration cap of algo/include/v2xloc/algo/core/config.hpp and
 // the static memory it implies (sizeof the workspace structs a firmware image keeps static).
 #include "tools/info/config_table.hpp"
-#include "v2xloc/algo/config.hpp"
-#include "v2xloc/algo/register_clouds.hpp"
+#include "v2xloc/algo/core/config.hpp"
+#include "v2xloc/algo/registration/register_clouds.hpp"
 
 // The localization stages' objects, when their headers exist (they hold fixed-size histories/maps).
-#if __has_include("v2xloc/algo/ekf.hpp")
-#include "v2xloc/algo/ekf.hpp"
+#if __has_include("v2xloc/algo/localization/ekf.hpp")
+#include "v2xloc/algo/localization/ekf.hpp"
 #define V2XLOC_INFO_HAS_EKF 1
 #endif
-#if __has_include("v2xloc/algo/map_fusion.hpp")
-#include "v2xloc/algo/map_fusion.hpp"
+#if __has_include("v2xloc/algo/localization/map_fusion.hpp")
+#include "v2xloc/algo/localization/map_fusion.hpp"
 #define V2XLOC_INFO_HAS_MAP_FUSION 1
 #endif
-#if __has_include("v2xloc/algo/odometry.hpp")
-#include "v2xloc/algo/odometry.hpp"
+#if __has_include("v2xloc/algo/localization/odometry.hpp")
+#include "v2xloc/algo/localization/odometry.hpp"
 #define V2XLOC_INFO_HAS_ODOMETRY 1
 #endif
-#if __has_include("v2xloc/algo/trajectory_backfill.hpp")
-#include "v2xloc/algo/trajectory_backfill.hpp"
+#if __has_include("v2xloc/algo/localization/trajectory_backfill.hpp")
+#include "v2xloc/algo/localization/trajectory_backfill.hpp"
 #define V2XLOC_INFO_HAS_BACKFILL 1
 #endif
-#if __has_include("v2xloc/algo/validity_gate.hpp")
-#include "v2xloc/algo/validity_gate.hpp"
+#if __has_include("v2xloc/algo/localization/validity_gate.hpp")
+#include "v2xloc/algo/localization/validity_gate.hpp"
 #define V2XLOC_INFO_HAS_GATE 1
 #endif
 

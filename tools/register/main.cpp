@@ -1,7 +1,7 @@
 // v2xloc-register SOURCE TARGET [--voxel M] [--init FILE_4x4] [--mode global|icp] [--seed N]
 // Reads two clouds, runs the allocation-free registration pipeline (algo/register_clouds) and
 // prints one JSON object (see register_cli.hpp). Exit 0 ok, 1 registration failed, 2 usage/IO.
-#include "tools/cloud_io/cloud_io.hpp"
+#include "host_sim/cloud_io/cloud_io.hpp"
 #include "tools/register/register_cli.hpp"
 
 #include <chrono>

@@ -1,7 +1,7 @@
 // v2xloc-register's command line and JSON output, separate from main() so tests can call them.
 #pragma once
 
-#include "v2xloc/algo/register_clouds.hpp"
+#include "v2xloc/algo/registration/register_clouds.hpp"
 
 #include <cstdint>
 #include <optional>

@@ -1,6 +1,6 @@
 // libFuzzer target: every reader on arbitrary bytes must return (true, consistent cloud) or
 // (false, message), never crash or read out of bounds (run with ASan). First byte picks the reader.
-#include "tools/cloud_io/cloud_io.hpp"
+#include "host_sim/cloud_io/cloud_io.hpp"
 
 #include <cstdlib>
 

@@ -60,14 +60,14 @@ class ReplayE2e : public ::testing::Test {
 std::string* ReplayE2e::dir_ = nullptr;
 bool ReplayE2e::generated_ = false;
 
-bool same_frame(const protocol::CanFrame& a, const protocol::CanFrame& b) {
+bool same_frame(const hal::CanFrame& a, const hal::CanFrame& b) {
   return a.id == b.id && a.dlc == b.dlc && std::memcmp(a.data, b.data, sizeof a.data) == 0;
 }
 
 std::string hex(const firmware::PoseFrames& f) {
   std::string out;
   char buf[8];
-  for (const protocol::CanFrame* c : {&f.position, &f.attitude, &f.sigma}) {
+  for (const hal::CanFrame* c : {&f.position, &f.attitude, &f.sigma}) {
     std::snprintf(buf, sizeof buf, " %03X#", static_cast<unsigned>(c->id));
     out += buf;
     for (int k = 0; k < c->dlc; ++k) {

@@ -5,8 +5,8 @@
 #include <vector>
 
 #include "registration_test_support.hpp"
-#include "v2xloc/algo/det_math.hpp"
-#include "v2xloc/algo/register_clouds.hpp"
+#include "v2xloc/algo/core/det_math.hpp"
+#include "v2xloc/algo/registration/register_clouds.hpp"
 
 namespace v2xloc {
 namespace {

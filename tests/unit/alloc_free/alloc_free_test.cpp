@@ -5,8 +5,8 @@
 
 #include "alloc_counter.hpp"
 #include "registration_test_support.hpp"
-#include "v2xloc/algo/kabsch.hpp"
-#include "v2xloc/algo/register_clouds.hpp"
+#include "v2xloc/algo/registration/kabsch.hpp"
+#include "v2xloc/algo/registration/register_clouds.hpp"
 
 namespace v2xloc {
 namespace {

@@ -19,7 +19,7 @@ TEST(CandumpLog, FormatsLikeCandump) {
   r.frame.data[2] = 0xBE;
   r.frame.data[3] = 0xEF;
   EXPECT_EQ(format_candump_line(r), "(1700000000.123456) can0 123#DEADBEEF");
-  r.frame.id = 0x1ABCDEF0u | protocol::CanFrame::kExtendedFlag;
+  r.frame.id = 0x1ABCDEF0u | hal::CanFrame::kExtendedFlag;
   r.frame.dlc = 0;
   EXPECT_EQ(format_candump_line(r), "(1700000000.123456) can0 1ABCDEF0#");
 }

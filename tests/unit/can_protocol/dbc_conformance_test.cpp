@@ -50,7 +50,7 @@ TEST(DbcConformance, RandomPhysicalValuesMatchDbcScaling) {
         in[name] = v;
       }
       protocol::PackStats stats;
-      const protocol::CanFrame f = b.pack(in, &stats);
+      const hal::CanFrame f = b.pack(in, &stats);
       EXPECT_EQ(stats.saturated, 0u) << m.name;
       ASSERT_EQ(f.id, m.id);
       ASSERT_EQ(f.dlc, m.dlc);

@@ -15,8 +15,8 @@ using Values = std::map<std::string, double>;
 
 struct MessageBinding {
   std::uint32_t id;
-  std::function<protocol::CanFrame(const Values&, protocol::PackStats*)> pack;
-  std::function<protocol::DecodeStatus(const protocol::CanFrame&, Values&)> unpack;
+  std::function<hal::CanFrame(const Values&, protocol::PackStats*)> pack;
+  std::function<protocol::DecodeStatus(const hal::CanFrame&, Values&)> unpack;
 };
 
 namespace detail {

@@ -1,7 +1,7 @@
 // Helpers for the cloud_io tests: fixture paths and the expected-values side files.
 #pragma once
 
-#include "tools/cloud_io/cloud_io.hpp"
+#include "host_sim/cloud_io/cloud_io.hpp"
 
 #include <fstream>
 #include <sstream>

@@ -1,4 +1,4 @@
-#include "v2xloc/algo/bounded_vector.hpp"
+#include "v2xloc/algo/core/bounded_vector.hpp"
 
 #include <gtest/gtest.h>
 

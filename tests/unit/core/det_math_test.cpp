@@ -1,4 +1,4 @@
-#include "v2xloc/algo/det_math.hpp"
+#include "v2xloc/algo/core/det_math.hpp"
 
 #include <gtest/gtest.h>
 

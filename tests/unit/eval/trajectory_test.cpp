@@ -1,4 +1,4 @@
-#include "host_sim/eval/paper_table.hpp"
+#include "tools/eval/paper_table.hpp"
 #include "host_sim/eval/trajectory.hpp"
 
 #include <gtest/gtest.h>

@@ -91,7 +91,7 @@ TEST(FirmwareAppLoop, NoHeapAllocationAfterStartUpAndOnePosePerFrame) {
   protocol::VehicleMotion vm;
   vm.wheel_speed_mps = 5.0;
   vm.speed_valid = vm.yaw_rate_valid = true;
-  const protocol::CanFrame vehicle = protocol::pack(vm);
+  const hal::CanFrame vehicle = protocol::pack(vm);
 
   std::uint64_t allocations = 0;
   auto poll_until = [&](std::uint64_t frames) {

@@ -52,16 +52,16 @@ TEST(InputDecoder, VehicleFrameDecodesWithTimeAndBadFramesAreCounted) {
   m.wheel_speed_mps = 7.25;
   m.yaw_rate_rps = -0.1234;
   m.speed_valid = m.yaw_rate_valid = true;
-  const protocol::CanFrame good = protocol::pack(m);
+  const hal::CanFrame good = protocol::pack(m);
 
-  protocol::CanFrame bad_crc = good;
+  hal::CanFrame bad_crc = good;
   bad_crc.data[0] ^= 0x01;
-  protocol::CanFrame short_dlc = good;
+  hal::CanFrame short_dlc = good;
   short_dlc.dlc = 5;
   EXPECT_EQ(dec->on_can(bad_crc, kEpoch + 1'000'000, sink), CanInputKind::kRejected);
   EXPECT_EQ(dec->on_can(short_dlc, kEpoch + 1'000'000, sink), CanInputKind::kRejected);
   EXPECT_EQ(dec->on_can(good, kEpoch + 1'500'000'000, sink), CanInputKind::kVehicle);
-  protocol::CanFrame unknown;
+  hal::CanFrame unknown;
   unknown.id = 0x7AB;
   unknown.dlc = 8;
   EXPECT_EQ(dec->on_can(unknown, kEpoch, sink), CanInputKind::kUnknownId);
@@ -144,7 +144,7 @@ TEST(InputDecoder, GnssFixIsAssembledFromPositionStatusAndTime) {
   ASSERT_EQ(sink.gnss.size(), 4u);
   EXPECT_FALSE(sink.gnss[3].velocity_valid);
   // A corrupted velocity frame is rejected and counted; the fix still arrives without it.
-  protocol::CanFrame bad = protocol::pack(vel);
+  hal::CanFrame bad = protocol::pack(vel);
   bad.data[0] ^= 0x01;
   const auto rejected_before = dec->counters().can_rejected;
   dec->on_can(protocol::pack(pos), kEpoch + 1'000'000'000, sink);
@@ -238,11 +238,11 @@ TEST(InputDecoder, EgoScanFromAnotherSenderIsRejectedAndCounted) {
 
 TEST(WireConventions, SimTimeFrameRoundTrips) {
   const std::int64_t t = 123'456'789'012;
-  const protocol::CanFrame f = make_sim_time_frame(t);
+  const hal::CanFrame f = make_sim_time_frame(t);
   std::int64_t back = 0;
   ASSERT_TRUE(parse_sim_time_frame(f, back));
   EXPECT_EQ(back, t);
-  protocol::CanFrame other = f;
+  hal::CanFrame other = f;
   other.id = 0x120;
   EXPECT_FALSE(parse_sim_time_frame(other, back));
   EXPECT_TRUE(sender_is_agent(kAgentSenderBase));

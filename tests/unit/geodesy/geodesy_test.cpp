@@ -1,4 +1,4 @@
-#include "v2xloc/algo/geodesy.hpp"
+#include "v2xloc/algo/core/geodesy.hpp"
 
 #include <gtest/gtest.h>
 

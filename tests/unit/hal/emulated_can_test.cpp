@@ -49,11 +49,11 @@ TEST(EmulatedCan, RandomFramesRoundTripBitExactAndInOrder) {
   Pair p;
   EmulatedCanBus a(p.link_a, p.clock), b(p.link_b, p.clock);
   std::mt19937 rng(7);
-  std::vector<protocol::CanFrame> sent;
+  std::vector<hal::CanFrame> sent;
   for (int i = 0; i < 500; ++i) {
-    protocol::CanFrame f;
+    hal::CanFrame f;
     const bool extended = (rng() & 3) == 0;
-    f.id = extended ? ((rng() & 0x1FFFFFFFu) | protocol::CanFrame::kExtendedFlag) : (rng() & 0x7FFu);
+    f.id = extended ? ((rng() & 0x1FFFFFFFu) | hal::CanFrame::kExtendedFlag) : (rng() & 0x7FFu);
     f.dlc = static_cast<std::uint8_t>(rng() % 9);
     for (int k = 0; k < f.dlc; ++k) f.data[k] = static_cast<std::uint8_t>(rng());
     ASSERT_EQ(a.send(f), Status::kOk);
@@ -79,8 +79,8 @@ TEST(EmulatedCan, RandomFramesRoundTripBitExactAndInOrder) {
 TEST(EmulatedCan, DatagramBytesAreExactlyStructCanFrame) {
   Pair p;
   EmulatedCanBus a(p.link_a, p.clock);
-  protocol::CanFrame f;
-  f.id = 0x18FEF100u | protocol::CanFrame::kExtendedFlag;
+  hal::CanFrame f;
+  f.id = 0x18FEF100u | hal::CanFrame::kExtendedFlag;
   f.dlc = 2;
   f.data[0] = 0x11;
   f.data[1] = 0x22;
@@ -104,12 +104,12 @@ TEST(EmulatedCan, FiltersAndErrorMaskFollowCanRaw) {
   Pair p;
   EmulatedCanBus a(p.link_a, p.clock), b(p.link_b, p.clock);
   const CanFilter filters[] = {{0x100, CanFilter::kStandardMask},
-                               {0x200 | protocol::CanFrame::kExtendedFlag, 0x700 | protocol::CanFrame::kExtendedFlag}};
+                               {0x200 | hal::CanFrame::kExtendedFlag, 0x700 | hal::CanFrame::kExtendedFlag}};
   ASSERT_EQ(b.set_filters(filters), Status::kOk);
-  const std::uint32_t ids[] = {0x100, 0x101, 0x200, 0x200 | protocol::CanFrame::kExtendedFlag,
-                               0x2AB | protocol::CanFrame::kExtendedFlag, 0x300 | protocol::CanFrame::kExtendedFlag};
+  const std::uint32_t ids[] = {0x100, 0x101, 0x200, 0x200 | hal::CanFrame::kExtendedFlag,
+                               0x2AB | hal::CanFrame::kExtendedFlag, 0x300 | hal::CanFrame::kExtendedFlag};
   for (const std::uint32_t id : ids) {
-    protocol::CanFrame f;
+    hal::CanFrame f;
     f.id = id;
     f.dlc = 1;
     ASSERT_EQ(a.send(f), Status::kOk);
@@ -122,7 +122,7 @@ TEST(EmulatedCan, FiltersAndErrorMaskFollowCanRaw) {
   std::array<std::uint8_t, 16> err_bytes{};
   std::memcpy(err_bytes.data(), &err, sizeof err);
   ASSERT_EQ(a.send_raw(err_bytes), Status::kOk);
-  protocol::CanFrame sentinel;  // accepted; arriving last, it proves everything before was seen
+  hal::CanFrame sentinel;  // accepted; arriving last, it proves everything before was seen
   sentinel.id = 0x100;
   sentinel.dlc = 1;
   sentinel.data[0] = 0xEE;
@@ -131,8 +131,8 @@ TEST(EmulatedCan, FiltersAndErrorMaskFollowCanRaw) {
   CanRxFrame rx;
   while (got.size() < 4 && receive_wait(b, rx) == Status::kOk) got.push_back(rx.frame.id);
   EXPECT_EQ(rx.frame.data[0], 0xEE);
-  EXPECT_EQ(got, (std::vector<std::uint32_t>{0x100, 0x200 | protocol::CanFrame::kExtendedFlag,
-                                              0x2AB | protocol::CanFrame::kExtendedFlag, 0x100}));
+  EXPECT_EQ(got, (std::vector<std::uint32_t>{0x100, 0x200 | hal::CanFrame::kExtendedFlag,
+                                              0x2AB | hal::CanFrame::kExtendedFlag, 0x100}));
   EXPECT_EQ(b.receive(rx), Status::kWouldBlock);
   EXPECT_EQ(b.counters().rx_filtered, 4u);  // 0x101, 0x200 std, 0x300 ext, error frame
 
@@ -155,7 +155,7 @@ TEST(EmulatedCan, MalformedDatagramsAreCountedAndSkipped) {
   ASSERT_EQ(p.link_a.send(bad_len), Status::kOk);
   ASSERT_EQ(p.link_a.send(huge), Status::kOk);
   EmulatedCanBus a(p.link_a, p.clock);
-  protocol::CanFrame good;
+  hal::CanFrame good;
   good.id = 0x7FF;
   good.dlc = 0;
   ASSERT_EQ(a.send(good), Status::kOk);

@@ -38,7 +38,7 @@ TEST(SocketCanReal, Vcan0RoundTripWithKernelTimestampsAndFilters) {
   const CanFilter only{0x123, CanFilter::kStandardMask};
   ASSERT_EQ(rx.set_filters(std::span<const CanFilter>(&only, 1)), Status::kOk) << rx.last_error();
   ASSERT_EQ(rx.set_error_mask(can_error::kAll), Status::kOk);
-  protocol::CanFrame skip, want;
+  hal::CanFrame skip, want;
   skip.id = 0x124;
   skip.dlc = 1;
   want.id = 0x123;

@@ -12,7 +12,7 @@ namespace v2xloc::hal {
 namespace {
 
 TEST(SocketCanFrame, StandardFrameHasTheKernelLayout) {
-  protocol::CanFrame f;
+  hal::CanFrame f;
   f.id = 0x123;
   f.dlc = 3;
   f.data[0] = 0xDE;
@@ -38,8 +38,8 @@ TEST(SocketCanFrame, StandardFrameHasTheKernelLayout) {
 }
 
 TEST(SocketCanFrame, ExtendedFrameSetsEffFlag) {
-  protocol::CanFrame f;
-  f.id = 0x1ABCDEF0u | protocol::CanFrame::kExtendedFlag;
+  hal::CanFrame f;
+  f.id = 0x1ABCDEF0u | hal::CanFrame::kExtendedFlag;
   f.dlc = 8;
   for (int i = 0; i < 8; ++i) f.data[i] = static_cast<std::uint8_t>(0xF0 + i);
   std::array<std::uint8_t, kSocketCanFrameBytes> bytes{};
@@ -53,7 +53,7 @@ TEST(SocketCanFrame, ExtendedFrameSetsEffFlag) {
 
 TEST(SocketCanFrame, InvalidFramesAreRejected) {
   std::array<std::uint8_t, kSocketCanFrameBytes> bytes{};
-  protocol::CanFrame f;
+  hal::CanFrame f;
   f.dlc = 9;
   EXPECT_EQ(encode_socketcan_frame(f, bytes), Status::kInvalidArgument);
   f.dlc = 1;

@@ -3,10 +3,10 @@
 #include <cmath>
 #include <vector>
 
-#include "v2xloc/algo/deskew.hpp"
-#include "v2xloc/algo/det_math.hpp"
-#include "v2xloc/algo/rigid_motion.hpp"
-#include "v2xloc/algo/stereo_cloud.hpp"
+#include "v2xloc/algo/localization/deskew.hpp"
+#include "v2xloc/algo/core/det_math.hpp"
+#include "v2xloc/algo/core/rigid_motion.hpp"
+#include "v2xloc/algo/localization/stereo_cloud.hpp"
 
 namespace v2xloc {
 namespace {

@@ -1,6 +1,6 @@
 // EKF: consistency (NEES over Monte-Carlo runs), NIS gating of GNSS outliers, out-of-sequence
 // fusion equal to on-time fusion, covariance from ICP information.
-#include "v2xloc/algo/ekf.hpp"
+#include "v2xloc/algo/localization/ekf.hpp"
 
 #include <gtest/gtest.h>
 
@@ -8,8 +8,8 @@
 #include <memory>
 #include <random>
 
-#include "v2xloc/algo/det_math.hpp"
-#include "v2xloc/algo/rigid_motion.hpp"
+#include "v2xloc/algo/core/det_math.hpp"
+#include "v2xloc/algo/core/rigid_motion.hpp"
 
 namespace v2xloc {
 namespace {

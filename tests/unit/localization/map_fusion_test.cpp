@@ -1,11 +1,11 @@
-#include "v2xloc/algo/map_fusion.hpp"
+#include "v2xloc/algo/localization/map_fusion.hpp"
 
 #include <gtest/gtest.h>
 
 #include <random>
 #include <vector>
 
-#include "v2xloc/algo/rigid_motion.hpp"
+#include "v2xloc/algo/core/rigid_motion.hpp"
 
 namespace v2xloc {
 namespace {

@@ -1,6 +1,6 @@
 // LiDAR odometry: degenerate inputs and map eviction (the corridor drive is in
 // odometry_corridor_test.cpp, label slow).
-#include "v2xloc/algo/odometry.hpp"
+#include "v2xloc/algo/localization/odometry.hpp"
 
 #include <gtest/gtest.h>
 
@@ -9,8 +9,8 @@
 #include <random>
 #include <vector>
 
-#include "v2xloc/algo/det_math.hpp"
-#include "v2xloc/algo/rigid_motion.hpp"
+#include "v2xloc/algo/core/det_math.hpp"
+#include "v2xloc/algo/core/rigid_motion.hpp"
 
 namespace v2xloc {
 namespace {

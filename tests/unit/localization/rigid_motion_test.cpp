@@ -1,4 +1,4 @@
-#include "v2xloc/algo/rigid_motion.hpp"
+#include "v2xloc/algo/core/rigid_motion.hpp"
 
 #include <gtest/gtest.h>
 

@@ -9,13 +9,13 @@
 #include <random>
 #include <vector>
 
-#include "v2xloc/algo/det_math.hpp"
-#include "v2xloc/algo/ekf.hpp"
-#include "v2xloc/algo/kdtree.hpp"
-#include "v2xloc/algo/normals.hpp"
-#include "v2xloc/algo/odometry.hpp"
-#include "v2xloc/algo/pose_search.hpp"
-#include "v2xloc/algo/rigid_motion.hpp"
+#include "v2xloc/algo/core/det_math.hpp"
+#include "v2xloc/algo/localization/ekf.hpp"
+#include "v2xloc/algo/search/kdtree.hpp"
+#include "v2xloc/algo/registration/normals.hpp"
+#include "v2xloc/algo/localization/odometry.hpp"
+#include "v2xloc/algo/registration/pose_search.hpp"
+#include "v2xloc/algo/core/rigid_motion.hpp"
 
 namespace v2xloc {
 namespace {

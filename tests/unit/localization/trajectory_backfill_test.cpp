@@ -1,10 +1,10 @@
-#include "v2xloc/algo/trajectory_backfill.hpp"
+#include "v2xloc/algo/localization/trajectory_backfill.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "v2xloc/algo/rigid_motion.hpp"
+#include "v2xloc/algo/core/rigid_motion.hpp"
 
 namespace v2xloc {
 namespace {

@@ -1,4 +1,4 @@
-#include "v2xloc/algo/validity_gate.hpp"
+#include "v2xloc/algo/localization/validity_gate.hpp"
 
 #include <gtest/gtest.h>
 

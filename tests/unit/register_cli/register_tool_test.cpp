@@ -1,6 +1,6 @@
 // Runs the v2xloc-register executable on the real outdoor pair and checks its JSON and exit codes.
 // Host only: spawns the host-built tool (and python3 to validate the JSON).
-#include "tools/cloud_io/cloud_io.hpp"
+#include "host_sim/cloud_io/cloud_io.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,12 +1,12 @@
-#include "v2xloc/algo/icp.hpp"
+#include "v2xloc/algo/registration/icp.hpp"
 
 #include <gtest/gtest.h>
 
 #include <vector>
 
 #include "registration_test_support.hpp"
-#include "v2xloc/algo/normals.hpp"
-#include "v2xloc/algo/voxel_downsample.hpp"
+#include "v2xloc/algo/registration/normals.hpp"
+#include "v2xloc/algo/registration/voxel_downsample.hpp"
 
 namespace v2xloc {
 namespace {

@@ -1,4 +1,4 @@
-#include "v2xloc/algo/kabsch.hpp"
+#include "v2xloc/algo/registration/kabsch.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "v2xloc/algo/prng.hpp"
+#include "v2xloc/algo/core/prng.hpp"
 
 #include <gtest/gtest.h>
 

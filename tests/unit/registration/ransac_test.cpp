@@ -1,4 +1,4 @@
-#include "v2xloc/algo/ransac.hpp"
+#include "v2xloc/algo/registration/ransac.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "v2xloc/algo/register_clouds.hpp"
+#include "v2xloc/algo/registration/register_clouds.hpp"
 
 #include <gtest/gtest.h>
 

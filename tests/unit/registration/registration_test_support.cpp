@@ -6,7 +6,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "v2xloc/algo/det_math.hpp"
+#include "v2xloc/algo/core/det_math.hpp"
 
 namespace v2xloc::testing {
 namespace {

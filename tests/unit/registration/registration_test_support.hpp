@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "v2xloc/algo/prng.hpp"
-#include "v2xloc/algo/types.hpp"
+#include "v2xloc/algo/core/prng.hpp"
+#include "v2xloc/algo/core/types.hpp"
 
 namespace v2xloc::testing {
 

@@ -1,5 +1,5 @@
 // Feature matching: one-way nearest neighbour vs brute force, mutual filter, fallback, capacity.
-#include "v2xloc/algo/correspondences.hpp"
+#include "v2xloc/algo/registration/correspondences.hpp"
 
 #include <gtest/gtest.h>
 

@@ -7,8 +7,8 @@
 #include <cstring>
 #include <vector>
 
-#include "v2xloc/algo/fpfh.hpp"
-#include "v2xloc/algo/normals.hpp"
+#include "v2xloc/algo/registration/fpfh.hpp"
+#include "v2xloc/algo/registration/normals.hpp"
 
 namespace v2xloc {
 namespace {

@@ -1,7 +1,7 @@
 // The k-d tree's fast paths give exactly the plain queries' answers: warm-started and
 // distance-bounded nearest, the first-hit "is anything closer" query, and the shared
 // neighbourhood lists (also when their storage overflows).
-#include "v2xloc/algo/kdtree.hpp"
+#include "v2xloc/algo/search/kdtree.hpp"
 
 #include <gtest/gtest.h>
 

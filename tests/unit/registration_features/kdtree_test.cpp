@@ -1,5 +1,5 @@
 // k-d tree against brute force (3-D and 33-D): kNN, radius, hybrid, nearest; counters.
-#include "v2xloc/algo/kdtree.hpp"
+#include "v2xloc/algo/search/kdtree.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,5 +1,5 @@
 // PCA normals on analytic surfaces, orientation, degenerate neighbourhoods, eigen solver.
-#include "v2xloc/algo/normals.hpp"
+#include "v2xloc/algo/registration/normals.hpp"
 
 #include <gtest/gtest.h>
 

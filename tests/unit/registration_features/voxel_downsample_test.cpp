@@ -1,5 +1,5 @@
 // Voxel downsampling against a brute-force centroid computation; determinism; counters.
-#include "v2xloc/algo/voxel_downsample.hpp"
+#include "v2xloc/algo/registration/voxel_downsample.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,0 +1,245 @@
+// Fixed-size extended Kalman filter for the ego pose (PX4 EKF2's habits: one state struct with a
+// documented layout and index table, fixed-size matrices, Joseph-form updates, innovation gates
+// with counters, a bounded history for delayed measurements).
+//
+// State (kEkfStateSize = 8, units in brackets), local ENU frame (x east, y north, z up):
+//   0..2  position of the vehicle reference point   [m]
+//   3     yaw, heading of the body x axis from east  [rad], wrapped to (-pi, pi]
+//   4     forward speed along body x                  [m/s]
+//   5     yaw rate                                    [rad/s]
+//   6     yaw-rate sensor bias (measured = true + b)  [rad/s]
+//   7     wheel-speed scale (measured = k * true)     [-]
+// Process model: constant turn rate and velocity on the ground plane (Schubert et al. 2008,
+// CTRV), midpoint-yaw integration; z, speed, yaw rate, bias and scale are random walks.
+//
+// Design choice: the vehicle's wheel speed and yaw rate are fused as measurements of the speed
+// and yaw-rate states (z = k v, z = w + b) at their own rate, and prediction integrates those
+// states. Compared with feeding them as control inputs this (a) makes wheel scale and gyro bias
+// observable from every absolute fix, (b) lets LiDAR odometry enter the same way, and (c) turns
+// history replay into a pure function of the time-ordered event log, with no separate input
+// buffer. Signal noise enters through R, the smoothing bandwidth through the random-walk q's.
+// LiDAR odometry's relative pose between two frames (dt apart) is fused as the mean body speed
+// and yaw rate over that interval (z = [|dp_x| / dt, dyaw / dt], an unbiased rate sensor): a
+// proper relative-pose update needs stochastic cloning (Roumeliotis & Burdick 2002), which a
+// fixed 8-state filter avoids at the cost of treating the odometry as a rate measurement.
+//
+// Out-of-sequence measurements: every event (measurement or predict_to() frame marker) is kept in a
+// time-ordered log (config::kEkfEventLogCapacity); after each frame marker a snapshot of
+// (state, covariance) is stored (config::kEkfHistoryLength frames). A measurement older than the
+// filter time is inserted into the log, the filter rolls back to the latest snapshot before it and
+// replays the log: the result is bit-identical to on-time fusion of the same event sequence.
+// Events older than the oldest snapshot are rejected (counted as too_late).
+//
+// Size: ~110 kB (event log 512 x 176 B + 32 snapshots x 592 B); static storage, not the stack.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "v2xloc/algo/core/config.hpp"
+#include "v2xloc/algo/core/types.hpp"
+
+namespace v2xloc {
+
+inline constexpr int kEkfStateSize = 8;
+
+// Index table of the state vector (EKF2's StateSample indices).
+namespace ekf_index {
+inline constexpr int kPosX = 0;
+inline constexpr int kPosY = 1;
+inline constexpr int kPosZ = 2;
+inline constexpr int kYaw = 3;
+inline constexpr int kSpeed = 4;
+inline constexpr int kYawRate = 5;
+inline constexpr int kYawRateBias = 6;
+inline constexpr int kWheelScale = 7;
+}  // namespace ekf_index
+
+using EkfVector = Eigen::Matrix<double, kEkfStateSize, 1>;
+using EkfCovariance = Eigen::Matrix<double, kEkfStateSize, kEkfStateSize>;
+
+// The state with names, in index-table order.
+struct EkfState {
+  double pos_x = 0.0;          // [m] east
+  double pos_y = 0.0;          // [m] north
+  double pos_z = 0.0;          // [m] up
+  double yaw = 0.0;            // [rad]
+  double speed = 0.0;          // [m/s]
+  double yaw_rate = 0.0;       // [rad/s]
+  double yaw_rate_bias = 0.0;  // [rad/s]
+  double wheel_scale = 1.0;    // [-]
+
+  EkfVector to_vector() const;
+  static EkfState from_vector(const EkfVector& x);
+  Vec3d position() const { return {pos_x, pos_y, pos_z}; }
+  Mat4d pose() const;  // world_T_body (yaw only; roll = pitch = 0)
+};
+static_assert(sizeof(EkfState) == kEkfStateSize * sizeof(double), "EkfState layout is the index table");
+
+struct EkfNoise {
+  // Process noise as continuous random-walk densities (variance growth per second).
+  double accel = 1.0;             // speed random walk [m/s^2/sqrt(Hz)] (urban driving)
+  double yaw_accel = 0.3;         // yaw-rate random walk [rad/s^2/sqrt(Hz)]
+  double vertical = 0.05;         // z random walk [m/sqrt(s)] (road grade)
+  double lateral = 0.02;          // position diffusion [m/sqrt(s)] (slip, model error)
+  double yaw_rate_bias = 1e-4;    // gyro bias walk [rad/s/sqrt(s)]
+  double wheel_scale = 1e-4;      // scale walk [1/sqrt(s)] (tyre pressure / wear)
+  // Measurement noise (1 sigma).
+  double wheel_speed = 0.05;      // [m/s], incl. quantisation
+  double gyro = 0.005;            // [rad/s]
+  double odometry_speed = 0.05;   // [m/s], LiDAR odometry mean speed over a frame
+  double odometry_yaw_rate = 0.005;  // [rad/s]
+};
+
+struct EkfGateParams {
+  // GNSS: the reported sigma is multiplied by this before gating and fusing (receivers under-
+  // report in urban canyons; 1.0 trusts them).
+  double gnss_sigma_inflation = 1.5;
+  // NIS thresholds: chi-square 99.9 % quantiles (3 DoF: 16.27, 4 DoF: 18.47). A fix is rejected
+  // when y^T S^-1 y exceeds them (multipath outliers, wrong registrations).
+  double gnss_nis_threshold = 16.27;
+  double registration_nis_threshold = 18.47;
+  // LiDAR odometry rates (2 DoF: 13.82) against the wheel speed / gyro the filter already has: a
+  // scan match that slipped (e.g. under-rotated at a turn's onset) must not drag the yaw rate.
+  double odometry_nis_threshold = 13.82;
+  bool gnss_gate_enabled = true;
+  bool registration_gate_enabled = true;
+  bool odometry_gate_enabled = true;
+};
+
+struct EkfParams {
+  EkfNoise noise{};
+  EkfGateParams gates{};
+  double max_substep = 0.01;  // [s] prediction step; longer segments are split (<= cap substeps)
+};
+
+// How a registration's ICP information matrix becomes a pose covariance.
+struct RegistrationCovarianceParams {
+  // cov6 = scale * rmse^2 * info^-1 (info = sum J^T J in the ICP's (rx,ry,rz,tx,ty,tz) order).
+  // ICP correspondences are not independent (shared voxel, correlated noise), so the textbook
+  // covariance is optimistic (Censi 2007; Landry et al. 2019): scale inflates it.
+  double scale = 10.0;
+  double min_rmse = 0.01;          // [m] floor of the residual sigma (perfect synthetic fits)
+  double min_sigma_xy = 0.01;      // [m] floors per axis after marginalisation
+  double min_sigma_z = 0.02;       // [m]
+  double min_sigma_yaw = 0.002;    // [rad]
+};
+
+enum class EkfEventType : std::uint8_t {
+  kFrame,          // predict_to() marker; a snapshot follows it
+  kVehicleSignals, // wheel speed + yaw rate
+  kGnss,
+  kRegistration,
+  kOdometry,
+};
+
+enum class EkfFuseStatus : std::uint8_t {
+  kFused,
+  kRejectedGate,     // NIS above threshold
+  kTooLate,          // older than the oldest snapshot
+  kNotInitialized,
+  kInvalidInput,     // non-finite value or non-positive-definite covariance
+  kNumericFailure,   // innovation covariance not positive definite
+};
+
+struct EkfCounters {
+  std::uint64_t events = 0;
+  std::uint64_t gnss_fused = 0;
+  std::uint64_t gnss_rejected = 0;
+  std::uint64_t registration_fused = 0;
+  std::uint64_t registration_rejected = 0;
+  std::uint64_t odometry_fused = 0;
+  std::uint64_t odometry_rejected = 0;
+  std::uint64_t signals_fused = 0;
+  std::uint64_t late_events = 0;        // fused through rollback + replay
+  std::uint64_t too_late = 0;           // rejected: older than the history
+  std::uint64_t invalid_inputs = 0;
+  std::uint64_t numeric_failures = 0;
+  std::uint64_t history_overflows = 0;  // event log full: history shortened
+  std::uint64_t replayed_events = 0;
+  std::uint64_t substep_caps = 0;       // segments longer than kEkfMaxPredictSubsteps * max_substep
+};
+
+// Covariance of (x, y, z, yaw) from a registration's 6x6 information, per the params above.
+// The ICP twist is left-multiplied about the world origin (registration_result.hpp), so a yaw
+// uncertainty also moves the vehicle: the position block is G cov6 G^T with G = [-[p]x | I],
+// p = the registered vehicle position (pose translation).
+Eigen::Matrix<double, 4, 4> registration_covariance(const Mat6d& information, double inlier_rmse,
+                                                     const Mat4d& pose,
+                                                     const RegistrationCovarianceParams& params = {});
+
+class Ekf {
+ public:
+  explicit Ekf(const EkfParams& params = {});
+
+  // Starts (or restarts) the filter at time t [s]; clears the history.
+  void initialize(double t, const EkfState& state, const EkfCovariance& covariance);
+  bool initialized() const { return initialized_; }
+  // Back to uninitialized (the localizer lost track); the history is dropped, counters are kept.
+  void reset();
+
+  // Measurements, each at its own time stamp t [s]; t older than the filter time -> rollback.
+  EkfFuseStatus on_vehicle_signals(double t, double wheel_speed, double yaw_rate);
+  // GNSS position in local ENU [m] with 1-sigma horizontal / vertical accuracy [m].
+  EkfFuseStatus on_gnss(double t, const Vec3d& enu, double sigma_horizontal, double sigma_vertical);
+  // Registration pose world_T_body; covariance of (x, y, z, yaw) (see registration_covariance).
+  EkfFuseStatus on_registration(double t, const Mat4d& pose,
+                                const Eigen::Matrix<double, 4, 4>& covariance);
+  // LiDAR odometry between t - dt and t: relative pose prev_T_curr (body frame).
+  EkfFuseStatus on_odometry(double t, double dt, const Mat4d& relative_pose);
+  // Propagates to t (a frame boundary) and snapshots the state for later rollbacks.
+  EkfFuseStatus predict_to(double t);
+
+  double time() const { return time_; }
+  EkfState state() const { return EkfState::from_vector(x_); }
+  const EkfVector& state_vector() const { return x_; }
+  const EkfCovariance& covariance() const { return P_; }
+  const EkfCounters& counters() const { return counters_; }
+  const EkfParams& params() const { return params_; }
+  // Last normalised innovation squared per source (for logs / consistency tests).
+  double last_gnss_nis() const { return last_gnss_nis_; }
+  double last_registration_nis() const { return last_registration_nis_; }
+
+ private:
+  struct Event {
+    double t = 0.0;
+    EkfEventType type = EkfEventType::kFrame;
+    double z[4] = {0.0, 0.0, 0.0, 0.0};
+    double R[4][4] = {};
+  };
+  struct Snapshot {
+    double t = 0.0;
+    std::size_t log_pos = 0;  // first log event NOT reflected in this snapshot
+    EkfVector x;
+    EkfCovariance P;
+  };
+
+  EkfFuseStatus submit(const Event& e);
+  EkfFuseStatus apply(const Event& e);  // predict to e.t, then fuse e
+  void propagate(double t);
+  template <int M>
+  EkfFuseStatus fuse(const Eigen::Matrix<double, M, 1>& innovation,
+                     const Eigen::Matrix<double, M, kEkfStateSize>& H,
+                     const Eigen::Matrix<double, M, M>& R, double nis_threshold, double* nis_out);
+  void take_snapshot(std::size_t log_pos);
+  void drop_oldest_snapshot();
+  bool make_room_in_log();
+
+  EkfParams params_;
+  bool initialized_ = false;
+  double time_ = 0.0;
+  EkfVector x_ = EkfVector::Zero();
+  EkfCovariance P_ = EkfCovariance::Zero();
+  EkfCounters counters_;
+  double last_gnss_nis_ = 0.0;
+  double last_registration_nis_ = 0.0;
+  bool replaying_ = false;
+
+  Event log_[config::kEkfEventLogCapacity];
+  std::size_t log_size_ = 0;
+  Snapshot snapshots_[config::kEkfHistoryLength];  // ring, oldest at snap_first_
+  std::size_t snap_first_ = 0;
+  std::size_t snap_count_ = 0;
+};
+
+}  // namespace v2xloc

@@ -1,0 +1,85 @@
+// Iterative closest point, point-to-point and point-to-plane, as Gauss-Newton on se(3)
+// (6x6 normal equations accumulated serially in double; Besl & McKay 1992, Chen & Medioni 1992;
+// linearisation as in Low 2004 / Open3D TransformationEstimationPointToPlane), with an optional
+// robust kernel as iteratively reweighted least squares (Babin et al., "Analysis of robust
+// functions for registration algorithms", ICRA 2019). No storage: correspondences are found and
+// accumulated on the fly, so each iteration is one nearest-neighbour pass over the source.
+//
+// Convergence follows Open3D's ICPConvergenceCriteria: after each update, fitness and inlier RMSE
+// are re-evaluated; the loop stops when both changed by less than relative_fitness /
+// relative_rmse, or after max_iterations updates (then converged = false, status kOk).
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "v2xloc/algo/core/config.hpp"
+#include "v2xloc/algo/search/kdtree.hpp"
+#include "v2xloc/algo/registration/registration_result.hpp"
+#include "v2xloc/algo/core/types.hpp"
+
+namespace v2xloc {
+
+enum class IcpMethod : std::uint8_t { kPointToPoint, kPointToPlane };
+
+enum class RobustKernelType : std::uint8_t {
+  kNone,          // plain least squares
+  kHuber,         // w = 1 for |r| <= k, k/|r| beyond
+  kTukey,         // w = (1 - (r/k)^2)^2 for |r| <= k, 0 beyond
+  kCauchy,        // w = 1 / (1 + (r/k)^2)
+  kGemanMcClure,  // w = k^2 / (k^2 + r^2)^2 * k^2  (normalised so w(0) = 1)
+};
+
+struct RobustKernel {
+  RobustKernelType type = RobustKernelType::kNone;
+  double scale = 0.1;  // k [m], the residual where down-weighting starts
+  // IRLS weight of a residual r [m] (point-to-point: |p - q|; point-to-plane: n.(p - q)).
+  double weight(double residual) const;
+};
+
+struct IcpCriteria {
+  double relative_fitness = 1e-6;  // stop when |fitness_k - fitness_{k-1}| < this ...
+  double relative_rmse = 1e-6;     // ... and |rmse_k - rmse_{k-1}| < this [m]
+  std::uint32_t max_iterations = 30;  // clamped to config::kIcpMaxIterations
+};
+
+struct IcpParams {
+  IcpMethod method = IcpMethod::kPointToPlane;
+  double max_correspondence_distance = 1.0;  // [m], pairs farther apart are ignored
+  IcpCriteria criteria{};
+  RobustKernel kernel{};
+  // Degenerate if the smallest eigenvalue of the (diagonally normalised) normal matrix is below
+  // this fraction of the largest (a single plane leaves 3 DoF unobserved for point-to-plane;
+  // collinear pairs one for point-to-point).
+  double min_eigenvalue_ratio = 1e-8;
+};
+
+// The (map) target as a view: reusable across frames without rebuilding. normals may be empty
+// for point-to-point; for point-to-plane it must have points.size() entries. tree must be built
+// over exactly `points`.
+struct IcpTarget {
+  std::span<const Vec3f> points{};
+  std::span<const Vec3f> normals{};
+  const KdTree<Vec3f>* tree = nullptr;
+};
+
+// Registers source to target starting from `initial` (p_target = T p_source).
+// Returns kOk (converged or hit the cap; result.converged tells which), kInvalidInput (bad
+// params / missing tree / normals), kNotEnoughPoints (< 3 valid source or target points),
+// kNoCorrespondences (nothing within max distance at some iteration), kDegenerate (normal
+// matrix rank-deficient; transform is the last well-posed estimate). Never NaN: on any failure
+// result.transform is the last finite estimate (initially `initial`).
+// fitness / inlier_rmse / inliers / information refer to result.transform.
+// neighbor_scratch (optional, >= source.size() entries, overwritten): each point's match of the
+// last iteration seeds its next search; same result, fewer tree nodes visited.
+RegistrationResult icp(std::span<const Vec3f> source, const IcpTarget& target,
+                       const Mat4d& initial, const IcpParams& params,
+                       std::span<std::uint32_t> neighbor_scratch = {});
+
+// Open3D's evaluate_registration: fitness, inlier RMSE, inliers and the information matrix of
+// `transform` without iterating (status kOk, kNoCorrespondences, kNotEnoughPoints or
+// kInvalidInput).
+RegistrationResult evaluate_registration(std::span<const Vec3f> source, const IcpTarget& target,
+                                         const Mat4d& transform, double max_correspondence_distance);
+
+}  // namespace v2xloc

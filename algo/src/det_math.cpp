@@ -1,6 +1,0 @@
-// det_math is header-only; this translation unit makes sure the header compiles on its own
-// under the core's flags (-fno-exceptions -fno-rtti, bare-metal).
-#include "v2xloc/algo/det_math.hpp"
-#include "v2xloc/algo/bounded_vector.hpp"
-#include "v2xloc/algo/config.hpp"
-#include "v2xloc/algo/types.hpp"

@@ -1,0 +1,442 @@
+#include "v2xloc/algo/localization/ekf.hpp"
+
+#include <cmath>
+
+#include "v2xloc/algo/core/det_math.hpp"
+#include "v2xloc/algo/core/rigid_motion.hpp"
+
+namespace v2xloc {
+
+namespace idx = ekf_index;
+using Mat4x4 = Eigen::Matrix<double, 4, 4>;
+
+EkfVector EkfState::to_vector() const {
+  EkfVector x;
+  x << pos_x, pos_y, pos_z, yaw, speed, yaw_rate, yaw_rate_bias, wheel_scale;
+  return x;
+}
+
+EkfState EkfState::from_vector(const EkfVector& x) {
+  EkfState s;
+  s.pos_x = x(idx::kPosX);
+  s.pos_y = x(idx::kPosY);
+  s.pos_z = x(idx::kPosZ);
+  s.yaw = x(idx::kYaw);
+  s.speed = x(idx::kSpeed);
+  s.yaw_rate = x(idx::kYawRate);
+  s.yaw_rate_bias = x(idx::kYawRateBias);
+  s.wheel_scale = x(idx::kWheelScale);
+  return s;
+}
+
+Mat4d EkfState::pose() const {
+  Mat4d T = Mat4d::Identity();
+  T.topLeftCorner<3, 3>() = rot_z(yaw);
+  T.topRightCorner<3, 1>() = position();
+  return T;
+}
+
+Mat4x4 registration_covariance(const Mat6d& information, double inlier_rmse, const Mat4d& pose,
+                               const RegistrationCovarianceParams& params) {
+  Mat4x4 cov = Mat4x4::Zero();
+  const double huge = 1e6;  // "no information": the NIS gate or the filter will ignore it
+  bool ok = information.allFinite() && std::isfinite(inlier_rmse);
+  Mat6d cov6 = Mat6d::Zero();
+  if (ok) {
+    const Eigen::LDLT<Mat6d> ldlt(information);
+    ok = ldlt.info() == Eigen::Success && ldlt.isPositive() &&
+         (ldlt.vectorD().array() > 1e-12 * information.diagonal().maxCoeff()).all();
+    if (ok) {
+      const double sigma = inlier_rmse > params.min_rmse ? inlier_rmse : params.min_rmse;
+      // Column by column: vector right-hand sides keep Eigen off its blocked (heap-using) path.
+      for (int c = 0; c < 6; ++c) {
+        cov6.col(c) = (params.scale * sigma * sigma) * ldlt.solve(Vec6d::Unit(c));
+      }
+      cov6 = 0.5 * (cov6 + cov6.transpose());
+    }
+  }
+  if (!ok) {
+    cov.diagonal().setConstant(huge);
+    return cov;
+  }
+  // Jacobian of (vehicle position, yaw) w.r.t. the twist (rx, ry, rz, tx, ty, tz).
+  Eigen::Matrix<double, 4, 6> G = Eigen::Matrix<double, 4, 6>::Zero();
+  G.block<3, 3>(0, 0) = -skew(Vec3d(pose.topRightCorner<3, 1>()));
+  G.block<3, 3>(0, 3) = Mat3d::Identity();
+  G(3, 2) = 1.0;
+  const Eigen::Matrix<double, 4, 6> Gc = G.lazyProduct(cov6);
+  cov = Gc.lazyProduct(G.transpose());
+  cov = 0.5 * (cov + cov.transpose());
+  const double floors[4] = {params.min_sigma_xy, params.min_sigma_xy, params.min_sigma_z,
+                            params.min_sigma_yaw};
+  for (int i = 0; i < 4; ++i) {
+    const double f2 = floors[i] * floors[i];
+    if (cov(i, i) < f2) cov(i, i) = f2;
+  }
+  return cov;
+}
+
+Ekf::Ekf(const EkfParams& params) : params_(params) {}
+
+void Ekf::initialize(double t, const EkfState& state, const EkfCovariance& covariance) {
+  x_ = state.to_vector();
+  x_(idx::kYaw) = det::wrap_pi(x_(idx::kYaw));
+  P_ = 0.5 * (covariance + covariance.transpose());
+  time_ = t;
+  initialized_ = true;
+  log_size_ = 0;
+  snap_first_ = 0;
+  snap_count_ = 0;
+  take_snapshot(0);
+}
+
+void Ekf::reset() {
+  initialized_ = false;
+  log_size_ = 0;
+  snap_first_ = 0;
+  snap_count_ = 0;
+}
+
+EkfFuseStatus Ekf::on_vehicle_signals(double t, double wheel_speed, double yaw_rate) {
+  Event e;
+  e.t = t;
+  e.type = EkfEventType::kVehicleSignals;
+  e.z[0] = wheel_speed;
+  e.z[1] = yaw_rate;
+  e.R[0][0] = params_.noise.wheel_speed * params_.noise.wheel_speed;
+  e.R[1][1] = params_.noise.gyro * params_.noise.gyro;
+  return submit(e);
+}
+
+EkfFuseStatus Ekf::on_gnss(double t, const Vec3d& enu, double sigma_horizontal,
+                           double sigma_vertical) {
+  Event e;
+  e.t = t;
+  e.type = EkfEventType::kGnss;
+  const double k = params_.gates.gnss_sigma_inflation;
+  const double sh = k * sigma_horizontal, sv = k * sigma_vertical;
+  if (!(sh > 0.0) || !(sv > 0.0)) {
+    ++counters_.invalid_inputs;
+    return EkfFuseStatus::kInvalidInput;
+  }
+  for (int i = 0; i < 3; ++i) e.z[i] = enu(i);
+  e.R[0][0] = e.R[1][1] = sh * sh;
+  e.R[2][2] = sv * sv;
+  return submit(e);
+}
+
+EkfFuseStatus Ekf::on_registration(double t, const Mat4d& pose, const Mat4x4& covariance) {
+  Event e;
+  e.t = t;
+  e.type = EkfEventType::kRegistration;
+  e.z[0] = pose(0, 3);
+  e.z[1] = pose(1, 3);
+  e.z[2] = pose(2, 3);
+  e.z[3] = yaw_of(pose.topLeftCorner<3, 3>());
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) e.R[r][c] = 0.5 * (covariance(r, c) + covariance(c, r));
+  return submit(e);
+}
+
+EkfFuseStatus Ekf::on_odometry(double t, double dt, const Mat4d& relative_pose) {
+  if (!(dt > 0.0)) {
+    ++counters_.invalid_inputs;
+    return EkfFuseStatus::kInvalidInput;
+  }
+  Event e;
+  e.t = t;
+  e.type = EkfEventType::kOdometry;
+  e.z[0] = relative_pose(0, 3) / dt;
+  e.z[1] = yaw_of(relative_pose.topLeftCorner<3, 3>()) / dt;
+  e.R[0][0] = params_.noise.odometry_speed * params_.noise.odometry_speed;
+  e.R[1][1] = params_.noise.odometry_yaw_rate * params_.noise.odometry_yaw_rate;
+  return submit(e);
+}
+
+EkfFuseStatus Ekf::predict_to(double t) {
+  if (!initialized_) return EkfFuseStatus::kNotInitialized;
+  if (!std::isfinite(t)) {
+    ++counters_.invalid_inputs;
+    return EkfFuseStatus::kInvalidInput;
+  }
+  // A frame boundary before the filter time (a newer measurement is already in) is not logged;
+  // neither is a repeated boundary at the same time. Otherwise the marker is logged even when
+  // t == time_ (signals stamped at the frame time), so every frame gets its snapshot.
+  if (t < time_) return EkfFuseStatus::kFused;
+  if (log_size_ > 0 && log_[log_size_ - 1].type == EkfEventType::kFrame && log_[log_size_ - 1].t == t) {
+    return EkfFuseStatus::kFused;
+  }
+  Event e;
+  e.t = t;
+  e.type = EkfEventType::kFrame;
+  return submit(e);
+}
+
+EkfFuseStatus Ekf::submit(const Event& e) {
+  if (!initialized_) return EkfFuseStatus::kNotInitialized;
+  bool finite = std::isfinite(e.t);
+  for (int i = 0; i < 4; ++i) {
+    finite = finite && std::isfinite(e.z[i]);
+    for (int j = 0; j < 4; ++j) finite = finite && std::isfinite(e.R[i][j]);
+  }
+  if (!finite) {
+    ++counters_.invalid_inputs;
+    return EkfFuseStatus::kInvalidInput;
+  }
+  ++counters_.events;
+
+  if (e.t >= time_) {  // in sequence: append and apply
+    make_room_in_log();
+    log_[log_size_++] = e;
+    const EkfFuseStatus status = apply(e);
+    if (e.type == EkfEventType::kFrame) take_snapshot(log_size_);
+    return status;
+  }
+
+  // Out of sequence: insert in time order (after events with the same stamp), roll back, replay.
+  make_room_in_log();
+  if (snap_count_ == 0 || e.t < snapshots_[snap_first_].t) {
+    ++counters_.too_late;
+    return EkfFuseStatus::kTooLate;
+  }
+  std::size_t pos = log_size_;
+  while (pos > 0 && log_[pos - 1].t > e.t) --pos;  // bounded by the log capacity
+  for (std::size_t j = log_size_; j > pos; --j) log_[j] = log_[j - 1];
+  log_[pos] = e;
+  ++log_size_;
+  for (std::size_t k = 0; k < snap_count_; ++k) {
+    Snapshot& s = snapshots_[(snap_first_ + k) % config::kEkfHistoryLength];
+    if (s.log_pos > pos) ++s.log_pos;
+  }
+  // Latest snapshot that does not include the new event.
+  std::size_t base = 0;
+  for (std::size_t k = 0; k < snap_count_; ++k) {
+    if (snapshots_[(snap_first_ + k) % config::kEkfHistoryLength].log_pos <= pos) base = k;
+  }
+  const Snapshot& from = snapshots_[(snap_first_ + base) % config::kEkfHistoryLength];
+  x_ = from.x;
+  P_ = from.P;
+  time_ = from.t;
+  ++counters_.late_events;
+  EkfFuseStatus status = EkfFuseStatus::kFused;
+  replaying_ = true;
+  std::size_t next_snap = base + 1;
+  for (std::size_t j = from.log_pos; j < log_size_; ++j) {
+    const EkfFuseStatus s = apply(log_[j]);
+    if (j == pos) status = s;
+    else ++counters_.replayed_events;
+    if (next_snap < snap_count_) {
+      Snapshot& sn = snapshots_[(snap_first_ + next_snap) % config::kEkfHistoryLength];
+      if (sn.log_pos == j + 1) {
+        sn.x = x_;
+        sn.P = P_;
+        ++next_snap;
+      }
+    }
+  }
+  replaying_ = false;
+  // Counters of the late event itself (apply() counts only outside replay).
+  if (status == EkfFuseStatus::kFused) {
+    if (e.type == EkfEventType::kGnss) ++counters_.gnss_fused;
+    if (e.type == EkfEventType::kRegistration) ++counters_.registration_fused;
+    if (e.type == EkfEventType::kOdometry) ++counters_.odometry_fused;
+    if (e.type == EkfEventType::kVehicleSignals) ++counters_.signals_fused;
+  } else if (status == EkfFuseStatus::kRejectedGate) {
+    if (e.type == EkfEventType::kGnss) ++counters_.gnss_rejected;
+    if (e.type == EkfEventType::kRegistration) ++counters_.registration_rejected;
+  }
+  return status;
+}
+
+void Ekf::propagate(double t) {
+  const double dt = t - time_;
+  if (!(dt > 0.0)) return;
+  double n = std::ceil(dt / params_.max_substep);
+  if (n < 1.0) n = 1.0;
+  if (n > static_cast<double>(config::kEkfMaxPredictSubsteps)) {
+    n = static_cast<double>(config::kEkfMaxPredictSubsteps);
+    if (!replaying_) ++counters_.substep_caps;
+  }
+  const int steps = static_cast<int>(n);
+  const double h = dt / n;
+  const EkfNoise& q = params_.noise;
+  for (int k = 0; k < steps; ++k) {
+    const double v = x_(idx::kSpeed), w = x_(idx::kYawRate);
+    const double yaw_mid = x_(idx::kYaw) + 0.5 * w * h;
+    const double c = det::cos(yaw_mid), s = det::sin(yaw_mid);
+    x_(idx::kPosX) += v * h * c;
+    x_(idx::kPosY) += v * h * s;
+    x_(idx::kYaw) = det::wrap_pi(x_(idx::kYaw) + w * h);
+
+    EkfCovariance F = EkfCovariance::Identity();
+    F(idx::kPosX, idx::kYaw) = -v * h * s;
+    F(idx::kPosX, idx::kSpeed) = h * c;
+    F(idx::kPosX, idx::kYawRate) = -v * h * s * 0.5 * h;
+    F(idx::kPosY, idx::kYaw) = v * h * c;
+    F(idx::kPosY, idx::kSpeed) = h * s;
+    F(idx::kPosY, idx::kYawRate) = v * h * c * 0.5 * h;
+    F(idx::kYaw, idx::kYawRate) = h;
+    // lazyProduct: coefficient-wise products; Eigen's GEMM path for 8x8 would reference malloc.
+    const EkfCovariance FP = F.lazyProduct(P_);
+    P_ = FP.lazyProduct(F.transpose());
+    P_(idx::kPosX, idx::kPosX) += q.lateral * q.lateral * h;
+    P_(idx::kPosY, idx::kPosY) += q.lateral * q.lateral * h;
+    P_(idx::kPosZ, idx::kPosZ) += q.vertical * q.vertical * h;
+    P_(idx::kSpeed, idx::kSpeed) += q.accel * q.accel * h;
+    P_(idx::kYawRate, idx::kYawRate) += q.yaw_accel * q.yaw_accel * h;
+    P_(idx::kYawRateBias, idx::kYawRateBias) += q.yaw_rate_bias * q.yaw_rate_bias * h;
+    P_(idx::kWheelScale, idx::kWheelScale) += q.wheel_scale * q.wheel_scale * h;
+    P_ = 0.5 * (P_ + P_.transpose());
+  }
+  time_ = t;
+}
+
+template <int M>
+EkfFuseStatus Ekf::fuse(const Eigen::Matrix<double, M, 1>& y,
+                        const Eigen::Matrix<double, M, kEkfStateSize>& H,
+                        const Eigen::Matrix<double, M, M>& R, double nis_threshold,
+                        double* nis_out) {
+  using MatM = Eigen::Matrix<double, M, M>;
+  const Eigen::Matrix<double, M, kEkfStateSize> HP = H.lazyProduct(P_);
+  const MatM S = HP.lazyProduct(H.transpose()) + R;
+  const Eigen::LLT<MatM> llt(S);
+  if (llt.info() != Eigen::Success || !S.allFinite()) {
+    if (!replaying_) ++counters_.numeric_failures;
+    return EkfFuseStatus::kNumericFailure;
+  }
+  // S is at most 4x4 and positive definite here: Eigen's closed-form inverse (no heap path).
+  const MatM S_inv = S.inverse();
+  const double nis = y.dot(S_inv.lazyProduct(y));
+  if (nis_out) *nis_out = nis;
+  if (nis_threshold > 0.0 && nis > nis_threshold) return EkfFuseStatus::kRejectedGate;
+  // K = P H^T S^-1 = (H P)^T S^-1, P symmetric.
+  const Eigen::Matrix<double, kEkfStateSize, M> K = HP.transpose().lazyProduct(S_inv);
+  x_ += K.lazyProduct(y);
+  x_(idx::kYaw) = det::wrap_pi(x_(idx::kYaw));
+  // Joseph form: stays symmetric positive semi-definite under rounding (Bucy & Joseph 1968).
+  const EkfCovariance I_KH = EkfCovariance::Identity() - K.lazyProduct(H);
+  const EkfCovariance A = I_KH.lazyProduct(P_);
+  const Eigen::Matrix<double, kEkfStateSize, M> KR = K.lazyProduct(R);
+  P_ = A.lazyProduct(I_KH.transpose()) + KR.lazyProduct(K.transpose());
+  P_ = 0.5 * (P_ + P_.transpose());
+  return EkfFuseStatus::kFused;
+}
+
+EkfFuseStatus Ekf::apply(const Event& e) {
+  propagate(e.t);
+  const bool count = !replaying_;
+  switch (e.type) {
+    case EkfEventType::kFrame:
+      return EkfFuseStatus::kFused;
+    case EkfEventType::kVehicleSignals: {
+      Eigen::Matrix<double, 2, 1> y;
+      y << e.z[0] - x_(idx::kWheelScale) * x_(idx::kSpeed),
+          e.z[1] - (x_(idx::kYawRate) + x_(idx::kYawRateBias));
+      Eigen::Matrix<double, 2, kEkfStateSize> H = Eigen::Matrix<double, 2, kEkfStateSize>::Zero();
+      H(0, idx::kSpeed) = x_(idx::kWheelScale);
+      H(0, idx::kWheelScale) = x_(idx::kSpeed);
+      H(1, idx::kYawRate) = 1.0;
+      H(1, idx::kYawRateBias) = 1.0;
+      Eigen::Matrix<double, 2, 2> R = Eigen::Matrix<double, 2, 2>::Zero();
+      R(0, 0) = e.R[0][0];
+      R(1, 1) = e.R[1][1];
+      const EkfFuseStatus s = fuse<2>(y, H, R, 0.0, nullptr);
+      if (count && s == EkfFuseStatus::kFused) ++counters_.signals_fused;
+      return s;
+    }
+    case EkfEventType::kOdometry: {
+      Eigen::Matrix<double, 2, 1> y;
+      y << e.z[0] - x_(idx::kSpeed), e.z[1] - x_(idx::kYawRate);
+      Eigen::Matrix<double, 2, kEkfStateSize> H = Eigen::Matrix<double, 2, kEkfStateSize>::Zero();
+      H(0, idx::kSpeed) = 1.0;
+      H(1, idx::kYawRate) = 1.0;
+      Eigen::Matrix<double, 2, 2> R = Eigen::Matrix<double, 2, 2>::Zero();
+      R(0, 0) = e.R[0][0];
+      R(1, 1) = e.R[1][1];
+      const double gate =
+          params_.gates.odometry_gate_enabled ? params_.gates.odometry_nis_threshold : 0.0;
+      const EkfFuseStatus s = fuse<2>(y, H, R, gate, nullptr);
+      if (count && s == EkfFuseStatus::kFused) ++counters_.odometry_fused;
+      if (count && s == EkfFuseStatus::kRejectedGate) ++counters_.odometry_rejected;
+      return s;
+    }
+    case EkfEventType::kGnss: {
+      Eigen::Matrix<double, 3, 1> y;
+      y << e.z[0] - x_(idx::kPosX), e.z[1] - x_(idx::kPosY), e.z[2] - x_(idx::kPosZ);
+      Eigen::Matrix<double, 3, kEkfStateSize> H = Eigen::Matrix<double, 3, kEkfStateSize>::Zero();
+      H(0, idx::kPosX) = H(1, idx::kPosY) = H(2, idx::kPosZ) = 1.0;
+      Eigen::Matrix<double, 3, 3> R;
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) R(r, c) = e.R[r][c];
+      const double gate =
+          params_.gates.gnss_gate_enabled ? params_.gates.gnss_nis_threshold : 0.0;
+      const EkfFuseStatus s = fuse<3>(y, H, R, gate, &last_gnss_nis_);
+      if (count && s == EkfFuseStatus::kFused) ++counters_.gnss_fused;
+      if (count && s == EkfFuseStatus::kRejectedGate) ++counters_.gnss_rejected;
+      return s;
+    }
+    case EkfEventType::kRegistration: {
+      Eigen::Matrix<double, 4, 1> y;
+      y << e.z[0] - x_(idx::kPosX), e.z[1] - x_(idx::kPosY), e.z[2] - x_(idx::kPosZ),
+          det::wrap_pi(e.z[3] - x_(idx::kYaw));
+      Eigen::Matrix<double, 4, kEkfStateSize> H = Eigen::Matrix<double, 4, kEkfStateSize>::Zero();
+      H(0, idx::kPosX) = H(1, idx::kPosY) = H(2, idx::kPosZ) = H(3, idx::kYaw) = 1.0;
+      Mat4x4 R;
+      for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) R(r, c) = e.R[r][c];
+      const double gate = params_.gates.registration_gate_enabled
+                              ? params_.gates.registration_nis_threshold
+                              : 0.0;
+      const EkfFuseStatus s = fuse<4>(y, H, R, gate, &last_registration_nis_);
+      if (count && s == EkfFuseStatus::kFused) ++counters_.registration_fused;
+      if (count && s == EkfFuseStatus::kRejectedGate) ++counters_.registration_rejected;
+      return s;
+    }
+  }
+  return EkfFuseStatus::kInvalidInput;
+}
+
+void Ekf::take_snapshot(std::size_t log_pos) {
+  if (snap_count_ == config::kEkfHistoryLength) {
+    drop_oldest_snapshot();
+    log_pos = log_size_;  // the log was shifted; a new snapshot always covers the whole log
+  }
+  Snapshot& s = snapshots_[(snap_first_ + snap_count_) % config::kEkfHistoryLength];
+  s.t = time_;
+  s.log_pos = log_pos;
+  s.x = x_;
+  s.P = P_;
+  ++snap_count_;
+}
+
+void Ekf::drop_oldest_snapshot() {
+  if (snap_count_ == 0) return;
+  snap_first_ = (snap_first_ + 1) % config::kEkfHistoryLength;
+  --snap_count_;
+  if (snap_count_ == 0) {
+    log_size_ = 0;
+    return;
+  }
+  // Events before the new oldest snapshot can never be replayed again: drop them.
+  const std::size_t shift = snapshots_[snap_first_].log_pos;
+  for (std::size_t j = shift; j < log_size_; ++j) log_[j - shift] = log_[j];
+  log_size_ -= shift;
+  for (std::size_t k = 0; k < snap_count_; ++k) {
+    snapshots_[(snap_first_ + k) % config::kEkfHistoryLength].log_pos -= shift;
+  }
+}
+
+bool Ekf::make_room_in_log() {
+  if (log_size_ < config::kEkfEventLogCapacity) return true;
+  ++counters_.history_overflows;
+  while (log_size_ >= config::kEkfEventLogCapacity && snap_count_ > 1) drop_oldest_snapshot();
+  if (log_size_ < config::kEkfEventLogCapacity) return true;
+  // A single snapshot and a full log (no frame markers for a long time): rebase on the current
+  // state; rollback then reaches back only to now.
+  snap_count_ = 0;
+  log_size_ = 0;
+  take_snapshot(0);
+  return true;
+}
+
+}  // namespace v2xloc

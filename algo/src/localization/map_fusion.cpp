@@ -1,0 +1,264 @@
+#include "v2xloc/algo/localization/map_fusion.hpp"
+
+#include <cmath>
+
+namespace v2xloc {
+
+namespace {
+constexpr std::uint32_t kMaxProbes = 64;
+std::uint32_t hash_key(const std::int32_t k[3]) {
+  return (static_cast<std::uint32_t>(k[0]) * 73856093u) ^
+         (static_cast<std::uint32_t>(k[1]) * 19349669u) ^
+         (static_cast<std::uint32_t>(k[2]) * 83492791u);
+}
+}  // namespace
+
+MapFusion::MapFusion(const MapFusionParams& params) : params_(params) {}
+
+void MapFusion::clear() {
+  for (MapSourceInfo& s : sources_) s = MapSourceInfo{};
+  num_points_ = 0;
+  ++revision_;
+}
+
+void MapFusion::remove_source_points(std::size_t slot) {
+  std::size_t n = 0;  // stable compaction keeps the other sources' order (determinism)
+  for (std::size_t i = 0; i < num_points_; ++i) {
+    if (point_source_[i] == slot) continue;
+    points_[n] = points_[i];
+    point_source_[n] = point_source_[i];
+    ++n;
+  }
+  num_points_ = n;
+  sources_[slot].points = 0;
+}
+
+bool MapFusion::cell_key(const Vec3f& p, double cell, std::int32_t level,
+                         std::int32_t key[3]) const {
+  for (int i = 0; i < 3; ++i) {
+    const double k = std::floor(static_cast<double>(p(i)) / cell);
+    if (!(k > -268435456.0 && k < 268435456.0)) return false;
+    key[i] = static_cast<std::int32_t>(k);
+  }
+  key[2] = key[2] * 4 + level;  // two grids share the table: level in the low bits of z
+  return true;
+}
+
+bool MapFusion::mark(const std::int32_t key[3]) {
+  std::uint32_t slot = hash_key(key) & static_cast<std::uint32_t>(kSlots - 1);
+  for (std::uint32_t probe = 0; probe < kMaxProbes; ++probe) {
+    Cell& c = cells_[slot];
+    if (c.stamp != stamp_) {
+      c.key[0] = key[0];
+      c.key[1] = key[1];
+      c.key[2] = key[2];
+      c.stamp = stamp_;
+      return true;
+    }
+    if (c.key[0] == key[0] && c.key[1] == key[1] && c.key[2] == key[2]) return true;
+    slot = (slot + 1) & static_cast<std::uint32_t>(kSlots - 1);
+  }
+  return false;
+}
+
+bool MapFusion::occupied(const std::int32_t key[3]) const {
+  std::uint32_t slot = hash_key(key) & static_cast<std::uint32_t>(kSlots - 1);
+  for (std::uint32_t probe = 0; probe < kMaxProbes; ++probe) {
+    const Cell& c = cells_[slot];
+    if (c.stamp != stamp_) return false;
+    if (c.key[0] == key[0] && c.key[1] == key[1] && c.key[2] == key[2]) return true;
+    slot = (slot + 1) & static_cast<std::uint32_t>(kSlots - 1);
+  }
+  return false;
+}
+
+bool MapFusion::occupied_around(const Vec3f& p, double cell, std::int32_t level) const {
+  std::int32_t key[3];
+  if (!cell_key(p, cell, level, key)) return false;
+  for (int dx = -1; dx <= 1; ++dx)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dz = -1; dz <= 1; ++dz) {
+        const std::int32_t k[3] = {key[0] + dx, key[1] + dy, key[2] + 4 * dz};
+        if (occupied(k)) return true;
+      }
+  return false;
+}
+
+// Fresh table generation: marks from earlier calls become empty without clearing.
+void MapFusion::new_cell_generation() {
+  if (++stamp_ == 0) {
+    for (Cell& c : cells_) c.stamp = 0;
+    stamp_ = 1;
+  }
+}
+
+double MapFusion::consistency(std::size_t slot, std::uint32_t& overlap_points) {
+  overlap_points = 0;
+  new_cell_generation();
+  // Fine cells of size inlier_distance / 2: a candidate with another source's point in its 27
+  // neighbour cells has one within ~0.87 * inlier_distance * ... (<= 1.5 cells per axis).
+  const double fine = 0.5 * params_.inlier_distance;
+  for (std::size_t i = 0; i < num_points_; ++i) {
+    if (point_source_[i] == slot) continue;
+    std::int32_t key[3];
+    if (cell_key(points_[i], fine, 0, key)) mark(key);
+    if (cell_key(points_[i], params_.overlap_cell, 1, key)) mark(key);
+  }
+  std::uint32_t inliers = 0;
+  for (const Vec3f& p : candidate_) {
+    if (!occupied_around(p, params_.overlap_cell, 1)) continue;  // outside the others' region
+    ++overlap_points;
+    if (occupied_around(p, fine, 0)) ++inliers;
+  }
+  return overlap_points > 0 ? static_cast<double>(inliers) / overlap_points : 1.0;
+}
+
+std::uint32_t MapFusion::drop_covered_by_trusted(std::size_t slot) {
+  new_cell_generation();
+  bool any = false;
+  for (std::size_t i = 0; i < num_points_; ++i) {
+    const std::size_t src = point_source_[i];
+    if (src == slot || !sources_[src].trusted) continue;
+    std::int32_t key[3];
+    if (cell_key(points_[i], params_.agent_fill_cell, 2, key)) any = mark(key) || any;
+  }
+  if (!any) return 0;
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < candidate_.size(); ++k) {
+    if (!occupied_around(candidate_[k], params_.agent_fill_cell, 2)) candidate_[kept++] = candidate_[k];
+  }
+  const auto dropped = static_cast<std::uint32_t>(candidate_.size() - kept);
+  candidate_.resize(kept);
+  return dropped;
+}
+
+MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
+                                  const Mat4d& world_T_sensor, std::span<const Vec3f> points,
+                                  bool trusted) {
+  MapInsertResult r;
+  r.input_points = static_cast<std::uint32_t>(points.size());
+  if (!std::isfinite(timestamp) || !world_T_sensor.allFinite()) return r;
+
+  // Source slot: same id, else a free slot, else the oldest if older than this cloud.
+  std::size_t slot = config::kMaxMapSources;
+  for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
+    if (sources_[s].active && sources_[s].id == source_id) slot = s;
+  }
+  const bool known = slot < config::kMaxMapSources;
+  if (known && !(timestamp > sources_[slot].timestamp)) {
+    r.status = MapInsertStatus::kStale;
+    ++counters_.stale;
+    return r;
+  }
+  bool displace = false;
+  if (!known) {
+    std::size_t oldest = config::kMaxMapSources;
+    for (std::size_t s = 0; s < config::kMaxMapSources && slot == config::kMaxMapSources; ++s) {
+      if (!sources_[s].active) slot = s;
+    }
+    if (slot == config::kMaxMapSources) {
+      for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
+        if (oldest == config::kMaxMapSources || sources_[s].timestamp < sources_[oldest].timestamp)
+          oldest = s;
+      }
+      if (sources_[oldest].timestamp < timestamp) {
+        slot = oldest;
+        displace = true;
+      }
+    }
+    if (slot == config::kMaxMapSources) {
+      r.status = MapInsertStatus::kNoSourceSlot;
+      ++counters_.no_source_slot;
+      return r;
+    }
+  }
+
+  // Into the global frame (double math), non-finite points dropped, then downsampled.
+  staging_.clear();
+  const Mat3d R = world_T_sensor.topLeftCorner<3, 3>();
+  const Vec3d t = world_T_sensor.topRightCorner<3, 1>();
+  for (const Vec3f& p : points) {
+    if (!p.allFinite()) {
+      ++r.non_finite_dropped;
+      continue;
+    }
+    if (!staging_.push_back((R * p.cast<double>() + t).cast<float>())) ++r.capacity_dropped;
+  }
+  candidate_.clear();
+  const VoxelDownsampleResult ds =
+      downsample_.run(staging_.span(), static_cast<float>(params_.voxel_size), candidate_);
+  r.capacity_dropped += ds.output_overflow + ds.hash_overflow + ds.range_overflow;
+  counters_.non_finite_dropped += r.non_finite_dropped;
+
+  if (params_.check_consistency && !trusted && !candidate_.empty()) {
+    r.consistency_fitness = consistency(known ? slot : config::kMaxMapSources, r.overlap_points);
+    if (r.overlap_points >= params_.min_overlap_points &&
+        r.consistency_fitness < params_.min_fitness) {
+      r.status = MapInsertStatus::kRejectedInconsistent;
+      ++counters_.rejected_inconsistent;
+      r.consistency_fitness = r.consistency_fitness;
+      return r;
+    }
+    if (r.overlap_points < params_.min_overlap_points) r.consistency_fitness = 1.0;
+  }
+
+  if (!trusted && params_.agent_fill_cell > 0.0) {
+    r.covered_dropped = drop_covered_by_trusted(known ? slot : config::kMaxMapSources);
+    counters_.agent_points_covered += r.covered_dropped;
+  }
+
+  if (known || displace) remove_source_points(slot);
+  if (displace) ++counters_.sources_evicted_slot;
+  std::uint32_t stored = 0;
+  for (const Vec3f& p : candidate_) {
+    if (num_points_ == config::kMaxMapPoints) {
+      ++r.capacity_dropped;
+      continue;
+    }
+    points_[num_points_] = p;
+    point_source_[num_points_] = static_cast<std::uint8_t>(slot);
+    ++num_points_;
+    ++stored;
+  }
+  counters_.points_dropped_capacity += r.capacity_dropped;
+  MapSourceInfo& info = sources_[slot];
+  info.id = source_id;
+  info.timestamp = timestamp;
+  info.world_T_sensor = world_T_sensor;
+  info.points = stored;
+  info.active = true;
+  info.trusted = trusted;
+  r.stored_points = stored;
+  r.status = known ? MapInsertStatus::kReplaced : MapInsertStatus::kInserted;
+  if (known) ++counters_.replaced;
+  else ++counters_.inserted;
+  ++revision_;
+  return r;
+}
+
+std::uint32_t MapFusion::expire(double now) {
+  std::uint32_t evicted = 0;
+  for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
+    if (!sources_[s].active || !(now - sources_[s].timestamp > params_.max_age)) continue;
+    remove_source_points(s);
+    sources_[s] = MapSourceInfo{};
+    ++evicted;
+  }
+  if (evicted > 0) {
+    counters_.sources_evicted_age += evicted;
+    ++revision_;
+  }
+  return evicted;
+}
+
+MapExtractResult MapFusion::extract(BoundedVector<Vec3f>& out) {
+  MapExtractResult r;
+  out.clear();
+  const VoxelDownsampleResult ds = downsample_.run(
+      std::span<const Vec3f>(points_, num_points_), static_cast<float>(params_.voxel_size), out);
+  r.points = static_cast<std::uint32_t>(out.size());
+  r.capacity_dropped = ds.output_overflow + ds.hash_overflow + ds.range_overflow;
+  return r;
+}
+
+}  // namespace v2xloc

@@ -1,0 +1,317 @@
+#include "v2xloc/algo/registration/icp.hpp"
+
+#include <Eigen/Cholesky>
+#include <cmath>
+
+#include "v2xloc/algo/core/det_math.hpp"
+#include "v2xloc/algo/registration/kabsch.hpp"
+
+namespace v2xloc {
+
+double RobustKernel::weight(double residual) const {
+  const double r = std::abs(residual);
+  const double k = scale;
+  switch (type) {
+    case RobustKernelType::kNone: return 1.0;
+    case RobustKernelType::kHuber: return r <= k ? 1.0 : k / r;
+    case RobustKernelType::kTukey: {
+      if (r > k) return 0.0;
+      const double u = 1.0 - (r / k) * (r / k);
+      return u * u;
+    }
+    case RobustKernelType::kCauchy: return 1.0 / (1.0 + (r / k) * (r / k));
+    case RobustKernelType::kGemanMcClure: {
+      const double k2 = k * k;
+      const double d = k2 + r * r;
+      return (k2 * k2) / (d * d);
+    }
+  }
+  return 1.0;
+}
+
+namespace {
+
+Mat3d skew_matrix(const Vec3d& v) {
+  Mat3d m;
+  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  return m;
+}
+
+// SO(3) exponential (Rodrigues) with the core's deterministic sin/cos.
+Mat3d rotation_exp(const Vec3d& w) {
+  const double theta2 = w.squaredNorm();
+  const Mat3d k = skew_matrix(w);
+  if (theta2 < 1e-20) return Mat3d::Identity() + k;
+  const double theta = std::sqrt(theta2);
+  const double a = det::sin(theta) / theta;
+  const double b = (1.0 - det::cos(theta)) / theta2;
+  return Mat3d::Identity() + a * k + b * (k * k);
+}
+
+// Re-orthonormalises R (Gram-Schmidt on rows) so products of many updates stay in SO(3).
+void orthonormalize(Mat4d& t) {
+  Vec3d x = t.block<1, 3>(0, 0).transpose();
+  Vec3d y = t.block<1, 3>(1, 0).transpose();
+  x /= x.norm();
+  y -= x.dot(y) * x;
+  y /= y.norm();
+  const Vec3d z = x.cross(y);
+  t.block<1, 3>(0, 0) = x.transpose();
+  t.block<1, 3>(1, 0) = y.transpose();
+  t.block<1, 3>(2, 0) = z.transpose();
+}
+
+// Eigenvalue spread of a symmetric positive semi-definite 6x6 after Jacobi (diagonal)
+// preconditioning, S = D^-1/2 H D^-1/2 with D = diag(H): unit-free, so rotation (m^2) and
+// translation (1) blocks compare fairly. Cyclic Jacobi rotations (Golub & Van Loan 8.5), fixed
+// sweep count, sqrt only: deterministic on every ISA. Returns min/max eigenvalue (0 if singular).
+double preconditioned_eigen_ratio(const Mat6d& h) {
+  Mat6d s = h;
+  for (int i = 0; i < 6; ++i) {
+    if (!(h(i, i) > 0.0)) return 0.0;
+  }
+  for (int i = 0; i < 6; ++i) {
+    for (int j = 0; j < 6; ++j) s(i, j) = h(i, j) / std::sqrt(h(i, i) * h(j, j));
+  }
+  for (int sweep = 0; sweep < 12; ++sweep) {
+    double off = 0.0;
+    for (int i = 0; i < 6; ++i) {
+      for (int j = i + 1; j < 6; ++j) off += s(i, j) * s(i, j);
+    }
+    if (off < 1e-30) break;
+    for (int p = 0; p < 6; ++p) {
+      for (int q = p + 1; q < 6; ++q) {
+        if (s(p, q) == 0.0) continue;
+        // Rotation angle that zeroes s(p, q): tan(2 phi) = 2 s_pq / (s_qq - s_pp).
+        const double theta = (s(q, q) - s(p, p)) / (2.0 * s(p, q));
+        const double t = (theta >= 0.0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1.0));
+        const double c = 1.0 / std::sqrt(t * t + 1.0);
+        const double sn = t * c;
+        for (int k = 0; k < 6; ++k) {  // columns p, q
+          const double skp = s(k, p), skq = s(k, q);
+          s(k, p) = c * skp - sn * skq;
+          s(k, q) = sn * skp + c * skq;
+        }
+        for (int k = 0; k < 6; ++k) {  // rows p, q
+          const double spk = s(p, k), sqk = s(q, k);
+          s(p, k) = c * spk - sn * sqk;
+          s(q, k) = sn * spk + c * sqk;
+        }
+      }
+    }
+  }
+  double lo = s(0, 0), hi = s(0, 0);
+  for (int i = 1; i < 6; ++i) {
+    lo = s(i, i) < lo ? s(i, i) : lo;
+    hi = s(i, i) > hi ? s(i, i) : hi;
+  }
+  return hi > 0.0 && lo > 0.0 ? lo / hi : 0.0;
+}
+
+// One nearest-neighbour pass at transform T: evaluation (fitness / RMSE / information) plus the
+// system of the chosen method. Sums in source order (deterministic).
+struct Pass {
+  std::uint32_t valid_source = 0;
+  std::uint32_t inliers = 0;
+  double squared_error_sum = 0.0;
+  // Information, closed form of sum J^T J with J = [-[q]x | I]: needs sum q q^T, sum q, count.
+  Mat3d qq_sum = Mat3d::Zero();
+  Vec3d q_sum = Vec3d::Zero();
+  // Point-to-plane normal equations.
+  Mat6d h = Mat6d::Zero();
+  Vec6d b = Vec6d::Zero();
+  // Point-to-point: weighted Kabsch (the exact minimiser of the weighted problem).
+  KabschAccumulator kabsch;
+  std::uint32_t search_truncated = 0;
+
+  double fitness() const { return valid_source > 0 ? double(inliers) / double(valid_source) : 0.0; }
+  double rmse() const { return inliers > 0 ? std::sqrt(squared_error_sum / double(inliers)) : 0.0; }
+  Mat6d information() const {
+    Mat6d info = Mat6d::Zero();
+    const double n = double(inliers);
+    info.topLeftCorner<3, 3>() = qq_sum.trace() * Mat3d::Identity() - qq_sum;
+    info.topRightCorner<3, 3>() = skew_matrix(q_sum);
+    info.bottomLeftCorner<3, 3>() = skew_matrix(q_sum).transpose();
+    info.bottomRightCorner<3, 3>() = n * Mat3d::Identity();
+    return info;
+  }
+};
+
+enum class PassMode { kEvaluateOnly, kPointToPoint, kPointToPlane };
+
+// Float search bound that admits every point the double gate (d2 <= max_d2) accepts: the query
+// is rounded to float (error ~ |pt| 2^-24 per axis) and the float distance adds a few ulps, so
+// the radius is widened by 1e-5 (1 + |pt|_inf). The gate itself stays the double test below,
+// so the matches are those of an unbounded nearest search followed by the gate.
+float search_bound(const Vec3d& pt, double max_distance) {
+  const double extent = std::abs(pt.x()) > std::abs(pt.y())
+                            ? (std::abs(pt.x()) > std::abs(pt.z()) ? std::abs(pt.x()) : std::abs(pt.z()))
+                            : (std::abs(pt.y()) > std::abs(pt.z()) ? std::abs(pt.y()) : std::abs(pt.z()));
+  const double d = max_distance + 1e-5 * (1.0 + extent);
+  return static_cast<float>(d * d);
+}
+
+// hints (optional, one per source point): last pass's match, seeds the search (same result).
+void run_pass(std::span<const Vec3f> source, const IcpTarget& target, const Mat4d& transform,
+              double max_distance, const RobustKernel& kernel, PassMode mode, Pass& pass,
+              std::span<std::uint32_t> hints = {}) {
+  const Mat3d r = transform.topLeftCorner<3, 3>();
+  const Vec3d t = transform.topRightCorner<3, 1>();
+  const double max_d2 = max_distance * max_distance;
+  const bool use_hints = hints.size() >= source.size();
+  for (std::size_t k = 0; k < source.size(); ++k) {
+    const Vec3f& pf = source[k];
+    if (!pf.allFinite()) continue;
+    ++pass.valid_source;
+    const Vec3d p = pf.cast<double>();
+    const Vec3d pt = r * p + t;
+    Neighbor nn{};
+    const std::uint32_t hint = use_hints ? hints[k] : KdTree<Vec3f>::kNoHint;
+    const KdQueryResult qr =
+        target.tree->nearest_within(pt.cast<float>(), search_bound(pt, max_distance), hint, nn);
+    if (qr.visit_cap_hit) ++pass.search_truncated;
+    if (use_hints) hints[k] = qr.count == 0 ? KdTree<Vec3f>::kNoHint : nn.index;
+    if (qr.count == 0) continue;
+    const Vec3d q = target.points[nn.index].cast<double>();
+    const Vec3d e = pt - q;
+    const double d2 = e.squaredNorm();
+    if (!(d2 <= max_d2)) continue;
+    ++pass.inliers;
+    pass.squared_error_sum += d2;
+    pass.qq_sum += q * q.transpose();
+    pass.q_sum += q;
+    if (mode == PassMode::kPointToPoint) {
+      pass.kabsch.add(p, q, kernel.weight(std::sqrt(d2)));
+    } else if (mode == PassMode::kPointToPlane) {
+      const Vec3d n = target.normals[nn.index].cast<double>();
+      if (!n.allFinite()) continue;
+      const double residual = n.dot(e);
+      const double w = kernel.weight(residual);
+      if (!(w > 0.0)) continue;
+      Vec6d j;
+      j.head<3>() = pt.cross(n);  // d(n.(exp(w^) p + v))/dw at 0 = (p x n)
+      j.tail<3>() = n;
+      pass.h += (w * j) * j.transpose();
+      pass.b += (w * residual) * j;
+    }
+  }
+}
+
+bool target_valid(const IcpTarget& target, bool need_normals) {
+  if (target.tree == nullptr || target.points.empty()) return false;
+  if (need_normals && target.normals.size() != target.points.size()) return false;
+  return true;
+}
+
+void fill_from_pass(const Pass& pass, RegistrationResult& result) {
+  result.fitness = pass.fitness();
+  result.inlier_rmse = pass.rmse();
+  result.inliers = pass.inliers;
+  result.information = pass.information();
+}
+
+std::uint32_t count_nonfinite(std::span<const Vec3f> cloud) {
+  std::uint32_t n = 0;
+  for (const Vec3f& p : cloud) n += p.allFinite() ? 0u : 1u;
+  return n;
+}
+
+}  // namespace
+
+RegistrationResult evaluate_registration(std::span<const Vec3f> source, const IcpTarget& target,
+                                         const Mat4d& transform, double max_correspondence_distance) {
+  RegistrationResult result;
+  result.transform = transform;
+  if (!target_valid(target, false) || !(max_correspondence_distance > 0.0) || !transform.allFinite()) {
+    result.status = RegistrationStatus::kInvalidInput;
+    return result;
+  }
+  result.nonfinite_dropped = count_nonfinite(source);
+  Pass pass;
+  run_pass(source, target, transform, max_correspondence_distance, RobustKernel{},
+           PassMode::kEvaluateOnly, pass);
+  fill_from_pass(pass, result);
+  result.search_truncated = pass.search_truncated;
+  result.status = pass.valid_source == 0   ? RegistrationStatus::kNotEnoughPoints
+                  : pass.inliers == 0      ? RegistrationStatus::kNoCorrespondences
+                                           : RegistrationStatus::kOk;
+  return result;
+}
+
+RegistrationResult icp(std::span<const Vec3f> source, const IcpTarget& target, const Mat4d& initial,
+                       const IcpParams& params, std::span<std::uint32_t> neighbor_scratch) {
+  RegistrationResult result;
+  result.transform = initial;
+  const bool plane = params.method == IcpMethod::kPointToPlane;
+  if (!target_valid(target, plane) || !(params.max_correspondence_distance > 0.0) ||
+      !initial.allFinite() || !(params.kernel.scale > 0.0)) {
+    result.status = RegistrationStatus::kInvalidInput;
+    return result;
+  }
+  result.nonfinite_dropped = count_nonfinite(source);
+  if (source.size() - result.nonfinite_dropped < 3 || target.tree->size() < 3) {
+    result.status = RegistrationStatus::kNotEnoughPoints;
+    return result;
+  }
+  const std::uint32_t max_iterations =
+      params.criteria.max_iterations < config::kIcpMaxIterations ? params.criteria.max_iterations
+                                                                 : config::kIcpMaxIterations;
+  const PassMode mode = plane ? PassMode::kPointToPlane : PassMode::kPointToPoint;
+
+  if (neighbor_scratch.size() >= source.size()) {
+    for (std::size_t k = 0; k < source.size(); ++k) neighbor_scratch[k] = KdTree<Vec3f>::kNoHint;
+  }
+  Mat4d transform = initial;
+  double prev_fitness = 0.0, prev_rmse = 0.0;
+  for (std::uint32_t k = 0;; ++k) {
+    Pass pass;
+    run_pass(source, target, transform, params.max_correspondence_distance, params.kernel, mode, pass,
+             neighbor_scratch);
+    result.search_truncated += pass.search_truncated;
+    result.transform = transform;
+    fill_from_pass(pass, result);
+    result.iterations = k;
+    if (pass.inliers == 0) {
+      result.status = RegistrationStatus::kNoCorrespondences;
+      return result;
+    }
+    if (k > 0 && std::abs(prev_fitness - pass.fitness()) < params.criteria.relative_fitness &&
+        std::abs(prev_rmse - pass.rmse()) < params.criteria.relative_rmse) {
+      result.converged = true;
+      break;
+    }
+    if (k == max_iterations) break;
+    prev_fitness = pass.fitness();
+    prev_rmse = pass.rmse();
+
+    Mat4d next = transform;
+    if (plane) {
+      if (!(preconditioned_eigen_ratio(pass.h) > params.min_eigenvalue_ratio)) {
+        result.status = RegistrationStatus::kDegenerate;
+        return result;
+      }
+      const Vec6d delta = pass.h.ldlt().solve(-pass.b);
+      Mat4d update = Mat4d::Identity();
+      update.topLeftCorner<3, 3>() = rotation_exp(delta.head<3>());
+      update.topRightCorner<3, 1>() = delta.tail<3>();
+      next = update * transform;
+      orthonormalize(next);
+    } else {
+      KabschParams kp;
+      kp.min_singular_ratio = params.min_eigenvalue_ratio;
+      if (pass.kabsch.solve(next, kp) != RegistrationStatus::kOk) {
+        result.status = RegistrationStatus::kDegenerate;
+        return result;
+      }
+    }
+    if (!next.allFinite()) {
+      result.status = RegistrationStatus::kDegenerate;
+      return result;
+    }
+    transform = next;
+  }
+  result.status = RegistrationStatus::kOk;
+  return result;
+}
+
+}  // namespace v2xloc

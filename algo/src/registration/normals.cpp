@@ -1,0 +1,163 @@
+#include "v2xloc/algo/registration/normals.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace v2xloc {
+namespace {
+
+bool finite3(const Vec3f& p) {
+  return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
+}
+
+// Orientation rule of Open3D's orient_normals_towards_camera_location: flip when pointing away;
+// a zero normal becomes the (normalised) direction to the camera, or (0,0,1).
+Vec3d orient(const Vec3d& n, const Vec3d& to_view) {
+  if (n.squaredNorm() == 0.0) {
+    const double len = to_view.norm();
+    return len == 0.0 ? Vec3d(0.0, 0.0, 1.0) : Vec3d(to_view / len);
+  }
+  return n.dot(to_view) < 0.0 ? Vec3d(-n) : n;
+}
+
+}  // namespace
+
+// Cyclic Jacobi (Golub & Van Loan, Alg. 8.5.3): rotations from +,-,*,/,sqrt only.
+void symmetric_eigen3(const Mat3d& input, Vec3d& eigenvalues, Mat3d& eigenvectors) {
+  Mat3d a = input;
+  Mat3d v = Mat3d::Identity();
+  const double scale = a.cwiseAbs().maxCoeff();
+  for (std::uint32_t sweep = 0; sweep < config::kJacobiMaxSweeps; ++sweep) {
+    const double off = std::abs(a(0, 1)) + std::abs(a(0, 2)) + std::abs(a(1, 2));
+    if (off <= 1e-300 || off <= scale * 1e-18) break;
+    for (int p = 0; p < 2; ++p) {
+      for (int q = p + 1; q < 3; ++q) {
+        const double apq = a(p, q);
+        if (apq == 0.0) continue;
+        const double theta = (a(q, q) - a(p, p)) / (2.0 * apq);
+        const double t = (theta >= 0.0 ? 1.0 : -1.0) /
+                         (std::abs(theta) + std::sqrt(theta * theta + 1.0));
+        const double c = 1.0 / std::sqrt(t * t + 1.0);
+        const double s = t * c;
+        // A <- J^T A J with J the (p,q) rotation [c s; -s c].
+        for (int k = 0; k < 3; ++k) {
+          const double akp = a(k, p);
+          const double akq = a(k, q);
+          a(k, p) = c * akp - s * akq;
+          a(k, q) = s * akp + c * akq;
+        }
+        for (int k = 0; k < 3; ++k) {
+          const double apk = a(p, k);
+          const double aqk = a(q, k);
+          a(p, k) = c * apk - s * aqk;
+          a(q, k) = s * apk + c * aqk;
+        }
+        for (int k = 0; k < 3; ++k) {
+          const double vkp = v(k, p);
+          const double vkq = v(k, q);
+          v(k, p) = c * vkp - s * vkq;
+          v(k, q) = s * vkp + c * vkq;
+        }
+      }
+    }
+  }
+  // Sort ascending (stable, by index on ties) with the eigenvectors as columns.
+  int order[3] = {0, 1, 2};
+  for (int i = 1; i < 3; ++i) {
+    for (int j = i; j > 0 && a(order[j], order[j]) < a(order[j - 1], order[j - 1]); --j) {
+      std::swap(order[j], order[j - 1]);
+    }
+  }
+  for (int i = 0; i < 3; ++i) {
+    eigenvalues[i] = a(order[i], order[i]);
+    eigenvectors.col(i) = v.col(order[i]);
+  }
+}
+
+NormalsResult estimate_normals(const KdTree<Vec3f>& tree, const NormalParams& params,
+                               std::span<Vec3f> normals, std::span<NormalQuality> quality) {
+  return estimate_normals(KdNeighborhoods(tree), params, normals, quality);
+}
+
+NormalsResult estimate_normals(const KdNeighborhoods& neighborhoods, const NormalParams& params,
+                               std::span<Vec3f> normals, std::span<NormalQuality> quality) {
+  NormalsResult r;
+  const KdTree<Vec3f>& tree = neighborhoods.tree();
+  const std::span<const Vec3f> points = tree.points();
+  if (tree.empty()) {
+    r.status = NormalsStatus::kEmptyTree;
+    return r;
+  }
+  if (!std::isfinite(params.radius) || !(params.radius > 0.0f) || params.max_nn == 0 ||
+      normals.size() < points.size() || (!quality.empty() && quality.size() < points.size())) {
+    r.status = NormalsStatus::kInvalidParams;
+    return r;
+  }
+  std::size_t max_nn = params.max_nn;
+  if (max_nn > config::kMaxNeighbors) {
+    max_nn = config::kMaxNeighbors;
+    r.max_nn_clamped = 1;
+  }
+  Neighbor neighbors[config::kMaxNeighbors];
+  const Vec3d viewpoint = params.viewpoint.cast<double>();
+
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Vec3f& p = points[i];
+    NormalQuality q = NormalQuality::kOk;
+    if (!finite3(p)) {
+      normals[i] = Vec3f(0.0f, 0.0f, 1.0f);
+      ++r.non_finite;
+      if (!quality.empty()) quality[i] = NormalQuality::kNonFinitePoint;
+      continue;
+    }
+    const KdQueryResult kr =
+        neighborhoods.get(i, params.radius, max_nn, std::span<Neighbor>(neighbors, max_nn));
+    r.search.add(kr);
+    Vec3d normal(0.0, 0.0, 1.0);
+    if (kr.count < 3) {
+      q = NormalQuality::kFewNeighbors;
+    } else {
+      // Two-pass centred covariance (better conditioned than Open3D's raw moments).
+      Vec3d mean = Vec3d::Zero();
+      for (std::uint32_t k = 0; k < kr.count; ++k) mean += points[neighbors[k].index].cast<double>();
+      mean /= static_cast<double>(kr.count);
+      Mat3d cov = Mat3d::Zero();
+      for (std::uint32_t k = 0; k < kr.count; ++k) {
+        const Vec3d d = points[neighbors[k].index].cast<double>() - mean;
+        for (int a = 0; a < 3; ++a) {
+          for (int b = a; b < 3; ++b) cov(a, b) += d[a] * d[b];
+        }
+      }
+      cov(1, 0) = cov(0, 1);
+      cov(2, 0) = cov(0, 2);
+      cov(2, 1) = cov(1, 2);
+      cov /= static_cast<double>(kr.count);
+      Vec3d lambda;
+      Mat3d vectors;
+      symmetric_eigen3(cov, lambda, vectors);
+      if (!(lambda[2] > 0.0)) {
+        q = NormalQuality::kFewNeighbors;  // all neighbours coincide
+      } else if (lambda[1] <= params.collinear_ratio * lambda[2]) {
+        q = NormalQuality::kCollinear;
+        // Closest to the viewpoint direction among the normals of the line.
+        const Vec3d dir = vectors.col(2);
+        Vec3d to_view = viewpoint - p.cast<double>();
+        Vec3d perp = to_view - dir * dir.dot(to_view);
+        if (perp.norm() <= 1e-12 * (to_view.norm() + 1.0)) perp = vectors.col(0);
+        normal = perp.normalized();
+      } else {
+        normal = vectors.col(0);
+      }
+    }
+    if (q == NormalQuality::kFewNeighbors) ++r.few_neighbors;
+    if (q == NormalQuality::kCollinear) ++r.collinear;
+    if (params.orient_to_viewpoint) normal = orient(normal, viewpoint - p.cast<double>());
+    normals[i] = normal.cast<float>();
+    if (!quality.empty()) quality[i] = q;
+  }
+  r.points = static_cast<std::uint32_t>(points.size());
+  r.status = NormalsStatus::kOk;
+  return r;
+}
+
+}  // namespace v2xloc
