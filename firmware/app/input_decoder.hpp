@@ -12,6 +12,7 @@
 #include "firmware/app/localizer_port.hpp"
 #include "firmware/protocol/can_messages.hpp"
 #include "firmware/protocol/pointcloud_udp.hpp"
+#include "firmware/trust/map_share_verifier.hpp"
 #include "v2xloc/algo/core/config.hpp"
 
 namespace v2xloc::firmware {
@@ -32,6 +33,15 @@ enum class CanInputKind : std::uint8_t {
 
 enum class CloudKind : std::uint8_t { kNone, kEgoScan, kMapCloud, kRejected };
 
+// Which endpoint a datagram came in on. Ego sensors have their own socket: an ego scan on the V2X
+// endpoint, or a map share / signature on the ego endpoint, is rejected (counted) before it
+// reaches the reassembler.
+enum class DatagramChannel : std::uint8_t { kEgo, kV2x };
+
+// Ego scans must carry a time stamp within this of the local (disciplined) clock: one scan dated
+// far in the future would otherwise make every later real scan look stale to the localizer.
+inline constexpr std::int64_t kEgoScanMaxClockSkewNs = 500'000'000;  // [ns] 5 sweep periods
+
 struct DecoderCounters {
   std::uint64_t can_frames = 0;
   std::uint64_t vehicle_inputs = 0;
@@ -45,6 +55,15 @@ struct DecoderCounters {
   std::uint64_t ego_scans = 0;
   std::uint64_t map_clouds = 0;
   std::uint64_t clouds_rejected = 0;     // complete but unusable (bad pose, wrong message type)
+  std::uint64_t wrong_channel = 0;       // datagram type not allowed on the endpoint it came in on
+  std::uint64_t shares_untrusted = 0;    // map shares the verifier refused (reasons: verifier counters)
+  std::uint64_t ego_time_rejected = 0;   // ego scans dated implausibly far from the local clock / not newer
+  std::uint64_t map_inconsistent = 0;    // trusted shares map fusion refused: disagree with the infrastructure
+  std::uint64_t map_held_back = 0;       // agent shares too little overlap to be checked
+  std::uint64_t map_no_slot = 0;         // per-role source cap reached
+  std::uint64_t map_stale = 0;           // not newer than the source's stored cloud
+  std::uint64_t can_repeated = 0;        // rolling counter did not advance: replayed / stuck frame, dropped
+  std::uint64_t can_counter_gaps = 0;    // frames lost by the rolling counter (accepted, counted)
 };
 
 class InputDecoder {
@@ -61,11 +80,23 @@ class InputDecoder {
 
   // One datagram received at monotonic now_ns. True when it completed a cloud: the caller first
   // drains earlier inputs (CAN), then calls dispatch_completed() before the next datagram.
+  // local_time_ns: the disciplined clock now (freshness of map shares and ego scans).
+  bool on_datagram(std::span<const std::uint8_t> datagram, std::int64_t now_ns, std::int64_t local_time_ns,
+                   DatagramChannel channel);
+  // Emulation / offline convenience: local time = epoch + now_ns (the SimClock's relation), and
+  // the channel taken from the datagram's message type (single-socket legacy wiring).
   bool on_datagram(std::span<const std::uint8_t> datagram, std::int64_t now_ns);
+
+  // Provisioned trust list (start-up). Without one, every map share is refused (unknown signer).
+  void provision_trust(const trust::TrustList& list) { verifier_.provision(list); }
+  const trust::MapShareVerifier& verifier() const { return verifier_; }
   // Hands the completed cloud to the localizer. Returns its kind; for an ego scan, `output`
   // points at the localizer's frame output and `frame_index` is the ego scan count - 1.
   CloudKind dispatch_completed(LocalizerPort& sink, const LocalizerFrameOutput** output = nullptr);
-  std::size_t expire(std::int64_t now_ns) { return reassembler_.expire(now_ns); }
+  std::size_t expire(std::int64_t now_ns) {
+    verifier_.expire(now_ns);
+    return reassembler_.expire(now_ns);
+  }
 
   // True when a GNSS fix reached the localizer between the previous ego scan and the latest one
   // (pose flag GnssUsed of the latest frame).
@@ -86,7 +117,14 @@ class InputDecoder {
   std::array<Vec3f, kMaxCloudPoints> points_{};
   std::array<float, kMaxCloudPoints> point_times_{};
   bool completed_pending_ = false;
+  std::int64_t completed_local_time_ns_ = 0;
+  bool have_ego_time_ = false;
+  std::uint64_t last_ego_stamp_ns_ = 0;
+  trust::MapShareVerifier verifier_{};
 
+  // Rolling counters of the frames that carry one (0x120, 0x131, 0x133): a repeat is dropped.
+  bool counter_ok(protocol::RollingCounterMonitor& monitor, std::uint8_t counter);
+  protocol::RollingCounterMonitor vehicle_counter_{}, gnss_status_counter_{}, gnss_velocity_counter_{};
   protocol::GnssPosition gnss_position_{};
   protocol::GnssStatus gnss_status_{};
   protocol::GnssVelocity gnss_velocity_{};

@@ -48,14 +48,16 @@ void on_signal(int) { g_stop = 1; }
 int usage() {
   std::fprintf(stderr,
                "usage: v2xloc-firmware [--config FILE] [--emulated] [options]\n"
-               "  common:   --cloud-port N (UDP clouds, default 47200; 0 = ephemeral)  --cloud-bind A.B.C.D\n"
+               "  common:   --cloud-port N (UDP V2X map shares, default 47200; 0 = ephemeral)  --cloud-bind A.B.C.D\n"
+               "            --ego-port N (UDP ego scans, default 47201; 0 = ephemeral)  --ego-bind A.B.C.D\n"
+               "            --trust-list FILE (provisioned V2X signers; without it every map share is refused)\n"
                "            --origin LAT,LON,ALT (local ENU origin)  --epoch-ns N (Unix ns of localizer t = 0)\n"
                "            --max-frames N (exit after N published frames)  --rcvbuf BYTES (default 33554432)\n"
                "  real:     --can-iface can0 [--can-bring-up 1]  --pps-chip gpiochip0 --pps-line N\n"
                "            --led-chip gpiochip0 --led-line N  --imu VID:PID\n"
                "  emulated: --can-port N (firmware's CAN-over-UDP port, 0 = ephemeral)  --can-peer-port N\n"
                "            --imu-script FILE (ScriptedHidDevice)  --pps 0|1 (scripted PPS, default 1)\n"
-               "Prints 'v2xloc-firmware: ready can=PORT cloud=PORT' once the sockets are bound.\n");
+               "Prints 'v2xloc-firmware: ready can=PORT cloud=PORT ego=PORT' once the sockets are bound.\n");
   return 2;
 }
 
@@ -117,6 +119,22 @@ void print_counters(const FirmwareApp& app) {
               (unsigned long long)d.can_rejected, (unsigned long long)d.can_unknown_id,
               (unsigned long long)d.ego_scans, (unsigned long long)d.map_clouds, (unsigned long long)d.clouds_rejected,
               (unsigned long long)d.datagrams_rejected);
+  const trust::VerifierCounters& v = app.decoder().verifier().counters();
+  std::printf("v2xloc-firmware: trust shares accepted %llu rejected %llu (missing_signature %llu unknown_signer %llu"
+              " sender_mismatch %llu too_old %llu future %llu stamp_skew %llu replay %llu bad_signature %llu crypto_error %llu)"
+              " signatures %llu malformed %llu; wrong_channel %llu ego_time_rejected %llu\n",
+              (unsigned long long)v.accepted, (unsigned long long)v.rejected(), (unsigned long long)v.missing_signature,
+              (unsigned long long)v.unknown_signer, (unsigned long long)v.sender_mismatch, (unsigned long long)v.too_old,
+              (unsigned long long)v.future, (unsigned long long)v.stamp_skew, (unsigned long long)v.replay,
+              (unsigned long long)v.bad_signature, (unsigned long long)v.crypto_error, (unsigned long long)v.signatures_rx,
+              (unsigned long long)v.signatures_malformed, (unsigned long long)d.wrong_channel,
+              (unsigned long long)d.ego_time_rejected);
+  std::printf("v2xloc-firmware: can_repeated %llu can_counter_gaps %llu gnss_time_rejected %llu\n",
+              (unsigned long long)d.can_repeated, (unsigned long long)d.can_counter_gaps,
+              (unsigned long long)c.gnss_time_rejected);
+  std::printf("v2xloc-firmware: map fusion of trusted shares: inconsistent %llu held_back %llu no_slot %llu stale %llu\n",
+              (unsigned long long)d.map_inconsistent, (unsigned long long)d.map_held_back,
+              (unsigned long long)d.map_no_slot, (unsigned long long)d.map_stale);
   std::printf("v2xloc-firmware: reassembly fragments %llu frames %llu duplicates %llu stale %llu timed_out %llu evicted %llu"
               " bad_crc %llu truncated %llu malformed %llu over_capacity %llu\n",
               (unsigned long long)r.fragments_accepted, (unsigned long long)r.frames_completed,
@@ -187,6 +205,35 @@ int main(int argc, char** argv) {
     return 1;
   }
   force_receive_buffer(cloud_link.fd(), static_cast<int>(get_ll("rcvbuf", 32 << 20)));
+  static hal::UdpLink ego_link;
+  hal::UdpOptions ego_options;
+  if (!hal::parse_ipv4(get("ego-bind", emulated ? "127.0.0.1" : "0.0.0.0").c_str(), ego_options.bind.address)) return usage();
+  ego_options.bind.port = static_cast<std::uint16_t>(get_ll("ego-port", 47201));
+  if (ego_link.open(ego_options) != hal::Status::kOk) {
+    std::fprintf(stderr, "v2xloc-firmware: ego UDP: %s\n", ego_link.last_error());
+    return 1;
+  }
+  force_receive_buffer(ego_link.fd(), static_cast<int>(get_ll("rcvbuf", 32 << 20)));
+  if (kv.count("trust-list")) {
+    static std::string text;  // start-up: heap allowed
+    std::ifstream in(kv["trust-list"], std::ios::binary);
+    if (!in) {
+      std::fprintf(stderr, "v2xloc-firmware: cannot read trust list %s\n", kv["trust-list"].c_str());
+      return 1;
+    }
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    static trust::TrustList list;
+    const trust::TrustListParseResult r = trust::parse_trust_list(
+        std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()), list);
+    if (r.status != trust::TrustListStatus::kOk) {
+      std::fprintf(stderr, "v2xloc-firmware: %s:%zu: %s\n", kv["trust-list"].c_str(), r.line, trust::to_string(r.status));
+      return 1;
+    }
+    g_decoder.provision_trust(list);
+    std::printf("v2xloc-firmware: trust list: %zu signers\n", list.count);
+  } else {
+    std::printf("v2xloc-firmware: no trust list: every V2X map share will be refused\n");
+  }
 
   static hal::LinuxClock linux_clock;
   static hal::SimClock sim_clock(0, epoch_ns, hal::SimClock::SleepMode::kExternal);
@@ -205,7 +252,7 @@ int main(int argc, char** argv) {
   hal::GpioLine* pps = nullptr;
   hal::GpioLine* led = nullptr;
   hal::HidDevice* imu = nullptr;
-  int poll_fds[4] = {cloud_link.fd(), -1, -1, -1};
+  int poll_fds[5] = {cloud_link.fd(), ego_link.fd(), -1, -1, -1};
 
   if (emulated) {
     hal::UdpOptions o;
@@ -235,7 +282,7 @@ int main(int argc, char** argv) {
       }
       imu = &imu_scripted;
     }
-    poll_fds[1] = can_link.fd();
+    poll_fds[2] = can_link.fd();
   } else {
     static std::string iface = get("can-iface", "can0");
     hal::SocketCanOptions o;
@@ -247,7 +294,7 @@ int main(int argc, char** argv) {
     }
     can = &socketcan;
     clock = &linux_clock;
-    poll_fds[1] = socketcan.fd();
+    poll_fds[2] = socketcan.fd();
     static std::string pps_chip = get("pps-chip", "gpiochip0"), led_chip = get("led-chip", "gpiochip0");
     if (kv.count("pps-line")) {
       hal::GpiodLineOptions g;
@@ -258,7 +305,7 @@ int main(int argc, char** argv) {
         return 1;
       }
       pps = &pps_gpiod;
-      poll_fds[2] = pps_gpiod.event_fd();
+      poll_fds[3] = pps_gpiod.event_fd();
     }
     if (kv.count("led-line")) {
       hal::GpiodLineOptions g;
@@ -285,19 +332,20 @@ int main(int argc, char** argv) {
     }
   }
 
-  static FirmwareApp app(FirmwareHal{*can, cloud_link, *clock, pps, led, imu}, g_decoder, port);
+  static FirmwareApp app(FirmwareHal{*can, cloud_link, *clock, pps, led, imu, &ego_link}, g_decoder, port);
   if (app.start() != hal::Status::kOk) {
     std::fprintf(stderr, "v2xloc-firmware: CAN filter set-up failed\n");
     return 1;
   }
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
-  std::printf("v2xloc-firmware: ready can=%u cloud=%u mode=%s\n",
+  std::printf("v2xloc-firmware: ready can=%u cloud=%u ego=%u mode=%s\n",
               emulated ? can_link.local_endpoint().port : 0u, cloud_link.local_endpoint().port,
+              ego_link.local_endpoint().port,
               emulated ? "emulated" : "real");
 
   // ---- Main loop: no allocation from here on (counted, reported at exit). ----
-  pollfd fds[4];
+  pollfd fds[5];
   nfds_t nfds = 0;
   for (int fd : poll_fds) {
     if (fd >= 0) fds[nfds++] = pollfd{fd, POLLIN, 0};

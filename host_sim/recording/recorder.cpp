@@ -4,6 +4,7 @@
 #include "host_sim/common/png.hpp"
 #include "host_sim/common/rng.hpp"
 #include "host_sim/recording/pose_io.hpp"
+#include "host_sim/recording/sim_trust.hpp"
 #include "host_sim/recording/topview.hpp"
 #include "host_sim/scenario/simulation.hpp"
 #include "host_sim/sensors/lidar.hpp"
@@ -425,6 +426,25 @@ bool generate_recording(const RecorderConfig& cfg, RecordingSummary& summary, st
   files.set("agent_ground_truth", agt);
   files.set("top_view", "topview.png");
   if (summary.has_can_log) files.set("can_log", "gnss_vehicle.log");
+  {
+    // The provisioned trust list: every map-cloud sensor's deterministic test key (sim_trust.hpp).
+    std::vector<SimSigner> signers;
+    for (std::size_t k = 0; k < sites.size(); ++k) {
+      SimSigner s;
+      if (sim_signer("infra", sites[k].name, s)) signers.push_back(s);
+    }
+    if (agents) {
+      for (std::size_t a = 0; a < sc.agents.size(); ++a) {
+        SimSigner s;
+        if (sim_signer("agent", "agent_" + std::to_string(a) + "_lidar", s)) signers.push_back(s);
+      }
+    }
+    if (!write_text_file((root / kTrustListFile).string(), trust_list_text(trust_list_of(signers)), err)) {
+      error = err;
+      return false;
+    }
+    files.set("trust_list", kTrustListFile);
+  }
   m.set("files", files);
 
   Json sensors = Json::array();

@@ -22,7 +22,10 @@ int usage() {
   std::fprintf(stderr,
                "usage: v2xloc-replay RECORDING_DIR [--firmware PATH | --connect HOST:CANPORT,CLOUDPORT "
                "[--local-can-port N]]\n"
-               "                     [--out DIR] [--frames N] [--timeout S] [--verbose] [-- FIRMWARE_ARGS...]\n");
+               "                     [--out DIR] [--frames N] [--timeout S] [--verbose] [--faults SPEC]\n"
+               "                     [-- FIRMWARE_ARGS...]\n"
+               "  --faults SPEC: comma-separated fault injection, e.g. loss=0.3,delay=0.5,rogue-shift=3\n"
+               "                (keys: host_sim/replay/fault_injection.hpp)\n");
   return 2;
 }
 
@@ -79,6 +82,13 @@ int main(int argc, char** argv) {
       const char* v = value();
       if (!v) return usage();
       options.frame_timeout_s = std::atof(v);
+    } else if (a == "--faults") {
+      const char* v = value();
+      std::string ferr;
+      if (!v || !parse_fault_spec(v, options.stream.faults, ferr)) {
+        std::fprintf(stderr, "v2xloc-replay: --faults: %s\n", v ? ferr.c_str() : "missing SPEC");
+        return 2;
+      }
     } else if (a == "--verbose") {
       options.verbose = true;
     } else if (a == "--") {
@@ -110,6 +120,16 @@ int main(int argc, char** argv) {
               result.wall_seconds > 0 ? result.frames.size() / result.wall_seconds : 0.0, result.can_frames_sent,
               result.datagrams_sent, s.map_clouds, s.ego_scans, (unsigned long long)s.points_dropped,
               (unsigned long long)s.times_clamped);
+  const FaultStats& fs = s.faults;
+  std::printf("v2xloc-replay: faults %s: shares lost %llu, datagrams dropped %llu reordered %llu duplicated %llu, "
+              "shares delayed %llu, GNSS frames dropped %llu, infra shares dropped %llu, corrupt CAN %llu, rogue shares "
+              "%llu, ego time jumps %llu\n",
+              describe(options.stream.faults).c_str(), (unsigned long long)fs.shares_lost,
+              (unsigned long long)fs.datagrams_dropped, (unsigned long long)fs.datagrams_reordered,
+              (unsigned long long)fs.datagrams_duplicated, (unsigned long long)fs.shares_delayed,
+              (unsigned long long)fs.gnss_frames_dropped, (unsigned long long)fs.infra_shares_dropped,
+              (unsigned long long)fs.can_corrupt_sent, (unsigned long long)fs.rogue_shares,
+              (unsigned long long)fs.ego_time_jumps);
   std::printf("v2xloc-replay: heartbeats %zu, pose decode errors %zu, diagnostic decode errors %zu, timeouts %d, "
               "send retries %zu\n",
               result.heartbeats, result.pose_decode_errors, result.diagnostic_decode_errors, result.timeouts,
