@@ -2,6 +2,8 @@
 // inputs; malformed or truncated input is counted and never disturbs the inputs around it.
 #include <gtest/gtest.h>
 
+#include "share_signing.hpp"
+
 #include <memory>
 #include <vector>
 
@@ -75,9 +77,18 @@ TEST(InputDecoder, VehicleFrameDecodesWithTimeAndBadFramesAreCounted) {
   EXPECT_EQ(dec->counters().vehicle_inputs, 1u);
 
   m.speed_valid = false;
+  m.counter = 1;  // the sender's rolling counter advances (a repeat would be dropped)
   EXPECT_EQ(dec->on_can(protocol::pack(m), kEpoch, sink), CanInputKind::kInvalid);
   EXPECT_EQ(dec->counters().vehicle_invalid, 1u);
   EXPECT_EQ(sink.vehicle.size(), 1u);
+}
+
+// Each transmission advances the message's rolling counter, as a sender does (repeats are dropped).
+template <typename M>
+M next_counter(M& m) {
+  const M sent = m;
+  m.counter = static_cast<std::uint8_t>((m.counter + 1) % protocol::kCounterModulo);
+  return sent;
 }
 
 TEST(InputDecoder, GnssFixIsAssembledFromPositionStatusAndTime) {
@@ -100,7 +111,7 @@ TEST(InputDecoder, GnssFixIsAssembledFromPositionStatusAndTime) {
   EXPECT_EQ(dec->counters().gnss_incomplete, 1u);
 
   EXPECT_EQ(dec->on_can(protocol::pack(pos), kEpoch + 200'000'000, sink), CanInputKind::kGnssPart);
-  EXPECT_EQ(dec->on_can(protocol::pack(st), kEpoch + 200'000'000, sink), CanInputKind::kGnssPart);
+  EXPECT_EQ(dec->on_can(protocol::pack(next_counter(st)), kEpoch + 200'000'000, sink), CanInputKind::kGnssPart);
   EXPECT_EQ(dec->on_can(protocol::pack(td), kEpoch + 200'000'000, sink), CanInputKind::kGnssFix);
   ASSERT_EQ(sink.gnss.size(), 1u);
   const GnssInput& g = sink.gnss[0];
@@ -116,7 +127,7 @@ TEST(InputDecoder, GnssFixIsAssembledFromPositionStatusAndTime) {
 
   // No position frame (receiver without a fix): forwarded as invalid.
   st.fix_type = protocol::GnssFixType::kNoFix;
-  dec->on_can(protocol::pack(st), kEpoch + 400'000'000, sink);
+  dec->on_can(protocol::pack(next_counter(st)), kEpoch + 400'000'000, sink);
   EXPECT_EQ(dec->on_can(protocol::pack(td), kEpoch + 400'000'000, sink), CanInputKind::kGnssFix);
   ASSERT_EQ(sink.gnss.size(), 2u);
   EXPECT_FALSE(sink.gnss[1].valid);
@@ -129,8 +140,8 @@ TEST(InputDecoder, GnssFixIsAssembledFromPositionStatusAndTime) {
   vel.speed_acc_mps = 0.14;
   vel.valid = true;
   dec->on_can(protocol::pack(pos), kEpoch + 600'000'000, sink);
-  dec->on_can(protocol::pack(st), kEpoch + 600'000'000, sink);
-  EXPECT_EQ(dec->on_can(protocol::pack(vel), kEpoch + 600'000'000, sink), CanInputKind::kGnssPart);
+  dec->on_can(protocol::pack(next_counter(st)), kEpoch + 600'000'000, sink);
+  EXPECT_EQ(dec->on_can(protocol::pack(next_counter(vel)), kEpoch + 600'000'000, sink), CanInputKind::kGnssPart);
   EXPECT_EQ(dec->on_can(protocol::pack(td), kEpoch + 600'000'000, sink), CanInputKind::kGnssFix);
   ASSERT_EQ(sink.gnss.size(), 3u);
   EXPECT_TRUE(sink.gnss[2].velocity_valid);
@@ -139,16 +150,16 @@ TEST(InputDecoder, GnssFixIsAssembledFromPositionStatusAndTime) {
   EXPECT_NEAR(sink.gnss[2].speed_acc, 0.14, 0.01);
   // The velocity belongs to that fix only: the next fix without 0x133 has none.
   dec->on_can(protocol::pack(pos), kEpoch + 800'000'000, sink);
-  dec->on_can(protocol::pack(st), kEpoch + 800'000'000, sink);
+  dec->on_can(protocol::pack(next_counter(st)), kEpoch + 800'000'000, sink);
   dec->on_can(protocol::pack(td), kEpoch + 800'000'000, sink);
   ASSERT_EQ(sink.gnss.size(), 4u);
   EXPECT_FALSE(sink.gnss[3].velocity_valid);
   // A corrupted velocity frame is rejected and counted; the fix still arrives without it.
-  hal::CanFrame bad = protocol::pack(vel);
+  hal::CanFrame bad = protocol::pack(next_counter(vel));
   bad.data[0] ^= 0x01;
   const auto rejected_before = dec->counters().can_rejected;
   dec->on_can(protocol::pack(pos), kEpoch + 1'000'000'000, sink);
-  dec->on_can(protocol::pack(st), kEpoch + 1'000'000'000, sink);
+  dec->on_can(protocol::pack(next_counter(st)), kEpoch + 1'000'000'000, sink);
   EXPECT_EQ(dec->on_can(bad, kEpoch + 1'000'000'000, sink), CanInputKind::kRejected);
   dec->on_can(protocol::pack(td), kEpoch + 1'000'000'000, sink);
   EXPECT_EQ(dec->counters().can_rejected, rejected_before + 1);
@@ -207,10 +218,16 @@ TEST(InputDecoder, MapSharesCarrySourceIdAgentFlagAndPose) {
   auto dec = std::make_unique<InputDecoder>(kEpoch);
   test::RecordingSink sink;
   const std::vector<float> xyz = ramp_points(300);
+  // Source id and role come from the provisioned trust list (the header's id must match it).
+  trust::TrustList list;
+  test::add_signer(list, kInfraSenderBase + 2, trust::SignerRole::kInfrastructure);
+  test::add_signer(list, kAgentSenderBase + 1, trust::SignerRole::kAgent);
+  dec->provision_trust(list);
   for (std::uint32_t sender : {kInfraSenderBase + 2, kAgentSenderBase + 1}) {
     const auto frags = fragment_cloud(protocol::CloudMessageType::kMapShare, sender, 0, 500'000'000, xyz, {});
+    EXPECT_FALSE(dec->on_datagram(test::sign_share(frags, sender, kEpoch + 500'000'000), 500'000'000));
     bool done = false;
-    for (const auto& f : frags) done = dec->on_datagram(f, 0);
+    for (const auto& f : frags) done = dec->on_datagram(f, 500'000'000);
     ASSERT_TRUE(done);
     EXPECT_EQ(dec->dispatch_completed(sink), CloudKind::kMapCloud);
   }
@@ -223,6 +240,22 @@ TEST(InputDecoder, MapSharesCarrySourceIdAgentFlagAndPose) {
   EXPECT_DOUBLE_EQ(sink.map[1].world_T_sensor(2, 3), 5.0);
   EXPECT_EQ(sink.map_points[1].size(), 300u);
   EXPECT_EQ(dec->counters().map_clouds, 2u);
+  EXPECT_EQ(dec->verifier().counters().accepted, 2u);
+
+  // The same share again (replay), and one without a signature: refused, counted, not fused.
+  for (bool sign : {true, false}) {
+    const auto frags = fragment_cloud(protocol::CloudMessageType::kMapShare, kInfraSenderBase + 2, sign ? 1 : 2,
+                                      500'000'000, xyz, {});
+    if (sign) dec->on_datagram(test::sign_share(frags, kInfraSenderBase + 2, kEpoch + 500'000'000), 500'000'000);
+    bool done = false;
+    for (const auto& f : frags) done = dec->on_datagram(f, 500'000'000);
+    ASSERT_TRUE(done);
+    EXPECT_EQ(dec->dispatch_completed(sink), CloudKind::kRejected);
+  }
+  EXPECT_EQ(sink.map.size(), 2u);
+  EXPECT_EQ(dec->verifier().counters().replay, 1u);
+  EXPECT_EQ(dec->verifier().counters().missing_signature, 1u);
+  EXPECT_EQ(dec->counters().shares_untrusted, 2u);
 }
 
 TEST(InputDecoder, EgoScanFromAnotherSenderIsRejectedAndCounted) {
