@@ -148,7 +148,9 @@ std::size_t FirmwareApp::drain_link(hal::DatagramLink& link, bool ego_link) {
     // Canonical order: every CAN frame sent before this cloud's last fragment goes first.
     drain_can();
     const LocalizerFrameOutput* out = nullptr;
-    if (decoder_.dispatch_completed(localizer_, &out) == CloudKind::kEgoScan && out != nullptr) publish_pose(*out);
+    const CloudKind kind = decoder_.dispatch_completed(localizer_, &out);
+    if (kind == CloudKind::kEgoScan && out != nullptr) publish_pose(*out);
+    if (kind == CloudKind::kEgoRejected) publish_pose(has_output_ ? latest_ : LocalizerFrameOutput{});  // hold
   }
   return n;
 }

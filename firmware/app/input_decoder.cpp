@@ -205,7 +205,8 @@ CloudKind InputDecoder::dispatch_completed(LocalizerPort& sink, const LocalizerF
       stamp < completed_local_time_ns_ - kEgoScanMaxClockSkewNs ||
       (have_ego_time_ && info.timestamp_ns <= last_ego_stamp_ns_)) {
     ++counters_.ego_time_rejected;
-    return CloudKind::kRejected;
+    last_frame_index_ = ego_frames_++;
+    return CloudKind::kEgoRejected;
   }
   have_ego_time_ = true;
   last_ego_stamp_ns_ = info.timestamp_ns;
@@ -219,7 +220,7 @@ CloudKind InputDecoder::dispatch_completed(LocalizerPort& sink, const LocalizerF
   in.body_T_lidar = pose;
   gnss_flag_for_frame_ = gnss_since_last_scan_;
   gnss_since_last_scan_ = false;
-  last_frame_index_ = static_cast<std::uint32_t>(counters_.ego_scans);
+  last_frame_index_ = ego_frames_++;
   ++counters_.ego_scans;
   const LocalizerFrameOutput& out = sink.on_ego_scan(in);
   if (output != nullptr) *output = &out;

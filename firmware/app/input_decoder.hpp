@@ -31,7 +31,9 @@ enum class CanInputKind : std::uint8_t {
   kUnknownId,     // not ours (counted)
 };
 
-enum class CloudKind : std::uint8_t { kNone, kEgoScan, kMapCloud, kRejected };
+// kEgoRejected: an ego scan refused for its time stamp; it still consumes a frame index, and the
+// caller publishes the last pose again for it (a pose every frame, nothing new fused).
+enum class CloudKind : std::uint8_t { kNone, kEgoScan, kMapCloud, kRejected, kEgoRejected };
 
 // Which endpoint a datagram came in on. Ego sensors have their own socket: an ego scan on the V2X
 // endpoint, or a map share / signature on the ego endpoint, is rejected (counted) before it
@@ -135,6 +137,7 @@ class InputDecoder {
   bool gnss_since_last_scan_ = false;
   bool gnss_flag_for_frame_ = false;
   std::uint32_t last_frame_index_ = 0;
+  std::uint32_t ego_frames_ = 0;  // ego frames consumed (fused or refused for their time)
   MapInsertResult last_map_insert_{};
   DecoderCounters counters_{};
 };

@@ -313,9 +313,18 @@ bool WireEventDecoder::feed(const WireEvent& event, DecodedFrame& frame) {
   for (const auto& d : event.datagrams) {
     if (!decoder_.on_datagram(d, event.time_ns)) continue;
     const LocalizerFrameOutput* out = nullptr;
-    if (decoder_.dispatch_completed(localizer_, &out) == firmware::CloudKind::kEgoScan && out != nullptr) {
+    const firmware::CloudKind kind = decoder_.dispatch_completed(localizer_, &out);
+    if (kind == firmware::CloudKind::kEgoRejected) {  // as the firmware: the last pose again
+      frame.frame = static_cast<int>(decoder_.last_frame_index());
+      frame.output = last_output_;
+      frame.pose = encoder_.encode(last_output_, decoder_.last_frame_index(), false);
+      frame.diagnostics = diagnostic_encoder_.encode(last_output_, decoder_.last_frame_index());
+      produced = true;
+    }
+    if (kind == firmware::CloudKind::kEgoScan && out != nullptr) {
       frame.frame = static_cast<int>(decoder_.last_frame_index());
       frame.output = *out;
+      last_output_ = *out;
       frame.pose = encoder_.encode(*out, decoder_.last_frame_index(), decoder_.gnss_used_in_last_frame());
       frame.diagnostics = diagnostic_encoder_.encode(*out, decoder_.last_frame_index());
       produced = true;

@@ -123,6 +123,7 @@ class WireEventDecoder {
   firmware::LocalizerPort& localizer_;
   firmware::PoseFrameEncoder encoder_{};
   firmware::DiagnosticFrameEncoder diagnostic_encoder_{};
+  LocalizerFrameOutput last_output_{};  // held for an ego scan refused for its time stamp
 };
 
 // The offline evaluator's loop: the whole event stream in-process. `decoder` is large (make it

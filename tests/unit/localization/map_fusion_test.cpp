@@ -63,9 +63,9 @@ TEST(MapFusion, ReplacementStaleAndAgeing) {
   // Reordered (older) message: stale.
   r = map.insert(7, 10.05, pose_a, in_sensor_frame(scene, pose_a), true);
   EXPECT_EQ(r.status, MapInsertStatus::kStale);
-  // A second source: points add up; consistent overlap accepted.
+  // A second (surveyed) source: points add up; consistent overlap accepted (shift probes agree).
   const Mat4d pose_b = sensor_pose(-5.0, 15.0, -0.7);
-  r = map.insert(8, 10.5, pose_b, in_sensor_frame(scene, pose_b));
+  r = map.insert(8, 10.5, pose_b, in_sensor_frame(scene, pose_b), true);
   EXPECT_EQ(r.status, MapInsertStatus::kInserted);
   EXPECT_GT(r.consistency_fitness, 0.95);
   EXPECT_GT(r.overlap_points, 1000u);
