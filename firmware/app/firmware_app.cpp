@@ -56,13 +56,27 @@ std::size_t FirmwareApp::drain_can() {
       ++counters_.can_error_frames;
       continue;
     }
-    const CanInputKind kind = decoder_.on_can(rx.frame, disciplined(rx.timestamp_ns), localizer_);
-    if (kind == CanInputKind::kGnssFix) {
-      last_gnss_ns_ = rx.timestamp_ns;
-      discipline_clock(rx.timestamp_ns);
-    }
+    apply_can(decoder_.decode_can(rx.frame, disciplined(rx.timestamp_ns)), rx.timestamp_ns);
   }
   return n;
+}
+
+void FirmwareApp::apply_can(const DecodedCan& decoded, std::int64_t rx_monotonic_ns) {
+  if (decoded.kind == CanInputKind::kVehicle) {
+    localizer_.on_vehicle(decoded.vehicle);
+  } else if (decoded.kind == CanInputKind::kGnssFix) {
+    localizer_.on_gnss(decoded.gnss);
+    last_gnss_ns_ = rx_monotonic_ns;
+    discipline_clock(rx_monotonic_ns);
+  }
+}
+
+void FirmwareApp::apply_cloud(const DecodedCloud& decoded) {
+  if (decoded.kind == CloudKind::kMapCloud) {
+    localizer_.on_map_cloud(decoded.map);
+  } else if (decoded.kind == CloudKind::kEgoScan) {
+    publish_pose(localizer_.on_ego_scan(decoded.ego), decoded.frame_index, decoded.gnss_used);
+  }
 }
 
 void FirmwareApp::discipline_clock(std::int64_t rx_monotonic_ns) {
@@ -127,10 +141,9 @@ std::size_t FirmwareApp::drain_datagrams() {
     const std::int64_t now = hal_.clock.monotonic_ns();
     last_datagram_ns_ = now;
     if (!decoder_.on_datagram(std::span<const std::uint8_t>(datagram_buffer_.data(), info.size), now)) continue;
-    // Canonical order: every CAN frame sent before this cloud's last fragment goes first.
+    // Input order: every CAN frame sent before this cloud's last fragment goes first.
     drain_can();
-    const LocalizerFrameOutput* out = nullptr;
-    if (decoder_.dispatch_completed(localizer_, &out) == CloudKind::kEgoScan && out != nullptr) publish_pose(*out);
+    apply_cloud(decoder_.decode_completed());
   }
   return n;
 }
@@ -143,16 +156,16 @@ void FirmwareApp::send(const hal::CanFrame& frame) {
   }
 }
 
-void FirmwareApp::publish_pose(const LocalizerFrameOutput& out) {
+void FirmwareApp::publish_pose(const LocalizerFrameOutput& out, std::uint32_t frame_index, bool gnss_used) {
   latest_ = out;
   has_output_ = true;
-  const PoseFrames frames = pose_encoder_.encode(out, decoder_.last_frame_index(), decoder_.gnss_used_in_last_frame());
+  const PoseFrames frames = pose_encoder_.encode(out, frame_index, gnss_used);
   send(frames.position);
   send(frames.attitude);
   send(frames.sigma);
   // Diagnostics (registration, gate decision, odometry) after the pose; odometry attitude last:
   // the replayer's lockstep waits for it.
-  const DiagnosticFrames diagnostics = diagnostic_encoder_.encode(out, decoder_.last_frame_index());
+  const DiagnosticFrames diagnostics = diagnostic_encoder_.encode(out, frame_index);
   send(diagnostics.registration_position);
   send(diagnostics.registration_quality);
   send(diagnostics.gate);

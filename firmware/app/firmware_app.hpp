@@ -1,17 +1,19 @@
-// The ECU application loop: polls the HAL, decodes (InputDecoder), runs the localizer, publishes
-// the fused pose and the diagnostic frames on CAN after every ego scan, drives the "localized" LED,
-// disciplines the clock on GNSS PPS edges and sends a 1 Hz heartbeat. It only knows hal/ interfaces; main() picks backends.
-// Event order: before a completed cloud is handed to the localizer, every pending CAN frame is
-// decoded first, so inputs reach the localizer in the canonical order of the replay event stream
-// (host_sim/replay/event_stream.hpp). No allocation: all buffers are members of static objects.
+// The ECU application loop: polls the HAL, decodes (InputDecoder), hands the decoded inputs to the
+// localizer (the only caller of the localizer in the firmware), publishes the fused pose and the
+// diagnostic frames on CAN after every ego scan, drives the "localized" LED, disciplines the clock
+// on GNSS PPS edges and sends a 1 Hz heartbeat. It only knows hal/ interfaces; main() picks backends.
+// Input order: before a completed cloud is handed to the localizer, every pending CAN frame is
+// decoded and applied first (the order firmware/wire/input_decoder.hpp defines).
+// No allocation: all buffers are members of static objects.
 #pragma once
 
 #include <array>
 #include <cstdint>
 
-#include "firmware/app/diagnostic_frames.hpp"
-#include "firmware/app/input_decoder.hpp"
-#include "firmware/app/pose_frames.hpp"
+#include "firmware/app/localizer_port.hpp"
+#include "firmware/wire/diagnostic_frames.hpp"
+#include "firmware/wire/input_decoder.hpp"
+#include "firmware/wire/pose_frames.hpp"
 #include "hal/can_bus.hpp"
 #include "hal/clock.hpp"
 #include "hal/datagram_link.hpp"
@@ -72,11 +74,13 @@ class FirmwareApp {
 
  private:
   std::size_t drain_can();
+  void apply_can(const DecodedCan& decoded, std::int64_t rx_monotonic_ns);
+  void apply_cloud(const DecodedCloud& decoded);
   std::size_t drain_datagrams();
   std::size_t poll_pps();
   std::size_t poll_imu();
   void maybe_heartbeat();
-  void publish_pose(const LocalizerFrameOutput& out);
+  void publish_pose(const LocalizerFrameOutput& out, std::uint32_t frame_index, bool gnss_used);
   void discipline_clock(std::int64_t rx_monotonic_ns);
   void send(const hal::CanFrame& frame);
   std::int64_t disciplined(std::int64_t monotonic_ns) const {

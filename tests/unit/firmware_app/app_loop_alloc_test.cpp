@@ -11,7 +11,7 @@
 #include "firmware/app/emulated_wiring.hpp"
 #include "firmware/app/firmware_app.hpp"
 #include "firmware/app/selected_localizer.hpp"
-#include "firmware/app/wire_conventions.hpp"
+#include "firmware/wire/wire_conventions.hpp"
 #include "hal/emulated/emulated_can_bus.hpp"
 #include "hal/linux/udp_link.hpp"
 
