@@ -2,8 +2,6 @@
 
 #include <cmath>
 
-#include "hal/hid_imu_report.hpp"
-
 namespace v2xloc::firmware {
 namespace {
 
@@ -38,7 +36,6 @@ std::size_t FirmwareApp::poll_once() {
   ++counters_.polls;
   std::size_t handled = drain_can();
   handled += poll_pps();
-  handled += poll_imu();
   handled += drain_datagrams();
   decoder_.expire(hal_.clock.monotonic_ns());
   maybe_heartbeat();
@@ -106,25 +103,6 @@ std::size_t FirmwareApp::poll_pps() {
   return n;
 }
 
-std::size_t FirmwareApp::poll_imu() {
-  if (hal_.imu == nullptr) return 0;
-  std::size_t n = 0;
-  std::array<std::uint8_t, 64> report{};
-  hal::HidReportInfo info;
-  while (n < 256 && hal_.imu->read_report(report, info) == hal::Status::kOk) {
-    ++n;
-    hal::hid_imu::RawReport raw;
-    if (hal::hid_imu::decode_input_report(std::span<const std::uint8_t>(report.data(), info.size), raw) !=
-        hal::Status::kOk) {
-      ++counters_.imu_malformed;
-      continue;
-    }
-    ++counters_.imu_reports;
-    imu_yaw_rate_ = hal::hid_imu::to_si(raw).gyro_rad_s[2];
-  }
-  return n;
-}
-
 std::size_t FirmwareApp::drain_datagrams() {
   std::size_t n = 0;
   hal::DatagramInfo info;
@@ -185,11 +163,12 @@ protocol::Heartbeat FirmwareApp::heartbeat_now() const {
   const protocol::ReassemblyCounters& r = decoder_.reassembly_counters();
   protocol::Heartbeat hb;
   hb.state = localizer_state(has_output_ ? &latest_ : nullptr);
+  namespace err = protocol::heartbeat_error;
   hb.error_flags = static_cast<std::uint8_t>(
-      (now - last_can_ns_ > config_.input_timeout_ns ? 1u : 0u) |
-      (now - last_datagram_ns_ > config_.input_timeout_ns ? 2u : 0u) |
-      (now - last_gnss_ns_ > config_.gnss_timeout_ns ? 4u : 0u) |
-      (r.over_capacity + r.frames_evicted > 0 ? 8u : 0u));
+      (now - last_can_ns_ > config_.input_timeout_ns ? err::kCanTimeout : 0u) |
+      (now - last_datagram_ns_ > config_.input_timeout_ns ? err::kUdpTimeout : 0u) |
+      (now - last_gnss_ns_ > config_.gnss_timeout_ns ? err::kGnssTimeout : 0u) |
+      (r.over_capacity + r.frames_evicted > 0 ? err::kCapacityOverflow : 0u));
   hb.uptime_s = static_cast<double>(now - start_ns_) * 1e-9;
   hb.can_rx_errors = saturate_u8(d.can_rejected + counters_.can_error_frames);
   hb.udp_dropped = saturate_u8(d.datagrams_rejected + counters_.datagrams_oversize + r.frames_timed_out +

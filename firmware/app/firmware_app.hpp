@@ -18,7 +18,6 @@
 #include "hal/clock.hpp"
 #include "hal/datagram_link.hpp"
 #include "hal/gpio_line.hpp"
-#include "hal/hid_device.hpp"
 
 namespace v2xloc::firmware {
 
@@ -28,7 +27,6 @@ struct FirmwareHal {
   hal::Clock& clock;
   hal::GpioLine* pps = nullptr;  // GNSS PPS input (optional)
   hal::GpioLine* led = nullptr;  // "localized" LED output (optional)
-  hal::HidDevice* imu = nullptr; // USB HID IMU (optional; hal/HID_IMU_REPORT.md)
 };
 
 struct FirmwareConfig {
@@ -51,8 +49,6 @@ struct FirmwareCounters {
   std::uint64_t heartbeats = 0;
   std::uint64_t pps_edges = 0;
   std::uint64_t clock_disciplined = 0;
-  std::uint64_t imu_reports = 0;
-  std::uint64_t imu_malformed = 0;
   std::uint64_t led_changes = 0;
 };
 
@@ -69,7 +65,6 @@ class FirmwareApp {
   const FirmwareCounters& counters() const { return counters_; }
   const InputDecoder& decoder() const { return decoder_; }
   const LocalizerFrameOutput* latest_output() const { return has_output_ ? &latest_ : nullptr; }
-  double latest_imu_yaw_rate() const { return imu_yaw_rate_; }
   protocol::Heartbeat heartbeat_now() const;
 
  private:
@@ -78,7 +73,6 @@ class FirmwareApp {
   void apply_cloud(const DecodedCloud& decoded);
   std::size_t drain_datagrams();
   std::size_t poll_pps();
-  std::size_t poll_imu();
   void maybe_heartbeat();
   void publish_pose(const LocalizerFrameOutput& out, std::uint32_t frame_index, bool gnss_used);
   void discipline_clock(std::int64_t rx_monotonic_ns);
@@ -103,7 +97,6 @@ class FirmwareApp {
   std::int64_t last_can_ns_ = 0, last_datagram_ns_ = 0, last_gnss_ns_ = 0;
   bool pps_pending_ = false;
   std::int64_t pps_edge_ns_ = 0;
-  double imu_yaw_rate_ = 0.0;
   std::array<std::uint8_t, 2048> datagram_buffer_{};  // > 1400-byte fragments; larger ones are counted
 };
 

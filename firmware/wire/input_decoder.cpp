@@ -51,26 +51,7 @@ DecodedCan InputDecoder::decode_can(const hal::CanFrame& frame, std::int64_t tim
         ++counters_.gnss_incomplete;
         return kind(CanInputKind::kInvalid);
       }
-      GnssInput& g = out.gnss;
-      g.t = t;
-      const bool fixed = gnss_status_.fix_type == protocol::GnssFixType::kFix2D ||
-                         gnss_status_.fix_type == protocol::GnssFixType::kFix3D;
-      g.valid = fixed && have_position_;
-      if (have_position_) {
-        g.lat_deg = gnss_position_.lat_deg;
-        g.lon_deg = gnss_position_.lon_deg;
-      }
-      g.alt_m = gnss_status_.alt_m;
-      g.h_acc = gnss_status_.h_acc_m;
-      g.v_acc = gnss_status_.v_acc_m;
-      g.num_sats = gnss_status_.num_sats;
-      g.hdop = gnss_time_.hdop;
-      if (have_velocity_ && gnss_velocity_.valid) {
-        g.velocity_valid = true;
-        g.vel_east = gnss_velocity_.vel_east_mps;
-        g.vel_north = gnss_velocity_.vel_north_mps;
-        g.speed_acc = gnss_velocity_.speed_acc_mps;
-      }
+      out.gnss = assemble_gnss_fix(t);
       have_position_ = have_status_ = have_velocity_ = false;
       ++counters_.gnss_inputs;
       gnss_since_last_scan_ = true;
@@ -80,6 +61,30 @@ DecodedCan InputDecoder::decode_can(const hal::CanFrame& frame, std::int64_t tim
       ++counters_.can_unknown_id;
       return kind(CanInputKind::kUnknownId);
   }
+}
+
+GnssInput InputDecoder::assemble_gnss_fix(double t) const {
+  GnssInput g;
+  g.t = t;
+  const bool fixed = gnss_status_.fix_type == protocol::GnssFixType::kFix2D ||
+                     gnss_status_.fix_type == protocol::GnssFixType::kFix3D;
+  g.valid = fixed && have_position_;
+  if (have_position_) {
+    g.lat_deg = gnss_position_.lat_deg;
+    g.lon_deg = gnss_position_.lon_deg;
+  }
+  g.alt_m = gnss_status_.alt_m;
+  g.h_acc = gnss_status_.h_acc_m;
+  g.v_acc = gnss_status_.v_acc_m;
+  g.num_sats = gnss_status_.num_sats;
+  g.hdop = gnss_time_.hdop;
+  if (have_velocity_ && gnss_velocity_.valid) {
+    g.velocity_valid = true;
+    g.vel_east = gnss_velocity_.vel_east_mps;
+    g.vel_north = gnss_velocity_.vel_north_mps;
+    g.speed_acc = gnss_velocity_.speed_acc_mps;
+  }
+  return g;
 }
 
 bool InputDecoder::on_datagram(std::span<const std::uint8_t> datagram, std::int64_t now_ns) {

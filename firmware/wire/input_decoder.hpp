@@ -93,6 +93,8 @@ class InputDecoder {
   const protocol::ReassemblyCounters& reassembly_counters() const { return reassembler_.counters(); }
 
  private:
+  // The fix closed by the time/DOP frame, from the stored position, status and velocity frames.
+  GnssInput assemble_gnss_fix(double t) const;
   bool pose_to_matrix(const protocol::SensorPose& pose, Mat4d& out) const;
 
   std::int64_t epoch_ns_ = 0;

@@ -77,7 +77,7 @@ TEST(FirmwareAppLoop, NoHeapAllocationAfterStartUpAndOnePosePerFrame) {
 
   configure_localizer(g_localizer, make_geodetic_origin(48.1374, 11.5755, 520.0));
   static LocalizerAdapter<SelectedLocalizer> port(g_localizer);
-  FirmwareApp app(FirmwareHal{fw_sim_bus, fw_cloud, clock, &pps, &led, nullptr}, g_decoder, port);
+  FirmwareApp app(FirmwareHal{fw_sim_bus, fw_cloud, clock, &pps, &led}, g_decoder, port);
   ASSERT_EQ(app.start(), hal::Status::kOk);
 
   // Everything the test sends is prepared before the counted loop.
