@@ -204,6 +204,22 @@ struct Heartbeat {
   std::uint8_t counter = 0;
 };
 
+// The codec's scaled-signal table (the constants pack/unpack use), by message id and DBC signal
+// name. Flags, rolling counters and CRC bytes sit at fixed bits; tests/unit/can_protocol checks
+// this table, and every frame the codec packs, against tools/dbc/v2xloc.dbc.
+struct NamedCanSignal {
+  std::uint32_t message_id;
+  const char* name;
+  unsigned start;   // LSB, Intel byte order
+  unsigned length;
+  bool is_signed;
+  double factor;    // physical = raw * factor + offset
+  double offset;
+  double min;       // physical range
+  double max;
+};
+std::span<const NamedCanSignal> can_signal_table();
+
 // Packing never fails: out-of-range values are clamped (counted in stats, if given).
 CanFrame pack(const VehicleMotion& m, PackStats* stats = nullptr);
 CanFrame pack(const GnssPosition& m, PackStats* stats = nullptr);
