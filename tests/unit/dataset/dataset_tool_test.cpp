@@ -104,9 +104,9 @@ TEST(DatasetTool, DairPairsRegisterFromNoPrior) {
     if (p["status"] != "ok") continue;
     ++registered;
     // The written calibration is the truth minus the offset: the corrected error is the real one.
-    EXPECT_LT(p["translation_error_offset_corrected_m"].get<double>(), 0.15);
-    EXPECT_LT(p["rotation_error_deg"].get<double>(), 0.5);
-    EXPECT_NEAR(p["translation_error_m"].get<double>(), info.offsets[i].norm(), 0.15);
+    EXPECT_LT(p["translation_error_offset_corrected_m"].get<double>(), 0.05);
+    EXPECT_LT(p["rotation_error_deg"].get<double>(), 0.2);
+    EXPECT_NEAR(p["translation_error_m"].get<double>(), info.offsets[i].norm(), 0.05);
   }
   EXPECT_GE(registered, 2);
   EXPECT_EQ(r.exit_code, registered == 3 ? 0 : 1);
