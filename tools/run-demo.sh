@@ -7,6 +7,8 @@
 #   V2XLOC_RECORDINGS=DIR   where recordings live (default out/recordings; reused if present)
 #   V2XLOC_DURATION=S       shorter scenarios for a quick look (default: the scenario's own 20-22 s)
 #   V2XLOC_JOBS=N           recordings generated at once (default: nproc)
+#   V2XLOC_STEREO=1         also render the disparity maps (the firmware replay does not use them;
+#                           only v2xloc-eval --stereo does): ~31 MB more per recording
 set -euo pipefail
 cd "$(dirname "$0")/.."
 REC=${V2XLOC_RECORDINGS:-out/recordings}
@@ -26,6 +28,7 @@ generate_one() {
   local sim=$1 perm=$2 dir="$REC/sim$1_$2"
   local args=(--scenario "$sim" --perm "$perm" --out "$dir.partial")
   [ -n "${V2XLOC_DURATION:-}" ] && args+=(--duration "$V2XLOC_DURATION")
+  [ "${V2XLOC_STEREO:-0}" = 1 ] || args+=(--no-stereo)
   rm -rf "$dir.partial"
   if ! build/host/bin/v2xloc-sim generate "${args[@]}" >"$dir.summary.txt"; then
     echo "[run-demo] generating $dir failed" >&2

@@ -69,7 +69,7 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
     if (!all && (scenario < 0 || perm_name.empty()))
-      throw CLI::RequiredError("generate needs --scenario and --perm, or --all");
+      throw CLI::ValidationError("generate", "needs --scenario and --perm, or --all");
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;  // usage errors keep exit code 2
   }

@@ -73,7 +73,7 @@ def finite(values):
 
 
 def plot_topview(name, frames, map_points, out_path):
-    fig, ax = plt.subplots(figsize=(9, 8), dpi=DPI)
+    fig, ax = plt.subplots(figsize=(10, 8.5), dpi=DPI)
     if map_points is not None and map_points["x"]:
         sc = ax.scatter(map_points["x"], map_points["y"], c=map_points["z"], s=0.3, cmap="Greys",
                         vmin=-1.0, vmax=12.0, rasterized=True, label="reference map points (infra + agent clouds)")
@@ -101,18 +101,28 @@ def plot_topview(name, frames, map_points, out_path):
     # Frame the drive, not the whole map: the truth and the fused pose with a margin.
     xs = finite(frames["truth_x"] + frames["fused_x"])
     ys = finite(frames["truth_y"] + frames["fused_y"])
-    margin = 25.0
-    ax.set_xlim(min(xs) - margin, max(xs) + margin)
-    ax.set_ylim(min(ys) - margin, max(ys) + margin)
+    margin = 20.0
+    x0, x1, y0, y1 = min(xs) - margin, max(xs) + margin, min(ys) - margin, max(ys) + margin
+    # A straight drive would give a thin strip: widen the shorter side to 60 % of the longer one so
+    # the map around the road stays visible.
+    wx, wy = x1 - x0, y1 - y0
+    if wy < 0.6 * wx:
+        c = 0.5 * (y0 + y1)
+        y0, y1 = c - 0.3 * wx, c + 0.3 * wx
+    elif wx < 0.6 * wy:
+        c = 0.5 * (x0 + x1)
+        x0, x1 = c - 0.3 * wy, c + 0.3 * wy
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
     ax.set_aspect("equal")
     ax.set_xlabel("x east [m]")
     ax.set_ylabel("y north [m]")
     ax.set_title(f"{name}: top view (local ENU at the intersection centre)")
     ax.grid(True, lw=0.3, alpha=0.5)
     ax.add_artist(AnchoredSizeBar(ax.transData, 10.0, "10 m", loc="lower right", pad=0.6, frameon=True, size_vertical=0.4))
-    ax.legend(loc="upper left", fontsize=7, framealpha=0.9, markerscale=1.5)
-    fig.tight_layout()
-    fig.savefig(out_path)
+    # Below the axes: the legend must not hide the drive.
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.11), ncol=2, fontsize=8, framealpha=0.9, markerscale=1.5)
+    fig.savefig(out_path, bbox_inches="tight")  # equal aspect leaves empty bands: crop them
     plt.close(fig)
 
 
@@ -145,9 +155,8 @@ def plot_errors(name, frames, out_path):
     ax.set_ylabel("position error [m] (log scale)")
     ax.set_title(f"{name}: error over time per Table 1 column (unaligned)")
     ax.grid(True, which="both", lw=0.3, alpha=0.5)
-    ax.legend(loc="upper right", fontsize=7, framealpha=0.9)
-    fig.tight_layout()
-    fig.savefig(out_path)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, fontsize=8, framealpha=0.9)
+    fig.savefig(out_path, bbox_inches="tight")  # the legend sits below the axes: keep it in the file
     plt.close(fig)
 
 

@@ -144,9 +144,9 @@ TEST(Plots, MatplotlibDrawsEveryPlotFromTheEvaluatorsFiles) {
   const PlotRender r = render_plots(dir, trace);
   if (r.skipped) GTEST_SKIP() << r.message;
   ASSERT_TRUE(r.ok) << r.message;
-  expect_readable_picture(dir + "/sim0_test_topview.png", 800, 700);
-  expect_readable_picture(dir + "/sim0_test_error.png", 900, 450);
-  expect_readable_picture(dir + "/sim0_test_timing.png", 900, 400);
+  expect_readable_picture(dir + "/sim0_test_topview.png", 700, 500);
+  expect_readable_picture(dir + "/sim0_test_error.png", 800, 450);
+  expect_readable_picture(dir + "/sim0_test_timing.png", 800, 350);
 
   // Without timing in the outputs the timing plot is skipped, the others are still drawn.
   fs::remove(dir + "/sim0_test_timing.png");
