@@ -46,7 +46,7 @@ std::vector<FrameRecord> synthetic_run() {
     r.gnss_body = Eigen::Vector3d(x + 4.0 * std::sin(i * 0.3), y + 3.0, 1.2);
     r.out.odometry_pose = at(7.0 * r.t * 1.01, 0.002 * i);
     r.out.registration_attempted = i % 2 == 1;
-    r.out.registration_status = i % 6 == 5 ? RegistrationStatus::kNotConverged : RegistrationStatus::kOk;
+    r.out.registration_status = i % 6 == 5 ? RegistrationStatus::kDidNotConverge : RegistrationStatus::kOk;
     r.out.registration_pose = at(x + 0.03, y - 0.02);
     r.out.fused_pose = at(x + 0.01 + 0.001 * i, y);
     r.lagged_pose = r.out.fused_pose;
