@@ -69,6 +69,9 @@ bool encode(int width, int height, int bit_depth, int colour_type, const std::ve
     return false;
   }
   png_set_write_fn(png, &out, append_bytes, nullptr);
+  // zlib level 1: a recording writes 200 disparity maps; on them level 6 was 4 % smaller but twice
+  // the time (22 vs 11 ms per 621 x 187 map).
+  png_set_compression_level(png, 1);
   png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height), bit_depth, colour_type,
                PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_write_info(png, info);

@@ -5,8 +5,8 @@ For every DIR/<name>_frames.csv (one row per frame: truth, GNSS fix, odometry, r
 fused pose, gate decision and the per-frame error of each Table 1 column) this writes
   DIR/<name>_topview.png  the run over the reference map's points (DIR/<name>_map.csv)
   DIR/<name>_error.png    error over time per Table 1 column, log axis, gate-valid frames marked
-  DIR/<name>_timing.png   per-frame processing time, when the evaluator's trace has timing
-                          columns (--trace TRACE_DIR, columns named *_ms); skipped otherwise
+  DIR/<name>_timing.png   per-frame processing time, from DIR/<name>_timing.csv or the evaluator's
+                          trace (--trace TRACE_DIR), columns t and *_ms; skipped when neither has them
 
 usage: plot_run.py DIR [--trace TRACE_DIR] [--only NAME]
 Exit 0 on success, 2 on bad input, 3 when matplotlib is not installed.
@@ -214,7 +214,14 @@ def main():
             plot_topview(name, frames, map_points, os.path.join(args.dir, written[0]))
             plot_errors(name, frames, os.path.join(args.dir, written[1]))
             timing_note = "no trace given: timing plot skipped"
-            if args.trace:
+            timing_path = os.path.join(args.dir, f"{name}_timing.csv")  # per-frame stage times, if written
+            if os.path.exists(timing_path):
+                if plot_timing(name, read_table(timing_path), timing_path, os.path.join(args.dir, f"{name}_timing.png")):
+                    written.append(f"{name}_timing.png")
+                    timing_note = ""
+                else:
+                    timing_note = f"{timing_path} has no *_ms column: timing plot skipped"
+            elif args.trace:
                 trace_path = os.path.join(args.trace, f"{name}_trace.txt")
                 if not os.path.exists(trace_path):
                     timing_note = f"no {trace_path}: timing plot skipped"
