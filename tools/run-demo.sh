@@ -81,7 +81,12 @@ step "writing $OUT/index.md"
     name=$(basename "$dir")
     cell() { [ -f "$OUT/plots/$1" ] && echo "[$1](plots/$1)" || echo "-"; }
     sim_view="-"
-    [ -f "$dir/topview.png" ] && sim_view="\`$dir/topview.png\`"
+    if [ -f "$dir/topview.png" ]; then
+      case "$dir" in
+        "$OUT"/*) sim_view="[topview.png](${dir#"$OUT"/}/topview.png)" ;;  # a link inside out/
+        *) sim_view="\`$dir/topview.png\`" ;;
+      esac
+    fi
     echo "| $name | $(cell "${name}_topview.png") | $(cell "${name}_error.png") | $(cell "${name}_timing.png") | $sim_view |"
   done
   echo
