@@ -2,8 +2,6 @@
 
 #include <cmath>
 
-#include "hal/hid_imu_report.hpp"
-
 namespace v2xloc::firmware {
 namespace {
 
@@ -38,7 +36,6 @@ std::size_t FirmwareApp::poll_once() {
   ++counters_.polls;
   std::size_t handled = drain_can();
   handled += poll_pps();
-  handled += poll_imu();
   handled += drain_datagrams();
   decoder_.expire(hal_.clock.monotonic_ns());
   maybe_heartbeat();
@@ -56,13 +53,37 @@ std::size_t FirmwareApp::drain_can() {
       ++counters_.can_error_frames;
       continue;
     }
-    const CanInputKind kind = decoder_.on_can(rx.frame, disciplined(rx.timestamp_ns), localizer_);
-    if (kind == CanInputKind::kGnssFix) {
-      last_gnss_ns_ = rx.timestamp_ns;
-      discipline_clock(rx.timestamp_ns);
-    }
+    apply_can(decoder_.decode_can(rx.frame, disciplined(rx.timestamp_ns)), rx.timestamp_ns);
   }
   return n;
+}
+
+void FirmwareApp::apply_can(const DecodedCan& decoded, std::int64_t rx_monotonic_ns) {
+  if (decoded.kind == CanInputKind::kVehicle) {
+    localizer_.on_vehicle(decoded.vehicle);
+  } else if (decoded.kind == CanInputKind::kGnssFix) {
+    localizer_.on_gnss(decoded.gnss);
+    last_gnss_ns_ = rx_monotonic_ns;
+    discipline_clock(rx_monotonic_ns);
+  }
+}
+
+void FirmwareApp::apply_cloud(const DecodedCloud& decoded) {
+  if (decoded.kind == CloudKind::kMapCloud) {
+    switch (localizer_.on_map_cloud(decoded.map).status) {
+      case MapInsertStatus::kRejectedInconsistent: ++counters_.map_inconsistent; break;
+      case MapInsertStatus::kHeldBack: ++counters_.map_held_back; break;
+      case MapInsertStatus::kNoSourceSlot: ++counters_.map_no_slot; break;
+      case MapInsertStatus::kStale: ++counters_.map_stale; break;
+      default: break;
+    }
+  } else if (decoded.kind == CloudKind::kEgoScan) {
+    publish_pose(localizer_.on_ego_scan(decoded.ego), decoded.frame_index, decoded.gnss_used);
+  } else if (decoded.kind == CloudKind::kEgoRejected) {
+    // A pose every frame: the last one again (nothing new was fused), or "no pose" before any.
+    ++counters_.ego_frames_held;
+    publish_pose(has_output_ ? LocalizerFrameOutput(latest_) : LocalizerFrameOutput{}, decoded.frame_index, false);
+  }
 }
 
 void FirmwareApp::discipline_clock(std::int64_t rx_monotonic_ns) {
@@ -98,25 +119,6 @@ std::size_t FirmwareApp::poll_pps() {
   return n;
 }
 
-std::size_t FirmwareApp::poll_imu() {
-  if (hal_.imu == nullptr) return 0;
-  std::size_t n = 0;
-  std::array<std::uint8_t, 64> report{};
-  hal::HidReportInfo info;
-  while (n < 256 && hal_.imu->read_report(report, info) == hal::Status::kOk) {
-    ++n;
-    hal::hid_imu::RawReport raw;
-    if (hal::hid_imu::decode_input_report(std::span<const std::uint8_t>(report.data(), info.size), raw) !=
-        hal::Status::kOk) {
-      ++counters_.imu_malformed;
-      continue;
-    }
-    ++counters_.imu_reports;
-    imu_yaw_rate_ = hal::hid_imu::to_si(raw).gyro_rad_s[2];
-  }
-  return n;
-}
-
 std::size_t FirmwareApp::drain_datagrams() {
   std::size_t n = 0;
   if (hal_.ego != nullptr) n += drain_link(*hal_.ego, true);
@@ -145,12 +147,9 @@ std::size_t FirmwareApp::drain_link(hal::DatagramLink& link, bool ego_link) {
       channel = DatagramChannel::kEgo;  // legacy single socket
     }
     if (!decoder_.on_datagram(bytes, now, disciplined(now), channel)) continue;
-    // Canonical order: every CAN frame sent before this cloud's last fragment goes first.
+    // Input order: every CAN frame sent before this cloud's last fragment goes first.
     drain_can();
-    const LocalizerFrameOutput* out = nullptr;
-    const CloudKind kind = decoder_.dispatch_completed(localizer_, &out);
-    if (kind == CloudKind::kEgoScan && out != nullptr) publish_pose(*out);
-    if (kind == CloudKind::kEgoRejected) publish_pose(has_output_ ? latest_ : LocalizerFrameOutput{});  // hold
+    apply_cloud(decoder_.decode_completed());
   }
   return n;
 }
@@ -163,16 +162,16 @@ void FirmwareApp::send(const hal::CanFrame& frame) {
   }
 }
 
-void FirmwareApp::publish_pose(const LocalizerFrameOutput& out) {
+void FirmwareApp::publish_pose(const LocalizerFrameOutput& out, std::uint32_t frame_index, bool gnss_used) {
   latest_ = out;
   has_output_ = true;
-  const PoseFrames frames = pose_encoder_.encode(out, decoder_.last_frame_index(), decoder_.gnss_used_in_last_frame());
+  const PoseFrames frames = pose_encoder_.encode(out, frame_index, gnss_used);
   send(frames.position);
   send(frames.attitude);
   send(frames.sigma);
   // Diagnostics (registration, gate decision, odometry) after the pose; odometry attitude last:
   // the replayer's lockstep waits for it.
-  const DiagnosticFrames diagnostics = diagnostic_encoder_.encode(out, decoder_.last_frame_index());
+  const DiagnosticFrames diagnostics = diagnostic_encoder_.encode(out, frame_index);
   send(diagnostics.registration_position);
   send(diagnostics.registration_quality);
   send(diagnostics.gate);
@@ -192,16 +191,18 @@ protocol::Heartbeat FirmwareApp::heartbeat_now() const {
   const protocol::ReassemblyCounters& r = decoder_.reassembly_counters();
   protocol::Heartbeat hb;
   hb.state = localizer_state(has_output_ ? &latest_ : nullptr);
+  namespace err = protocol::heartbeat_error;
   hb.error_flags = static_cast<std::uint8_t>(
-      (now - last_can_ns_ > config_.input_timeout_ns ? 1u : 0u) |
-      (now - last_datagram_ns_ > config_.input_timeout_ns ? 2u : 0u) |
-      (now - last_gnss_ns_ > config_.gnss_timeout_ns ? 4u : 0u) |
-      (r.over_capacity + r.frames_evicted > 0 ? 8u : 0u));
+      (now - last_can_ns_ > config_.input_timeout_ns ? err::kCanTimeout : 0u) |
+      (now - last_datagram_ns_ > config_.input_timeout_ns ? err::kUdpTimeout : 0u) |
+      (now - last_gnss_ns_ > config_.gnss_timeout_ns ? err::kGnssTimeout : 0u) |
+      (r.over_capacity + r.frames_evicted > 0 ? err::kCapacityOverflow : 0u));
   hb.uptime_s = static_cast<double>(now - start_ns_) * 1e-9;
   hb.can_rx_errors = saturate_u8(d.can_rejected + counters_.can_error_frames);
   hb.udp_dropped = saturate_u8(d.datagrams_rejected + counters_.datagrams_oversize + r.frames_timed_out +
                                r.frames_evicted + d.clouds_rejected + d.shares_untrusted + d.wrong_channel +
-                               d.ego_time_rejected + d.map_inconsistent + d.map_held_back + d.map_no_slot);
+                               d.ego_time_rejected + counters_.map_inconsistent + counters_.map_held_back +
+                               counters_.map_no_slot);
   hb.counter = heartbeat_counter_;
   return hb;
 }

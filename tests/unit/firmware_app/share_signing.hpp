@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "firmware/app/input_decoder.hpp"
+#include "firmware/wire/input_decoder.hpp"
 #include "firmware/trust/cloud_digest.hpp"
 
 namespace v2xloc::firmware::test {

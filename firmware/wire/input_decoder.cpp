@@ -1,8 +1,8 @@
-#include "firmware/app/input_decoder.hpp"
+#include "firmware/wire/input_decoder.hpp"
 
 #include <cmath>
 
-#include "firmware/app/wire_conventions.hpp"
+#include "firmware/wire/wire_conventions.hpp"
 
 namespace v2xloc::firmware {
 
@@ -17,40 +17,45 @@ bool InputDecoder::counter_ok(protocol::RollingCounterMonitor& monitor, std::uin
   return true;
 }
 
-CanInputKind InputDecoder::on_can(const hal::CanFrame& frame, std::int64_t time_ns, LocalizerPort& sink) {
+DecodedCan InputDecoder::decode_can(const hal::CanFrame& frame, std::int64_t time_ns) {
   ++counters_.can_frames;
   const double t = localizer_time_s(time_ns, epoch_ns_);
-  const auto rejected = [this] {
+  DecodedCan out;
+  const auto kind = [&out](CanInputKind k) {
+    out.kind = k;
+    return out;
+  };
+  const auto rejected = [this, &kind] {
     ++counters_.can_rejected;
-    return CanInputKind::kRejected;
+    return kind(CanInputKind::kRejected);
   };
   switch (frame.id) {
     case protocol::kVehicleMotionId: {
       protocol::VehicleMotion m;
       if (protocol::unpack(frame, m) != protocol::DecodeStatus::kOk) return rejected();
-      if (!counter_ok(vehicle_counter_, m.counter)) return CanInputKind::kRejected;
+      if (!counter_ok(vehicle_counter_, m.counter)) return kind(CanInputKind::kRejected);
       if (!m.speed_valid || !m.yaw_rate_valid) {
         ++counters_.vehicle_invalid;
-        return CanInputKind::kInvalid;
+        return kind(CanInputKind::kInvalid);
       }
-      sink.on_vehicle(VehicleInput{t, m.wheel_speed_mps, m.yaw_rate_rps});
+      out.vehicle = VehicleInput{t, m.wheel_speed_mps, m.yaw_rate_rps};
       ++counters_.vehicle_inputs;
-      return CanInputKind::kVehicle;
+      return kind(CanInputKind::kVehicle);
     }
     case protocol::kGnssPositionId:
       if (protocol::unpack(frame, gnss_position_) != protocol::DecodeStatus::kOk) return rejected();
       have_position_ = true;
-      return CanInputKind::kGnssPart;
+      return kind(CanInputKind::kGnssPart);
     case protocol::kGnssStatusId:
       if (protocol::unpack(frame, gnss_status_) != protocol::DecodeStatus::kOk) return rejected();
-      if (!counter_ok(gnss_status_counter_, gnss_status_.counter)) return CanInputKind::kRejected;
+      if (!counter_ok(gnss_status_counter_, gnss_status_.counter)) return kind(CanInputKind::kRejected);
       have_status_ = true;
-      return CanInputKind::kGnssPart;
+      return kind(CanInputKind::kGnssPart);
     case protocol::kGnssVelocityId:
       if (protocol::unpack(frame, gnss_velocity_) != protocol::DecodeStatus::kOk) return rejected();
-      if (!counter_ok(gnss_velocity_counter_, gnss_velocity_.counter)) return CanInputKind::kRejected;
+      if (!counter_ok(gnss_velocity_counter_, gnss_velocity_.counter)) return kind(CanInputKind::kRejected);
       have_velocity_ = true;
-      return CanInputKind::kGnssPart;
+      return kind(CanInputKind::kGnssPart);
     case protocol::kGnssTimeDopId: {
       // The time/DOP frame closes a fix (sent last: position, status, time). A fix without its
       // status frame is incomplete; without a position it is forwarded as invalid (no fix).
@@ -58,38 +63,42 @@ CanInputKind InputDecoder::on_can(const hal::CanFrame& frame, std::int64_t time_
       if (!have_status_) {
         have_position_ = have_velocity_ = false;
         ++counters_.gnss_incomplete;
-        return CanInputKind::kInvalid;
+        return kind(CanInputKind::kInvalid);
       }
-      GnssInput g;
-      g.t = t;
-      const bool fixed = gnss_status_.fix_type == protocol::GnssFixType::kFix2D ||
-                         gnss_status_.fix_type == protocol::GnssFixType::kFix3D;
-      g.valid = fixed && have_position_;
-      if (have_position_) {
-        g.lat_deg = gnss_position_.lat_deg;
-        g.lon_deg = gnss_position_.lon_deg;
-      }
-      g.alt_m = gnss_status_.alt_m;
-      g.h_acc = gnss_status_.h_acc_m;
-      g.v_acc = gnss_status_.v_acc_m;
-      g.num_sats = gnss_status_.num_sats;
-      g.hdop = gnss_time_.hdop;
-      if (have_velocity_ && gnss_velocity_.valid) {
-        g.velocity_valid = true;
-        g.vel_east = gnss_velocity_.vel_east_mps;
-        g.vel_north = gnss_velocity_.vel_north_mps;
-        g.speed_acc = gnss_velocity_.speed_acc_mps;
-      }
+      out.gnss = assemble_gnss_fix(t);
       have_position_ = have_status_ = have_velocity_ = false;
-      sink.on_gnss(g);
       ++counters_.gnss_inputs;
       gnss_since_last_scan_ = true;
-      return CanInputKind::kGnssFix;
+      return kind(CanInputKind::kGnssFix);
     }
     default:
       ++counters_.can_unknown_id;
-      return CanInputKind::kUnknownId;
+      return kind(CanInputKind::kUnknownId);
   }
+}
+
+GnssInput InputDecoder::assemble_gnss_fix(double t) const {
+  GnssInput g;
+  g.t = t;
+  const bool fixed = gnss_status_.fix_type == protocol::GnssFixType::kFix2D ||
+                     gnss_status_.fix_type == protocol::GnssFixType::kFix3D;
+  g.valid = fixed && have_position_;
+  if (have_position_) {
+    g.lat_deg = gnss_position_.lat_deg;
+    g.lon_deg = gnss_position_.lon_deg;
+  }
+  g.alt_m = gnss_status_.alt_m;
+  g.h_acc = gnss_status_.h_acc_m;
+  g.v_acc = gnss_status_.v_acc_m;
+  g.num_sats = gnss_status_.num_sats;
+  g.hdop = gnss_time_.hdop;
+  if (have_velocity_ && gnss_velocity_.valid) {
+    g.velocity_valid = true;
+    g.vel_east = gnss_velocity_.vel_east_mps;
+    g.vel_north = gnss_velocity_.vel_north_mps;
+    g.speed_acc = gnss_velocity_.speed_acc_mps;
+  }
+  return g;
 }
 
 bool InputDecoder::on_datagram(std::span<const std::uint8_t> datagram, std::int64_t now_ns) {
@@ -152,8 +161,13 @@ bool InputDecoder::pose_to_matrix(const protocol::SensorPose& pose, Mat4d& out) 
   return true;
 }
 
-CloudKind InputDecoder::dispatch_completed(LocalizerPort& sink, const LocalizerFrameOutput** output) {
-  if (!completed_pending_) return CloudKind::kNone;
+DecodedCloud InputDecoder::decode_completed() {
+  DecodedCloud out;
+  const auto kind = [&out](CloudKind k) {
+    out.kind = k;
+    return out;
+  };
+  if (!completed_pending_) return kind(CloudKind::kNone);
   completed_pending_ = false;
   const protocol::ReassembledCloud& cloud = reassembler_.completed();
   const protocol::CloudFrameInfo& info = cloud.info;
@@ -161,7 +175,7 @@ CloudKind InputDecoder::dispatch_completed(LocalizerPort& sink, const LocalizerF
   const std::uint32_t n = cloud.point_count;
   if (!pose_to_matrix(info.pose, pose) || n > points_.size() || cloud.xyz.size() < 3u * n) {
     ++counters_.clouds_rejected;
-    return CloudKind::kRejected;
+    return kind(CloudKind::kRejected);
   }
   for (std::uint32_t i = 0; i < n; ++i) {
     points_[i] = Vec3f(cloud.xyz[3u * i], cloud.xyz[3u * i + 1], cloud.xyz[3u * i + 2]);
@@ -175,42 +189,34 @@ CloudKind InputDecoder::dispatch_completed(LocalizerPort& sink, const LocalizerF
     const trust::ShareVerifyResult verdict = verifier_.verify(cloud, completed_local_time_ns_);
     if (verdict.verdict != trust::ShareVerdict::kAccepted) {
       ++counters_.shares_untrusted;
-      return CloudKind::kRejected;
+      return kind(CloudKind::kRejected);
     }
-    MapCloudInput in;
+    MapCloudInput& in = out.map;
     in.source_id = verdict.signer->sender_id;
     in.is_agent = verdict.signer->role == trust::SignerRole::kAgent;
     in.t = t;
     in.world_T_sensor = pose;
     in.points = points;
-    last_map_insert_ = sink.on_map_cloud(in);
-    switch (last_map_insert_.status) {
-      case MapInsertStatus::kRejectedInconsistent: ++counters_.map_inconsistent; break;
-      case MapInsertStatus::kHeldBack: ++counters_.map_held_back; break;
-      case MapInsertStatus::kNoSourceSlot: ++counters_.map_no_slot; break;
-      case MapInsertStatus::kStale: ++counters_.map_stale; break;
-      default: break;
-    }
     ++counters_.map_clouds;
-    return CloudKind::kMapCloud;
+    return kind(CloudKind::kMapCloud);
   }
   if (info.type != protocol::CloudMessageType::kEgoScan || info.sender_id != kEgoSenderId) {
     ++counters_.clouds_rejected;
-    return CloudKind::kRejected;
+    return kind(CloudKind::kRejected);
   }
-  // Plausible time: near the local clock and newer than the last accepted scan. A rejected scan is
+  // Plausible time: near the local clock and newer than the last accepted scan. A refused scan is
   // counted and leaves no trace, so it cannot freeze the scans after it.
   const std::int64_t stamp = static_cast<std::int64_t>(info.timestamp_ns & 0x7FFFFFFFFFFFFFFFull);
   if (info.timestamp_ns > 0x7FFFFFFFFFFFFFFFull || stamp > completed_local_time_ns_ + kEgoScanMaxClockSkewNs ||
       stamp < completed_local_time_ns_ - kEgoScanMaxClockSkewNs ||
       (have_ego_time_ && info.timestamp_ns <= last_ego_stamp_ns_)) {
     ++counters_.ego_time_rejected;
-    last_frame_index_ = ego_frames_++;
-    return CloudKind::kEgoRejected;
+    out.frame_index = ego_frames_++;
+    return kind(CloudKind::kEgoRejected);
   }
   have_ego_time_ = true;
   last_ego_stamp_ns_ = info.timestamp_ns;
-  EgoScanInput in;
+  EgoScanInput& in = out.ego;
   in.t = t;
   in.points = points;
   if (cloud.time_offset_ticks.size() == n) {
@@ -218,13 +224,11 @@ CloudKind InputDecoder::dispatch_completed(LocalizerPort& sink, const LocalizerF
     in.point_times = std::span<const float>(point_times_.data(), n);
   }
   in.body_T_lidar = pose;
-  gnss_flag_for_frame_ = gnss_since_last_scan_;
+  out.gnss_used = gnss_since_last_scan_;
   gnss_since_last_scan_ = false;
-  last_frame_index_ = ego_frames_++;
+  out.frame_index = ego_frames_++;
   ++counters_.ego_scans;
-  const LocalizerFrameOutput& out = sink.on_ego_scan(in);
-  if (output != nullptr) *output = &out;
-  return CloudKind::kEgoScan;
+  return kind(CloudKind::kEgoScan);
 }
 
 }  // namespace v2xloc::firmware

@@ -1,7 +1,12 @@
 // Wire -> localizer inputs. CAN frames (vehicle motion, GNSS position/status/velocity/time) are decoded with
 // the DBC codec; point-cloud datagrams are reassembled and dequantized into an ego scan or a map
-// share. The firmware loop and the offline evaluator both feed this one class, so the offline
-// path applies exactly the firmware's quantization and decoding (bit-identical inputs).
+// share. The decoder RETURNS typed inputs and never calls the localizer: the firmware loop
+// (firmware/app), the offline evaluator and the replayer's in-process path each hand them to their
+// localizer themselves, so every path applies exactly the firmware's quantization and decoding.
+//
+// Input order (the firmware's contract; every other path follows it): a completed cloud is handed
+// to the localizer only after every CAN frame received before its last fragment, so per ego frame
+// the localizer sees CAN inputs (receive order), then map clouds, then the ego scan.
 // Allocation-free; all storage (reassembler, decoded cloud) is inside: make the object static.
 #pragma once
 
@@ -9,11 +14,11 @@
 #include <cstdint>
 #include <span>
 
-#include "firmware/app/localizer_port.hpp"
 #include "firmware/protocol/can_messages.hpp"
 #include "firmware/protocol/pointcloud_udp.hpp"
 #include "firmware/trust/map_share_verifier.hpp"
 #include "v2xloc/algo/core/config.hpp"
+#include "v2xloc/algo/localization/localizer.hpp"
 
 namespace v2xloc::firmware {
 
@@ -23,16 +28,17 @@ inline constexpr std::size_t kMaxCloudFragments = 2048;            // >= 131072 
 using CloudReassembler = protocol::StaticPointCloudReassembler<kReassemblySlots, kMaxCloudPoints, kMaxCloudFragments>;
 
 enum class CanInputKind : std::uint8_t {
-  kVehicle,       // delivered a VehicleInput
-  kGnssFix,       // delivered a GnssInput (on the time/DOP frame that closes a fix)
+  kVehicle,       // decoded a VehicleInput
+  kGnssFix,       // decoded a GnssInput (on the time/DOP frame that closes a fix)
   kGnssPart,      // position or status of a fix, stored until the time frame
   kInvalid,       // decoded, but flagged invalid by the sender (counted, not forwarded)
   kRejected,      // wrong DLC, CRC or range (counted)
   kUnknownId,     // not ours (counted)
 };
 
-// kEgoRejected: an ego scan refused for its time stamp; it still consumes a frame index, and the
-// caller publishes the last pose again for it (a pose every frame, nothing new fused).
+// kEgoRejected: an ego scan refused for its time stamp; it still consumes a frame index
+// (DecodedCloud::frame_index), and the caller publishes the last pose again for it (a pose every
+// frame, nothing new fused).
 enum class CloudKind : std::uint8_t { kNone, kEgoScan, kMapCloud, kRejected, kEgoRejected };
 
 // Which endpoint a datagram came in on. Ego sensors have their own socket: an ego scan on the V2X
@@ -43,6 +49,23 @@ enum class DatagramChannel : std::uint8_t { kEgo, kV2x };
 // Ego scans must carry a time stamp within this of the local (disciplined) clock: one scan dated
 // far in the future would otherwise make every later real scan look stale to the localizer.
 inline constexpr std::int64_t kEgoScanMaxClockSkewNs = 500'000'000;  // [ns] 5 sweep periods
+
+// One decoded CAN frame: `vehicle` is set for kVehicle, `gnss` for kGnssFix.
+struct DecodedCan {
+  CanInputKind kind = CanInputKind::kUnknownId;
+  VehicleInput vehicle{};
+  GnssInput gnss{};
+};
+
+// One completed cloud: `map` is set for kMapCloud, `ego` for kEgoScan. The point spans refer to
+// the decoder's buffers and stay valid until the next datagram.
+struct DecodedCloud {
+  CloudKind kind = CloudKind::kNone;
+  MapCloudInput map{};
+  EgoScanInput ego{};
+  std::uint32_t frame_index = 0;  // kEgoScan: ego scans decoded before this one
+  bool gnss_used = false;         // kEgoScan: a GNSS fix was decoded since the previous ego scan (pose flag GnssUsed)
+};
 
 struct DecoderCounters {
   std::uint64_t can_frames = 0;
@@ -60,10 +83,6 @@ struct DecoderCounters {
   std::uint64_t wrong_channel = 0;       // datagram type not allowed on the endpoint it came in on
   std::uint64_t shares_untrusted = 0;    // map shares the verifier refused (reasons: verifier counters)
   std::uint64_t ego_time_rejected = 0;   // ego scans dated implausibly far from the local clock / not newer
-  std::uint64_t map_inconsistent = 0;    // trusted shares map fusion refused: disagree with the infrastructure
-  std::uint64_t map_held_back = 0;       // agent shares too little overlap to be checked
-  std::uint64_t map_no_slot = 0;         // per-role source cap reached
-  std::uint64_t map_stale = 0;           // not newer than the source's stored cloud
   std::uint64_t can_repeated = 0;        // rolling counter did not advance: replayed / stuck frame, dropped
   std::uint64_t can_counter_gaps = 0;    // frames lost by the rolling counter (accepted, counted)
 };
@@ -76,43 +95,40 @@ class InputDecoder {
   std::int64_t epoch_ns() const { return epoch_ns_; }
 
   // One CAN frame received at disciplined time time_ns.
-  CanInputKind on_can(const hal::CanFrame& frame, std::int64_t time_ns, LocalizerPort& sink);
+  DecodedCan decode_can(const hal::CanFrame& frame, std::int64_t time_ns);
   // Latest GNSS time frame (valid after kGnssFix), for PPS discipline.
   const protocol::GnssTimeDop& last_gnss_time() const { return gnss_time_; }
 
   // One datagram received at monotonic now_ns. True when it completed a cloud: the caller first
-  // drains earlier inputs (CAN), then calls dispatch_completed() before the next datagram.
+  // drains earlier inputs (CAN), then calls decode_completed() before the next datagram.
   // local_time_ns: the disciplined clock now (freshness of map shares and ego scans).
   bool on_datagram(std::span<const std::uint8_t> datagram, std::int64_t now_ns, std::int64_t local_time_ns,
                    DatagramChannel channel);
   // Emulation / offline convenience: local time = epoch + now_ns (the SimClock's relation), and
   // the channel taken from the datagram's message type (single-socket legacy wiring).
   bool on_datagram(std::span<const std::uint8_t> datagram, std::int64_t now_ns);
-
-  // Provisioned trust list (start-up). Without one, every map share is refused (unknown signer).
-  void provision_trust(const trust::TrustList& list) { verifier_.provision(list); }
-  const trust::MapShareVerifier& verifier() const { return verifier_; }
-  // Hands the completed cloud to the localizer. Returns its kind; for an ego scan, `output`
-  // points at the localizer's frame output and `frame_index` is the ego scan count - 1.
-  CloudKind dispatch_completed(LocalizerPort& sink, const LocalizerFrameOutput** output = nullptr);
+  // The cloud the last datagram completed, as a localizer input (kNone when there is none; a
+  // cloud is returned once). A map share is returned only when the verifier accepted it; its
+  // source id and agent flag come from the provisioned trust list, not from the header.
+  DecodedCloud decode_completed();
   std::size_t expire(std::int64_t now_ns) {
     verifier_.expire(now_ns);
     return reassembler_.expire(now_ns);
   }
 
-  // True when a GNSS fix reached the localizer between the previous ego scan and the latest one
-  // (pose flag GnssUsed of the latest frame).
-  bool gnss_used_in_last_frame() const { return gnss_flag_for_frame_; }
-  std::uint32_t last_frame_index() const { return last_frame_index_; }
-  const MapInsertResult& last_map_insert() const { return last_map_insert_; }
+  // Provisioned trust list (start-up). Without one, every map share is refused (unknown signer).
+  void provision_trust(const trust::TrustList& list) { verifier_.provision(list); }
+  const trust::MapShareVerifier& verifier() const { return verifier_; }
 
   const DecoderCounters& counters() const { return counters_; }
   const protocol::ReassemblyCounters& reassembly_counters() const { return reassembler_.counters(); }
 
-  static constexpr std::size_t static_bytes() { return sizeof(InputDecoder); }
-
  private:
+  // The fix closed by the time/DOP frame, from the stored position, status and velocity frames.
+  GnssInput assemble_gnss_fix(double t) const;
   bool pose_to_matrix(const protocol::SensorPose& pose, Mat4d& out) const;
+  // Rolling counters of the frames that carry one (0x120, 0x131, 0x133): a repeat is dropped.
+  bool counter_ok(protocol::RollingCounterMonitor& monitor, std::uint8_t counter);
 
   std::int64_t epoch_ns_ = 0;
   CloudReassembler reassembler_{};
@@ -122,11 +138,10 @@ class InputDecoder {
   std::int64_t completed_local_time_ns_ = 0;
   bool have_ego_time_ = false;
   std::uint64_t last_ego_stamp_ns_ = 0;
+  std::uint32_t ego_frames_ = 0;  // ego frames consumed (fused or refused for their time)
   trust::MapShareVerifier verifier_{};
-
-  // Rolling counters of the frames that carry one (0x120, 0x131, 0x133): a repeat is dropped.
-  bool counter_ok(protocol::RollingCounterMonitor& monitor, std::uint8_t counter);
   protocol::RollingCounterMonitor vehicle_counter_{}, gnss_status_counter_{}, gnss_velocity_counter_{};
+
   protocol::GnssPosition gnss_position_{};
   protocol::GnssStatus gnss_status_{};
   protocol::GnssVelocity gnss_velocity_{};
@@ -135,10 +150,6 @@ class InputDecoder {
   bool have_status_ = false;
   bool have_velocity_ = false;
   bool gnss_since_last_scan_ = false;
-  bool gnss_flag_for_frame_ = false;
-  std::uint32_t last_frame_index_ = 0;
-  std::uint32_t ego_frames_ = 0;  // ego frames consumed (fused or refused for their time)
-  MapInsertResult last_map_insert_{};
   DecoderCounters counters_{};
 };
 
