@@ -220,7 +220,8 @@ MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
     r.consistency_fitness =
         consistency(known ? slot : config::kMaxMapSources, r.overlap_points, r.best_probe_fitness);
     const bool checkable = r.overlap_points >= params_.min_overlap_points;
-    const bool shifted = checkable && r.best_probe_fitness > r.consistency_fitness + params_.probe_margin;
+    const double margin = trusted ? params_.infra_probe_margin : params_.probe_margin;
+    const bool shifted = checkable && r.best_probe_fitness > r.consistency_fitness + margin;
     if (!trusted && !checkable) {
       r.status = MapInsertStatus::kHeldBack;
       ++counters_.held_back;
