@@ -149,7 +149,17 @@ std::size_t FirmwareApp::drain_link(hal::DatagramLink& link, bool ego_link) {
     if (!decoder_.on_datagram(bytes, now, disciplined(now), channel)) continue;
     // Input order: every CAN frame sent before this cloud's last fragment goes first.
     drain_can();
-    apply_cloud(decoder_.decode_completed());
+    const DecodedCloud decoded = decoder_.decode_completed();
+    if (decoded.kind == CloudKind::kEgoScan || decoded.kind == CloudKind::kEgoRejected) {
+      // Period boundary: shares waiting for their signature check are verified now (at most
+      // kMaxSignatureVerificationsPerPeriod) and reach map fusion before this scan.
+      for (std::size_t k = 0; k < kMaxSignatureVerificationsPerPeriod; ++k) {
+        const DecodedCloud share = decoder_.next_verified_share();
+        if (share.kind == CloudKind::kNone) break;
+        apply_cloud(share);
+      }
+    }
+    apply_cloud(decoded);
   }
   return n;
 }
@@ -200,7 +210,7 @@ protocol::Heartbeat FirmwareApp::heartbeat_now() const {
   hb.uptime_s = static_cast<double>(now - start_ns_) * 1e-9;
   hb.can_rx_errors = saturate_u8(d.can_rejected + counters_.can_error_frames);
   hb.udp_dropped = saturate_u8(d.datagrams_rejected + counters_.datagrams_oversize + r.frames_timed_out +
-                               r.frames_evicted + d.clouds_rejected + d.shares_untrusted + d.wrong_channel +
+                               r.frames_evicted + d.clouds_rejected + d.shares_untrusted + d.shares_queue_dropped + d.wrong_channel +
                                d.ego_time_rejected + counters_.map_inconsistent + counters_.map_held_back +
                                counters_.map_no_slot);
   hb.counter = heartbeat_counter_;

@@ -320,6 +320,7 @@ void PointCloudReassembler::reset() {
   recent_next_ = 0;
   counters_ = ReassemblyCounters{};
   completed_ = ReassembledCloud{};
+  last_accepted_ = AcceptedFragment{};
   completed_slot_ = SIZE_MAX;
 }
 
@@ -413,6 +414,7 @@ std::size_t PointCloudReassembler::expire(std::int64_t now_ns) {
 
 CloudStatus PointCloudReassembler::push(std::span<const std::uint8_t> datagram, std::int64_t now_ns) {
   release_completed();
+  last_accepted_ = AcceptedFragment{};
   ++counters_.datagrams;
   expire(now_ns);
 
@@ -470,6 +472,7 @@ CloudStatus PointCloudReassembler::push(std::span<const std::uint8_t> datagram, 
   }
   slot.points_received += h.points_in_fragment;
   ++slot.fragments_received;
+  last_accepted_ = AcceptedFragment{true, index, h.fragment_index, h.info.type, payload};
   if (slot.fragments_received < slot.meta.fragment_count) return count(CloudStatus::kOk);
 
   slot.state = ReassemblySlot::State::kComplete;
@@ -486,6 +489,10 @@ CloudStatus PointCloudReassembler::push(std::span<const std::uint8_t> datagram, 
                                   : std::span<const std::uint16_t>{};
   completed_.first_fragment_rx_ns = slot.first_rx_ns;
   completed_.completed_rx_ns = now_ns;
+  completed_.flags = slot.meta.flags;
+  completed_.fragment_count = slot.meta.fragment_count;
+  completed_.points_per_fragment = slot.meta.points_per_fragment;
+  completed_.slot = index;
   return count(CloudStatus::kFrameComplete);
 }
 

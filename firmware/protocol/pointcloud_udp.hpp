@@ -147,6 +147,22 @@ struct ReassembledCloud {
   std::span<const std::uint16_t> time_offset_ticks; // empty when absent
   std::int64_t first_fragment_rx_ns = 0;
   std::int64_t completed_rx_ns = 0;
+  // Frame-constant wire fields (what a digest over the wire bytes covers besides the payloads).
+  std::uint16_t flags = 0;
+  std::uint16_t fragment_count = 0;
+  std::uint16_t points_per_fragment = 0;
+  std::size_t slot = 0;  // reassembly slot the frame was built in (see AcceptedFragment)
+};
+
+// The fragment the last push() placed (kOk or kFrameComplete): its reassembly slot, index and
+// payload bytes exactly as received (a view into the datagram passed to push()). Lets a caller
+// hash what arrived per fragment without the reassembler knowing about hashing.
+struct AcceptedFragment {
+  bool valid = false;
+  std::size_t slot = 0;
+  std::uint16_t fragment_index = 0;
+  CloudMessageType type = CloudMessageType::kEgoScan;
+  std::span<const std::uint8_t> payload;
 };
 
 struct ReassemblyCounters {
@@ -202,6 +218,8 @@ class PointCloudReassembler {
   // Drops incomplete frames older than the timeout. Returns how many were dropped.
   std::size_t expire(std::int64_t now_ns);
   const ReassembledCloud& completed() const { return completed_; }
+  const AcceptedFragment& last_accepted() const { return last_accepted_; }
+  std::size_t slot_count() const { return storage_.slots.size(); }
   const ReassemblyCounters& counters() const { return counters_; }
   std::size_t frames_in_flight() const;
   void reset();  // frees every slot and clears the counters
@@ -227,6 +245,7 @@ class PointCloudReassembler {
   ReassemblyConfig config_;
   ReassemblyCounters counters_{};
   ReassembledCloud completed_{};
+  AcceptedFragment last_accepted_{};
   std::size_t completed_slot_ = SIZE_MAX;
   std::array<FrameKey, kRecentKeys> recent_{};
   std::size_t recent_next_ = 0;

@@ -89,8 +89,8 @@ ShareVerifyResult MapShareVerifier::reject(ShareVerdict v, const TrustedSigner* 
   return ShareVerifyResult{v, signer};
 }
 
-ShareVerifyResult MapShareVerifier::verify(const protocol::ReassembledCloud& cloud, std::int64_t local_time_ns) {
-  const protocol::CloudFrameInfo& info = cloud.info;
+ShareVerifyResult MapShareVerifier::admit(const protocol::CloudFrameInfo& info, const Digest& digest,
+                                          std::int64_t local_time_ns, VerificationJob& job) {
   Pending* pending = nullptr;
   for (Pending& p : pending_) {
     if (p.used && p.sig.sender_id == info.sender_id && p.sig.sensor_id == info.sensor_id &&
@@ -121,14 +121,33 @@ ShareVerifyResult MapShareVerifier::verify(const protocol::ReassembledCloud& clo
   if (has_last_[index] && sig.generation_time_ns <= last_generation_ns_[index]) {
     return reject(ShareVerdict::kReplay, signer);
   }
-  const Digest digest = signed_digest(sig, cloud_digest(cloud));
-  const CryptoStatus c = verify_digest(signer->key, digest, sig.signature);
+  job.sig = sig;
+  job.signer_index = index;
+  job.to_verify = signed_digest(sig, digest);
+  return ShareVerifyResult{ShareVerdict::kAccepted, signer};
+}
+
+ShareVerifyResult MapShareVerifier::complete(const VerificationJob& job) {
+  if (job.signer_index >= list_.count) return reject(ShareVerdict::kUnknownSigner);  // re-provisioned since
+  const TrustedSigner* signer = &list_.signers[job.signer_index];
+  if (has_last_[job.signer_index] && job.sig.generation_time_ns <= last_generation_ns_[job.signer_index]) {
+    return reject(ShareVerdict::kReplay, signer);
+  }
+  const CryptoStatus c = verify_digest(signer->key, job.to_verify, job.sig.signature);
   if (c == CryptoStatus::kBadSignature || c == CryptoStatus::kBadKey) return reject(ShareVerdict::kBadSignature, signer);
   if (c != CryptoStatus::kOk) return reject(ShareVerdict::kCryptoError, signer);
-  last_generation_ns_[index] = sig.generation_time_ns;
-  has_last_[index] = true;
+  last_generation_ns_[job.signer_index] = job.sig.generation_time_ns;
+  has_last_[job.signer_index] = true;
   ++counters_.accepted;
   return ShareVerifyResult{ShareVerdict::kAccepted, signer};
+}
+
+ShareVerifyResult MapShareVerifier::verify(const protocol::CloudFrameInfo& info, const Digest& digest,
+                                           std::int64_t local_time_ns) {
+  VerificationJob job;
+  const ShareVerifyResult admitted = admit(info, digest, local_time_ns, job);
+  if (admitted.verdict != ShareVerdict::kAccepted) return admitted;
+  return complete(job);
 }
 
 }  // namespace v2xloc::trust

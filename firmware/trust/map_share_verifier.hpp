@@ -13,7 +13,12 @@
 // most one cloud per sensor per instant; a duplicated or re-sent cloud is a replay).
 //
 // Checks run cheapest first; the ECDSA verification (the only expensive step) runs last, so
-// garbage, unknown signers, stale and replayed shares cost no crypto. Allocation-free.
+// garbage, unknown signers, stale and replayed shares cost no crypto. Two steps, so the caller can
+// spread the ECDSA work over periods: admit() runs every cheap check when the cloud completes
+// (freshness judged by the local clock AT COMPLETION against the signed generation time, so a
+// share verified a period later is judged as fairly as one verified at once) and returns a
+// VerificationJob; complete() runs the replay check again and the ECDSA verification. verify()
+// does both at once. Allocation-free.
 #pragma once
 
 #include <array>
@@ -52,6 +57,13 @@ struct ShareVerifyResult {
   const TrustedSigner* signer = nullptr;  // provisioned signer (set from kSenderMismatch on)
 };
 
+// A share that passed every cheap check and waits for its ECDSA verification.
+struct VerificationJob {
+  protocol::CloudSignature sig{};
+  std::size_t signer_index = 0;  // into the trust list
+  Digest to_verify{};            // signed_digest(sig, cloud digest)
+};
+
 struct VerifierCounters {
   std::uint64_t signatures_rx = 0;
   std::uint64_t signatures_malformed = 0;
@@ -84,8 +96,14 @@ class MapShareVerifier {
 
   // A datagram carrying the signature magic, received at monotonic now_ns.
   protocol::SignatureParseStatus on_signature_datagram(std::span<const std::uint8_t> datagram, std::int64_t now_ns);
-  // A completed map share; local_time_ns = the firmware's disciplined clock now.
-  ShareVerifyResult verify(const protocol::ReassembledCloud& cloud, std::int64_t local_time_ns);
+  // A completed map share whose cloud digest (cloud_digest.hpp, over the wire bytes) is `digest`;
+  // local_time_ns = the firmware's disciplined clock when it completed. kAccepted here means
+  // "admitted": `job` is ready for complete().
+  ShareVerifyResult admit(const protocol::CloudFrameInfo& info, const Digest& digest, std::int64_t local_time_ns,
+                          VerificationJob& job);
+  // Replay check (again: an earlier job may have advanced the signer) and the ECDSA verification.
+  ShareVerifyResult complete(const VerificationJob& job);
+  ShareVerifyResult verify(const protocol::CloudFrameInfo& info, const Digest& digest, std::int64_t local_time_ns);
   void expire(std::int64_t now_ns);
 
   const VerifierCounters& counters() const { return counters_; }

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "firmware/trust/cloud_digest.hpp"
 #include "firmware/wire/wire_conventions.hpp"
 
 namespace v2xloc::firmware {
@@ -130,6 +131,13 @@ bool InputDecoder::on_datagram(std::span<const std::uint8_t> datagram, std::int6
   }
   completed_local_time_ns_ = local_time_ns;
   const protocol::CloudStatus s = reassembler_.push(datagram, now_ns);
+  const protocol::AcceptedFragment& accepted = reassembler_.last_accepted();
+  if (accepted.valid && accepted.type == protocol::CloudMessageType::kMapShare &&
+      accepted.slot < kReassemblySlots && accepted.fragment_index < kMaxCloudFragments) {
+    // Hash what arrived, once per fragment (the share's signature covers these digests).
+    fragment_digests_[accepted.slot * kMaxCloudFragments + accepted.fragment_index] =
+        trust::fragment_digest(accepted.payload);
+  }
   switch (s) {
     case protocol::CloudStatus::kFrameComplete:
       completed_pending_ = true;
@@ -177,29 +185,48 @@ DecodedCloud InputDecoder::decode_completed() {
     ++counters_.clouds_rejected;
     return kind(CloudKind::kRejected);
   }
-  for (std::uint32_t i = 0; i < n; ++i) {
-    points_[i] = Vec3f(cloud.xyz[3u * i], cloud.xyz[3u * i + 1], cloud.xyz[3u * i + 2]);
-  }
   const double t = localizer_time_s(static_cast<std::int64_t>(info.timestamp_ns), epoch_ns_);
-  const std::span<const Vec3f> points(points_.data(), n);
 
   if (info.type == protocol::CloudMessageType::kMapShare) {
-    // Trust before fusion: a signature over the whole cloud by a provisioned signer, fresh by the
-    // local clock, not a replay. Role and source id come from the trust list, not the header.
-    const trust::ShareVerifyResult verdict = verifier_.verify(cloud, completed_local_time_ns_);
+    // Trust before fusion: a signature over the whole cloud's wire bytes by a provisioned signer,
+    // fresh by the local clock now, not a replay. The ECDSA check itself waits in the queue for
+    // the period's budget. Role and source id come from the trust list, not the header.
+    if (cloud.slot >= kReassemblySlots || cloud.fragment_count > kMaxCloudFragments) {
+      ++counters_.clouds_rejected;
+      return kind(CloudKind::kRejected);
+    }
+    const std::span<const trust::Digest> fragments(&fragment_digests_[cloud.slot * kMaxCloudFragments],
+                                                   cloud.fragment_count);
+    trust::VerificationJob job;
+    const trust::ShareVerifyResult verdict =
+        verifier_.admit(info, trust::cloud_digest(cloud, fragments), completed_local_time_ns_, job);
     if (verdict.verdict != trust::ShareVerdict::kAccepted) {
       ++counters_.shares_untrusted;
       return kind(CloudKind::kRejected);
     }
-    MapCloudInput& in = out.map;
-    in.source_id = verdict.signer->sender_id;
-    in.is_agent = verdict.signer->role == trust::SignerRole::kAgent;
-    in.t = t;
-    in.world_T_sensor = pose;
-    in.points = points;
-    ++counters_.map_clouds;
-    return kind(CloudKind::kMapCloud);
+    if (queue_count_ == kShareVerifyQueueCapacity) {  // full: the oldest waiting share gives way
+      queue_head_ = (queue_head_ + 1) % kShareVerifyQueueCapacity;
+      --queue_count_;
+      ++counters_.shares_queue_dropped;
+    }
+    const std::size_t at = (queue_head_ + queue_count_) % kShareVerifyQueueCapacity;
+    QueuedShare& q = queue_[at];
+    q.job = job;
+    q.t = t;
+    q.world_T_sensor = pose;
+    q.point_count = n;
+    for (std::uint32_t i = 0; i < n; ++i) {
+      queue_points_[at][i] = Vec3f(cloud.xyz[3u * i], cloud.xyz[3u * i + 1], cloud.xyz[3u * i + 2]);
+    }
+    ++queue_count_;
+    ++counters_.shares_queued;
+    return kind(CloudKind::kMapQueued);
   }
+  for (std::uint32_t i = 0; i < n; ++i) {
+    points_[i] = Vec3f(cloud.xyz[3u * i], cloud.xyz[3u * i + 1], cloud.xyz[3u * i + 2]);
+  }
+  const std::span<const Vec3f> points(points_.data(), n);
+  begin_verification_period();  // an ego scan (used or refused) is the period boundary
   if (info.type != protocol::CloudMessageType::kEgoScan || info.sender_id != kEgoSenderId) {
     ++counters_.clouds_rejected;
     return kind(CloudKind::kRejected);
@@ -229,6 +256,32 @@ DecodedCloud InputDecoder::decode_completed() {
   out.frame_index = ego_frames_++;
   ++counters_.ego_scans;
   return kind(CloudKind::kEgoScan);
+}
+
+DecodedCloud InputDecoder::next_verified_share() {
+  DecodedCloud out;
+  if (queue_count_ == 0 || verifications_this_period_ >= kMaxSignatureVerificationsPerPeriod) return out;
+  const std::size_t at = queue_head_;
+  queue_head_ = (queue_head_ + 1) % kShareVerifyQueueCapacity;
+  --queue_count_;
+  ++verifications_this_period_;
+  ++counters_.signature_verifications;
+  const QueuedShare& q = queue_[at];
+  const trust::ShareVerifyResult verdict = verifier_.complete(q.job);
+  if (verdict.verdict != trust::ShareVerdict::kAccepted) {
+    ++counters_.shares_untrusted;
+    out.kind = CloudKind::kRejected;
+    return out;
+  }
+  MapCloudInput& in = out.map;
+  in.source_id = verdict.signer->sender_id;
+  in.is_agent = verdict.signer->role == trust::SignerRole::kAgent;
+  in.t = q.t;
+  in.world_T_sensor = q.world_T_sensor;
+  in.points = std::span<const Vec3f>(queue_points_[at].data(), q.point_count);
+  ++counters_.map_clouds;
+  out.kind = CloudKind::kMapCloud;
+  return out;
 }
 
 }  // namespace v2xloc::firmware

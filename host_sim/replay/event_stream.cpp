@@ -76,9 +76,7 @@ bool EventStream::open(const RecordingReader& reader, const EventStreamConfig& c
     trust_list_ = trust_list_of(signers_);
   }
   faults_.configure(config.faults);
-  if (config.sign_map_shares) {
-    own_reassembler_ = std::make_shared<firmware::CloudReassembler>();
-  }
+  sign_shares_ = config.sign_map_shares;
   return true;
 }
 
@@ -140,20 +138,25 @@ bool EventStream::map_share(const MapCloudInfo& info, std::uint32_t id, std::uin
   ev.kind = WireEvent::Kind::kMapCloud;
   ev.time_ns = stamp_ns;
   if (!fragment(protocol::CloudMessageType::kMapShare, id, seq, stamp_ns, pose, cloud, false, ev, error)) return false;
-  if (signer == nullptr || !own_reassembler_) return true;
-  // Sign what the receiver will reassemble: run our own fragments through a reassembler.
-  own_reassembler_->reset();
-  bool complete = false;
+  if (signer == nullptr || !sign_shares_) return true;
+  // Sign what the receiver will hash: the payload bytes of our own fragments, per fragment.
+  std::vector<trust::ShareDigestBuilder::Entry> scratch(ev.datagrams.size());
+  trust::ShareDigestBuilder builder(scratch);
   for (const auto& d : ev.datagrams) {
-    complete = own_reassembler_->push(d, 0) == protocol::CloudStatus::kFrameComplete;
+    if (!builder.add(d)) {
+      error = "map share fragment did not parse for signing";
+      return false;
+    }
   }
-  if (!complete) {
-    error = "map share did not reassemble for signing";
+  protocol::ReassembledCloud frame;
+  trust::Digest digest{};
+  if (!builder.finish(frame, digest)) {
+    error = "map share incomplete for signing";
     return false;
   }
   protocol::CloudSignature sig;
-  if (trust::sign_cloud(signer->priv, signer->pub, own_reassembler_->completed(),
-                        static_cast<std::uint64_t>(epoch_ns_ + stamp_ns), sig) != trust::CryptoStatus::kOk) {
+  if (trust::sign_cloud(signer->priv, signer->pub, frame, digest, static_cast<std::uint64_t>(epoch_ns_ + stamp_ns), sig) !=
+      trust::CryptoStatus::kOk) {
     error = "signing failed";
     return false;
   }
@@ -315,7 +318,14 @@ bool WireEventDecoder::feed(const WireEvent& event, DecodedFrame& frame) {
   for (const auto& d : event.datagrams) {
     if (!decoder_.on_datagram(d, event.time_ns)) continue;
     const firmware::DecodedCloud decoded = decoder_.decode_completed();
-    if (decoded.kind == firmware::CloudKind::kMapCloud) localizer_.on_map_cloud(decoded.map);
+    if (decoded.kind == firmware::CloudKind::kEgoScan || decoded.kind == firmware::CloudKind::kEgoRejected) {
+      // As the firmware: at the period boundary, the shares waiting for verification first.
+      for (std::size_t k = 0; k < firmware::kMaxSignatureVerificationsPerPeriod; ++k) {
+        const firmware::DecodedCloud share = decoder_.next_verified_share();
+        if (share.kind == firmware::CloudKind::kNone) break;
+        if (share.kind == firmware::CloudKind::kMapCloud) localizer_.on_map_cloud(share.map);
+      }
+    }
     if (decoded.kind == firmware::CloudKind::kEgoRejected) {  // as the firmware: the last pose again
       frame.frame = static_cast<int>(decoded.frame_index);
       frame.output = last_output_;

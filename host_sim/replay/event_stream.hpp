@@ -98,7 +98,7 @@ class EventStream {
   EventStreamStats stats_{};
   trust::TrustList trust_list_{};
   std::vector<SimSigner> signers_;
-  std::shared_ptr<protocol::PointCloudReassembler> own_reassembler_;  // the receiver's view, for the digest
+  bool sign_shares_ = false;  // map shares get a signature datagram (digest over their fragments)
   FaultInjector faults_{};
   std::vector<WireEvent> delayed_;        // V2X shares held back by the delay fault
   bool burst_done_ = false;

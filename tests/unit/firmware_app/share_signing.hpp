@@ -1,5 +1,5 @@
 // Test support: signs a map share the way a provisioned V2X sender does (signature datagram over
-// the reassembled cloud), and the trust list naming that sender.
+// the wire bytes of its fragments), and the trust list naming that sender.
 #pragma once
 
 #include <memory>
@@ -28,12 +28,16 @@ inline void add_signer(trust::TrustList& list, std::uint32_t sender_id, trust::S
 // The signature datagram for the share made of `fragments`, generated at generation_time_ns.
 inline std::vector<std::uint8_t> sign_share(const std::vector<std::vector<std::uint8_t>>& fragments,
                                             std::uint32_t sender_id, std::uint64_t generation_time_ns) {
-  auto reassembler = std::make_unique<CloudReassembler>();
-  for (const auto& f : fragments) reassembler->push(f, 0);
+  std::vector<trust::ShareDigestBuilder::Entry> scratch(fragments.size());
+  trust::ShareDigestBuilder builder(scratch);
+  for (const auto& f : fragments) builder.add(f);
+  protocol::ReassembledCloud frame;
+  trust::Digest digest{};
+  builder.finish(frame, digest);
   trust::PublicKey pub{};
   trust::derive_public_key(share_key(sender_id), pub);
   protocol::CloudSignature sig;
-  trust::sign_cloud(share_key(sender_id), pub, reassembler->completed(), generation_time_ns, sig);
+  trust::sign_cloud(share_key(sender_id), pub, frame, digest, generation_time_ns, sig);
   std::vector<std::uint8_t> d(protocol::signature_wire::kBytes);
   protocol::encode_signature_datagram(sig, d);
   return d;

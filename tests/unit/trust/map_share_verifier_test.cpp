@@ -47,10 +47,38 @@ struct Fixture {
     s.role = role;
     s.sender_id = id;
   }
+  // The cloud as datagrams (what a sender transmits), fragments of 40 points.
+  std::vector<std::vector<std::uint8_t>> datagrams() const {
+    protocol::PointCloudFragmenter fragmenter;
+    EXPECT_EQ(fragmenter.begin(cloud.info, protocol::CloudPointsView{xyz, {}, {}}, 104 + 4 + 40 * 6), protocol::CloudStatus::kOk);
+    std::vector<std::vector<std::uint8_t>> out;
+    for (int guard = 0; guard < 100; ++guard) {
+      std::vector<std::uint8_t> d(protocol::pointcloud_wire::kMaxDatagramBytes);
+      std::size_t n = 0;
+      if (fragmenter.next(d, n) != protocol::CloudStatus::kOk) break;
+      d.resize(n);
+      out.push_back(std::move(d));
+    }
+    return out;
+  }
+  // The cloud digest over the wire bytes, and the frame fields it covers.
+  Digest digest(protocol::ReassembledCloud* frame_out = nullptr) const {
+    const auto ds = datagrams();
+    std::vector<ShareDigestBuilder::Entry> scratch(ds.size());
+    ShareDigestBuilder builder(scratch);
+    for (const auto& d : ds) EXPECT_TRUE(builder.add(d));
+    protocol::ReassembledCloud frame;
+    Digest out{};
+    EXPECT_TRUE(builder.finish(frame, out));
+    if (frame_out != nullptr) *frame_out = frame;
+    return out;
+  }
   std::array<std::uint8_t, protocol::signature_wire::kBytes> signed_datagram(const PrivateKey& priv, const PublicKey& pub,
                                                                              std::int64_t gen_ns) {
     protocol::CloudSignature sig;
-    EXPECT_EQ(sign_cloud(priv, pub, cloud, static_cast<std::uint64_t>(gen_ns), sig), CryptoStatus::kOk);
+    protocol::ReassembledCloud frame;
+    const Digest d0 = digest(&frame);
+    EXPECT_EQ(sign_cloud(priv, pub, frame, d0, static_cast<std::uint64_t>(gen_ns), sig), CryptoStatus::kOk);
     std::array<std::uint8_t, protocol::signature_wire::kBytes> d{};
     EXPECT_TRUE(encode_signature_datagram(sig, d));
     return d;
@@ -63,7 +91,7 @@ TEST(MapShareVerifier, AcceptsASignedFreshShareAndNamesTheProvisionedRole) {
   v.provision(f.list);
   const auto d = f.signed_datagram(f.infra_priv, f.infra_pub, kNow - 1'000'000);
   ASSERT_EQ(v.on_signature_datagram(d, 0), protocol::SignatureParseStatus::kOk);
-  const ShareVerifyResult r = v.verify(f.cloud, kNow);
+  const ShareVerifyResult r = v.verify(f.cloud.info, f.digest(), kNow);
   EXPECT_EQ(r.verdict, ShareVerdict::kAccepted);
   ASSERT_NE(r.signer, nullptr);
   EXPECT_EQ(r.signer->role, SignerRole::kInfrastructure);
@@ -78,7 +106,7 @@ TEST(MapShareVerifier, EveryRejectionIsCountedByReason) {
   std::int64_t gen = kNow - 1'000'000;
   const auto expect = [&](ShareVerdict want, const std::uint64_t& counter) {
     const std::uint64_t before = counter;
-    EXPECT_EQ(v.verify(f.cloud, kNow).verdict, want) << to_string(want);
+    EXPECT_EQ(v.verify(f.cloud.info, f.digest(), kNow).verdict, want) << to_string(want);
     EXPECT_EQ(counter, before + 1) << to_string(want);
   };
   const VerifierCounters& c = v.counters();
@@ -96,7 +124,7 @@ TEST(MapShareVerifier, EveryRejectionIsCountedByReason) {
   v.on_signature_datagram(f.signed_datagram(f.infra_priv, f.infra_pub, kNow + 41'000'000), 0);
   expect(ShareVerdict::kFuture, c.future);
   v.on_signature_datagram(f.signed_datagram(f.infra_priv, f.infra_pub, kNow + 39'000'000), 0);
-  EXPECT_EQ(v.verify(f.cloud, kNow).verdict, ShareVerdict::kAccepted) << "39 ms ahead is inside the margin";
+  EXPECT_EQ(v.verify(f.cloud.info, f.digest(), kNow).verdict, ShareVerdict::kAccepted) << "39 ms ahead is inside the margin";
   // Replay of an accepted share (same generation time) and an older one.
   v.on_signature_datagram(f.signed_datagram(f.infra_priv, f.infra_pub, kNow + 39'000'000), 0);
   expect(ShareVerdict::kReplay, c.replay);
@@ -123,7 +151,7 @@ TEST(MapShareVerifier, EmptyTrustListAcceptsNothing) {
   Fixture f;
   MapShareVerifier v;
   v.on_signature_datagram(f.signed_datagram(f.infra_priv, f.infra_pub, kNow), 0);
-  EXPECT_EQ(v.verify(f.cloud, kNow).verdict, ShareVerdict::kUnknownSigner);
+  EXPECT_EQ(v.verify(f.cloud.info, f.digest(), kNow).verdict, ShareVerdict::kUnknownSigner);
 }
 
 TEST(MapShareVerifier, PendingSignaturesAreBoundedAndExpire) {
