@@ -256,6 +256,76 @@ TEST(InputDecoder, MapSharesCarrySourceIdAgentFlagAndPose) {
   EXPECT_EQ(dec->counters().shares_untrusted, 2u);
 }
 
+// Six sources complete a share in the same period: the queue keeps the newest
+// kShareVerifyQueueCapacity (the oldest are dropped and counted), and each ego scan (period
+// boundary) verifies at most kMaxSignatureVerificationsPerPeriod of them, oldest first. A share is
+// judged by the local clock when it completed, so one verified two periods (or 1.2 s) later still
+// passes; fragments that differ from the signed wire bytes fail.
+TEST(InputDecoder, SignatureChecksAreBoundedPerPeriodAndQueued) {
+  static_assert(kMaxSignatureVerificationsPerPeriod == 2 && kShareVerifyQueueCapacity == 4);
+  auto dec = std::make_unique<InputDecoder>(kEpoch);
+  trust::TrustList list;
+  constexpr std::uint32_t kSources = 6;
+  for (std::uint32_t k = 0; k < kSources; ++k) test::add_signer(list, kInfraSenderBase + k, trust::SignerRole::kInfrastructure);
+  dec->provision_trust(list);
+  const std::vector<float> xyz = ramp_points(400);
+  std::vector<float> tampered = xyz;
+  tampered[3 * 399] += 0.01f;  // 5 quantization steps: different wire bytes, same header
+  for (std::uint32_t k = 0; k < kSources; ++k) {
+    const std::uint32_t sender = kInfraSenderBase + k;
+    const auto frags = fragment_cloud(protocol::CloudMessageType::kMapShare, sender, 0, 500'000'000, xyz, {});
+    ASSERT_GT(frags.size(), 1u);
+    dec->on_datagram(test::sign_share(frags, sender, kEpoch + 500'000'000), 500'000'000);
+    // Source 5 sends fragments that are not the ones it signed; the rest arrive in reverse order.
+    const auto sent = k == 5 ? fragment_cloud(protocol::CloudMessageType::kMapShare, sender, 0, 500'000'000, tampered, {})
+                             : frags;
+    bool done = false;
+    for (auto it = sent.rbegin(); it != sent.rend(); ++it) done = dec->on_datagram(*it, 500'000'000);
+    ASSERT_TRUE(done);
+    EXPECT_EQ(dec->decode_completed().kind, CloudKind::kMapQueued) << k;
+  }
+  EXPECT_EQ(dec->counters().shares_queued, kSources);
+  EXPECT_EQ(dec->counters().shares_queue_dropped, 2u);  // sources 0 and 1, the oldest
+  EXPECT_EQ(dec->shares_waiting(), kShareVerifyQueueCapacity);
+  EXPECT_EQ(dec->verifier().counters().accepted, 0u) << "no ECDSA before the period boundary";
+
+  std::vector<std::uint32_t> fused;
+  std::size_t rejected = 0;
+  const auto period = [&](std::uint32_t seq, std::int64_t now_ns) {
+    const auto ego = fragment_cloud(protocol::CloudMessageType::kEgoScan, kEgoSenderId, seq, now_ns, ramp_points(50), {});
+    bool done = false;
+    for (const auto& f : ego) done = dec->on_datagram(f, now_ns);
+    EXPECT_TRUE(done);
+    EXPECT_EQ(dec->decode_completed().kind, CloudKind::kEgoScan);
+    std::size_t verified = 0;
+    for (std::size_t guard = 0; guard < 10; ++guard) {
+      const DecodedCloud share = dec->next_verified_share();
+      if (share.kind == CloudKind::kNone) break;
+      ++verified;
+      if (share.kind == CloudKind::kMapCloud) {
+        fused.push_back(share.map.source_id);
+        EXPECT_EQ(share.map.points.size(), 400u);
+        EXPECT_DOUBLE_EQ(share.map.t, 0.5);  // the share's own time, not the verification's
+      } else {
+        ++rejected;
+      }
+    }
+    return verified;
+  };
+  EXPECT_EQ(period(1, 600'000'000), kMaxSignatureVerificationsPerPeriod);
+  EXPECT_EQ(dec->shares_waiting(), 2u);
+  // 1.2 s after completion (beyond the 1 s freshness window by the clock now): still judged by
+  // the completion time.
+  EXPECT_EQ(period(2, 1'700'000'000), kMaxSignatureVerificationsPerPeriod);
+  EXPECT_EQ(period(3, 1'800'000'000), 0u);
+  EXPECT_EQ(fused, (std::vector<std::uint32_t>{kInfraSenderBase + 2, kInfraSenderBase + 3, kInfraSenderBase + 4}));
+  EXPECT_EQ(rejected, 1u);
+  EXPECT_EQ(dec->verifier().counters().bad_signature, 1u);
+  EXPECT_EQ(dec->verifier().counters().accepted, 3u);
+  EXPECT_EQ(dec->counters().signature_verifications, 4u);
+  EXPECT_EQ(dec->counters().shares_untrusted, 1u);
+}
+
 TEST(InputDecoder, EgoScanFromAnotherSenderIsRejectedAndCounted) {
   auto dec = std::make_unique<InputDecoder>(kEpoch);
   test::DecodedLog decoded;
