@@ -28,11 +28,11 @@ inline constexpr std::size_t kMaxCloudFragments = 2048;            // >= 131072 
 using CloudReassembler = protocol::StaticPointCloudReassembler<kReassemblySlots, kMaxCloudPoints, kMaxCloudFragments>;
 
 // Signature checks per period (one ego scan = one 10 Hz period of 100 M instructions on the
-// A53-class target). Measured (callgrind, host, 16 000-point share): ECDSA P-256 verify ~11.9 M
-// instructions; hashing the share's wire bytes (~7 M) is paid fragment by fragment as they arrive,
-// not here. 2 verifies = ~24 M = a quarter of the period, leaving the rest to registration and
-// fusion; six sources sending in one period are verified over three periods instead of costing
-// ~71 M in one.
+// A53-class target). Measured (callgrind, host, 16 000-point share, tools/bench/share_cost.cpp):
+// ECDSA P-256 verify 11.9 M instructions; hashing the share's wire bytes (6.3 M) is paid fragment
+// by fragment as they arrive, not here. 2 verifies = 23.7 M, a quarter of the period; with six
+// sources sending at once the period's trust work is 6 x 6.3 + 2 x 11.9 = 62 M (all six verified
+// at once: 109 M, over budget), the other four follow in the next two periods.
 inline constexpr std::size_t kMaxSignatureVerificationsPerPeriod = 2;
 // Completed, admitted shares waiting for their ECDSA verification. 4 = two periods of backlog at
 // kMaxSignatureVerificationsPerPeriod; overflow drops the OLDEST waiting share (counted: a fresher
