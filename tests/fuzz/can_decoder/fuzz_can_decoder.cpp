@@ -1,38 +1,46 @@
 // Bytes from the CAN bus and the point-cloud socket through the firmware's own path: SocketCAN
-// `struct can_frame` bytes -> hal::decode_socketcan_frame -> InputDecoder::on_can, interleaved with
-// datagrams -> InputDecoder::on_datagram / dispatch_completed (as FirmwareApp polls them).
+// `struct can_frame` bytes -> hal::decode_socketcan_frame -> InputDecoder::decode_can, interleaved
+// with datagrams -> InputDecoder::on_datagram / decode_completed (the firmware's input order).
 // Input: records of [tag][payload]: tag even -> 16 bytes of can_frame; tag odd -> 2-byte length +
-// that many datagram bytes. Every input is counted exactly once by the decoder.
+// that many datagram bytes. Properties: every input is counted exactly once, and whatever the
+// decoder hands on to the localizer is finite and within the decoder's buffers.
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
 #include <span>
 
-#include "firmware/app/input_decoder.hpp"
+#include "firmware/wire/input_decoder.hpp"
 #include "hal/socketcan_frame.hpp"
 
 namespace {
 
 using namespace v2xloc;
 
-// Stands in for the localizer: accepts everything, returns a fixed frame output.
-class NullPort final : public firmware::LocalizerPort {
- public:
-  void on_vehicle(const VehicleInput&) override { ++inputs; }
-  void on_gnss(const GnssInput&) override { ++inputs; }
-  MapInsertResult on_map_cloud(const MapCloudInput&) override {
-    ++inputs;
-    return {};
-  }
-  const LocalizerFrameOutput& on_ego_scan(const EgoScanInput&) override {
-    ++inputs;
-    return output_;
-  }
-  std::size_t inputs = 0;
+bool finite_points(std::span<const Vec3f> points) {
+  if (points.size() > firmware::kMaxCloudPoints) return false;
+  for (const Vec3f& p : points)
+    if (!p.allFinite()) return false;
+  return true;
+}
 
- private:
-  LocalizerFrameOutput output_{};
-};
+void check(const firmware::DecodedCan& d) {
+  using K = firmware::CanInputKind;
+  if (d.kind == K::kVehicle && !(std::isfinite(d.vehicle.wheel_speed) && std::isfinite(d.vehicle.yaw_rate)))
+    std::abort();
+  if (d.kind == K::kGnssFix && !(std::isfinite(d.gnss.lat_deg) && std::isfinite(d.gnss.lon_deg) &&
+                                 std::isfinite(d.gnss.alt_m) && std::isfinite(d.gnss.h_acc)))
+    std::abort();
+}
+
+void check(const firmware::DecodedCloud& d) {
+  if (d.kind == firmware::CloudKind::kMapCloud && (!finite_points(d.map.points) || !d.map.world_T_sensor.allFinite()))
+    std::abort();
+  if (d.kind == firmware::CloudKind::kEgoScan &&
+      (!finite_points(d.ego.points) || !d.ego.body_T_lidar.allFinite() ||
+       (!d.ego.point_times.empty() && d.ego.point_times.size() != d.ego.points.size())))
+    std::abort();
+}
 
 }  // namespace
 
@@ -40,7 +48,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   // Megabytes of static buffers: one decoder for the process, re-created in place per input.
   static auto* decoder = new firmware::InputDecoder(0);
   *decoder = firmware::InputDecoder(0);
-  NullPort port;
   std::int64_t now_ns = 1'000'000'000;
   std::uint64_t frames = 0, datagrams = 0;
   while (size > 0) {
@@ -52,7 +59,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       const std::size_t n = size < hal::kSocketCanFrameBytes ? size : hal::kSocketCanFrameBytes;
       hal::CanRxFrame rx;
       if (hal::decode_socketcan_frame({data, n}, rx) == hal::Status::kOk && !rx.error && !rx.remote) {
-        decoder->on_can(rx.frame, now_ns, port);
+        check(decoder->decode_can(rx.frame, now_ns));
         ++frames;
       }
       data += n;
@@ -64,7 +71,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       size -= 2;
       if (len > size) len = size;
       ++datagrams;
-      if (decoder->on_datagram({data, len}, now_ns)) decoder->dispatch_completed(port);
+      if (decoder->on_datagram({data, len}, now_ns)) check(decoder->decode_completed());
       data += len;
       size -= len;
     }
