@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
+#include <new>
 #include <span>
 
 #include "firmware/wire/input_decoder.hpp"
@@ -45,9 +46,11 @@ void check(const firmware::DecodedCloud& d) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  // Megabytes of static buffers: one decoder for the process, re-created in place per input.
+  // Megabytes of buffers: one decoder for the process, re-created in place per input (assigning
+  // a fresh InputDecoder would put that temporary on the stack and overflow it).
   static auto* decoder = new firmware::InputDecoder(0);
-  *decoder = firmware::InputDecoder(0);
+  decoder->~InputDecoder();
+  new (decoder) firmware::InputDecoder(0);
   std::int64_t now_ns = 1'000'000'000;
   std::uint64_t frames = 0, datagrams = 0;
   while (size > 0) {

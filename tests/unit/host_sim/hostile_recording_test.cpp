@@ -230,7 +230,8 @@ TEST_F(HostileRecording, GroundTruthMustCoverEveryFrame) {
 TEST_F(HostileRecording, CandumpStampsAreStrict) {
   // "(inf)" parsed as a number: every CAN frame lay after the end and was silently ignored.
   for (const char* line : {"(inf) can0 120#00", "(nan) can0 120#00", "(1e9) can0 120#00", "(1700000000.5) can0 120#00",
-                           "(-1.000000) can0 120#00", "(1700000000.000000) can0 120#0", "(1700000000.000000) can0 800#00"}) {
+                           "(-1.000000) can0 120#00", "(1700000000.000000) can0 120#0", "(1700000000.000000) can0 800#00",
+                           "(17000000700000000.000000) can0 120#00"}) {  // seconds * 1e6 overflowed int64 (UBSan)
     write("can.log", std::string("(1700000000.000000) can0 120#00\n") + line + "\n");
     ASSERT_EQ(open_error(), "");
     std::vector<CanLogFrame> can;
