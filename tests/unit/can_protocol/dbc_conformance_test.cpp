@@ -75,7 +75,8 @@ TEST(DbcConformance, BindingsNameExactlyTheDbcSignals) {
     Values decoded;
     b.unpack(b.pack({}, nullptr), decoded);
     for (const auto& [name, s] : m.signals) {
-      if (name != "Crc") EXPECT_TRUE(decoded.count(name)) << m.name << "." << name << " has no binding";
+      if (name == "Crc") continue;
+      EXPECT_TRUE(decoded.count(name)) << m.name << "." << name << " has no binding";
     }
     for (const auto& [name, v] : decoded) EXPECT_TRUE(m.signals.count(name)) << m.name << "." << name << " is not in the DBC";
   }
