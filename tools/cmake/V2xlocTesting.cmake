@@ -94,7 +94,10 @@ function(v2xloc_fuzz_target)
     # allocate gigabytes. The first corpus folder receives new inputs, the seeds stay untouched.
     add_test(NAME ${F_NAME} COMMAND ${F_NAME} -max_total_time=${V2XLOC_FUZZ_SECONDS} -timeout=10
              -rss_limit_mb=2048 -print_final_stats=1 -artifact_prefix=${artifacts}/ ${work} ${corpus})
-    set_tests_properties(${F_NAME} PROPERTIES LABELS fuzz TIMEOUT ${timeout})
+    # libFuzzer refuses a missing corpus folder: recreate both folders before each run.
+    add_test(NAME ${F_NAME}_folders COMMAND ${CMAKE_COMMAND} -E make_directory ${work} ${artifacts})
+    set_tests_properties(${F_NAME}_folders PROPERTIES LABELS fuzz FIXTURES_SETUP ${F_NAME}_folders)
+    set_tests_properties(${F_NAME} PROPERTIES LABELS fuzz TIMEOUT ${timeout} FIXTURES_REQUIRED ${F_NAME}_folders)
   else()
     add_test(NAME ${F_NAME}_corpus COMMAND ${F_NAME} ${corpus})
     set_tests_properties(${F_NAME}_corpus PROPERTIES LABELS unit TIMEOUT 300)
