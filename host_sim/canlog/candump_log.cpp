@@ -9,6 +9,8 @@
 namespace v2xloc::sim {
 namespace {
 
+constexpr std::int64_t kMaxSeconds = 999'999'999'999;
+
 int hex_value(char c) {
   if (c >= '0' && c <= '9') return c - '0';
   if (c >= 'a' && c <= 'f') return c - 'a' + 10;
@@ -73,6 +75,11 @@ bool parse_candump_line(std::string_view line, CandumpRecord& out, std::string& 
   if (dot == std::string_view::npos || !parse_decimal(ts.substr(0, dot), sec) || ts.size() - dot - 1 != 6 ||
       !parse_decimal(ts.substr(dot + 1), usec)) {
     error = "bad time stamp (want seconds.microseconds)";
+    return false;
+  }
+  // Microseconds must fit an int64: 12 digits of seconds (31,700 years) is the most that can.
+  if (sec > kMaxSeconds) {
+    error = "time stamp seconds above " + std::to_string(kMaxSeconds);
     return false;
   }
   s.remove_prefix(close + 1);

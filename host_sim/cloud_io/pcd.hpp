@@ -28,10 +28,10 @@ bool write_pcd(const std::string& path, const PointCloud& cloud, PcdEncoding enc
 bool encode_pcd(const PointCloud& cloud, PcdEncoding encoding, std::vector<std::uint8_t>& out,
                 std::string& error);
 
-// LZF (liblzf format, as used by PCL's binary_compressed). Returns the number of bytes written to
-// `out`, or 0 on corrupt input / output overflow / empty input.
+// LZF blocks as PCL's binary_compressed stores them, through the system liblzf. Returns the number
+// of bytes written to `out`, or 0 on corrupt input / output overflow / empty input.
 std::size_t lzf_decompress(std::span<const std::uint8_t> in, std::span<std::uint8_t> out);
-// Compresses into `out` (cleared first); always succeeds (worst case ~ in.size() * 33 / 32 + 1).
-void lzf_compress(std::span<const std::uint8_t> in, std::vector<std::uint8_t>& out);
+// Compresses into `out` (cleared first); false only for blocks liblzf cannot address (>= 4 GiB).
+bool lzf_compress(std::span<const std::uint8_t> in, std::vector<std::uint8_t>& out);
 
 }  // namespace v2xloc::cloud_io

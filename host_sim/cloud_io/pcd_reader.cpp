@@ -5,6 +5,8 @@
 #include "host_sim/cloud_io/cloud_io.hpp"
 #include "host_sim/cloud_io/detail.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace v2xloc::cloud_io {
@@ -129,6 +131,13 @@ bool parse_header(std::span<const std::uint8_t> bytes, Header& h, std::string& e
         if (!detail::parse_number(tokens[i + 1], h.viewpoint[i])) {
           error = "bad VIEWPOINT" + where; return false;
         }
+      }
+      // The viewpoint becomes the sensor pose: inf/nan or a non-unit quaternion would silently
+      // become a wrong transform downstream. PCL prints unit quaternions to >= 6 digits.
+      const float* v = h.viewpoint;
+      const float norm = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
+      if (!std::all_of(v, v + 7, [](float x) { return std::isfinite(x); }) || !(std::abs(norm - 1.0f) <= 1e-3f)) {
+        error = "VIEWPOINT must be 7 finite numbers with a unit quaternion" + where; return false;
       }
       h.has_viewpoint = true;
     } else if (key == "data") {

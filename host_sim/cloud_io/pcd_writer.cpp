@@ -117,8 +117,7 @@ bool encode_pcd(const PointCloud& cloud, PcdEncoding encoding, std::vector<std::
         }
       }
       std::vector<std::uint8_t> packed;
-      lzf_compress(soa, packed);
-      if (soa.size() > 0xffffffffu || packed.size() > 0xffffffffu) {
+      if (soa.size() > 0xffffffffu || !lzf_compress(soa, packed) || packed.size() > 0xffffffffu) {
         error = "cloud too large for binary_compressed (4 GiB block limit)";
         out.clear();
         return false;

@@ -213,6 +213,14 @@ bool parse_ply(std::span<const std::uint8_t> bytes, PointCloud& out, std::string
 
   Cursor cursor(bytes, data_offset, format);
   for (std::size_t i = 0; i < vertex_index; ++i) {
+    // An instance without properties occupies no bytes: nothing to skip, however large the count
+    // (2^64 - 1 of them used to spin for ever). Otherwise every property takes >= 1 byte (binary
+    // scalar or ascii token), so a count above the remaining bytes is a lie: refuse it up front.
+    if (elements[i].properties.empty()) continue;
+    if (elements[i].count > cursor.remaining() / elements[i].properties.size()) {
+      error = "truncated: PLY element '" + elements[i].name + "' has more instances than the data can hold";
+      return false;
+    }
     for (std::uint64_t j = 0; j < elements[i].count; ++j) {
       if (!skip_instance(cursor, elements[i])) {
         error = "truncated or malformed PLY data in element '" + elements[i].name + "'";

@@ -1,6 +1,6 @@
 #include "host_sim/recording/recorder.hpp"
 
-#include "host_sim/common/json.hpp"
+#include "host_sim/common/text_file.hpp"
 #include "host_sim/common/png.hpp"
 #include "host_sim/common/rng.hpp"
 #include "host_sim/recording/pose_io.hpp"
@@ -62,17 +62,17 @@ cloud_io::PointCloud to_cloud(const LidarScan& scan) {
 
 Json lidar_json(const LidarConfig& l) {
   Json j = Json::object();
-  j.set("type", "lidar");
-  j.set("beams", l.beams);
-  j.set("elevation_max_deg", l.elevation_max_deg);
-  j.set("elevation_min_deg", l.elevation_min_deg);
-  j.set("azimuth_steps", l.azimuth_steps);
-  j.set("azimuth_convention", "column c at -180 + 360 (c + 0.5) / azimuth_steps deg, counter-clockwise, 0 = +x");
-  j.set("rate_hz", l.rate_hz);
-  j.set("min_range_m", l.min_range);
-  j.set("max_range_m", l.max_range);
-  j.set("range_sigma_m", l.range_sigma);
-  j.set("dropout", l.dropout);
+  j["type"] = "lidar";
+  j["beams"] = l.beams;
+  j["elevation_max_deg"] = l.elevation_max_deg;
+  j["elevation_min_deg"] = l.elevation_min_deg;
+  j["azimuth_steps"] = l.azimuth_steps;
+  j["azimuth_convention"] = "column c at -180 + 360 (c + 0.5) / azimuth_steps deg, counter-clockwise, 0 = +x";
+  j["rate_hz"] = l.rate_hz;
+  j["min_range_m"] = l.min_range;
+  j["max_range_m"] = l.max_range;
+  j["range_sigma_m"] = l.range_sigma;
+  j["dropout"] = l.dropout;
   return j;
 }
 
@@ -211,14 +211,14 @@ void record_infra_clouds(Session& s, int i, double t, FrameProducts& out) {
     const std::string rel = "infra/" + s.sites[k].name + frame_file("", i, "pcd");
     s.write_cloud(rel, s.scan);
     Json e = Json::object();
-    e.set("sensor", s.sites[k].name);
-    e.set("kind", "infra");
-    e.set("stamp_s", t);
-    e.set("file", rel);
-    e.set("points", s.scan.points.size());
-    e.set("sensor_pose_enu", pose_to_json(pose));
-    e.set("true_sensor_pose_enu", pose_to_json(pose));
-    out.map_clouds.push(std::move(e));
+    e["sensor"] = s.sites[k].name;
+    e["kind"] = "infra";
+    e["stamp_s"] = t;
+    e["file"] = rel;
+    e["points"] = s.scan.points.size();
+    e["sensor_pose_enu"] = pose_to_json(pose);
+    e["true_sensor_pose_enu"] = pose_to_json(pose);
+    out.map_clouds.push_back(std::move(e));
   }
 }
 
@@ -246,15 +246,15 @@ void record_agent_clouds(Session& s, int i, double t, AgentPoseError& pose_error
     rep.y += pose_error.bias[a].y() + pose_error.rng.gaussian(cfg.agent_pos_noise_sigma);
     rep.yaw += pose_error.bias[a].z() + pose_error.rng.gaussian(cfg.agent_yaw_noise_sigma_deg * M_PI / 180.0);
     Json e = Json::object();
-    e.set("sensor", name + "_lidar");
-    e.set("kind", "agent");
-    e.set("agent", name);
-    e.set("stamp_s", t);
-    e.set("file", rel);
-    e.set("points", s.scan.points.size());
-    e.set("sensor_pose_enu", pose_to_json(planar(rep) * acfg.mount));
-    e.set("true_sensor_pose_enu", pose_to_json(traj.body_to_enu(t) * acfg.mount));
-    out.map_clouds.push(std::move(e));
+    e["sensor"] = name + "_lidar";
+    e["kind"] = "agent";
+    e["agent"] = name;
+    e["stamp_s"] = t;
+    e["file"] = rel;
+    e["points"] = s.scan.points.size();
+    e["sensor_pose_enu"] = pose_to_json(planar(rep) * acfg.mount);
+    e["true_sensor_pose_enu"] = pose_to_json(traj.body_to_enu(t) * acfg.mount);
+    out.map_clouds.push_back(std::move(e));
   }
 }
 
@@ -325,18 +325,18 @@ std::vector<GnssFix> record_gnss(Session& s, RecordingSummary& summary, TopViewD
   summary.hdop_min = drive.hdop_min;
   summary.hdop_max = drive.hdop_max;
   gnss_json = Json::object();
-  gnss_json.set("file", "gnss_fixes.txt");
-  gnss_json.set("note", "truth-side diagnostics of the GNSS model; the ego receives the fixes on CAN");
-  gnss_json.set("rate_hz", cfg.gnss_rate_hz);
-  gnss_json.set("epoch_offset_s", s.scenario().gnss_epoch_offset_s);
-  gnss_json.set("antenna_in_body", Json::array_of(std::vector<double>{kAntennaInBody.x(), kAntennaInBody.y(), kAntennaInBody.z()}));
-  gnss_json.set("valid_fixes", valid);
-  gnss_json.set("mean_horizontal_error_m", summary.gnss_mean_h_error);
-  gnss_json.set("max_horizontal_error_m", summary.gnss_max_h_error);
-  gnss_json.set("hdop_min", summary.hdop_min);
-  gnss_json.set("hdop_max", summary.hdop_max);
-  gnss_json.set("mean_velocity_error_mps", drive.mean_velocity_error);
-  gnss_json.set("max_velocity_error_mps", drive.max_velocity_error);
+  gnss_json["file"] = "gnss_fixes.txt";
+  gnss_json["note"] = "truth-side diagnostics of the GNSS model; the ego receives the fixes on CAN";
+  gnss_json["rate_hz"] = cfg.gnss_rate_hz;
+  gnss_json["epoch_offset_s"] = s.scenario().gnss_epoch_offset_s;
+  gnss_json["antenna_in_body"] = Json(std::vector<double>{kAntennaInBody.x(), kAntennaInBody.y(), kAntennaInBody.z()});
+  gnss_json["valid_fixes"] = valid;
+  gnss_json["mean_horizontal_error_m"] = summary.gnss_mean_h_error;
+  gnss_json["max_horizontal_error_m"] = summary.gnss_max_h_error;
+  gnss_json["hdop_min"] = summary.hdop_min;
+  gnss_json["hdop_max"] = summary.hdop_max;
+  gnss_json["mean_velocity_error_mps"] = drive.mean_velocity_error;
+  gnss_json["max_velocity_error_mps"] = drive.max_velocity_error;
   return fixes;
 }
 #endif
@@ -421,12 +421,12 @@ void write_can_log(Session& s, const std::vector<GnssFix>& fixes, RecordingSumma
   if (!log) s.errors.push_back("cannot write gnss_vehicle.log");
   summary.has_can_log = true;
   can_json = Json::object();
-  can_json.set("file", "gnss_vehicle.log");
-  can_json.set("format", "candump -L: (unix_seconds.microseconds) can0 ID#HEXDATA");
-  can_json.set("frames", writer.frames_written());
-  can_json.set("vehicle_motion", "0x120 at 100 Hz (wheel speed, yaw rate)");
-  can_json.set("gnss", "0x130 position, 0x131 status, 0x133 velocity, 0x132 time + DOP at the GNSS rate");
-  can_json.set("codec", "firmware/protocol/can_messages.hpp");
+  can_json["file"] = "gnss_vehicle.log";
+  can_json["format"] = "candump -L: (unix_seconds.microseconds) can0 ID#HEXDATA";
+  can_json["frames"] = writer.frames_written();
+  can_json["vehicle_motion"] = "0x120 at 100 Hz (wheel speed, yaw rate)";
+  can_json["gnss"] = "0x130 position, 0x131 status, 0x133 velocity, 0x132 time + DOP at the GNSS rate";
+  can_json["codec"] = "firmware/protocol/can_messages.hpp";
 }
 #endif
 
@@ -441,18 +441,18 @@ void summarize_scans(const std::vector<double>& pts_per_scan, RecordingSummary& 
 
 Json manifest_files(const Session& s, const RecordingSummary& summary) {
   Json files = Json::object();
-  files.set("ego_scan_pattern", "ego_lidar/%06d.pcd");
-  files.set("ego_scan_fields", "x y z intensity t (float32, PCD binary_compressed); sensor frame at each point's firing time; t = seconds since the frame stamp");
-  if (s.cfg.stereo) files.set("disparity_pattern", "stereo/%06d.png");
-  files.set("frame_stamp", "frame index / frame_rate_hz");
-  files.set("ground_truth", "ground_truth.tum");
-  files.set("ground_truth_100hz", "ground_truth_100hz.tum");
+  files["ego_scan_pattern"] = "ego_lidar/%06d.pcd";
+  files["ego_scan_fields"] = "x y z intensity t (float32, PCD binary_compressed); sensor frame at each point's firing time; t = seconds since the frame stamp";
+  if (s.cfg.stereo) files["disparity_pattern"] = "stereo/%06d.png";
+  files["frame_stamp"] = "frame index / frame_rate_hz";
+  files["ground_truth"] = "ground_truth.tum";
+  files["ground_truth_100hz"] = "ground_truth_100hz.tum";
   Json agt = Json::array();
-  for (std::size_t a = 0; a < s.scenario().agents.size(); ++a) agt.push(Json("agent_" + std::to_string(a) + "_ground_truth.tum"));
-  files.set("agent_ground_truth", agt);
-  files.set("top_view", "topview.png");
-  if (summary.has_can_log) files.set("can_log", "gnss_vehicle.log");
-  files.set("trust_list", kTrustListFile);
+  for (std::size_t a = 0; a < s.scenario().agents.size(); ++a) agt.push_back(Json("agent_" + std::to_string(a) + "_ground_truth.tum"));
+  files["agent_ground_truth"] = agt;
+  files["top_view"] = "topview.png";
+  if (summary.has_can_log) files["can_log"] = "gnss_vehicle.log";
+  files["trust_list"] = kTrustListFile;
   return files;
 }
 
@@ -479,48 +479,48 @@ Json manifest_sensors(const Session& s) {
   Json sensors = Json::array();
   {
     Json j = lidar_json(s.ego_cfg);
-    j.set("name", "ego_lidar");
-    j.set("carrier", "ego");
-    j.set("mount_in_body", pose_to_json(s.ego_cfg.mount));
-    sensors.push(std::move(j));
+    j["name"] = "ego_lidar";
+    j["carrier"] = "ego";
+    j["mount_in_body"] = pose_to_json(s.ego_cfg.mount);
+    sensors.push_back(std::move(j));
   }
   if (cfg.stereo) {
     const StereoCalibration cal = s.stereo_cfg.calibration();
     Json j = Json::object();
-    j.set("name", "ego_stereo");
-    j.set("type", "stereo_disparity");
-    j.set("carrier", "ego");
-    j.set("width", cal.width);
-    j.set("height", cal.height);
-    j.set("fx", cal.fx);
-    j.set("fy", cal.fy);
-    j.set("cx", cal.cx);
-    j.set("cy", cal.cy);
-    j.set("baseline_m", cal.baseline);
-    j.set("camera_to_body", pose_to_json(cal.camera_to_body));
-    j.set("camera_frame", "left camera optical frame: x right, y down, z forward");
-    j.set("disparity_sigma_px", s.stereo_cfg.disparity_sigma);
-    j.set("rate_hz", sc.frame_rate);
-    sensors.push(std::move(j));
+    j["name"] = "ego_stereo";
+    j["type"] = "stereo_disparity";
+    j["carrier"] = "ego";
+    j["width"] = cal.width;
+    j["height"] = cal.height;
+    j["fx"] = cal.fx;
+    j["fy"] = cal.fy;
+    j["cx"] = cal.cx;
+    j["cy"] = cal.cy;
+    j["baseline_m"] = cal.baseline;
+    j["camera_to_body"] = pose_to_json(cal.camera_to_body);
+    j["camera_frame"] = "left camera optical frame: x right, y down, z forward";
+    j["disparity_sigma_px"] = s.stereo_cfg.disparity_sigma;
+    j["rate_hz"] = sc.frame_rate;
+    sensors.push_back(std::move(j));
   }
   for (const auto& site : s.sites) {
     Json j = lidar_json(infra_lidar_config(cfg.quick));
-    j.set("name", site.name);
-    j.set("carrier", "infrastructure");
-    j.set("rate_hz_published", sc.frame_rate / s.map_every);
-    j.set("surveyed_pose_enu", pose_to_json(site.sensor_to_enu));
-    sensors.push(std::move(j));
+    j["name"] = site.name;
+    j["carrier"] = "infrastructure";
+    j["rate_hz_published"] = sc.frame_rate / s.map_every;
+    j["surveyed_pose_enu"] = pose_to_json(site.sensor_to_enu);
+    sensors.push_back(std::move(j));
   }
   if (s.agents) {
     for (std::size_t a = 0; a < sc.agents.size(); ++a) {
       const LidarConfig acfg = agent_lidar_config(cfg.quick);
       Json j = lidar_json(acfg);
-      j.set("name", "agent_" + std::to_string(a) + "_lidar");
-      j.set("carrier", "agent_" + std::to_string(a));
-      j.set("rate_hz_published", sc.frame_rate / s.map_every);
-      j.set("mount_in_body", pose_to_json(acfg.mount));
-      j.set("motion_compensated", true);
-      sensors.push(std::move(j));
+      j["name"] = "agent_" + std::to_string(a) + "_lidar";
+      j["carrier"] = "agent_" + std::to_string(a);
+      j["rate_hz_published"] = sc.frame_rate / s.map_every;
+      j["mount_in_body"] = pose_to_json(acfg.mount);
+      j["motion_compensated"] = true;
+      sensors.push_back(std::move(j));
     }
   }
   return sensors;
@@ -531,47 +531,47 @@ Json build_manifest(const Session& s, const FrameProducts& products, const Recor
   const RecorderConfig& cfg = s.cfg;
   const Scenario& sc = s.scenario();
   Json m = Json::object();
-  m.set("format", "v2xloc-recording");
-  m.set("format_version", 1);
+  m["format"] = "v2xloc-recording";
+  m["format_version"] = 1;
   Json scj = Json::object();
-  scj.set("id", sc.id);
-  scj.set("name", sc.name);
-  scj.set("description", sc.description);
-  m.set("scenario", scj);
-  m.set("permutation", permutation_name(cfg.permutation));
-  m.set("seed", static_cast<double>(cfg.seed));
-  m.set("quick", cfg.quick);
-  m.set("duration_s", sc.duration);
-  m.set("frame_rate_hz", sc.frame_rate);
-  m.set("frame_count", s.frames);
-  m.set("time_origin_unix_s", cfg.time_origin_unix_s);
+  scj["id"] = sc.id;
+  scj["name"] = sc.name;
+  scj["description"] = sc.description;
+  m["scenario"] = scj;
+  m["permutation"] = permutation_name(cfg.permutation);
+  m["seed"] = static_cast<double>(cfg.seed);
+  m["quick"] = cfg.quick;
+  m["duration_s"] = sc.duration;
+  m["frame_rate_hz"] = sc.frame_rate;
+  m["frame_count"] = s.frames;
+  m["time_origin_unix_s"] = cfg.time_origin_unix_s;
   Json geo = Json::object();
-  geo.set("lat_deg", cfg.origin_lat_deg);
-  geo.set("lon_deg", cfg.origin_lon_deg);
-  geo.set("alt_m", cfg.origin_alt_m);
-  m.set("geodetic_origin", geo);
+  geo["lat_deg"] = cfg.origin_lat_deg;
+  geo["lon_deg"] = cfg.origin_lon_deg;
+  geo["alt_m"] = cfg.origin_alt_m;
+  m["geodetic_origin"] = geo;
   Json units = Json::object();
-  units.set("frame", "local ENU at the intersection centre: x east, y north, z up (metres)");
-  units.set("body_frame", "vehicle body: x forward, y left, z up, origin on the ground at the footprint centre");
-  units.set("time", "seconds since the recording start; unix time = time_origin_unix_s + t");
-  units.set("pose", "[x, y, z, qx, qy, qz, qw], child frame in parent frame");
-  units.set("intensity", "[0, 1], reflectivity * cos(incidence) + noise");
-  units.set("disparity", "uint16 PNG, disparity_px = value / 256, 0 = invalid");
-  m.set("units", units);
-  m.set("files", manifest_files(s, summary));
-  m.set("sensors", manifest_sensors(s));
+  units["frame"] = "local ENU at the intersection centre: x east, y north, z up (metres)";
+  units["body_frame"] = "vehicle body: x forward, y left, z up, origin on the ground at the footprint centre";
+  units["time"] = "seconds since the recording start; unix time = time_origin_unix_s + t";
+  units["pose"] = "[x, y, z, qx, qy, qz, qw], child frame in parent frame";
+  units["intensity"] = "[0, 1], reflectivity * cos(incidence) + noise";
+  units["disparity"] = "uint16 PNG, disparity_px = value / 256, 0 = invalid";
+  m["units"] = units;
+  m["files"] = manifest_files(s, summary);
+  m["sensors"] = manifest_sensors(s);
   Json mc = Json::object();
-  mc.set("fields", "x y z intensity t (float32, PCD binary_compressed), sensor frame at stamp_s");
-  mc.set("pose_note", "sensor_pose_enu is what the sender reports (agents: with their localization error); true_sensor_pose_enu is the truth");
-  mc.set("clouds", products.map_clouds);
-  m.set("map_clouds", mc);
-  if (!gnss_json.is_null()) m.set("gnss", gnss_json);
-  if (!can_json.is_null()) m.set("can_log", can_json);
+  mc["fields"] = "x y z intensity t (float32, PCD binary_compressed), sensor frame at stamp_s";
+  mc["pose_note"] = "sensor_pose_enu is what the sender reports (agents: with their localization error); true_sensor_pose_enu is the truth";
+  mc["clouds"] = products.map_clouds;
+  m["map_clouds"] = mc;
+  if (!gnss_json.is_null()) m["gnss"] = gnss_json;
+  if (!can_json.is_null()) m["can_log"] = can_json;
   Json stats = Json::object();
-  stats.set("ego_points_per_scan_mean", summary.points_per_scan_mean);
-  stats.set("ego_points_per_scan_min", summary.points_per_scan_min);
-  stats.set("ego_points_per_scan_max", summary.points_per_scan_max);
-  m.set("stats", stats);
+  stats["ego_points_per_scan_mean"] = summary.points_per_scan_mean;
+  stats["ego_points_per_scan_min"] = summary.points_per_scan_min;
+  stats["ego_points_per_scan_max"] = summary.points_per_scan_max;
+  m["stats"] = stats;
   return m;
 }
 
@@ -646,7 +646,7 @@ bool generate_recording(const RecorderConfig& cfg, RecordingSummary& summary, st
   summarize_scans(products.points_per_scan, summary);
   if (!write_trust_list(s, error)) return false;
   const Json manifest = build_manifest(s, products, summary, gnss_json, can_json);
-  if (!write_text_file((s.root / "manifest.json").string(), manifest.dump(2), error)) return false;
+  if (!write_text_file((s.root / "manifest.json").string(), manifest.dump(2) + "\n", error)) return false;
   if (cfg.top_view && !write_top_view_picture(s, top, summary.name, error)) return false;
 
   summary.bytes = folder_bytes(s.root);

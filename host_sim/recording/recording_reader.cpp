@@ -1,78 +1,283 @@
 #include "host_sim/recording/recording_reader.hpp"
 
+#include "host_sim/canlog/candump_log.hpp"
 #include "host_sim/cloud_io/pcd.hpp"
+#include "host_sim/common/text_file.hpp"
 
 #include <algorithm>
-#include <charconv>
-#include <cstdio>
+#include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 
 namespace v2xloc::sim {
 namespace {
 
-std::string format_index(const std::string& pattern, int i) {
-  char buf[512];
-  std::snprintf(buf, sizeof buf, pattern.c_str(), i);
-  return buf;
+namespace fs = std::filesystem;
+
+constexpr std::size_t kMaxManifestBytes = 64u << 20;  // ours are ~100 kB even with 1000s of map clouds
+constexpr std::size_t kMaxPathChars = 1024;
+constexpr std::int64_t kMaxCloudPoints = 100'000'000;
+constexpr std::size_t kMaxCanLogLines = 100'000'000;
+
+// Field readers over one JSON object. Each names the field and the reason it is refused.
+class Fields {
+ public:
+  Fields(const Json& obj, std::string where, std::string& error) : obj_(obj), where_(std::move(where)), error_(error) {}
+
+  const Json* find(const char* key) const {
+    if (!obj_.is_object()) return nullptr;
+    const auto it = obj_.find(key);
+    return it == obj_.end() ? nullptr : &*it;
+  }
+  bool fail(const char* key, const std::string& why) const {
+    error_ = where_ + key + ": " + why;
+    return false;
+  }
+  bool object(const char* key, const Json*& out) const {
+    out = find(key);
+    return out && out->is_object() ? true : fail(key, "missing or not an object");
+  }
+  bool string(const char* key, std::string& out, bool required = true) const {
+    const Json* v = find(key);
+    if (!v) return required ? fail(key, "missing") : true;
+    if (!v->is_string()) return fail(key, "not a string");
+    out = v->get<std::string>();
+    return true;
+  }
+  bool number(const char* key, double lo, double hi, double& out) const {
+    const Json* v = find(key);
+    if (!v || !v->is_number()) return fail(key, "missing or not a number");
+    const double d = v->get<double>();
+    if (!std::isfinite(d) || d < lo || d > hi)
+      return fail(key, "out of range [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    out = d;
+    return true;
+  }
+  bool integer(const char* key, std::int64_t lo, std::int64_t hi, std::int64_t& out) const {
+    const Json* v = find(key);
+    if (!v || !v->is_number_integer()) return fail(key, "missing or not an integer");
+    const bool too_big = v->is_number_unsigned() && v->get<std::uint64_t>() > static_cast<std::uint64_t>(hi);
+    const std::int64_t i = too_big ? hi : v->get<std::int64_t>();
+    if (too_big || i < lo || i > hi)
+      return fail(key, "out of range [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    out = i;
+    return true;
+  }
+  bool pose(const char* key, Eigen::Isometry3d& out) const {
+    const Json* v = find(key);
+    return v && pose_from_json(*v, out) ? true : fail(key, "want [x, y, z, qx, qy, qz, qw], finite, unit quaternion");
+  }
+  bool path(const char* key, std::string& out, bool required = true) const;
+
+ private:
+  const Json& obj_;
+  std::string where_;
+  std::string& error_;
+};
+
+// A relative path inside the recording: no absolute paths, no "..", no control characters.
+bool plain_relative_path(const std::string& rel, std::string& why) {
+  if (rel.empty() || rel.size() > kMaxPathChars) {
+    why = "empty or longer than " + std::to_string(kMaxPathChars) + " characters";
+    return false;
+  }
+  if (rel.front() == '/') {
+    why = "absolute path";
+    return false;
+  }
+  for (unsigned char c : rel) {
+    if (c < 0x20 || c == 0x7f || c == '\\') {
+      why = "control character or backslash in path";
+      return false;
+    }
+  }
+  std::size_t start = 0;
+  while (start <= rel.size()) {
+    const std::size_t end = std::min(rel.find('/', start), rel.size());
+    if (rel.compare(start, end - start, "..") == 0 && end - start == 2) {
+      why = "'..' leaves the recording";
+      return false;
+    }
+    start = end + 1;
+  }
+  return true;
 }
 
-int hex_digit(char c) {
-  if (c >= '0' && c <= '9') return c - '0';
-  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
-  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
-  return -1;
+bool Fields::path(const char* key, std::string& out, bool required) const {
+  std::string value;
+  if (!string(key, value, required)) return false;
+  if (value.empty() && !find(key)) return true;  // optional and absent
+  std::string why;
+  if (!plain_relative_path(value, why)) return fail(key, why);
+  out = value;
+  return true;
 }
 
 }  // namespace
 
+bool RecordingReader::parse_index_pattern(const std::string& text, IndexPattern& out, std::string& error) {
+  // Exactly one "%0Nd" and no other '%': the pattern is data, never handed to printf.
+  const std::size_t pct = text.find('%');
+  if (pct == std::string::npos || text.find('%', pct + 1) != std::string::npos || pct + 4 > text.size() ||
+      text[pct + 1] != '0' || text[pct + 2] < '1' || text[pct + 2] > '9' || text[pct + 3] != 'd') {
+    error = "want exactly one %0Nd frame-index token (N = 1..9), e.g. ego_lidar/%06d.pcd";
+    return false;
+  }
+  IndexPattern p;
+  p.prefix = text.substr(0, pct);
+  p.suffix = text.substr(pct + 4);
+  p.width = text[pct + 2] - '0';
+  if (!plain_relative_path(p.format(0), error)) return false;
+  out = std::move(p);
+  return true;
+}
+
+std::string RecordingReader::IndexPattern::format(int index) const {
+  std::string digits = std::to_string(index);
+  if (digits.size() < static_cast<std::size_t>(width)) digits.insert(0, static_cast<std::size_t>(width) - digits.size(), '0');
+  return prefix + digits + suffix;
+}
+
+bool RecordingReader::resolve(const std::string& rel, std::string& path, std::string& error) const {
+  std::string why;
+  if (!plain_relative_path(rel, why)) {
+    error = dir_ + ": " + rel + ": " + why;
+    return false;
+  }
+  // Symbolic links may still point elsewhere: compare the real location with the folder's.
+  std::error_code ec;
+  const fs::path real = fs::weakly_canonical(fs::path(real_dir_) / rel, ec);
+  const fs::path root(real_dir_);
+  if (ec || std::mismatch(root.begin(), root.end(), real.begin(), real.end()).first != root.end()) {
+    error = dir_ + ": " + rel + " resolves outside the recording";
+    return false;
+  }
+  path = dir_ + "/" + rel;
+  return true;
+}
+
 bool RecordingReader::open(const std::string& dir, std::string& error) {
+  *this = RecordingReader{};
   dir_ = dir;
-  if (!read_json_file(dir + "/manifest.json", manifest_, error)) return false;
-  if (manifest_["format"].as_string() != "v2xloc-recording") {
-    error = "not a v2xloc recording: " + dir;
+  std::error_code ec;
+  real_dir_ = fs::canonical(dir, ec).string();
+  if (ec) {
+    error = "cannot open recording " + dir + ": " + ec.message();
     return false;
   }
-  frame_count_ = manifest_["frame_count"].as_int();
-  frame_rate_ = manifest_["frame_rate_hz"].as_number(10.0);
-  const Json& files = manifest_["files"];
-  scan_pattern_ = files["ego_scan_pattern"].as_string();
-  disparity_pattern_ = files["disparity_pattern"].as_string();
-  if (scan_pattern_.find("%06d") == std::string::npos) {
-    error = "manifest: bad ego_scan_pattern";
+  std::string text;
+  if (!read_text_file(dir + "/manifest.json", kMaxManifestBytes, text, error)) return false;
+  if (!parse_manifest(text, error)) {
+    error = dir + "/manifest.json: " + error;
     return false;
   }
-  if (!read_tum(dir + "/" + files["ground_truth"].as_string(), gt_, error)) return false;
-  if (!read_tum(dir + "/" + files["ground_truth_100hz"].as_string(), gt100_, error)) return false;
-  for (const Json& s : manifest_["sensors"].items()) {
-    const std::string name = s["name"].as_string();
-    if (name == "ego_lidar") pose_from_json(s["mount_in_body"], ego_lidar_mount_);
-    if (name == "ego_stereo") {
-      has_stereo_ = disparity_pattern_.find("%06d") != std::string::npos;
-      stereo_.width = s["width"].as_int();
-      stereo_.height = s["height"].as_int();
-      stereo_.fx = s["fx"].as_number();
-      stereo_.fy = s["fy"].as_number();
-      stereo_.cx = s["cx"].as_number();
-      stereo_.cy = s["cy"].as_number();
-      stereo_.baseline = s["baseline_m"].as_number();
-      stereo_.disparity_sigma_px = s["disparity_sigma_px"].as_number();
-      pose_from_json(s["camera_to_body"], stereo_.camera_to_body);
+  std::string path;
+  if (!resolve(gt_file_, path, error) || !read_tum(path, gt_, error)) return false;
+  if (gt_.size() != static_cast<std::size_t>(frame_count_)) {
+    error = path + ": " + std::to_string(gt_.size()) + " poses for frame_count " + std::to_string(frame_count_);
+    return false;
+  }
+  if (!resolve(gt100_file_, path, error) || !read_tum(path, gt100_, error)) return false;
+  if (gt100_.empty()) {
+    error = path + ": no poses";
+    return false;
+  }
+  return true;
+}
+
+bool RecordingReader::parse_manifest(const std::string& text, std::string& error) {
+  {
+    RecordingReader fresh;  // nothing of an earlier manifest survives
+    fresh.dir_ = std::move(dir_);
+    fresh.real_dir_ = std::move(real_dir_);
+    *this = std::move(fresh);
+  }
+  Json m;
+  try {
+    m = Json::parse(text);
+  } catch (const Json::exception& e) {
+    error = std::string("not valid JSON: ") + e.what();
+    return false;
+  }
+  const Fields top(m, "", error);
+  std::string format;
+  if (!top.string("format", format)) return false;
+  if (format != "v2xloc-recording") return top.fail("format", "not a v2xloc recording");
+  const Json *scenario = nullptr, *geo = nullptr, *files = nullptr;
+  std::int64_t count = 0, id = 0;
+  if (!top.object("scenario", scenario) || !Fields(*scenario, "scenario.", error).integer("id", 0, 1'000'000, id) ||
+      !top.string("permutation", permutation_) || !top.integer("frame_count", 1, kMaxFrames, count) ||
+      !top.number("frame_rate_hz", 0.1, 1000.0, frame_rate_) ||
+      !top.number("time_origin_unix_s", 0.0, 1e11, time_origin_unix_) || !top.object("geodetic_origin", geo))
+    return false;
+  scenario_ = static_cast<int>(id);
+  frame_count_ = static_cast<int>(count);
+  const Fields g(*geo, "geodetic_origin.", error);
+  if (!g.number("lat_deg", -90, 90, origin_lat_deg_) || !g.number("lon_deg", -180, 180, origin_lon_deg_) ||
+      !g.number("alt_m", -1e4, 1e5, origin_alt_m_))
+    return false;
+
+  if (!top.object("files", files)) return false;
+  const Fields f(*files, "files.", error);
+  std::string scan, disparity;
+  if (!f.string("ego_scan_pattern", scan) || !f.string("disparity_pattern", disparity, false) ||
+      !f.path("ground_truth", gt_file_) || !f.path("ground_truth_100hz", gt100_file_) ||
+      !f.path("can_log", can_log_file_, false) || !f.path("trust_list", trust_list_file_, false))
+    return false;
+  std::string why;
+  if (!parse_index_pattern(scan, scan_pattern_, why)) return f.fail("ego_scan_pattern", why);
+  if (f.find("disparity_pattern") && !parse_index_pattern(disparity, disparity_pattern_, why))
+    return f.fail("disparity_pattern", why);
+
+  const Json* sensors = top.find("sensors");
+  if (!sensors || !sensors->is_array()) return top.fail("sensors", "missing or not an array");
+  bool have_ego_lidar = false;
+  for (std::size_t k = 0; k < sensors->size(); ++k) {
+    const Fields s((*sensors)[k], "sensors[" + std::to_string(k) + "].", error);
+    std::string name, carrier;
+    if (!s.string("name", name) || !s.string("carrier", carrier, false)) return false;
+    if (name == "ego_lidar") {
+      if (!s.pose("mount_in_body", ego_lidar_mount_)) return false;
+      have_ego_lidar = true;
+    }
+    if (name == "ego_stereo" && disparity_pattern_.width > 0) {
+      std::int64_t w = 0, h = 0;
+      if (!s.integer("width", 1, 65535, w) || !s.integer("height", 1, 65535, h) ||
+          !s.number("fx", 1e-3, 1e7, stereo_.fx) || !s.number("fy", 1e-3, 1e7, stereo_.fy) ||
+          !s.number("cx", -1e7, 1e7, stereo_.cx) || !s.number("cy", -1e7, 1e7, stereo_.cy) ||
+          !s.number("baseline_m", 1e-4, 100, stereo_.baseline) ||
+          !s.number("disparity_sigma_px", 0, 1e3, stereo_.disparity_sigma_px) ||
+          !s.pose("camera_to_body", stereo_.camera_to_body))
+        return false;
+      stereo_.width = static_cast<int>(w);
+      stereo_.height = static_cast<int>(h);
+      has_stereo_ = true;
+    }
+    if (carrier == "infrastructure") {
+      Eigen::Isometry3d p;
+      if (!s.pose("surveyed_pose_enu", p)) return false;
+      infra_poses_.push_back(p);
     }
   }
-  map_clouds_.clear();
-  for (const Json& c : manifest_["map_clouds"]["clouds"].items()) {
-    MapCloudInfo m;
-    m.sensor = c["sensor"].as_string();
-    m.kind = c["kind"].as_string();
-    m.stamp = c["stamp_s"].as_number();
-    m.file = c["file"].as_string();
-    m.points = static_cast<std::size_t>(c["points"].as_number());
-    if (!pose_from_json(c["sensor_pose_enu"], m.sensor_pose) || !pose_from_json(c["true_sensor_pose_enu"], m.true_sensor_pose)) {
-      error = "manifest: bad map cloud pose for " + m.file;
+  if (!have_ego_lidar) return top.fail("sensors", "no ego_lidar entry");
+
+  const Json* map = top.find("map_clouds");
+  const Json* clouds = map && map->is_object() && map->contains("clouds") ? &(*map)["clouds"] : nullptr;
+  if (!clouds || !clouds->is_array()) return top.fail("map_clouds.clouds", "missing or not an array");
+  for (std::size_t k = 0; k < clouds->size(); ++k) {
+    const Fields c((*clouds)[k], "map_clouds.clouds[" + std::to_string(k) + "].", error);
+    MapCloudInfo info;
+    std::int64_t points = 0;
+    if (!c.string("sensor", info.sensor) || !c.string("kind", info.kind) ||
+        !c.number("stamp_s", -1e7, 1e7, info.stamp) || !c.path("file", info.file) ||
+        !c.integer("points", 0, kMaxCloudPoints, points) || !c.pose("sensor_pose_enu", info.sensor_pose) ||
+        !c.pose("true_sensor_pose_enu", info.true_sensor_pose))
       return false;
-    }
-    map_clouds_.push_back(std::move(m));
+    if (info.kind != "infra" && info.kind != "agent") return c.fail("kind", "want \"infra\" or \"agent\"");
+    if (info.sensor.empty() || info.sensor.size() > 64) return c.fail("sensor", "empty or longer than 64 characters");
+    info.points = static_cast<std::size_t>(points);
+    map_clouds_.push_back(std::move(info));
   }
   std::stable_sort(map_clouds_.begin(), map_clouds_.end(),
                    [](const MapCloudInfo& a, const MapCloudInfo& b) { return a.stamp < b.stamp; });
@@ -84,17 +289,18 @@ bool RecordingReader::ego_scan(int i, cloud_io::PointCloud& out, std::string& er
     error = "frame index out of range";
     return false;
   }
-  return cloud_io::read_pcd(dir_ + "/" + format_index(scan_pattern_, i), out, error);
+  std::string path;
+  return resolve(scan_pattern_.format(i), path, error) && cloud_io::read_pcd(path, out, error);
 }
 
 Eigen::Isometry3d RecordingReader::ground_truth_at(double t) const {
   if (gt100_.empty()) return Eigen::Isometry3d::Identity();
-  if (t <= gt100_.front().t) return gt100_.front().pose;
+  if (!(t > gt100_.front().t)) return gt100_.front().pose;  // also NaN
   if (t >= gt100_.back().t) return gt100_.back().pose;
   const auto it = std::upper_bound(gt100_.begin(), gt100_.end(), t, [](double v, const TimedPose& p) { return v < p.t; });
   const TimedPose& b = *it;
   const TimedPose& a = *(it - 1);
-  const double s = (t - a.t) / (b.t - a.t);
+  const double s = (t - a.t) / (b.t - a.t);  // read_tum guarantees b.t > a.t
   Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
   out.translation() = (1 - s) * a.pose.translation() + s * b.pose.translation();
   out.linear() = Eigen::Quaterniond(a.pose.linear()).slerp(s, Eigen::Quaterniond(b.pose.linear())).toRotationMatrix();
@@ -110,7 +316,8 @@ bool RecordingReader::disparity(int i, Image16& out, std::string& error) const {
     error = "frame index out of range";
     return false;
   }
-  return read_png16(dir_ + "/" + format_index(disparity_pattern_, i), out, error);
+  std::string path;
+  return resolve(disparity_pattern_.format(i), path, error) && read_png16(path, out, error);
 }
 
 std::vector<const MapCloudInfo*> RecordingReader::map_clouds_until(double t) const {
@@ -132,85 +339,49 @@ std::vector<const MapCloudInfo*> RecordingReader::latest_map_clouds(double t) co
 }
 
 bool RecordingReader::load_map_cloud(const MapCloudInfo& info, cloud_io::PointCloud& out, std::string& error) const {
-  return cloud_io::read_pcd(dir_ + "/" + info.file, out, error);
-}
-
-std::vector<Eigen::Isometry3d> RecordingReader::infra_surveyed_poses() const {
-  std::vector<Eigen::Isometry3d> out;
-  for (const Json& s : manifest_["sensors"].items()) {
-    if (s["carrier"].as_string() != "infrastructure") continue;
-    Eigen::Isometry3d p;
-    if (pose_from_json(s["surveyed_pose_enu"], p)) out.push_back(p);
-  }
-  return out;
+  std::string path;
+  return resolve(info.file, path, error) && cloud_io::read_pcd(path, out, error);
 }
 
 std::string RecordingReader::trust_list_path() const {
-  const std::string f = manifest_["files"]["trust_list"].as_string();
-  return f.empty() ? std::string() : dir_ + "/" + f;
+  return trust_list_file_.empty() ? std::string() : dir_ + "/" + trust_list_file_;
 }
 
 std::string RecordingReader::can_log_path() const {
-  const std::string f = manifest_["files"]["can_log"].as_string();
-  return f.empty() ? std::string() : dir_ + "/" + f;
-}
-
-bool parse_candump_line(const std::string& line, double& unix_time, CanLogFrame& out) {
-  // "(1700000000.123456) can0 123#DEADBEEF"
-  if (line.size() < 10 || line[0] != '(') return false;
-  const auto close = line.find(')');
-  if (close == std::string::npos) return false;
-  auto res = std::from_chars(line.data() + 1, line.data() + close, unix_time);
-  if (res.ec != std::errc()) return false;
-  std::size_t p = close + 1;
-  while (p < line.size() && line[p] == ' ') ++p;
-  const auto sp = line.find(' ', p);
-  if (sp == std::string::npos) return false;
-  out.interface = line.substr(p, sp - p);
-  const std::string frame = line.substr(sp + 1);
-  const auto hash = frame.find('#');
-  if (hash == std::string::npos || hash == 0 || hash > 8) return false;
-  std::uint32_t id = 0;
-  for (std::size_t k = 0; k < hash; ++k) {
-    const int d = hex_digit(frame[k]);
-    if (d < 0) return false;
-    id = (id << 4) | static_cast<std::uint32_t>(d);
-  }
-  if (hash == 8) id |= 0x80000000u;  // 29-bit identifiers are written with 8 hex digits
-  out.id = id;
-  std::size_t q = hash + 1;
-  out.dlc = 0;
-  while (q < frame.size() && hex_digit(frame[q]) >= 0) {
-    if (q + 1 >= frame.size() || hex_digit(frame[q + 1]) < 0 || out.dlc >= 8) return false;
-    out.data[out.dlc++] = static_cast<std::uint8_t>(hex_digit(frame[q]) * 16 + hex_digit(frame[q + 1]));
-    q += 2;
-  }
-  return true;
+  return can_log_file_.empty() ? std::string() : dir_ + "/" + can_log_file_;
 }
 
 bool RecordingReader::can_frames(std::vector<CanLogFrame>& out, std::string& error) const {
   out.clear();
-  const std::string path = can_log_path();
-  if (path.empty()) {
+  std::string path;
+  if (can_log_file_.empty()) {
     error = "recording has no CAN log";
     return false;
   }
+  if (!resolve(can_log_file_, path, error)) return false;
   std::ifstream in(path);
   if (!in) {
     error = "cannot open " + path;
     return false;
   }
-  const double t0 = time_origin_unix();
   std::string line;
+  std::size_t number = 0;
   while (std::getline(in, line)) {
+    ++number;
     if (line.empty()) continue;
-    CanLogFrame f;
-    double unix_time = 0;
-    if (!parse_candump_line(line, unix_time, f)) {
-      error = "bad candump line: " + line;
+    CandumpRecord r;
+    std::string why;
+    if (number > kMaxCanLogLines || !parse_candump_line(line, r, why)) {
+      error = path + " line " + std::to_string(number) + ": " + (why.empty() ? "too many lines" : why);
       return false;
     }
-    f.t = unix_time - t0;
+    CanLogFrame f;
+    // Exact integer microseconds -> seconds (the division rounds once, like parsing the decimal text).
+    f.t = static_cast<double>(r.timestamp_us) / 1e6 - time_origin_unix_;
+    f.interface = std::move(r.interface);
+    f.id = r.frame.id;
+    f.dlc = r.frame.dlc;
+    std::copy(r.frame.data, r.frame.data + 8, f.data);
     out.push_back(f);
   }
   return true;

@@ -1,9 +1,11 @@
 // Read access to a recording folder (host_sim/RECORDING_FORMAT.md): frames with the ego scan
 // (per-point time), ground truth, disparity maps + stereo calibration, the infrastructure/agent
 // map clouds with their reported poses, and the CAN log.
+// A recording is untrusted input: open() checks every manifest field it uses (type, range,
+// finiteness), file names are data (one `%0Nd` frame-index token, paths that stay inside the
+// folder), the ground truth must cover every frame; any violation is an error naming the field.
 #pragma once
 
-#include "host_sim/common/json.hpp"
 #include "host_sim/common/png.hpp"
 #include "host_sim/recording/pose_io.hpp"
 #include "host_sim/cloud_io/point_cloud.hpp"
@@ -44,17 +46,19 @@ class RecordingReader {
  public:
   bool open(const std::string& dir, std::string& error);
 
+  // Upper bound on frame_count: 24 h at 10 Hz, far beyond any recording, bounds the allocations.
+  static constexpr int kMaxFrames = 864'000;
+
   const std::string& dir() const { return dir_; }
-  const Json& manifest() const { return manifest_; }
-  int scenario() const { return manifest_["scenario"]["id"].as_int(); }
-  std::string permutation() const { return manifest_["permutation"].as_string(); }
+  int scenario() const { return scenario_; }
+  const std::string& permutation() const { return permutation_; }
   int frame_count() const { return frame_count_; }
   double frame_rate() const { return frame_rate_; }
   double frame_time(int i) const { return i / frame_rate_; }
-  double time_origin_unix() const { return manifest_["time_origin_unix_s"].as_number(); }
-  double origin_lat_deg() const { return manifest_["geodetic_origin"]["lat_deg"].as_number(); }
-  double origin_lon_deg() const { return manifest_["geodetic_origin"]["lon_deg"].as_number(); }
-  double origin_alt_m() const { return manifest_["geodetic_origin"]["alt_m"].as_number(); }
+  double time_origin_unix() const { return time_origin_unix_; }
+  double origin_lat_deg() const { return origin_lat_deg_; }
+  double origin_lon_deg() const { return origin_lon_deg_; }
+  double origin_alt_m() const { return origin_alt_m_; }
 
   // Ego LiDAR scan of frame i: sensor frame, per-point time relative to frame_time(i).
   bool ego_scan(int i, cloud_io::PointCloud& out, std::string& error) const;
@@ -77,28 +81,46 @@ class RecordingReader {
   // The newest cloud of every sensor with stamp <= t (the current reference map inputs).
   std::vector<const MapCloudInfo*> latest_map_clouds(double t) const;
   bool load_map_cloud(const MapCloudInfo& info, cloud_io::PointCloud& out, std::string& error) const;
-  std::vector<Eigen::Isometry3d> infra_surveyed_poses() const;
+  const std::vector<Eigen::Isometry3d>& infra_surveyed_poses() const { return infra_poses_; }
 
-  // CAN log (candump -L format: "(unix.usec) iface ID#DATA"). False if the recording has none.
+  // CAN log (candump -L format: "(unix.usec) iface ID#DATA", host_sim/canlog). False if the
+  // recording has none or any line is malformed.
   std::string can_log_path() const;
   // trust_list.txt of the recording (manifest files.trust_list); empty for recordings made before it.
   std::string trust_list_path() const;
   bool can_frames(std::vector<CanLogFrame>& out, std::string& error) const;
 
+  // A per-frame file name: literal text around one `%0Nd` token (N = 1..9), e.g. "ego_lidar/%06d.pcd".
+  struct IndexPattern {
+    std::string prefix, suffix;
+    int width = 0;  // 0: no pattern
+    std::string format(int index) const;
+  };
+  static bool parse_index_pattern(const std::string& text, IndexPattern& out, std::string& error);
+
+  // The manifest's checks alone, on its text (no file access): the first step of open(), and
+  // what the manifest fuzz target drives.
+  bool parse_manifest(const std::string& text, std::string& error);
+
  private:
-  std::string dir_;
-  Json manifest_;
+  // dir_/rel, provided rel is a plain relative path whose real location is inside the recording.
+  bool resolve(const std::string& rel, std::string& path, std::string& error) const;
+
+  std::string dir_, real_dir_;
+  int scenario_ = 0;
+  std::string permutation_;
   int frame_count_ = 0;
   double frame_rate_ = 10.0;
-  std::string scan_pattern_, disparity_pattern_;
+  double time_origin_unix_ = 0;
+  double origin_lat_deg_ = 0, origin_lon_deg_ = 0, origin_alt_m_ = 0;
+  IndexPattern scan_pattern_, disparity_pattern_;
+  std::string gt_file_, gt100_file_, can_log_file_, trust_list_file_;
+  std::vector<Eigen::Isometry3d> infra_poses_;
   Eigen::Isometry3d ego_lidar_mount_ = Eigen::Isometry3d::Identity();
   std::vector<TimedPose> gt_, gt100_;
   bool has_stereo_ = false;
   StereoCalibrationInfo stereo_;
   std::vector<MapCloudInfo> map_clouds_;
 };
-
-// Parses one candump -L line; false for malformed lines.
-bool parse_candump_line(const std::string& line, double& unix_time, CanLogFrame& out);
 
 }  // namespace v2xloc::sim

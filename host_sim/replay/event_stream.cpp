@@ -23,16 +23,6 @@ protocol::SensorPose to_sensor_pose(const Eigen::Isometry3d& T) {
   return p;
 }
 
-// Trailing index of a sensor name after `prefix` ("infra_2" -> 2, "agent_1_lidar" -> 1).
-bool index_after(const std::string& name, const std::string& prefix, std::uint32_t& index) {
-  if (name.rfind(prefix, 0) != 0 || name.size() == prefix.size()) return false;
-  char* end = nullptr;
-  const unsigned long v = std::strtoul(name.c_str() + prefix.size(), &end, 10);
-  if (end == name.c_str() + prefix.size()) return false;
-  index = static_cast<std::uint32_t>(v);
-  return true;
-}
-
 }  // namespace
 
 bool EventStream::sender_id_for(const MapCloudInfo& info, std::uint32_t& sender_id) {

@@ -17,7 +17,7 @@ set(V2XLOC_SKIP_TEST_LABELS "" CACHE STRING "Test labels whose executables this 
 # through the emulator when cross-compiling).
 function(v2xloc_gtest)
   cmake_parse_arguments(T "NO_MAIN" "NAME;TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
-  set(skipped OFF)
+  set(skipped ${V2XLOC_FUZZ})  # the fuzz build compiles fuzz targets only
   foreach(label ${T_LABELS})
     if(label IN_LIST V2XLOC_SKIP_TEST_LABELS)
       set(skipped ON)
@@ -64,4 +64,42 @@ function(v2xloc_exclude_non_test_targets dir)
   foreach(sub ${subdirs})
     v2xloc_exclude_non_test_targets(${sub})
   endforeach()
+endfunction()
+
+# v2xloc_fuzz_target(NAME name SOURCES ... LIBS ...)
+# One libFuzzer target (LLVMFuzzerTestOneInput) with its seed corpus in <folder>/corpus/.
+# - V2XLOC_FUZZ (clang): a libFuzzer binary; ctest runs it for V2XLOC_FUZZ_SECONDS (label fuzz),
+#   growing a working corpus in the build tree from the committed seeds; crashers are written to
+#   build/<preset>/fuzz_artifacts/<name>/ (add them to corpus/ as regression seeds).
+# - any other build: the same code with a small driver that replays every corpus file once
+#   (label unit), so the seeds and past crashers stay regression tests under g++, ASan and qemu.
+set(V2XLOC_FUZZ_SECONDS 20 CACHE STRING "Seconds each fuzz target runs under ctest (V2XLOC_FUZZ)")
+function(v2xloc_fuzz_target)
+  cmake_parse_arguments(F "" "NAME" "SOURCES;LIBS" ${ARGN})
+  set(corpus ${CMAKE_CURRENT_SOURCE_DIR}/corpus)
+  if(V2XLOC_FUZZ)
+    add_executable(${F_NAME} ${F_SOURCES})
+    target_link_options(${F_NAME} PRIVATE -fsanitize=fuzzer)
+  else()
+    add_executable(${F_NAME} ${F_SOURCES} ${CMAKE_SOURCE_DIR}/tests/fuzz/replay_main.cpp)
+  endif()
+  target_link_libraries(${F_NAME} PRIVATE ${F_LIBS})
+  set_target_properties(${F_NAME} PROPERTIES V2XLOC_TEST_EXECUTABLE ON)
+  if(V2XLOC_FUZZ)
+    set(work ${CMAKE_BINARY_DIR}/fuzz_corpus/${F_NAME})
+    set(artifacts ${CMAKE_BINARY_DIR}/fuzz_artifacts/${F_NAME})
+    file(MAKE_DIRECTORY ${work} ${artifacts})
+    math(EXPR timeout "${V2XLOC_FUZZ_SECONDS} + 120")
+    # -timeout: one input taking > 10 s is a hang; -rss_limit_mb: a lying size field must not
+    # allocate gigabytes. The first corpus folder receives new inputs, the seeds stay untouched.
+    add_test(NAME ${F_NAME} COMMAND ${F_NAME} -max_total_time=${V2XLOC_FUZZ_SECONDS} -timeout=10
+             -rss_limit_mb=2048 -print_final_stats=1 -artifact_prefix=${artifacts}/ ${work} ${corpus})
+    # libFuzzer refuses a missing corpus folder: recreate both folders before each run.
+    add_test(NAME ${F_NAME}_folders COMMAND ${CMAKE_COMMAND} -E make_directory ${work} ${artifacts})
+    set_tests_properties(${F_NAME}_folders PROPERTIES LABELS fuzz FIXTURES_SETUP ${F_NAME}_folders)
+    set_tests_properties(${F_NAME} PROPERTIES LABELS fuzz TIMEOUT ${timeout} FIXTURES_REQUIRED ${F_NAME}_folders)
+  else()
+    add_test(NAME ${F_NAME}_corpus COMMAND ${F_NAME} ${corpus})
+    set_tests_properties(${F_NAME}_corpus PROPERTIES LABELS unit TIMEOUT 300)
+  endif()
 endfunction()

@@ -1,5 +1,6 @@
 #include "tools/eval/offline_run.hpp"
 
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -23,11 +24,23 @@ double timed_seconds(F&& f) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-std::uint32_t source_id_of(const sim::MapCloudInfo& info) {
-  // "infra_3" -> 1 + 3, "agent_1..." -> 32 + 1: stable ids per sensor.
+// "infra_3" -> 1 + 3, "agent_1..." -> 32 + 1: stable ids per sensor. The number comes from the
+// recording, so it is parsed without throwing and must keep infra and agent ids apart.
+bool source_id_of(const sim::MapCloudInfo& info, std::uint32_t& id, std::string& error) {
   const auto digit = info.sensor.find_first_of("0123456789");
-  const std::uint32_t k = digit == std::string::npos ? 0u : static_cast<std::uint32_t>(std::stoul(info.sensor.substr(digit)));
-  return info.kind == "agent" ? firmware::kAgentSenderBase + k : firmware::kInfraSenderBase + k;
+  std::uint32_t k = 0;
+  if (digit != std::string::npos) {
+    const char* first = info.sensor.data() + digit;
+    const char* last = info.sensor.data() + info.sensor.size();
+    const auto r = std::from_chars(first, last, k);
+    if (r.ec != std::errc() || k >= firmware::kAgentSenderBase - firmware::kInfraSenderBase) {
+      error = "map cloud sensor '" + info.sensor + "': index must be 0.." +
+              std::to_string(firmware::kAgentSenderBase - firmware::kInfraSenderBase - 1);
+      return false;
+    }
+  }
+  id = info.kind == "agent" ? firmware::kAgentSenderBase + k : firmware::kInfraSenderBase + k;
+  return true;
 }
 
 }  // namespace
@@ -100,7 +113,7 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
       const sim::MapCloudInfo& info = clouds[next_cloud];
       if (!reader.load_map_cloud(info, cloud, error)) return false;
       MapCloudInput in;
-      in.source_id = source_id_of(info);
+      if (!source_id_of(info, in.source_id, error)) return false;
       in.is_agent = info.kind == "agent";
       in.t = info.stamp;
       in.world_T_sensor = to_mat(info.sensor_pose);

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstring>
 #include <random>
 
@@ -103,6 +104,40 @@ TEST(Robustness, LyingHeadersGiveClearErrors) {
                                   "property float x\nproperty float y\nproperty float z\nend_header\n"), c, error));
   EXPECT_FALSE(parse_kitti_bin(std::vector<std::uint8_t>(17), c, error));
   EXPECT_NE(error.find("multiple of 16"), std::string::npos);
+}
+
+TEST(Robustness, PlyElementCountsCannotStallTheReader) {
+  // An element with no properties and 2^64 - 1 instances before "vertex" spun for ever; one with
+  // a property and 1e10 instances took 8 s to fail. Both must answer at once.
+  const std::string vertex = "element vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+  PointCloud c;
+  std::string error;
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<std::uint8_t> b = bytes_of("ply\nformat binary_little_endian 1.0\nelement junk 18446744073709551615\n" + vertex);
+  b.resize(b.size() + 12, 0);
+  ASSERT_TRUE(parse_ply(b, c, error)) << error;  // property-less instances occupy no bytes
+  EXPECT_EQ(c.size(), 1u);
+  EXPECT_FALSE(parse_ply(bytes_of("ply\nformat binary_little_endian 1.0\nelement junk 10000000000\nproperty uchar a\n" +
+                                  vertex + std::string(13, '\0')), c, error));
+  EXPECT_NE(error.find("more instances than the data can hold"), std::string::npos) << error;
+  EXPECT_FALSE(parse_ply(bytes_of("ply\nformat ascii 1.0\nelement junk 10000000000\nproperty uchar a\n" + vertex +
+                                  "1 2 3\n"), c, error));
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 1.0);
+}
+
+TEST(Robustness, PcdViewpointMustBeAFiniteUnitPose) {
+  // VIEWPOINT inf used to read as status ok with a sensor pose 0.56 m off.
+  const std::string head = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\nHEIGHT 1\n";
+  const std::string tail = "POINTS 1\nDATA ascii\n1 2 3\n";
+  PointCloud c;
+  std::string error;
+  for (const char* vp : {"inf 0 0 1 0 0 0", "0 0 0 nan 0 0 0", "0 0 0 2 0 0 0", "0 0 0 0 0 0 0", "1e39 0 0 1 0 0 0"}) {
+    EXPECT_FALSE(parse_pcd(bytes_of(head + "VIEWPOINT " + vp + "\n" + tail), c, error)) << vp;
+    EXPECT_NE(error.find("VIEWPOINT"), std::string::npos) << vp << ": " << error;
+  }
+  ASSERT_TRUE(parse_pcd(bytes_of(head + "VIEWPOINT 1 2 3 0.707107 0 0 0.707107\n" + tail), c, error)) << error;
+  EXPECT_TRUE(c.has_viewpoint);
+  EXPECT_FLOAT_EQ(c.sensor_origin.y(), 2.0f);
 }
 
 TEST(Robustness, PaddingAndUnknownFieldsAreSkipped) {

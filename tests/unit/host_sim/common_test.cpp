@@ -1,32 +1,27 @@
-#include "host_sim/common/json.hpp"
+#include "host_sim/common/text_file.hpp"
 #include "host_sim/common/rng.hpp"
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <string>
+
+#include <unistd.h>
 
 namespace v2xloc::sim {
 namespace {
 
-TEST(HostSimCommon, JsonRoundTrip) {
-  Json j = Json::object();
-  j.set("name", "sim \"0\"\n");
-  j.set("pi", 3.141592653589793);
-  j.set("n", 42);
-  j.set("list", Json::array_of(std::vector<double>{1.5, -2.0, 1e-7}));
-  Json inner = Json::object();
-  inner.set("ok", true);
-  j.set("inner", inner);
-  Json back;
-  std::string err;
-  ASSERT_TRUE(Json::parse(j.dump(2), back, err)) << err;
-  EXPECT_EQ(back["name"].as_string(), "sim \"0\"\n");
-  EXPECT_EQ(back["pi"].as_number(), 3.141592653589793);
-  EXPECT_EQ(back["n"].as_int(), 42);
-  EXPECT_EQ(back["list"].as_numbers(), (std::vector<double>{1.5, -2.0, 1e-7}));
-  EXPECT_TRUE(back["inner"]["ok"].as_bool());
-  EXPECT_EQ(back.dump(), j.dump());
-  EXPECT_FALSE(Json::parse("{\"a\": [1, 2,}", back, err));
+TEST(HostSimCommon, TextFileReadRefusesFilesAboveTheCap) {
+  const std::string path = std::string(V2XLOC_BINARY_DIR) + "/text_file_cap_" + std::to_string(::getpid()) + ".txt";
+  std::string err, back;
+  ASSERT_TRUE(write_text_file(path, std::string(1000, 'x'), err)) << err;
+  ASSERT_TRUE(read_text_file(path, 1000, back, err)) << err;
+  EXPECT_EQ(back.size(), 1000u);
+  EXPECT_FALSE(read_text_file(path, 999, back, err));
+  EXPECT_NE(err.find("larger than 999 bytes"), std::string::npos) << err;
+  EXPECT_FALSE(read_text_file(path + ".missing", 1000, back, err));
+  EXPECT_NE(err.find("cannot open"), std::string::npos) << err;
+  std::remove(path.c_str());
 }
 
 TEST(HostSimCommon, RngIsSeededAndGaussianHasUnitVariance) {

@@ -198,20 +198,5 @@ TEST_F(HostSimRecording, CanLogHoldsVehicleAndGnssFramesInTimeOrder) {
   EXPECT_LT(last, 1.0);
 }
 
-TEST(HostSimCandump, ParsesStandardAndExtendedFrames) {
-  double t = 0;
-  CanLogFrame f;
-  ASSERT_TRUE(parse_candump_line("(1700000000.250000) can0 123#DEADBEEF", t, f));
-  EXPECT_DOUBLE_EQ(t, 1700000000.25);
-  EXPECT_EQ(f.id, 0x123u);
-  EXPECT_EQ(f.dlc, 4);
-  EXPECT_EQ(f.data[0], 0xDE);
-  ASSERT_TRUE(parse_candump_line("(1.000000) vcan0 18FF0001#0102", t, f));
-  EXPECT_EQ(f.id, 0x18FF0001u | 0x80000000u);
-  EXPECT_EQ(f.dlc, 2);
-  EXPECT_FALSE(parse_candump_line("garbage", t, f));
-  EXPECT_FALSE(parse_candump_line("(1.0) can0 123#ABC", t, f));
-}
-
 }  // namespace
 }  // namespace v2xloc::sim

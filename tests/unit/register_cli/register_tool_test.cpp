@@ -11,6 +11,9 @@
 #include <fstream>
 #include <sstream>
 #include <sys/wait.h>
+#include <unistd.h>
+#include <utility>
+#include <vector>
 
 namespace {
 
@@ -150,6 +153,40 @@ TEST_F(RegisterTool, ExitCodes) {
   EXPECT_EQ(r.out.rfind("{\"status\":\"", 0), 0u) << r.out;
   EXPECT_EQ(r.out.find("{\"status\":\"ok\""), std::string::npos) << r.out;
   EXPECT_TRUE(valid_json(r.out)) << r.out;
+}
+
+TEST_F(RegisterTool, HostileFilesExitWithAClearError) {
+  // Files an attacker controls: the tool must refuse each with exit 2 and the file's name in the
+  // message, within seconds (`timeout` turns a hang into exit 124).
+  const std::string dir = testing::TempDir() + "/v2xloc_register_hostile_" + std::to_string(::getpid());
+  std::filesystem::create_directories(dir);
+  const std::string pcd_head = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 3\nHEIGHT 1\n";
+  const std::string ply_vertex = "element vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+  const std::vector<std::pair<std::string, std::string>> files = {
+      {"viewpoint_inf.pcd", pcd_head + "VIEWPOINT inf 0 0 1 0 0 0\nPOINTS 3\nDATA ascii\n0 0 0\n1 0 0\n0 1 0\n"},
+      {"lying_points.pcd", pcd_head + "POINTS 3000000000\nDATA binary\n" + std::string(36, '\0')},
+      {"bad_lzf.pcd", pcd_head + "POINTS 3\nDATA binary_compressed\n" + std::string("\x08\0\0\0\x24\0\0\0\xe0\xff\xff\0\0\0\0\0", 16)},
+      {"ply_count_1e10.ply", "ply\nformat ascii 1.0\nelement junk 10000000000\nproperty uchar a\n" + ply_vertex + "1 2 3\n"},
+      {"ply_no_end_header.ply", "ply\nformat ascii 1.0\nelement vertex 1\n"},
+      {"odd_size.bin", std::string(17, '\0')},
+  };
+  for (const auto& [name, bytes] : files) {
+    const std::string path = dir + "/" + name;
+    std::ofstream(path, std::ios::binary) << bytes;
+    for (const std::string& args : {path + " " + kPair + "/target.ply", kPair + "/source.ply " + path}) {
+      ToolRun r;
+      std::FILE* pipe = popen(("timeout 20 " + kTool + " " + args + " 2>&1").c_str(), "r");
+      ASSERT_NE(pipe, nullptr);
+      char buf[4096];
+      std::size_t n = 0;
+      while ((n = std::fread(buf, 1, sizeof(buf), pipe)) > 0) r.out.append(buf, n);
+      const int status = pclose(pipe);
+      r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+      EXPECT_EQ(r.exit_code, 2) << name << ": " << r.out;
+      EXPECT_NE(r.out.find(name), std::string::npos) << name << ": " << r.out;
+    }
+  }
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
