@@ -74,7 +74,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       size -= 2;
       if (len > size) len = size;
       ++datagrams;
-      if (decoder->on_datagram({data, len}, now_ns)) check(decoder->decode_completed());
+      if (decoder->on_datagram({data, len}, now_ns)) {
+        const firmware::DecodedCloud d = decoder->decode_completed();
+        check(d);
+        // As the firmware: an ego scan closes the period, queued shares are verified (bounded).
+        if (d.kind == firmware::CloudKind::kEgoScan || d.kind == firmware::CloudKind::kEgoRejected) {
+          for (std::size_t k = 0; k < firmware::kMaxSignatureVerificationsPerPeriod; ++k) {
+            const firmware::DecodedCloud share = decoder->next_verified_share();
+            if (share.kind == firmware::CloudKind::kNone) break;
+            check(share);
+          }
+        }
+      }
       data += len;
       size -= len;
     }
