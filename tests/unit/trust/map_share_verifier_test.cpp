@@ -147,6 +147,48 @@ TEST(MapShareVerifier, EveryRejectionIsCountedByReason) {
   EXPECT_EQ(c.accepted, 1u);
 }
 
+// admit() then complete(), as the decoder's queue does: freshness is judged at admission, so a job
+// completed later still passes; two jobs of one signer completed newest first leave the older one
+// a replay (the replay check runs again at completion); the digest binds the wire bytes.
+TEST(MapShareVerifier, AdmittedJobsAreCompletedLaterAndRecheckedForReplay) {
+  Fixture f;
+  MapShareVerifier v;
+  v.provision(f.list);
+  const Digest digest = f.digest();
+  VerificationJob older, newer;
+  f.cloud.info.frame_seq = 7;
+  v.on_signature_datagram(f.signed_datagram(f.infra_priv, f.infra_pub, kNow - 2'000'000), 0);
+  ASSERT_EQ(v.admit(f.cloud.info, f.digest(), kNow, older).verdict, ShareVerdict::kAccepted);
+  f.cloud.info.frame_seq = 8;
+  v.on_signature_datagram(f.signed_datagram(f.infra_priv, f.infra_pub, kNow - 1'000'000), 0);
+  ASSERT_EQ(v.admit(f.cloud.info, f.digest(), kNow, newer).verdict, ShareVerdict::kAccepted);
+  EXPECT_EQ(v.counters().accepted, 0u) << "admission runs no ECDSA";
+  EXPECT_EQ(v.complete(newer).verdict, ShareVerdict::kAccepted);
+  EXPECT_EQ(v.complete(older).verdict, ShareVerdict::kReplay);
+  EXPECT_EQ(v.counters().accepted, 1u);
+  EXPECT_EQ(v.counters().replay, 1u);
+
+  // One quantization step in one point changes the wire bytes, hence the digest.
+  f.xyz[5] += 0.004f;
+  EXPECT_NE(f.digest(), digest);
+  f.xyz[5] -= 0.004f;
+  // Arrival order does not matter: the builder fed in reverse gives the same digest.
+  f.cloud.info.frame_seq = 7;
+  auto ds = f.datagrams();
+  ASSERT_GT(ds.size(), 2u);
+  std::vector<ShareDigestBuilder::Entry> scratch(ds.size());
+  ShareDigestBuilder builder(scratch);
+  for (auto it = ds.rbegin(); it != ds.rend(); ++it) ASSERT_TRUE(builder.add(*it));
+  protocol::ReassembledCloud frame;
+  Digest reversed{};
+  ASSERT_TRUE(builder.finish(frame, reversed));
+  EXPECT_EQ(reversed, digest);
+  // A missing fragment: no digest.
+  ShareDigestBuilder partial(scratch);
+  for (std::size_t i = 1; i < ds.size(); ++i) partial.add(ds[i]);
+  EXPECT_FALSE(partial.finish(frame, reversed));
+}
+
 TEST(MapShareVerifier, EmptyTrustListAcceptsNothing) {
   Fixture f;
   MapShareVerifier v;
