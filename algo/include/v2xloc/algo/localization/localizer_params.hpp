@@ -31,6 +31,10 @@ struct LocalizerParams {
   // ---- Reference map ----
   MapFusionParams map{};              // voxel 0.2 m, consistency check on
   double map_refresh_period = 0.5;    // [s] rebuild map points / normals / tree at most this often
+  // A rebuild runs beside the registration, one step per period: extract, k-d tree, then the
+  // normals this many points per period (~25 M instructions on the host); registration keeps
+  // the previous map meanwhile. The first map is built at once (nothing to register against).
+  std::uint32_t map_normals_per_period = 32768;
   float map_normal_radius = 0.6f;     // [m] (3 map voxels)
 
   // ---- Odometry ----
@@ -41,6 +45,10 @@ struct LocalizerParams {
   RegisterCloudsParams global = default_global();   // the paper's FPFH + RANSAC
   PoseSearchParams search = default_search();        // GNSS-seeded exhaustive search
   bool use_fpfh_ransac = true;        // try FPFH + RANSAC too; the better ICP fitness wins
+  // Scan points the pose search (start-up, audit) refines and compares its candidates on: every
+  // k-th point of the registration scan, <= config::kMaxSearchPoints. The accepted pose is refined
+  // again on the whole scan; this only picks the basin (a 0.5 m-voxel scan holds 5-20k points).
+  std::uint32_t search_points = 1024;
   double global_map_radius = 70.0;    // [m] map crop around the GNSS fix for the global search
   double global_gnss_gate_sigmas = 4.0;  // accept a global solution within this many GNSS sigmas
   // ... but never closer than this [m]: a canyon receiver reports sigma_uere * HDOP (3-8 m) while
