@@ -1,15 +1,11 @@
 #include "hal/hid_imu_report.hpp"
 
+#include "hal/little_endian.hpp"
+
 namespace v2xloc::hal::hid_imu {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-void put16(std::uint8_t* p, std::uint16_t v) {
-  p[0] = static_cast<std::uint8_t>(v);
-  p[1] = static_cast<std::uint8_t>(v >> 8);
-}
-std::uint16_t get16(const std::uint8_t* p) { return static_cast<std::uint16_t>(p[0] | (p[1] << 8)); }
 
 }  // namespace
 
@@ -20,10 +16,10 @@ std::size_t encode_input_report(const RawReport& r, std::span<std::uint8_t> out)
   p[1] = r.counter;
   p[2] = r.status;
   p[3] = 0;  // reserved
-  for (int i = 0; i < 4; ++i) p[4 + i] = static_cast<std::uint8_t>(r.sensor_time_us >> (8 * i));
-  for (int i = 0; i < 3; ++i) put16(p + 8 + 2 * i, static_cast<std::uint16_t>(r.gyro[i]));
-  for (int i = 0; i < 3; ++i) put16(p + 14 + 2 * i, static_cast<std::uint16_t>(r.accel[i]));
-  put16(p + 20, static_cast<std::uint16_t>(r.temperature));
+  le::put_u32(p + 4, r.sensor_time_us);
+  for (int i = 0; i < 3; ++i) le::put_u16(p + 8 + 2 * i, static_cast<std::uint16_t>(r.gyro[i]));
+  for (int i = 0; i < 3; ++i) le::put_u16(p + 14 + 2 * i, static_cast<std::uint16_t>(r.accel[i]));
+  le::put_u16(p + 20, static_cast<std::uint16_t>(r.temperature));
   return kInputReportBytes;
 }
 
@@ -32,11 +28,10 @@ Status decode_input_report(std::span<const std::uint8_t> bytes, RawReport& r) {
   const std::uint8_t* p = bytes.data();
   r.counter = p[1];
   r.status = p[2];
-  r.sensor_time_us = 0;
-  for (int i = 3; i >= 0; --i) r.sensor_time_us = (r.sensor_time_us << 8) | p[4 + i];
-  for (int i = 0; i < 3; ++i) r.gyro[i] = static_cast<std::int16_t>(get16(p + 8 + 2 * i));
-  for (int i = 0; i < 3; ++i) r.accel[i] = static_cast<std::int16_t>(get16(p + 14 + 2 * i));
-  r.temperature = static_cast<std::int16_t>(get16(p + 20));
+  r.sensor_time_us = le::get_u32(p + 4);
+  for (int i = 0; i < 3; ++i) r.gyro[i] = static_cast<std::int16_t>(le::get_u16(p + 8 + 2 * i));
+  for (int i = 0; i < 3; ++i) r.accel[i] = static_cast<std::int16_t>(le::get_u16(p + 14 + 2 * i));
+  r.temperature = static_cast<std::int16_t>(le::get_u16(p + 20));
   return Status::kOk;
 }
 
@@ -57,7 +52,7 @@ std::size_t encode_command(Command command, std::uint16_t argument, std::span<st
   if (out.size() < kOutputReportBytes) return 0;
   out[0] = kOutputReportId;
   out[1] = static_cast<std::uint8_t>(command);
-  put16(out.data() + 2, argument);
+  le::put_u16(out.data() + 2, argument);
   for (std::size_t i = 4; i < kOutputReportBytes; ++i) out[i] = 0;
   return kOutputReportBytes;
 }

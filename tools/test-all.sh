@@ -4,6 +4,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 JOBS=${JOBS:-$(nproc)}
+# One compiler cache for every tree of this checkout (presets and the install tests' cross trees).
+export CCACHE_BASEDIR="$PWD" CCACHE_NOHASHDIR=1
 
 step() { printf '\n==== %s ====\n' "$*"; }
 
@@ -26,5 +28,8 @@ step "cortex-r52: bare-metal build + link check"
 cmake --preset cortex-r52 >/dev/null
 cmake --build --preset cortex-r52 -j "$JOBS"
 tools/check-baremetal.sh build/cortex-r52/bin/v2xloc_baremetal.elf
+
+step "install: find_package(v2xloc) consumers for host, aarch64 (qemu) and Cortex-R52 (link)"
+ctest --test-dir build/host -L install --output-on-failure
 
 step "all test stages passed"

@@ -1,6 +1,6 @@
 #include "firmware/app/emulated_wiring.hpp"
 
-#include "firmware/app/wire_conventions.hpp"
+#include "firmware/wire/wire_conventions.hpp"
 
 namespace v2xloc::firmware {
 

@@ -2,8 +2,6 @@
 
 #include <cmath>
 
-#include "hal/hid_imu_report.hpp"
-
 namespace v2xloc::firmware {
 namespace {
 
@@ -38,7 +36,6 @@ std::size_t FirmwareApp::poll_once() {
   ++counters_.polls;
   std::size_t handled = drain_can();
   handled += poll_pps();
-  handled += poll_imu();
   handled += drain_datagrams();
   decoder_.expire(hal_.clock.monotonic_ns());
   maybe_heartbeat();
@@ -56,13 +53,27 @@ std::size_t FirmwareApp::drain_can() {
       ++counters_.can_error_frames;
       continue;
     }
-    const CanInputKind kind = decoder_.on_can(rx.frame, disciplined(rx.timestamp_ns), localizer_);
-    if (kind == CanInputKind::kGnssFix) {
-      last_gnss_ns_ = rx.timestamp_ns;
-      discipline_clock(rx.timestamp_ns);
-    }
+    apply_can(decoder_.decode_can(rx.frame, disciplined(rx.timestamp_ns)), rx.timestamp_ns);
   }
   return n;
+}
+
+void FirmwareApp::apply_can(const DecodedCan& decoded, std::int64_t rx_monotonic_ns) {
+  if (decoded.kind == CanInputKind::kVehicle) {
+    localizer_.on_vehicle(decoded.vehicle);
+  } else if (decoded.kind == CanInputKind::kGnssFix) {
+    localizer_.on_gnss(decoded.gnss);
+    last_gnss_ns_ = rx_monotonic_ns;
+    discipline_clock(rx_monotonic_ns);
+  }
+}
+
+void FirmwareApp::apply_cloud(const DecodedCloud& decoded) {
+  if (decoded.kind == CloudKind::kMapCloud) {
+    localizer_.on_map_cloud(decoded.map);
+  } else if (decoded.kind == CloudKind::kEgoScan) {
+    publish_pose(localizer_.on_ego_scan(decoded.ego), decoded.frame_index, decoded.gnss_used);
+  }
 }
 
 void FirmwareApp::discipline_clock(std::int64_t rx_monotonic_ns) {
@@ -92,25 +103,6 @@ std::size_t FirmwareApp::poll_pps() {
   return n;
 }
 
-std::size_t FirmwareApp::poll_imu() {
-  if (hal_.imu == nullptr) return 0;
-  std::size_t n = 0;
-  std::array<std::uint8_t, 64> report{};
-  hal::HidReportInfo info;
-  while (n < 256 && hal_.imu->read_report(report, info) == hal::Status::kOk) {
-    ++n;
-    hal::hid_imu::RawReport raw;
-    if (hal::hid_imu::decode_input_report(std::span<const std::uint8_t>(report.data(), info.size), raw) !=
-        hal::Status::kOk) {
-      ++counters_.imu_malformed;
-      continue;
-    }
-    ++counters_.imu_reports;
-    imu_yaw_rate_ = hal::hid_imu::to_si(raw).gyro_rad_s[2];
-  }
-  return n;
-}
-
 std::size_t FirmwareApp::drain_datagrams() {
   std::size_t n = 0;
   hal::DatagramInfo info;
@@ -127,10 +119,9 @@ std::size_t FirmwareApp::drain_datagrams() {
     const std::int64_t now = hal_.clock.monotonic_ns();
     last_datagram_ns_ = now;
     if (!decoder_.on_datagram(std::span<const std::uint8_t>(datagram_buffer_.data(), info.size), now)) continue;
-    // Canonical order: every CAN frame sent before this cloud's last fragment goes first.
+    // Input order: every CAN frame sent before this cloud's last fragment goes first.
     drain_can();
-    const LocalizerFrameOutput* out = nullptr;
-    if (decoder_.dispatch_completed(localizer_, &out) == CloudKind::kEgoScan && out != nullptr) publish_pose(*out);
+    apply_cloud(decoder_.decode_completed());
   }
   return n;
 }
@@ -143,16 +134,16 @@ void FirmwareApp::send(const hal::CanFrame& frame) {
   }
 }
 
-void FirmwareApp::publish_pose(const LocalizerFrameOutput& out) {
+void FirmwareApp::publish_pose(const LocalizerFrameOutput& out, std::uint32_t frame_index, bool gnss_used) {
   latest_ = out;
   has_output_ = true;
-  const PoseFrames frames = pose_encoder_.encode(out, decoder_.last_frame_index(), decoder_.gnss_used_in_last_frame());
+  const PoseFrames frames = pose_encoder_.encode(out, frame_index, gnss_used);
   send(frames.position);
   send(frames.attitude);
   send(frames.sigma);
   // Diagnostics (registration, gate decision, odometry) after the pose; odometry attitude last:
   // the replayer's lockstep waits for it.
-  const DiagnosticFrames diagnostics = diagnostic_encoder_.encode(out, decoder_.last_frame_index());
+  const DiagnosticFrames diagnostics = diagnostic_encoder_.encode(out, frame_index);
   send(diagnostics.registration_position);
   send(diagnostics.registration_quality);
   send(diagnostics.gate);
@@ -172,11 +163,12 @@ protocol::Heartbeat FirmwareApp::heartbeat_now() const {
   const protocol::ReassemblyCounters& r = decoder_.reassembly_counters();
   protocol::Heartbeat hb;
   hb.state = localizer_state(has_output_ ? &latest_ : nullptr);
+  namespace err = protocol::heartbeat_error;
   hb.error_flags = static_cast<std::uint8_t>(
-      (now - last_can_ns_ > config_.input_timeout_ns ? 1u : 0u) |
-      (now - last_datagram_ns_ > config_.input_timeout_ns ? 2u : 0u) |
-      (now - last_gnss_ns_ > config_.gnss_timeout_ns ? 4u : 0u) |
-      (r.over_capacity + r.frames_evicted > 0 ? 8u : 0u));
+      (now - last_can_ns_ > config_.input_timeout_ns ? err::kCanTimeout : 0u) |
+      (now - last_datagram_ns_ > config_.input_timeout_ns ? err::kUdpTimeout : 0u) |
+      (now - last_gnss_ns_ > config_.gnss_timeout_ns ? err::kGnssTimeout : 0u) |
+      (r.over_capacity + r.frames_evicted > 0 ? err::kCapacityOverflow : 0u));
   hb.uptime_s = static_cast<double>(now - start_ns_) * 1e-9;
   hb.can_rx_errors = saturate_u8(d.can_rejected + counters_.can_error_frames);
   hb.udp_dropped = saturate_u8(d.datagrams_rejected + counters_.datagrams_oversize + r.frames_timed_out +

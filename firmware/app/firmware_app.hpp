@@ -1,22 +1,23 @@
-// The ECU application loop: polls the HAL, decodes (InputDecoder), runs the localizer, publishes
-// the fused pose and the diagnostic frames on CAN after every ego scan, drives the "localized" LED,
-// disciplines the clock on GNSS PPS edges and sends a 1 Hz heartbeat. It only knows hal/ interfaces; main() picks backends.
-// Event order: before a completed cloud is handed to the localizer, every pending CAN frame is
-// decoded first, so inputs reach the localizer in the canonical order of the replay event stream
-// (host_sim/replay/event_stream.hpp). No allocation: all buffers are members of static objects.
+// The ECU application loop: polls the HAL, decodes (InputDecoder), hands the decoded inputs to the
+// localizer (the only caller of the localizer in the firmware), publishes the fused pose and the
+// diagnostic frames on CAN after every ego scan, drives the "localized" LED, disciplines the clock
+// on GNSS PPS edges and sends a 1 Hz heartbeat. It only knows hal/ interfaces; main() picks backends.
+// Input order: before a completed cloud is handed to the localizer, every pending CAN frame is
+// decoded and applied first (the order firmware/wire/input_decoder.hpp defines).
+// No allocation: all buffers are members of static objects.
 #pragma once
 
 #include <array>
 #include <cstdint>
 
-#include "firmware/app/diagnostic_frames.hpp"
-#include "firmware/app/input_decoder.hpp"
-#include "firmware/app/pose_frames.hpp"
+#include "firmware/app/localizer_port.hpp"
+#include "firmware/wire/diagnostic_frames.hpp"
+#include "firmware/wire/input_decoder.hpp"
+#include "firmware/wire/pose_frames.hpp"
 #include "hal/can_bus.hpp"
 #include "hal/clock.hpp"
 #include "hal/datagram_link.hpp"
 #include "hal/gpio_line.hpp"
-#include "hal/hid_device.hpp"
 
 namespace v2xloc::firmware {
 
@@ -26,7 +27,6 @@ struct FirmwareHal {
   hal::Clock& clock;
   hal::GpioLine* pps = nullptr;  // GNSS PPS input (optional)
   hal::GpioLine* led = nullptr;  // "localized" LED output (optional)
-  hal::HidDevice* imu = nullptr; // USB HID IMU (optional; hal/HID_IMU_REPORT.md)
 };
 
 struct FirmwareConfig {
@@ -49,8 +49,6 @@ struct FirmwareCounters {
   std::uint64_t heartbeats = 0;
   std::uint64_t pps_edges = 0;
   std::uint64_t clock_disciplined = 0;
-  std::uint64_t imu_reports = 0;
-  std::uint64_t imu_malformed = 0;
   std::uint64_t led_changes = 0;
 };
 
@@ -67,16 +65,16 @@ class FirmwareApp {
   const FirmwareCounters& counters() const { return counters_; }
   const InputDecoder& decoder() const { return decoder_; }
   const LocalizerFrameOutput* latest_output() const { return has_output_ ? &latest_ : nullptr; }
-  double latest_imu_yaw_rate() const { return imu_yaw_rate_; }
   protocol::Heartbeat heartbeat_now() const;
 
  private:
   std::size_t drain_can();
+  void apply_can(const DecodedCan& decoded, std::int64_t rx_monotonic_ns);
+  void apply_cloud(const DecodedCloud& decoded);
   std::size_t drain_datagrams();
   std::size_t poll_pps();
-  std::size_t poll_imu();
   void maybe_heartbeat();
-  void publish_pose(const LocalizerFrameOutput& out);
+  void publish_pose(const LocalizerFrameOutput& out, std::uint32_t frame_index, bool gnss_used);
   void discipline_clock(std::int64_t rx_monotonic_ns);
   void send(const hal::CanFrame& frame);
   std::int64_t disciplined(std::int64_t monotonic_ns) const {
@@ -99,7 +97,6 @@ class FirmwareApp {
   std::int64_t last_can_ns_ = 0, last_datagram_ns_ = 0, last_gnss_ns_ = 0;
   bool pps_pending_ = false;
   std::int64_t pps_edge_ns_ = 0;
-  double imu_yaw_rate_ = 0.0;
   std::array<std::uint8_t, 2048> datagram_buffer_{};  // > 1400-byte fragments; larger ones are counted
 };
 

@@ -1,6 +1,6 @@
 // The firmware's view of the localizer: the four input calls and the per-frame output, behind a
-// small virtual interface so the application loop (and the offline evaluator, which feeds the
-// same decoder) does not depend on which localizer type main() links in. LocalizerAdapter binds
+// small virtual interface so the application loop does not depend on which localizer type main()
+// links in. LocalizerAdapter binds
 // any type with the v2xloc::Localizer API (configure / on_vehicle / on_gnss / on_map_cloud /
 // on_ego_scan) without copying: the localizer object itself stays a static owned by main.
 #pragma once

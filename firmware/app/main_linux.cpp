@@ -1,7 +1,8 @@
 // v2xloc-firmware: the ECU application on Linux. Chooses the HAL backends (real: SocketCAN, UDP,
 // libgpiod, hidapi; --emulated: CAN over UDP on loopback, SimClock driven by the replayer,
 // scripted PPS), builds the static objects, prints their memory, and runs the poll loop.
-// Options (also as key=value lines in --config FILE): see usage() and firmware/README.md.
+// Options (also as key=value lines in --config FILE): see usage() and firmware/README.md. main()
+// reads as its steps: options, origin, static objects, backends, loop, exit report.
 #include <poll.h>
 #include <sys/socket.h>
 
@@ -18,10 +19,8 @@
 #include "firmware/app/firmware_app.hpp"
 #include "firmware/app/selected_localizer.hpp"
 #include "hal/emulated/emulated_can_bus.hpp"
-#include "hal/emulated/scripted_hid_device.hpp"
 #include "hal/emulated/sim_clock.hpp"
 #include "hal/linux/gpiod_line.hpp"
-#include "hal/linux/hidapi_device.hpp"
 #include "hal/linux/linux_clock.hpp"
 #include "hal/linux/socketcan_bus.hpp"
 #include "hal/linux/udp_link.hpp"
@@ -49,12 +48,13 @@ int usage() {
   std::fprintf(stderr,
                "usage: v2xloc-firmware [--config FILE] [--emulated] [options]\n"
                "  common:   --cloud-port N (UDP clouds, default 47200; 0 = ephemeral)  --cloud-bind A.B.C.D\n"
-               "            --origin LAT,LON,ALT (local ENU origin)  --epoch-ns N (Unix ns of localizer t = 0)\n"
+               "            --origin LAT,LON,ALT (required: the local ENU origin of the map and the poses)\n"
+               "            --epoch-ns N (Unix ns of localizer t = 0)\n"
                "            --max-frames N (exit after N published frames)  --rcvbuf BYTES (default 33554432)\n"
                "  real:     --can-iface can0 [--can-bring-up 1]  --pps-chip gpiochip0 --pps-line N\n"
-               "            --led-chip gpiochip0 --led-line N  --imu VID:PID\n"
+               "            --led-chip gpiochip0 --led-line N\n"
                "  emulated: --can-port N (firmware's CAN-over-UDP port, 0 = ephemeral)  --can-peer-port N\n"
-               "            --imu-script FILE (ScriptedHidDevice)  --pps 0|1 (scripted PPS, default 1)\n"
+               "            --pps 0|1 (scripted PPS, default 1)\n"
                "Prints 'v2xloc-firmware: ready can=PORT cloud=PORT' once the sockets are bound.\n");
   return 2;
 }
@@ -104,12 +104,11 @@ void print_counters(const FirmwareApp& app) {
   const DecoderCounters& d = app.decoder().counters();
   const protocol::ReassemblyCounters& r = app.decoder().reassembly_counters();
   std::printf("v2xloc-firmware: polls %llu can_rx %llu can_err %llu can_tx %llu tx_fail %llu datagrams %llu oversize %llu"
-              " frames %llu heartbeats %llu pps %llu disciplined %llu imu %llu\n",
+              " frames %llu heartbeats %llu pps %llu disciplined %llu\n",
               (unsigned long long)c.polls, (unsigned long long)c.can_rx, (unsigned long long)c.can_error_frames,
               (unsigned long long)c.can_tx, (unsigned long long)c.can_tx_failed, (unsigned long long)c.datagrams_rx,
               (unsigned long long)c.datagrams_oversize, (unsigned long long)c.frames_published,
-              (unsigned long long)c.heartbeats, (unsigned long long)c.pps_edges, (unsigned long long)c.clock_disciplined,
-              (unsigned long long)c.imu_reports);
+              (unsigned long long)c.heartbeats, (unsigned long long)c.pps_edges, (unsigned long long)c.clock_disciplined);
   std::printf("v2xloc-firmware: decoded vehicle %llu (invalid %llu) gnss %llu (incomplete %llu) can_rejected %llu unknown_id %llu"
               " ego_scans %llu map_clouds %llu clouds_rejected %llu datagrams_rejected %llu\n",
               (unsigned long long)d.vehicle_inputs, (unsigned long long)d.vehicle_invalid,
@@ -126,166 +125,221 @@ void print_counters(const FirmwareApp& app) {
               (unsigned long long)r.over_capacity);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+// ---- Options: command line and --config FILE, as key -> value. ----
+struct Options {
   std::map<std::string, std::string> kv;
   bool emulated = false;
+
+  bool has(const char* key) const { return kv.count(key) != 0; }
+  std::string get(const char* key, const char* fallback) const { return has(key) ? kv.at(key) : std::string(fallback); }
+  long long get_ll(const char* key, long long fallback) const {
+    return has(key) ? std::strtoll(kv.at(key).c_str(), nullptr, 0) : fallback;
+  }
+};
+
+// Returns 0 when the options are complete, else the exit code (usage or unreadable config).
+int parse_options(int argc, char** argv, Options& options) {
   for (int i = 1; i < argc; ++i) {
-    std::string a = argv[i];
+    const std::string a = argv[i];
     if (a == "--emulated") {
-      emulated = true;
-    } else if (a == "-h" || a == "--help") {
-      return usage();
-    } else if (a.rfind("--", 0) == 0) {
-      std::string key = a.substr(2), value;
-      const auto eq = key.find('=');
-      if (eq != std::string::npos) {
-        value = key.substr(eq + 1);
-        key.resize(eq);
-      } else if (i + 1 < argc) {
-        value = argv[++i];
-      } else {
-        return usage();
-      }
-      if (key == "config") {
-        if (!load_config(value, kv)) {
-          std::fprintf(stderr, "v2xloc-firmware: cannot read config %s\n", value.c_str());
-          return 2;
-        }
-      } else {
-        kv[key] = value;
-      }
+      options.emulated = true;
+      continue;
+    }
+    if (a == "-h" || a == "--help" || a.rfind("--", 0) != 0) return usage();
+    std::string key = a.substr(2), value;
+    const auto eq = key.find('=');
+    if (eq != std::string::npos) {
+      value = key.substr(eq + 1);
+      key.resize(eq);
+    } else if (i + 1 < argc) {
+      value = argv[++i];
     } else {
       return usage();
     }
+    if (key != "config") {
+      options.kv[key] = value;
+    } else if (!load_config(value, options.kv)) {
+      std::fprintf(stderr, "v2xloc-firmware: cannot read config %s\n", value.c_str());
+      return 2;
+    }
   }
-  if (kv.count("emulated") && kv["emulated"] != "0") emulated = true;
-  auto get = [&](const char* key, const char* fallback) { return kv.count(key) ? kv[key] : std::string(fallback); };
-  auto get_ll = [&](const char* key, long long fallback) {
-    return kv.count(key) ? std::strtoll(kv[key].c_str(), nullptr, 0) : fallback;
-  };
+  if (options.has("emulated") && options.kv["emulated"] != "0") options.emulated = true;
+  return 0;
+}
 
-  double lat = 48.1374, lon = 11.5755, alt = 520.0;
-  if (kv.count("origin") && std::sscanf(kv["origin"].c_str(), "%lf,%lf,%lf", &lat, &lon, &alt) != 3) return usage();
-  const std::int64_t epoch_ns = get_ll("epoch-ns", 0);
-  const long long max_frames = get_ll("max-frames", 0);
-  std::setvbuf(stdout, nullptr, _IOLBF, 0);
-
-  print_memory();
-  configure_localizer(g_localizer, make_geodetic_origin(lat, lon, alt));
-  g_decoder.set_epoch_ns(epoch_ns);
-  static LocalizerAdapter<SelectedLocalizer> port(g_localizer);
-
-  // ---- Backends ----
-  static hal::UdpLink cloud_link;
-  hal::UdpOptions cloud_options;
-  if (!hal::parse_ipv4(get("cloud-bind", emulated ? "127.0.0.1" : "0.0.0.0").c_str(), cloud_options.bind.address)) return usage();
-  cloud_options.bind.port = static_cast<std::uint16_t>(get_ll("cloud-port", 47200));
-  if (cloud_link.open(cloud_options) != hal::Status::kOk) {
-    std::fprintf(stderr, "v2xloc-firmware: cloud UDP: %s\n", cloud_link.last_error());
-    return 1;
+// The geodetic origin of the local ENU frame: option or config key `origin`, no built-in default
+// (a pose against a guessed origin would be silently wrong).
+bool read_origin(const Options& options, GeodeticOrigin& origin) {
+  double lat = 0.0, lon = 0.0, alt = 0.0;
+  if (!options.has("origin") || std::sscanf(options.kv.at("origin").c_str(), "%lf,%lf,%lf", &lat, &lon, &alt) != 3) {
+    std::fprintf(stderr, "v2xloc-firmware: --origin LAT,LON,ALT is required\n");
+    return false;
   }
-  force_receive_buffer(cloud_link.fd(), static_cast<int>(get_ll("rcvbuf", 32 << 20)));
+  origin = make_geodetic_origin(lat, lon, alt);
+  return true;
+}
 
-  static hal::LinuxClock linux_clock;
-  static hal::SimClock sim_clock(0, epoch_ns, hal::SimClock::SleepMode::kExternal);
-  static hal::UdpLink can_link;
-  static hal::SocketCanBus socketcan;
-  static hal::GpiodLine pps_gpiod, led_gpiod;
-  static hal::HidapiDevice imu_hidapi;
-  static hal::ScriptedGpioLine pps_scripted(sim_clock);
-  static CountingLedLine led_emulated;
-  static hal::ScriptedHidDevice imu_scripted(sim_clock);
-  static hal::EmulatedCanBus* emulated_can = nullptr;
-  static SimTimeCanBus* sim_time_can = nullptr;
-
+// ---- Backends: what main() hands the application, and what the exit report reads. ----
+struct Backends {
+  hal::UdpLink* cloud_link = nullptr;
+  hal::UdpLink* can_link = nullptr;      // emulated only
   hal::CanBus* can = nullptr;
   hal::Clock* clock = nullptr;
   hal::GpioLine* pps = nullptr;
   hal::GpioLine* led = nullptr;
-  hal::HidDevice* imu = nullptr;
-  int poll_fds[4] = {cloud_link.fd(), -1, -1, -1};
+  int poll_fds[3] = {-1, -1, -1};        // cloud socket, CAN socket, PPS events
+  // Emulation only, for the exit report.
+  hal::SimClock* sim_clock = nullptr;
+  hal::EmulatedCanBus* emulated_can = nullptr;
+  SimTimeCanBus* sim_time_can = nullptr;
+  CountingLedLine* counting_led = nullptr;
+};
 
-  if (emulated) {
-    hal::UdpOptions o;
-    o.bind.port = static_cast<std::uint16_t>(get_ll("can-port", 47100));
-    o.has_peer = true;
-    o.peer = hal::Ipv4Endpoint{0x7F000001u, static_cast<std::uint16_t>(get_ll("can-peer-port", 47101))};
-    o.receive_buffer_bytes = 1 << 20;
-    if (can_link.open(o) != hal::Status::kOk) {
-      std::fprintf(stderr, "v2xloc-firmware: emulated CAN UDP: %s\n", can_link.last_error());
-      return 1;
-    }
-    static hal::EmulatedCanBus ecan(can_link, sim_clock);
-    static SimTimeCanBus stcan(ecan, sim_clock);
-    emulated_can = &ecan;
-    sim_time_can = &stcan;
-    can = &stcan;
-    clock = &sim_clock;
-    if (get_ll("pps", 1) != 0) {
-      script_pps_edges(pps_scripted, epoch_ns, 3600LL * 1'000'000'000);  // one hour of edges, at start-up
-      pps = &pps_scripted;
-    }
-    led = &led_emulated;
-    if (kv.count("imu-script")) {
-      if (imu_scripted.load_script(kv["imu-script"].c_str()) != hal::Status::kOk) {
-        std::fprintf(stderr, "v2xloc-firmware: cannot load %s\n", kv["imu-script"].c_str());
-        return 1;
-      }
-      imu = &imu_scripted;
-    }
-    poll_fds[1] = can_link.fd();
-  } else {
-    static std::string iface = get("can-iface", "can0");
-    hal::SocketCanOptions o;
-    o.interface = iface.c_str();
-    o.bring_up = get_ll("can-bring-up", 0) != 0;
-    if (socketcan.open(o) != hal::Status::kOk) {
-      std::fprintf(stderr, "v2xloc-firmware: SocketCAN %s: %s\n", iface.c_str(), socketcan.last_error());
-      return 1;
-    }
-    can = &socketcan;
-    clock = &linux_clock;
-    poll_fds[1] = socketcan.fd();
-    static std::string pps_chip = get("pps-chip", "gpiochip0"), led_chip = get("led-chip", "gpiochip0");
-    if (kv.count("pps-line")) {
-      hal::GpiodLineOptions g;
-      g.chip = pps_chip.c_str();
-      g.offset = static_cast<unsigned>(get_ll("pps-line", 0));
-      if (pps_gpiod.open(g) != hal::Status::kOk) {
-        std::fprintf(stderr, "v2xloc-firmware: PPS: %s\n", pps_gpiod.last_error());
-        return 1;
-      }
-      pps = &pps_gpiod;
-      poll_fds[2] = pps_gpiod.event_fd();
-    }
-    if (kv.count("led-line")) {
-      hal::GpiodLineOptions g;
-      g.chip = led_chip.c_str();
-      g.offset = static_cast<unsigned>(get_ll("led-line", 0));
-      g.mode = hal::GpiodLineOptions::Mode::kOutput;
-      if (led_gpiod.open(g) != hal::Status::kOk) {
-        std::fprintf(stderr, "v2xloc-firmware: LED: %s\n", led_gpiod.last_error());
-        return 1;
-      }
-      led = &led_gpiod;
-    }
-    if (kv.count("imu")) {
-      unsigned vid = 0, pid = 0;
-      if (std::sscanf(kv["imu"].c_str(), "%x:%x", &vid, &pid) != 2) return usage();
-      hal::HidapiOptions h;
-      h.vendor_id = static_cast<std::uint16_t>(vid);
-      h.product_id = static_cast<std::uint16_t>(pid);
-      if (imu_hidapi.open(h) != hal::Status::kOk) {
-        std::fprintf(stderr, "v2xloc-firmware: IMU: %s\n", imu_hidapi.last_error());
-        return 1;
-      }
-      imu = &imu_hidapi;
-    }
+bool open_cloud_link(const Options& options, Backends& b) {
+  static hal::UdpLink cloud_link;
+  hal::UdpOptions o;
+  if (!hal::parse_ipv4(options.get("cloud-bind", options.emulated ? "127.0.0.1" : "0.0.0.0").c_str(), o.bind.address)) {
+    usage();
+    return false;
   }
+  o.bind.port = static_cast<std::uint16_t>(options.get_ll("cloud-port", 47200));
+  if (cloud_link.open(o) != hal::Status::kOk) {
+    std::fprintf(stderr, "v2xloc-firmware: cloud UDP: %s\n", cloud_link.last_error());
+    return false;
+  }
+  force_receive_buffer(cloud_link.fd(), static_cast<int>(options.get_ll("rcvbuf", 32 << 20)));
+  b.cloud_link = &cloud_link;
+  b.poll_fds[0] = cloud_link.fd();
+  return true;
+}
 
-  static FirmwareApp app(FirmwareHal{*can, cloud_link, *clock, pps, led, imu}, g_decoder, port);
+// CAN over UDP on loopback, the SimClock driven by the replayer's sim-time frames, scripted PPS
+// edges and a counting LED.
+bool open_emulated_backends(const Options& options, std::int64_t epoch_ns, Backends& b) {
+  static hal::SimClock sim_clock(0, epoch_ns, hal::SimClock::SleepMode::kExternal);
+  static hal::UdpLink can_link;
+  static hal::ScriptedGpioLine pps(sim_clock);
+  static CountingLedLine led;
+  hal::UdpOptions o;
+  o.bind.port = static_cast<std::uint16_t>(options.get_ll("can-port", 47100));
+  o.has_peer = true;
+  o.peer = hal::Ipv4Endpoint{0x7F000001u, static_cast<std::uint16_t>(options.get_ll("can-peer-port", 47101))};
+  o.receive_buffer_bytes = 1 << 20;
+  if (can_link.open(o) != hal::Status::kOk) {
+    std::fprintf(stderr, "v2xloc-firmware: emulated CAN UDP: %s\n", can_link.last_error());
+    return false;
+  }
+  static hal::EmulatedCanBus emulated_can(can_link, sim_clock);
+  static SimTimeCanBus sim_time_can(emulated_can, sim_clock);
+  b.can_link = &can_link;
+  b.can = &sim_time_can;
+  b.clock = &sim_clock;
+  if (options.get_ll("pps", 1) != 0) {
+    script_pps_edges(pps, epoch_ns, 3600LL * 1'000'000'000);  // one hour of edges, at start-up
+    b.pps = &pps;
+  }
+  b.led = &led;
+  b.poll_fds[1] = can_link.fd();
+  b.sim_clock = &sim_clock;
+  b.emulated_can = &emulated_can;
+  b.sim_time_can = &sim_time_can;
+  b.counting_led = &led;
+  return true;
+}
+
+bool open_gpio_line(hal::GpiodLine& line, const std::string& chip, long long offset,
+                    hal::GpiodLineOptions::Mode mode, const char* what) {
+  hal::GpiodLineOptions g;
+  g.chip = chip.c_str();
+  g.offset = static_cast<unsigned>(offset);
+  g.mode = mode;
+  if (line.open(g) == hal::Status::kOk) return true;
+  std::fprintf(stderr, "v2xloc-firmware: %s: %s\n", what, line.last_error());
+  return false;
+}
+
+// SocketCAN, the Linux clock, and PPS / LED on GPIO lines when their line numbers are given.
+bool open_real_backends(const Options& options, Backends& b) {
+  static hal::LinuxClock linux_clock;
+  static hal::SocketCanBus socketcan;
+  static hal::GpiodLine pps, led;
+  static const std::string iface = options.get("can-iface", "can0");
+  hal::SocketCanOptions o;
+  o.interface = iface.c_str();
+  o.bring_up = options.get_ll("can-bring-up", 0) != 0;
+  if (socketcan.open(o) != hal::Status::kOk) {
+    std::fprintf(stderr, "v2xloc-firmware: SocketCAN %s: %s\n", iface.c_str(), socketcan.last_error());
+    return false;
+  }
+  b.can = &socketcan;
+  b.clock = &linux_clock;
+  b.poll_fds[1] = socketcan.fd();
+  if (options.has("pps-line")) {
+    if (!open_gpio_line(pps, options.get("pps-chip", "gpiochip0"), options.get_ll("pps-line", 0),
+                        hal::GpiodLineOptions::Mode::kEdgeInput, "PPS")) {
+      return false;
+    }
+    b.pps = &pps;
+    b.poll_fds[2] = pps.event_fd();
+  }
+  if (options.has("led-line")) {
+    if (!open_gpio_line(led, options.get("led-chip", "gpiochip0"), options.get_ll("led-line", 0),
+                        hal::GpiodLineOptions::Mode::kOutput, "LED")) {
+      return false;
+    }
+    b.led = &led;
+  }
+  return true;
+}
+
+// Polls until SIGINT/SIGTERM or max_frames published frames (0: no limit); idle polls wait on the
+// sockets (or the heartbeat tick). No allocation in here: counted, reported at exit.
+void run_loop(FirmwareApp& app, const Backends& b, long long max_frames) {
+  pollfd fds[3];
+  nfds_t nfds = 0;
+  for (int fd : b.poll_fds) {
+    if (fd >= 0) fds[nfds++] = pollfd{fd, POLLIN, 0};
+  }
+  alloc_counter::arm(true);
+  while (!g_stop) {
+    if (app.poll_once() == 0) poll(fds, nfds, 20);
+    if (max_frames > 0 && app.counters().frames_published >= static_cast<unsigned long long>(max_frames)) break;
+  }
+  alloc_counter::arm(false);
+}
+
+void print_exit_report(const FirmwareApp& app, const Backends& b) {
+  std::printf("v2xloc-firmware: heap allocations in the main loop: %llu (%llu bytes)\n",
+              (unsigned long long)alloc_counter::allocations(), (unsigned long long)alloc_counter::bytes());
+  print_counters(app);
+  if (b.sim_time_can == nullptr) return;
+  std::printf("v2xloc-firmware: sim-time frames %llu (backwards %llu), sim time %.3f s, LED changes %llu\n",
+              (unsigned long long)b.sim_time_can->time_frames(), (unsigned long long)b.sim_time_can->time_backwards(),
+              b.sim_clock->monotonic_ns() * 1e-9, (unsigned long long)b.counting_led->changes());
+  const hal::CanCounters cc = b.emulated_can->counters();
+  std::printf("v2xloc-firmware: emulated CAN rx %llu tx %llu malformed %llu\n", (unsigned long long)cc.rx_frames,
+              (unsigned long long)cc.tx_frames, (unsigned long long)cc.rx_malformed);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options options;
+  if (const int exit_code = parse_options(argc, argv, options); exit_code != 0) return exit_code;
+  GeodeticOrigin origin;
+  if (!read_origin(options, origin)) return usage();
+  const std::int64_t epoch_ns = options.get_ll("epoch-ns", 0);
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
+
+  print_memory();
+  configure_localizer(g_localizer, origin);
+  g_decoder.set_epoch_ns(epoch_ns);
+  static LocalizerAdapter<SelectedLocalizer> port(g_localizer);
+
+  Backends b;
+  if (!open_cloud_link(options, b)) return 1;
+  if (!(options.emulated ? open_emulated_backends(options, epoch_ns, b) : open_real_backends(options, b))) return 1;
+  static FirmwareApp app(FirmwareHal{*b.can, *b.cloud_link, *b.clock, b.pps, b.led}, g_decoder, port);
   if (app.start() != hal::Status::kOk) {
     std::fprintf(stderr, "v2xloc-firmware: CAN filter set-up failed\n");
     return 1;
@@ -293,32 +347,10 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   std::printf("v2xloc-firmware: ready can=%u cloud=%u mode=%s\n",
-              emulated ? can_link.local_endpoint().port : 0u, cloud_link.local_endpoint().port,
-              emulated ? "emulated" : "real");
+              b.can_link != nullptr ? b.can_link->local_endpoint().port : 0u, b.cloud_link->local_endpoint().port,
+              options.emulated ? "emulated" : "real");
 
-  // ---- Main loop: no allocation from here on (counted, reported at exit). ----
-  pollfd fds[4];
-  nfds_t nfds = 0;
-  for (int fd : poll_fds) {
-    if (fd >= 0) fds[nfds++] = pollfd{fd, POLLIN, 0};
-  }
-  alloc_counter::arm(true);
-  while (!g_stop) {
-    if (app.poll_once() == 0) poll(fds, nfds, 20);  // idle: wait for input (or the heartbeat tick)
-    if (max_frames > 0 && app.counters().frames_published >= static_cast<unsigned long long>(max_frames)) break;
-  }
-  alloc_counter::arm(false);
-
-  std::printf("v2xloc-firmware: heap allocations in the main loop: %llu (%llu bytes)\n",
-              (unsigned long long)alloc_counter::allocations(), (unsigned long long)alloc_counter::bytes());
-  print_counters(app);
-  if (sim_time_can != nullptr) {
-    std::printf("v2xloc-firmware: sim-time frames %llu (backwards %llu), sim time %.3f s, LED changes %llu\n",
-                (unsigned long long)sim_time_can->time_frames(), (unsigned long long)sim_time_can->time_backwards(),
-                sim_clock.monotonic_ns() * 1e-9, (unsigned long long)led_emulated.changes());
-    const hal::CanCounters cc = emulated_can->counters();
-    std::printf("v2xloc-firmware: emulated CAN rx %llu tx %llu malformed %llu\n", (unsigned long long)cc.rx_frames,
-                (unsigned long long)cc.tx_frames, (unsigned long long)cc.rx_malformed);
-  }
+  run_loop(app, b, options.get_ll("max-frames", 0));
+  print_exit_report(app, b);
   return 0;
 }

@@ -19,7 +19,8 @@ struct Signal {
   double max;
 };
 
-// ---- Signal table (keep in step with tools/dbc/v2xloc.dbc) ----------------------------------
+// ---- Signal table: tools/dbc/v2xloc.dbc is the source of truth; DbcConformance.CodecSignalTableEqualsDbc
+// fails on any difference (kSignalTable below lists these constants by DBC name). ----
 constexpr Signal kWheelSpeed{0, 16, true, 0.01, 0.0, -327.68, 327.67};
 constexpr Signal kYawRate{16, 16, true, 0.0001, 0.0, -3.2768, 3.2767};
 constexpr Signal kLatitude{0, 32, true, 1e-7, 0.0, -90.0, 90.0};
@@ -75,6 +76,58 @@ constexpr unsigned kCounterBit48 = 48;  // VehicleMotion, PoseSigma, Heartbeat, 
 constexpr unsigned kCounterBit52 = 52;  // GnssStatus, Pose/Registration/Odometry frames (flags in 48..51)
 constexpr unsigned kFlagsBit = 48;
 constexpr unsigned kCrcByte = 7;
+
+// The table above by message and DBC signal name, for the DBC conformance test (can_signal_table).
+constexpr NamedCanSignal kSignalTable[] = {
+#define V2XLOC_SIGNAL(id, name, s) {id, name, s.start, s.length, s.is_signed, s.factor, s.offset, s.min, s.max}
+    V2XLOC_SIGNAL(kVehicleMotionId, "WheelSpeed", kWheelSpeed),
+    V2XLOC_SIGNAL(kVehicleMotionId, "YawRate", kYawRate),
+    V2XLOC_SIGNAL(kGnssPositionId, "Latitude", kLatitude),
+    V2XLOC_SIGNAL(kGnssPositionId, "Longitude", kLongitude),
+    V2XLOC_SIGNAL(kGnssStatusId, "Altitude", kAltitude),
+    V2XLOC_SIGNAL(kGnssStatusId, "HorizontalAccuracy", kHAcc),
+    V2XLOC_SIGNAL(kGnssStatusId, "VerticalAccuracy", kVAcc),
+    V2XLOC_SIGNAL(kGnssStatusId, "NumSatellites", kNumSats),
+    V2XLOC_SIGNAL(kGnssStatusId, "FixType", kFixType),
+    V2XLOC_SIGNAL(kGnssStatusId, "Counter", kGnssStatusCounter),
+    V2XLOC_SIGNAL(kGnssVelocityId, "VelEast", kVelEast),
+    V2XLOC_SIGNAL(kGnssVelocityId, "VelNorth", kVelNorth),
+    V2XLOC_SIGNAL(kGnssVelocityId, "VelUp", kVelUp),
+    V2XLOC_SIGNAL(kGnssVelocityId, "SpeedAccuracy", kSpeedAcc),
+    V2XLOC_SIGNAL(kGnssTimeDopId, "TimeOfWeek", kTimeOfWeek),
+    V2XLOC_SIGNAL(kGnssTimeDopId, "Week", kWeek),
+    V2XLOC_SIGNAL(kGnssTimeDopId, "Hdop", kHdop),
+    V2XLOC_SIGNAL(kGnssTimeDopId, "Pdop", kPdop),
+    V2XLOC_SIGNAL(kPosePositionId, "PoseX", kPoseX),
+    V2XLOC_SIGNAL(kPosePositionId, "PoseY", kPoseY),
+    V2XLOC_SIGNAL(kPoseAttitudeId, "PoseZ", kPoseZ),
+    V2XLOC_SIGNAL(kPoseAttitudeId, "PoseYaw", kPoseYaw),
+    V2XLOC_SIGNAL(kPoseAttitudeId, "FrameCounter", kFrameCounter),
+    V2XLOC_SIGNAL(kPoseSigmaId, "SigmaX", kSigmaX),
+    V2XLOC_SIGNAL(kPoseSigmaId, "SigmaY", kSigmaY),
+    V2XLOC_SIGNAL(kPoseSigmaId, "SigmaZ", kSigmaZ),
+    V2XLOC_SIGNAL(kPoseSigmaId, "SigmaYaw", kSigmaYaw),
+    V2XLOC_SIGNAL(kHeartbeatId, "State", kState),
+    V2XLOC_SIGNAL(kHeartbeatId, "ErrorFlags", kErrorFlags),
+    V2XLOC_SIGNAL(kHeartbeatId, "Uptime", kUptime),
+    V2XLOC_SIGNAL(kHeartbeatId, "CanRxErrors", kCanRxErrors),
+    V2XLOC_SIGNAL(kHeartbeatId, "UdpDropped", kUdpDropped),
+    V2XLOC_SIGNAL(kRegistrationPositionId, "RegX", kRegX),
+    V2XLOC_SIGNAL(kRegistrationPositionId, "RegY", kRegY),
+    V2XLOC_SIGNAL(kRegistrationQualityId, "RegZ", kRegZ),
+    V2XLOC_SIGNAL(kRegistrationQualityId, "RegFitness", kRegFitness),
+    V2XLOC_SIGNAL(kRegistrationQualityId, "RegRmse", kRegRmse),
+    V2XLOC_SIGNAL(kRegistrationQualityId, "FrameCounter", kRegFrameCounter),
+    V2XLOC_SIGNAL(kGateDecisionId, "DecidedFrame", kGateDecidedFrame),
+    V2XLOC_SIGNAL(kGateDecisionId, "FrameCounter", kGateFrameCounter),
+    V2XLOC_SIGNAL(kGateDecisionId, "Mode", kGateMode),
+    V2XLOC_SIGNAL(kOdometryPositionId, "OdomX", kOdomX),
+    V2XLOC_SIGNAL(kOdometryPositionId, "OdomY", kOdomY),
+    V2XLOC_SIGNAL(kOdometryAttitudeId, "OdomZ", kOdomZ),
+    V2XLOC_SIGNAL(kOdometryAttitudeId, "OdomYaw", kOdomYaw),
+    V2XLOC_SIGNAL(kOdometryAttitudeId, "FrameCounter", kOdomFrameCounter),
+#undef V2XLOC_SIGNAL
+};
 
 // Physical -> raw with clamping; NaN becomes the value nearest zero in range. Counts saturation.
 void encode(std::uint8_t* data, const Signal& s, double phys, PackStats* stats) {
@@ -160,6 +213,8 @@ DecodeStatus range_status(bool out_of_range) {
 }
 
 }  // namespace
+
+std::span<const NamedCanSignal> can_signal_table() { return kSignalTable; }
 
 const char* to_string(DecodeStatus status) {
   switch (status) {

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 
 #include "hal/can_frame.hpp"
 
@@ -186,14 +187,38 @@ enum class LocalizerState : std::uint8_t {
 };
 inline constexpr std::uint8_t kLocalizerStateMax = 5;
 
+// Heartbeat ErrorFlags bits (DBC comment of 0x300 ErrorFlags, WIRE_FORMATS.md).
+namespace heartbeat_error {
+inline constexpr std::uint8_t kCanTimeout = 1u << 0;        // no CAN frame within the input timeout
+inline constexpr std::uint8_t kUdpTimeout = 1u << 1;        // no datagram within the input timeout
+inline constexpr std::uint8_t kGnssTimeout = 1u << 2;       // no GNSS fix within the GNSS timeout
+inline constexpr std::uint8_t kCapacityOverflow = 1u << 3;  // reassembly ran out of capacity
+}  // namespace heartbeat_error
+
 struct Heartbeat {
   LocalizerState state = LocalizerState::kInit;
-  std::uint8_t error_flags = 0;    // 4 bits, see WIRE_FORMATS.md
+  std::uint8_t error_flags = 0;    // heartbeat_error bits (4 bits)
   double uptime_s = 0.0;           // [0, 1677721.5], 0.1 s
   std::uint8_t can_rx_errors = 0;  // saturating counters since start-up, [0, 255]
   std::uint8_t udp_dropped = 0;
   std::uint8_t counter = 0;
 };
+
+// The codec's scaled-signal table (the constants pack/unpack use), by message id and DBC signal
+// name. Flags, rolling counters and CRC bytes sit at fixed bits; tests/unit/can_protocol checks
+// this table, and every frame the codec packs, against tools/dbc/v2xloc.dbc.
+struct NamedCanSignal {
+  std::uint32_t message_id;
+  const char* name;
+  unsigned start;   // LSB, Intel byte order
+  unsigned length;
+  bool is_signed;
+  double factor;    // physical = raw * factor + offset
+  double offset;
+  double min;       // physical range
+  double max;
+};
+std::span<const NamedCanSignal> can_signal_table();
 
 // Packing never fails: out-of-range values are clamped (counted in stats, if given).
 CanFrame pack(const VehicleMotion& m, PackStats* stats = nullptr);

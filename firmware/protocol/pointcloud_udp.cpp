@@ -5,42 +5,14 @@
 #include <cstring>
 
 #include "firmware/protocol/crc32.hpp"
+#include "hal/little_endian.hpp"
 
 namespace v2xloc::protocol {
 namespace {
 
 using namespace pointcloud_wire;
 
-// Explicit little-endian byte-by-byte packing: identical bytes on little- and big-endian hosts.
-void put_u8(std::uint8_t* p, std::uint8_t v) { p[0] = v; }
-void put_u16(std::uint8_t* p, std::uint16_t v) {
-  p[0] = static_cast<std::uint8_t>(v);
-  p[1] = static_cast<std::uint8_t>(v >> 8);
-}
-void put_u32(std::uint8_t* p, std::uint32_t v) {
-  for (int i = 0; i < 4; ++i) p[i] = static_cast<std::uint8_t>(v >> (8 * i));
-}
-void put_u64(std::uint8_t* p, std::uint64_t v) {
-  for (int i = 0; i < 8; ++i) p[i] = static_cast<std::uint8_t>(v >> (8 * i));
-}
-void put_f32(std::uint8_t* p, float v) { put_u32(p, std::bit_cast<std::uint32_t>(v)); }
-void put_f64(std::uint8_t* p, double v) { put_u64(p, std::bit_cast<std::uint64_t>(v)); }
-
-std::uint16_t get_u16(const std::uint8_t* p) {
-  return static_cast<std::uint16_t>(p[0] | (p[1] << 8));
-}
-std::uint32_t get_u32(const std::uint8_t* p) {
-  std::uint32_t v = 0;
-  for (int i = 3; i >= 0; --i) v = (v << 8) | p[i];
-  return v;
-}
-std::uint64_t get_u64(const std::uint8_t* p) {
-  std::uint64_t v = 0;
-  for (int i = 7; i >= 0; --i) v = (v << 8) | p[i];
-  return v;
-}
-float get_f32(const std::uint8_t* p) { return std::bit_cast<float>(get_u32(p)); }
-double get_f64(const std::uint8_t* p) { return std::bit_cast<double>(get_u64(p)); }
+using namespace hal::le;  // the house's one little-endian byte packer
 
 // Header field offsets (see WIRE_FORMATS.md).
 enum Offset : std::size_t {

@@ -1,70 +1,80 @@
 // v2xloc-sim generate --scenario 0..3 --perm 4_infra_2_agent|4_infra|2_infra --out DIR [--seed N]
-//                     [--duration S] [--quick]
-// v2xloc-sim generate --all --out DIR [--seed N] [--duration S] [--quick]
-// --all writes DIR/sim<k>_<perm>/ for all 12 combinations.
+//                     [--duration S] [--quick] [--no-stereo]
+// v2xloc-sim generate --all --out DIR [--seed N] [--duration S] [--quick] [--no-stereo]
+// --all writes DIR/sim<k>_<perm>/ for all 12 combinations (one after the other; tools/run-demo.sh
+// runs one process per recording instead, on every core).
 #include "host_sim/recording/recorder.hpp"
 
+#include <CLI/CLI.hpp>
+#include <unistd.h>
+
 #include <chrono>
+#include <functional>
+#include <memory>
 #include <cstdio>
-#include <cstdlib>
 #include <string>
 #include <vector>
 
 namespace {
 
-int usage() {
-  std::fprintf(stderr,
-               "usage: v2xloc-sim generate --scenario 0..3 --perm 4_infra_2_agent|4_infra|2_infra --out DIR\n"
-               "                           [--seed N] [--duration S] [--quick] [--no-stereo]\n"
-               "       v2xloc-sim generate --all --out DIR [--seed N] [--duration S] [--quick] [--no-stereo]\n");
-  return 2;
+using namespace v2xloc::sim;
+
+// On a terminal one line is redrawn in place; in a log (stderr not a terminal, e.g. several
+// generators in parallel) a line per quarter, so interleaved output stays readable.
+std::function<void(int, int)> progress_printer(const std::string& tag, const std::string& name) {
+  const bool tty = isatty(STDERR_FILENO) != 0;
+  auto last = std::make_shared<int>(-1);
+  return [tty, tag, name, last](int done, int total) {
+    const int pct = 100 * done / total;
+    const int step = tty ? 5 : 25;
+    if (pct / step == *last / step && done != total) return;
+    *last = pct;
+    if (tty) {
+      std::fprintf(stderr, "\r%s %-22s %3d%% (%d/%d frames)", tag.c_str(), name.c_str(), pct, done, total);
+      if (done == total) std::fputc('\n', stderr);
+    } else {
+      std::fprintf(stderr, "%s %-22s %3d%% (%d/%d frames)\n", tag.c_str(), name.c_str(), pct, done, total);
+    }
+    std::fflush(stderr);
+  };
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  using namespace v2xloc::sim;
-  if (argc < 2 || std::string(argv[1]) != "generate") return usage();
+  CLI::App app{"Generates simulated recordings (scenarios Sim 0-3 x sensor permutations); see\n"
+               "host_sim/RECORDING_FORMAT.md.",
+               "v2xloc-sim"};
+  app.require_subcommand(1);
+  CLI::App* generate = app.add_subcommand("generate", "render one recording (--scenario, --perm) or all 12 (--all)");
   RecorderConfig base;
   int scenario = -1;
   std::string perm_name;
   bool all = false;
+  bool no_stereo = false;
   std::string out;
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
-    if (a == "--all") {
-      all = true;
-    } else if (a == "--quick") {
-      base.quick = true;
-    } else if (a == "--no-stereo") {
-      base.stereo = false;
-    } else if (a == "--scenario") {
-      const char* v = next();
-      if (!v) return usage();
-      scenario = std::atoi(v);
-    } else if (a == "--perm") {
-      const char* v = next();
-      if (!v) return usage();
-      perm_name = v;
-    } else if (a == "--out") {
-      const char* v = next();
-      if (!v) return usage();
-      out = v;
-    } else if (a == "--seed") {
-      const char* v = next();
-      if (!v) return usage();
-      base.seed = std::strtoull(v, nullptr, 10);
-    } else if (a == "--duration") {
-      const char* v = next();
-      if (!v) return usage();
-      base.duration = std::atof(v);
-    } else {
-      std::fprintf(stderr, "unknown argument %s\n", a.c_str());
-      return usage();
-    }
+  std::vector<std::string> perm_names;
+  for (Permutation p : kAllPermutations) perm_names.push_back(permutation_name(p));
+  auto* scenario_opt = generate->add_option("--scenario", scenario, "scenario Sim 0..3")
+                           ->check(CLI::Range(0, kScenarioCount - 1));
+  auto* perm_opt = generate->add_option("--perm", perm_name, "sensor permutation")->check(CLI::IsMember(perm_names));
+  auto* all_flag = generate->add_flag("--all", all, "all 12 recordings, as OUT/sim<k>_<perm>/");
+  all_flag->excludes(scenario_opt)->excludes(perm_opt);
+  generate->add_option("--out", out, "recording folder (with --all: the parent folder)")->required();
+  generate->add_option("--seed", base.seed, "noise seed (same seed, same bytes)");
+  generate->add_option("--duration", base.duration, "seconds (default: the scenario's own; --quick: 3 s)")
+      ->check(CLI::NonNegativeNumber);
+  generate->add_flag("--quick", base.quick, "CI configuration: few beams / azimuth steps, coarse stereo");
+  generate->add_flag("--no-stereo", no_stereo, "no disparity maps");
+  try {
+    app.parse(argc, argv);
+    if (!all && (scenario < 0 || perm_name.empty()))
+      throw CLI::ValidationError("generate", "needs --scenario and --perm, or --all");
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;  // usage errors keep exit code 2
   }
-  if (out.empty()) return usage();
+  base.stereo = !no_stereo;
+
   std::vector<RecorderConfig> jobs;
   if (all) {
     for (int s = 0; s < kScenarioCount; ++s)
@@ -76,11 +86,9 @@ int main(int argc, char** argv) {
         jobs.push_back(c);
       }
   } else {
-    Permutation p;
-    if (scenario < 0 || scenario >= kScenarioCount || !parse_permutation(perm_name, p)) return usage();
     RecorderConfig c = base;
     c.scenario = scenario;
-    c.permutation = p;
+    parse_permutation(perm_name, c.permutation);  // checked by IsMember above
     c.out_dir = out;
     jobs.push_back(c);
   }
@@ -88,22 +96,13 @@ int main(int argc, char** argv) {
   std::vector<RecordingSummary> summaries;
   for (std::size_t j = 0; j < jobs.size(); ++j) {
     const std::string name = recording_name(jobs[j].scenario, jobs[j].permutation);
-    int last_pct = -1;
-    auto progress = [&](int done, int total) {
-      const int pct = 100 * done / total;
-      if (pct / 5 != last_pct / 5 || done == total) {
-        std::fprintf(stderr, "\r[%zu/%zu] %-22s %3d%% (%d/%d frames)", j + 1, jobs.size(), name.c_str(), pct, done, total);
-        std::fflush(stderr);
-        last_pct = pct;
-      }
-    };
+    const std::string tag = "[" + std::to_string(j + 1) + "/" + std::to_string(jobs.size()) + "]";
     RecordingSummary s;
     std::string error;
-    if (!generate_recording(jobs[j], s, error, progress)) {
+    if (!generate_recording(jobs[j], s, error, progress_printer(tag, name))) {
       std::fprintf(stderr, "\nerror: %s: %s\n", name.c_str(), error.c_str());
       return 1;
     }
-    std::fprintf(stderr, "\n");
     summaries.push_back(s);
   }
   const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -1,7 +1,6 @@
-// Minimal PNG (ISO/IEC 15948) writer and reader without zlib: the IDAT stream uses stored
-// (uncompressed) deflate blocks (RFC 1951 sec. 3.2.4) inside a zlib wrapper (RFC 1950, Adler-32),
-// chunks carry CRC-32 (ISO 3309). Any PNG decoder reads these files; our reader only accepts
-// stored-deflate streams (the files we write), which is all the recording reader needs.
+// PNG files through libpng (the field's PNG library): 16-bit grayscale (KITTI-style disparity maps
+// in recordings) and 8-bit RGB (top views). Any PNG decoder reads what we write; the readers accept
+// any valid PNG of the right kind, whatever compression or filters the writer chose.
 #pragma once
 
 #include <cstdint>
@@ -10,9 +9,6 @@
 #include <vector>
 
 namespace v2xloc::sim {
-
-std::uint32_t crc32(std::span<const std::uint8_t> bytes, std::uint32_t crc = 0);
-std::uint32_t adler32(std::span<const std::uint8_t> bytes, std::uint32_t adler = 1);
 
 struct Image16 {  // single channel, 16 bit (e.g. KITTI-style disparity * 256)
   int width = 0;
@@ -26,13 +22,20 @@ struct ImageRgb {  // 8-bit RGB
   std::vector<std::uint8_t> pixels;  // row-major, 3 bytes per pixel
 };
 
-std::vector<std::uint8_t> encode_png(const Image16& image);
-std::vector<std::uint8_t> encode_png(const ImageRgb& image);
+// Encoders return false with `error` set when the image is empty or inconsistent (pixel count
+// != width * height) or libpng fails.
+bool encode_png(const Image16& image, std::vector<std::uint8_t>& out, std::string& error);
+bool encode_png(const ImageRgb& image, std::vector<std::uint8_t>& out, std::string& error);
 bool write_png(const std::string& path, const Image16& image, std::string& error);
 bool write_png(const std::string& path, const ImageRgb& image, std::string& error);
 
-// Reads a 16-bit grayscale PNG with stored-deflate IDAT and filter type 0 (what we write).
+// A 16-bit grayscale PNG (anything else is an error: a disparity map must keep its 16 bits).
 bool decode_png16(std::span<const std::uint8_t> bytes, Image16& out, std::string& error);
 bool read_png16(const std::string& path, Image16& out, std::string& error);
+
+// Any PNG (gray, palette, RGB, with or without alpha, 8 or 16 bit) converted to 8-bit RGB; alpha is
+// dropped. For checking written pictures (tests, tools).
+bool decode_png_rgb(std::span<const std::uint8_t> bytes, ImageRgb& out, std::string& error);
+bool read_png_rgb(const std::string& path, ImageRgb& out, std::string& error);
 
 }  // namespace v2xloc::sim

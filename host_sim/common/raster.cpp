@@ -1,5 +1,7 @@
 #include "host_sim/common/raster.hpp"
 
+#include "host_sim/common/bitmap_font.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -97,6 +99,46 @@ void Canvas::cross(const Eigen::Vector2d& centre, double half_px, Rgb c) {
   const double h = half_px / ppm_;
   line(centre + Eigen::Vector2d(-h, -h), centre + Eigen::Vector2d(h, h), c);
   line(centre + Eigen::Vector2d(-h, h), centre + Eigen::Vector2d(h, -h), c);
+}
+
+void Canvas::fill_rect_px(int x0, int y0, int x1, int y1, Rgb c) {
+  for (int y = std::max(0, y0); y < std::min(img_.height, y1); ++y)
+    for (int x = std::max(0, x0); x < std::min(img_.width, x1); ++x) put(x, y, c);
+}
+
+void Canvas::frame_rect_px(int x0, int y0, int x1, int y1, Rgb c) {
+  fill_rect_px(x0, y0, x1, y0 + 1, c);
+  fill_rect_px(x0, y1 - 1, x1, y1, c);
+  fill_rect_px(x0, y0, x0 + 1, y1, c);
+  fill_rect_px(x1 - 1, y0, x1, y1, c);
+}
+
+void Canvas::line_px(double xa, double ya, double xb, double yb, Rgb c, double width_px) {
+  const double len = std::hypot(xb - xa, yb - ya);
+  const int steps = std::max(1, static_cast<int>(std::ceil(len * 2.0)));
+  const double r = std::max(0.5, width_px * 0.5);
+  for (int i = 0; i <= steps; ++i) {
+    const double f = static_cast<double>(i) / steps;
+    disc_px(xa + (xb - xa) * f, ya + (yb - ya) * f, r, c);
+  }
+}
+
+// One glyph cell is the 5-pixel glyph plus one pixel of spacing.
+int Canvas::text_width_px(const std::string& text, int scale) {
+  return text.empty() ? 0 : static_cast<int>(text.size()) * (kGlyphWidth + 1) * scale - scale;
+}
+
+int Canvas::text_height_px(int scale) { return kGlyphHeight * scale; }
+
+void Canvas::text_px(int x, int y, const std::string& text, Rgb c, int scale) {
+  for (char ch : text) {
+    const GlyphRows& g = glyph(ch);
+    for (int r = 0; r < kGlyphHeight; ++r)
+      for (int col = 0; col < kGlyphWidth; ++col)
+        if (g[static_cast<std::size_t>(r)] & (1u << (kGlyphWidth - 1 - col)))
+          fill_rect_px(x + col * scale, y + r * scale, x + (col + 1) * scale, y + (r + 1) * scale, c);
+    x += (kGlyphWidth + 1) * scale;
+  }
 }
 
 }  // namespace v2xloc::sim

@@ -28,6 +28,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 
 namespace v2xloc::sim {
 namespace {
@@ -89,6 +90,491 @@ std::uint64_t folder_bytes(const fs::path& dir) {
   return total;
 }
 
+// ---- The steps of generate_recording, in order ----
+
+// What every step shares: the configuration, the simulated scenario, the sensor set-up and where
+// files go. Write errors are collected and reported after each step.
+struct Session {
+  explicit Session(const RecorderConfig& c) : cfg(c) {}
+  const RecorderConfig& cfg;
+  Simulation sim;
+  fs::path root;
+  LidarConfig ego_cfg;
+  StereoConfig stereo_cfg;
+  std::vector<InfraSite> sites;
+  bool agents = false;
+  int frames = 0;
+  double dt_frame = 0.1;
+  int map_every = 5;
+  std::vector<std::string> errors;
+  std::string err;  // scratch for the writers' messages
+  // Scratch buffers reused by every frame.
+  LidarScan scan;
+  Image16 disparity;
+
+  const Scenario& scenario() const { return sim.scenario; }
+  World& world() { return sim.iw.world; }
+
+  void write_cloud(const std::string& rel, const LidarScan& s) {
+    const cloud_io::PointCloud c = to_cloud(s);
+    if (!cloud_io::write_pcd((root / rel).string(), c, cloud_io::PcdEncoding::kBinaryCompressed, err)) errors.push_back(err);
+  }
+  bool failed(std::string& error) const {
+    if (errors.empty()) return false;
+    error = errors.front();
+    return true;
+  }
+};
+
+// What the frame loop produces for the later steps.
+struct FrameProducts {
+  Json map_clouds = Json::array();
+  std::vector<TimedPose> ground_truth;
+  std::vector<double> points_per_scan;
+};
+
+// Agent self-localization error: a per-run bias (dx, dy, dyaw) drawn first, then per-cloud noise
+// from the same stream, in cloud order (the stream order is part of the recording's bytes).
+struct AgentPoseError {
+  Rng rng;
+  std::vector<Eigen::Vector3d> bias;
+};
+
+bool setup(Session& s, std::string& error) {
+  const RecorderConfig& cfg = s.cfg;
+  if (cfg.scenario < 0 || cfg.scenario >= kScenarioCount) {
+    error = "scenario must be 0..3";
+    return false;
+  }
+  const double duration = cfg.duration > 0 ? cfg.duration : (cfg.quick ? 3.0 : 0.0);
+  build_simulation(cfg.scenario, cfg.seed, duration, WorldConfig{}, s.sim);
+  s.root = fs::path(cfg.out_dir);
+  s.ego_cfg = ego_lidar_config(cfg.quick);
+  s.stereo_cfg = ego_stereo_config(cfg.quick);
+  s.sites = infra_sites(cfg.permutation);
+  s.agents = uses_agents(cfg.permutation);
+  s.frames = s.scenario().frame_count();
+  s.dt_frame = 1.0 / s.scenario().frame_rate;
+  s.map_every = std::max(1, static_cast<int>(std::lround(s.scenario().frame_rate / cfg.map_rate_hz)));
+  return true;
+}
+
+bool create_folders(const Session& s, std::string& error) {
+  std::error_code ec;
+  fs::create_directories(s.root / "ego_lidar", ec);
+  if (s.cfg.stereo) fs::create_directories(s.root / "stereo", ec);
+  if (ec) {
+    error = "cannot create " + s.root.string() + ": " + ec.message();
+    return false;
+  }
+  for (const auto& site : s.sites) fs::create_directories(s.root / "infra" / site.name, ec);
+  if (s.agents)
+    for (std::size_t a = 0; a < s.scenario().agents.size(); ++a)
+      fs::create_directories(s.root / "agents" / ("agent_" + std::to_string(a)), ec);
+  return true;
+}
+
+AgentPoseError draw_agent_pose_bias(const Session& s) {
+  const RecorderConfig& cfg = s.cfg;
+  AgentPoseError e{Rng(derive_seed(cfg.seed, {kAgentPose})), {}};
+  for (std::size_t a = 0; a < s.scenario().agents.size(); ++a)
+    e.bias.emplace_back(e.rng.gaussian(cfg.agent_pos_bias_sigma), e.rng.gaussian(cfg.agent_pos_bias_sigma),
+                        e.rng.gaussian(cfg.agent_yaw_bias_sigma_deg * M_PI / 180.0));
+  return e;
+}
+
+// Ego LiDAR sweep (raw: each point in the sensor frame at its own firing time) and disparity map.
+void record_ego_frame(Session& s, int i, double t, FrameProducts& out) {
+  const Scenario& sc = s.scenario();
+  Rng rng(derive_seed(s.cfg.seed, {kEgoLidar, static_cast<std::uint64_t>(i)}));
+  render_lidar_sweep(s.world(), s.ego_cfg, [&](double tt) { return sc.ego.body_to_enu(tt); }, t, s.sim.ego_body, rng, s.scan);
+  out.points_per_scan.push_back(static_cast<double>(s.scan.points.size()));
+  s.write_cloud(frame_file("ego_lidar", i, "pcd"), s.scan);
+  out.ground_truth.push_back({t, sc.ego.body_to_enu(t)});
+
+  if (s.cfg.stereo) {
+    Rng srng(derive_seed(s.cfg.seed, {kStereo, static_cast<std::uint64_t>(i)}));
+    render_disparity(s.world(), s.stereo_cfg, sc.ego.body_to_enu(t), t, s.sim.ego_body, srng, s.disparity);
+    if (!write_png((s.root / frame_file("stereo", i, "png")).string(), s.disparity, s.err)) s.errors.push_back(s.err);
+  }
+}
+
+void record_infra_clouds(Session& s, int i, double t, FrameProducts& out) {
+  for (std::size_t k = 0; k < s.sites.size(); ++k) {
+    LidarConfig icfg = infra_lidar_config(s.cfg.quick);
+    icfg.name = s.sites[k].name;
+    icfg.mount = Eigen::Isometry3d::Identity();
+    Rng irng(derive_seed(s.cfg.seed, {kInfra, k, static_cast<std::uint64_t>(i)}));
+    const Eigen::Isometry3d pose = s.sites[k].sensor_to_enu;
+    render_lidar_sweep(s.world(), icfg, [&](double) { return pose; }, t, -1, irng, s.scan);
+    const std::string rel = "infra/" + s.sites[k].name + frame_file("", i, "pcd");
+    s.write_cloud(rel, s.scan);
+    Json e = Json::object();
+    e.set("sensor", s.sites[k].name);
+    e.set("kind", "infra");
+    e.set("stamp_s", t);
+    e.set("file", rel);
+    e.set("points", s.scan.points.size());
+    e.set("sensor_pose_enu", pose_to_json(pose));
+    e.set("true_sensor_pose_enu", pose_to_json(pose));
+    out.map_clouds.push(std::move(e));
+  }
+}
+
+void record_agent_clouds(Session& s, int i, double t, AgentPoseError& pose_error, FrameProducts& out) {
+  const RecorderConfig& cfg = s.cfg;
+  for (std::size_t a = 0; a < s.scenario().agents.size(); ++a) {
+    const Trajectory& traj = s.scenario().agents[a];
+    const LidarConfig acfg = agent_lidar_config(cfg.quick);
+    Rng arng(derive_seed(cfg.seed, {kAgentLidar, a, static_cast<std::uint64_t>(i)}));
+    render_lidar_sweep(s.world(), acfg, [&](double tt) { return traj.body_to_enu(tt); }, t, s.sim.agent_bodies[a], arng,
+                       s.scan);
+    // The agent shares a motion-compensated sweep: points re-expressed in the sensor frame at
+    // the stamp with its own (accurate over 0.1 s) odometry; per-point times are kept.
+    const Eigen::Isometry3d sensor_at_stamp_inv = (traj.body_to_enu(t) * acfg.mount).inverse();
+    for (auto& p : s.scan.points) {
+      const Eigen::Isometry3d at_fire = traj.body_to_enu(t + p.t) * acfg.mount;
+      p.p = (sensor_at_stamp_inv * (at_fire * p.p.cast<double>())).cast<float>();
+    }
+    const std::string name = "agent_" + std::to_string(a);
+    const std::string rel = "agents/" + name + frame_file("", i, "pcd");
+    s.write_cloud(rel, s.scan);
+    // Reported pose = truth + bias + noise (the agent's own localization error).
+    PlanarPose rep = traj.pose(t);
+    rep.x += pose_error.bias[a].x() + pose_error.rng.gaussian(cfg.agent_pos_noise_sigma);
+    rep.y += pose_error.bias[a].y() + pose_error.rng.gaussian(cfg.agent_pos_noise_sigma);
+    rep.yaw += pose_error.bias[a].z() + pose_error.rng.gaussian(cfg.agent_yaw_noise_sigma_deg * M_PI / 180.0);
+    Json e = Json::object();
+    e.set("sensor", name + "_lidar");
+    e.set("kind", "agent");
+    e.set("agent", name);
+    e.set("stamp_s", t);
+    e.set("file", rel);
+    e.set("points", s.scan.points.size());
+    e.set("sensor_pose_enu", pose_to_json(planar(rep) * acfg.mount));
+    e.set("true_sensor_pose_enu", pose_to_json(traj.body_to_enu(t) * acfg.mount));
+    out.map_clouds.push(std::move(e));
+  }
+}
+
+// The 10 Hz loop: every frame the ego sensors, every map_every-th frame the map clouds.
+bool record_frames(Session& s, FrameProducts& out, std::string& error, const std::function<void(int, int)>& progress) {
+  AgentPoseError pose_error = draw_agent_pose_bias(s);
+  for (int i = 0; i < s.frames; ++i) {
+    const double t = i * s.dt_frame;
+    record_ego_frame(s, i, t, out);
+    if (i % s.map_every == 0) {
+      record_infra_clouds(s, i, t, out);
+      if (s.agents) record_agent_clouds(s, i, t, pose_error, out);
+    }
+    if (s.failed(error)) return false;
+    if (progress) progress(i + 1, s.frames);
+  }
+  return true;
+}
+
+// Ground truth: 10 Hz at the frame stamps, 100 Hz for vehicle signals, and the agents.
+void write_ground_truth(Session& s, const std::vector<TimedPose>& gt) {
+  const Scenario& sc = s.scenario();
+  if (!write_tum((s.root / "ground_truth.tum").string(), gt, s.err)) s.errors.push_back(s.err);
+  std::vector<TimedPose> gt100;
+  const int n100 = static_cast<int>(std::lround(sc.duration * 100.0));
+  for (int k = 0; k < n100; ++k) gt100.push_back({k * 0.01, sc.ego.body_to_enu(k * 0.01)});
+  if (!write_tum((s.root / "ground_truth_100hz.tum").string(), gt100, s.err)) s.errors.push_back(s.err);
+  for (std::size_t a = 0; a < sc.agents.size(); ++a) {
+    std::vector<TimedPose> agt;
+    for (int f = 0; f < s.frames; ++f) agt.push_back({f * s.dt_frame, sc.agents[a].body_to_enu(f * s.dt_frame)});
+    if (!write_tum((s.root / ("agent_" + std::to_string(a) + "_ground_truth.tum")).string(), agt, s.err))
+      s.errors.push_back(s.err);
+  }
+}
+
+const Eigen::Vector3d kAntennaInBody(0.0, 0.0, 1.75);
+
+#if V2XLOC_SIM_HAVE_GNSS
+// GNSS fixes (host_sim/gnss): gnss_fixes.txt, the summary's statistics, the manifest entry and the
+// valid fixes for the top view.
+std::vector<GnssFix> record_gnss(Session& s, RecordingSummary& summary, TopViewData& top, Json& gnss_json) {
+  const RecorderConfig& cfg = s.cfg;
+  std::vector<GnssFix> fixes;
+  const v2xloc::GeodeticOrigin origin = v2xloc::make_geodetic_origin(cfg.origin_lat_deg, cfg.origin_lon_deg, cfg.origin_alt_m);
+  const GnssDrive drive = simulate_gnss_drive(s.scenario(), s.world(), origin, cfg.seed, cfg.gnss_rate_hz, kAntennaInBody);
+  std::string csv = "# t lat_deg lon_deg alt_m h_acc_m v_acc_m num_sats hdop pdop valid east_m north_m up_m true_east_m true_north_m"
+                    " vel_east vel_north speed_acc velocity_valid true_vel_east true_vel_north\n";
+  for (std::size_t k = 0; k < drive.fixes.size(); ++k) {
+    const GnssFix& f = drive.fixes[k];
+    const Eigen::Vector3d& ant = drive.true_antenna[k];
+    const Eigen::Vector3d& vel = drive.true_velocity[k];
+    char line[512];
+    std::snprintf(line, sizeof line,
+                  "%.3f %.9f %.9f %.3f %.3f %.3f %d %.2f %.2f %d %.3f %.3f %.3f %.3f %.3f %.3f %.3f %.3f %d %.3f %.3f\n", f.t,
+                  f.lat_deg, f.lon_deg, f.alt_m, f.h_acc_m, f.v_acc_m, f.num_sats, f.hdop, f.pdop, f.valid ? 1 : 0,
+                  f.enu_estimate.x(), f.enu_estimate.y(), f.enu_estimate.z(), ant.x(), ant.y(), f.vel_east, f.vel_north,
+                  f.speed_acc_mps, f.velocity_valid ? 1 : 0, vel.x(), vel.y());
+    csv += line;
+    fixes.push_back(f);
+    if (f.valid) top.gnss_fixes.push_back(f.enu_estimate.head<2>());
+  }
+  const int valid = drive.valid;
+  if (!write_text_file((s.root / "gnss_fixes.txt").string(), csv, s.err)) s.errors.push_back(s.err);
+  summary.has_gnss = true;
+  summary.gnss_fixes = valid;
+  summary.gnss_mean_h_error = drive.mean_h_error;
+  summary.gnss_max_h_error = drive.max_h_error;
+  summary.hdop_min = drive.hdop_min;
+  summary.hdop_max = drive.hdop_max;
+  gnss_json = Json::object();
+  gnss_json.set("file", "gnss_fixes.txt");
+  gnss_json.set("note", "truth-side diagnostics of the GNSS model; the ego receives the fixes on CAN");
+  gnss_json.set("rate_hz", cfg.gnss_rate_hz);
+  gnss_json.set("epoch_offset_s", s.scenario().gnss_epoch_offset_s);
+  gnss_json.set("antenna_in_body", Json::array_of(std::vector<double>{kAntennaInBody.x(), kAntennaInBody.y(), kAntennaInBody.z()}));
+  gnss_json.set("valid_fixes", valid);
+  gnss_json.set("mean_horizontal_error_m", summary.gnss_mean_h_error);
+  gnss_json.set("max_horizontal_error_m", summary.gnss_max_h_error);
+  gnss_json.set("hdop_min", summary.hdop_min);
+  gnss_json.set("hdop_max", summary.hdop_max);
+  gnss_json.set("mean_velocity_error_mps", drive.mean_velocity_error);
+  gnss_json.set("max_velocity_error_mps", drive.max_velocity_error);
+  return fixes;
+}
+#endif
+
+#if V2XLOC_SIM_HAVE_GNSS && V2XLOC_SIM_HAVE_CANLOG && V2XLOC_SIM_HAVE_VEHICLE
+struct TimedCanFrame {
+  std::int64_t us;
+  int order;  // tie-break at equal stamps: vehicle motion, then position, status, velocity, time
+  hal::CanFrame frame;
+};
+
+// Vehicle motion (wheel speed, yaw rate) at the vehicle rate from host_sim/vehicle's model.
+void append_vehicle_frames(const Session& s, std::vector<TimedCanFrame>& out) {
+  const RecorderConfig& cfg = s.cfg;
+  const Scenario& sc = s.scenario();
+  VehicleSignalSimulator veh(VehicleSignalConfig{}, derive_seed(cfg.seed, {kVehicle}));
+  const int nv = static_cast<int>(std::floor(sc.duration * cfg.vehicle_rate_hz + 1e-9));
+  for (int k = 0; k < nv; ++k) {
+    const double tv = k / cfg.vehicle_rate_hz;
+    const VehicleState st = sc.ego.state(tv);
+    const VehicleSignals sig = veh.sample(tv, st.speed, st.yaw_rate);
+    protocol::VehicleMotion vm;
+    vm.wheel_speed_mps = sig.wheel_speed_mps;
+    vm.yaw_rate_rps = sig.yaw_rate_rps;
+    vm.speed_valid = sig.speed_valid;
+    vm.yaw_rate_valid = sig.yaw_rate_valid;
+    vm.counter = static_cast<std::uint8_t>(sig.counter % protocol::kCounterModulo);
+    out.push_back({candump_timestamp_us(cfg.time_origin_unix_s + tv), 0, protocol::pack(vm)});
+  }
+}
+
+// Each GNSS fix as position (valid fixes only), status, velocity and time + DOP frames.
+void append_gnss_frames(const Session& s, const std::vector<GnssFix>& fixes, std::vector<TimedCanFrame>& out) {
+  std::uint8_t gnss_counter = 0;
+  for (const GnssFix& f : fixes) {
+    const double unix_t = s.cfg.time_origin_unix_s + f.t;
+    const std::int64_t us = candump_timestamp_us(unix_t);
+    protocol::GnssPosition pos;
+    pos.lat_deg = f.lat_deg;
+    pos.lon_deg = f.lon_deg;
+    protocol::GnssStatus status;
+    status.alt_m = f.alt_m;
+    status.h_acc_m = f.h_acc_m;
+    status.v_acc_m = f.v_acc_m;
+    status.num_sats = static_cast<std::uint8_t>(std::clamp(f.num_sats, 0, 63));
+    status.fix_type = f.valid ? protocol::GnssFixType::kFix3D : protocol::GnssFixType::kNoFix;
+    status.counter = gnss_counter;
+    gnss_counter = static_cast<std::uint8_t>((gnss_counter + 1) % protocol::kCounterModulo);
+    protocol::GnssTimeDop td;
+    // GPS time = unix time - GPS epoch (1980-01-06) + leap seconds (18 s since 2017).
+    const double gps_s = unix_t - 315964800.0 + 18.0;
+    td.week = static_cast<std::uint16_t>(std::floor(gps_s / 604800.0));
+    td.time_of_week_s = gps_s - 604800.0 * td.week;
+    td.hdop = f.hdop;
+    td.pdop = f.pdop;
+    protocol::GnssVelocity vel;
+    vel.vel_east_mps = f.vel_east;
+    vel.vel_north_mps = f.vel_north;
+    vel.vel_up_mps = f.vel_up;
+    vel.speed_acc_mps = f.speed_acc_mps;
+    vel.valid = f.velocity_valid;
+    vel.counter = status.counter;  // one counter step per fix, like the status frame
+    if (f.valid) out.push_back({us, 1, protocol::pack(pos)});
+    out.push_back({us, 2, protocol::pack(status)});
+    out.push_back({us, 3, protocol::pack(vel)});
+    out.push_back({us, 4, protocol::pack(td)});
+  }
+}
+
+// CAN log: vehicle motion at 100 Hz and the GNSS fixes (position, status, time + DOP), merged in
+// time order, time stamps = time_origin_unix_s + t.
+void write_can_log(Session& s, const std::vector<GnssFix>& fixes, RecordingSummary& summary, Json& can_json) {
+  std::vector<TimedCanFrame> out;
+  append_vehicle_frames(s, out);
+  append_gnss_frames(s, fixes, out);
+  std::stable_sort(out.begin(), out.end(), [](const TimedCanFrame& a, const TimedCanFrame& b) {
+    return a.us < b.us || (a.us == b.us && a.order < b.order);
+  });
+  std::ofstream log(s.root / "gnss_vehicle.log", std::ios::binary);
+  CandumpWriter writer(log, "can0");
+  for (const auto& e : out) writer.write(e.us, e.frame);
+  if (!log) s.errors.push_back("cannot write gnss_vehicle.log");
+  summary.has_can_log = true;
+  can_json = Json::object();
+  can_json.set("file", "gnss_vehicle.log");
+  can_json.set("format", "candump -L: (unix_seconds.microseconds) can0 ID#HEXDATA");
+  can_json.set("frames", writer.frames_written());
+  can_json.set("vehicle_motion", "0x120 at 100 Hz (wheel speed, yaw rate)");
+  can_json.set("gnss", "0x130 position, 0x131 status, 0x133 velocity, 0x132 time + DOP at the GNSS rate");
+  can_json.set("codec", "firmware/protocol/can_messages.hpp");
+}
+#endif
+
+void summarize_scans(const std::vector<double>& pts_per_scan, RecordingSummary& summary) {
+  if (pts_per_scan.empty()) return;
+  double sum = 0;
+  for (double v : pts_per_scan) sum += v;
+  summary.points_per_scan_mean = sum / static_cast<double>(pts_per_scan.size());
+  summary.points_per_scan_min = *std::min_element(pts_per_scan.begin(), pts_per_scan.end());
+  summary.points_per_scan_max = *std::max_element(pts_per_scan.begin(), pts_per_scan.end());
+}
+
+Json manifest_files(const Session& s, const RecordingSummary& summary) {
+  Json files = Json::object();
+  files.set("ego_scan_pattern", "ego_lidar/%06d.pcd");
+  files.set("ego_scan_fields", "x y z intensity t (float32, PCD binary_compressed); sensor frame at each point's firing time; t = seconds since the frame stamp");
+  if (s.cfg.stereo) files.set("disparity_pattern", "stereo/%06d.png");
+  files.set("frame_stamp", "frame index / frame_rate_hz");
+  files.set("ground_truth", "ground_truth.tum");
+  files.set("ground_truth_100hz", "ground_truth_100hz.tum");
+  Json agt = Json::array();
+  for (std::size_t a = 0; a < s.scenario().agents.size(); ++a) agt.push(Json("agent_" + std::to_string(a) + "_ground_truth.tum"));
+  files.set("agent_ground_truth", agt);
+  files.set("top_view", "topview.png");
+  if (summary.has_can_log) files.set("can_log", "gnss_vehicle.log");
+  return files;
+}
+
+Json manifest_sensors(const Session& s) {
+  const RecorderConfig& cfg = s.cfg;
+  const Scenario& sc = s.scenario();
+  Json sensors = Json::array();
+  {
+    Json j = lidar_json(s.ego_cfg);
+    j.set("name", "ego_lidar");
+    j.set("carrier", "ego");
+    j.set("mount_in_body", pose_to_json(s.ego_cfg.mount));
+    sensors.push(std::move(j));
+  }
+  if (cfg.stereo) {
+    const StereoCalibration cal = s.stereo_cfg.calibration();
+    Json j = Json::object();
+    j.set("name", "ego_stereo");
+    j.set("type", "stereo_disparity");
+    j.set("carrier", "ego");
+    j.set("width", cal.width);
+    j.set("height", cal.height);
+    j.set("fx", cal.fx);
+    j.set("fy", cal.fy);
+    j.set("cx", cal.cx);
+    j.set("cy", cal.cy);
+    j.set("baseline_m", cal.baseline);
+    j.set("camera_to_body", pose_to_json(cal.camera_to_body));
+    j.set("camera_frame", "left camera optical frame: x right, y down, z forward");
+    j.set("disparity_sigma_px", s.stereo_cfg.disparity_sigma);
+    j.set("rate_hz", sc.frame_rate);
+    sensors.push(std::move(j));
+  }
+  for (const auto& site : s.sites) {
+    Json j = lidar_json(infra_lidar_config(cfg.quick));
+    j.set("name", site.name);
+    j.set("carrier", "infrastructure");
+    j.set("rate_hz_published", sc.frame_rate / s.map_every);
+    j.set("surveyed_pose_enu", pose_to_json(site.sensor_to_enu));
+    sensors.push(std::move(j));
+  }
+  if (s.agents) {
+    for (std::size_t a = 0; a < sc.agents.size(); ++a) {
+      const LidarConfig acfg = agent_lidar_config(cfg.quick);
+      Json j = lidar_json(acfg);
+      j.set("name", "agent_" + std::to_string(a) + "_lidar");
+      j.set("carrier", "agent_" + std::to_string(a));
+      j.set("rate_hz_published", sc.frame_rate / s.map_every);
+      j.set("mount_in_body", pose_to_json(acfg.mount));
+      j.set("motion_compensated", true);
+      sensors.push(std::move(j));
+    }
+  }
+  return sensors;
+}
+
+Json build_manifest(const Session& s, const FrameProducts& products, const RecordingSummary& summary,
+                    const Json& gnss_json, const Json& can_json) {
+  const RecorderConfig& cfg = s.cfg;
+  const Scenario& sc = s.scenario();
+  Json m = Json::object();
+  m.set("format", "v2xloc-recording");
+  m.set("format_version", 1);
+  Json scj = Json::object();
+  scj.set("id", sc.id);
+  scj.set("name", sc.name);
+  scj.set("description", sc.description);
+  m.set("scenario", scj);
+  m.set("permutation", permutation_name(cfg.permutation));
+  m.set("seed", static_cast<double>(cfg.seed));
+  m.set("quick", cfg.quick);
+  m.set("duration_s", sc.duration);
+  m.set("frame_rate_hz", sc.frame_rate);
+  m.set("frame_count", s.frames);
+  m.set("time_origin_unix_s", cfg.time_origin_unix_s);
+  Json geo = Json::object();
+  geo.set("lat_deg", cfg.origin_lat_deg);
+  geo.set("lon_deg", cfg.origin_lon_deg);
+  geo.set("alt_m", cfg.origin_alt_m);
+  m.set("geodetic_origin", geo);
+  Json units = Json::object();
+  units.set("frame", "local ENU at the intersection centre: x east, y north, z up (metres)");
+  units.set("body_frame", "vehicle body: x forward, y left, z up, origin on the ground at the footprint centre");
+  units.set("time", "seconds since the recording start; unix time = time_origin_unix_s + t");
+  units.set("pose", "[x, y, z, qx, qy, qz, qw], child frame in parent frame");
+  units.set("intensity", "[0, 1], reflectivity * cos(incidence) + noise");
+  units.set("disparity", "uint16 PNG, disparity_px = value / 256, 0 = invalid");
+  m.set("units", units);
+  m.set("files", manifest_files(s, summary));
+  m.set("sensors", manifest_sensors(s));
+  Json mc = Json::object();
+  mc.set("fields", "x y z intensity t (float32, PCD binary_compressed), sensor frame at stamp_s");
+  mc.set("pose_note", "sensor_pose_enu is what the sender reports (agents: with their localization error); true_sensor_pose_enu is the truth");
+  mc.set("clouds", products.map_clouds);
+  m.set("map_clouds", mc);
+  if (!gnss_json.is_null()) m.set("gnss", gnss_json);
+  if (!can_json.is_null()) m.set("can_log", can_json);
+  Json stats = Json::object();
+  stats.set("ego_points_per_scan_mean", summary.points_per_scan_mean);
+  stats.set("ego_points_per_scan_min", summary.points_per_scan_min);
+  stats.set("ego_points_per_scan_max", summary.points_per_scan_max);
+  m.set("stats", stats);
+  return m;
+}
+
+// topview.png: the paths sampled at the frame stamps (and the end), the sites and the GNSS fixes.
+bool write_top_view_picture(const Session& s, TopViewData& top, const std::string& title, std::string& error) {
+  const Scenario& sc = s.scenario();
+  top.title = title;
+  top.agent_paths.resize(sc.agents.size());
+  for (int k = 0; k <= s.frames; ++k) {
+    const double tt = std::min(k * s.dt_frame, sc.duration);
+    const PlanarPose e = sc.ego.pose(tt);
+    top.ego_path.emplace_back(e.x, e.y);
+    for (std::size_t a = 0; a < sc.agents.size(); ++a) {
+      const PlanarPose p = sc.agents[a].pose(tt);
+      top.agent_paths[a].emplace_back(p.x, p.y);
+    }
+  }
+  for (const auto& site : s.sites) top.infra.push_back(site.sensor_to_enu.translation().head<2>());
+  top.agents_have_lidar = s.agents;
+  return write_top_view((s.root / "topview.png").string(), s.sim.iw, top, error);
+}
+
 }  // namespace
 
 std::string recording_name(int scenario, Permutation p) {
@@ -114,415 +600,36 @@ std::string RecordingSummary::one_line() const {
 bool generate_recording(const RecorderConfig& cfg, RecordingSummary& summary, std::string& error,
                         const std::function<void(int, int)>& progress) {
   const auto wall0 = std::chrono::steady_clock::now();
-  if (cfg.scenario < 0 || cfg.scenario >= kScenarioCount) {
-    error = "scenario must be 0..3";
-    return false;
-  }
-  const double duration = cfg.duration > 0 ? cfg.duration : (cfg.quick ? 3.0 : 0.0);
-  Simulation sim;
-  build_simulation(cfg.scenario, cfg.seed, duration, WorldConfig{}, sim);
-  const Scenario& sc = sim.scenario;
-  World& world = sim.iw.world;
+  // Simulation holds the whole world: on the heap, not the stack.
+  auto session = std::make_unique<Session>(cfg);
+  Session& s = *session;
+  if (!setup(s, error) || !create_folders(s, error)) return false;
 
-  const fs::path root(cfg.out_dir);
-  std::error_code ec;
-  fs::create_directories(root / "ego_lidar", ec);
-  if (cfg.stereo) fs::create_directories(root / "stereo", ec);
-  if (ec) {
-    error = "cannot create " + root.string() + ": " + ec.message();
-    return false;
-  }
+  FrameProducts products;
+  if (!record_frames(s, products, error, progress)) return false;
+  write_ground_truth(s, products.ground_truth);
 
-  const LidarConfig ego_cfg = ego_lidar_config(cfg.quick);
-  const StereoConfig stereo_cfg = ego_stereo_config(cfg.quick);
-  const std::vector<InfraSite> sites = infra_sites(cfg.permutation);
-  const bool agents = uses_agents(cfg.permutation);
-  for (const auto& s : sites) fs::create_directories(root / "infra" / s.name, ec);
-  if (agents)
-    for (std::size_t a = 0; a < sc.agents.size(); ++a) fs::create_directories(root / "agents" / ("agent_" + std::to_string(a)), ec);
-
-  const int frames = sc.frame_count();
-  const double dt_frame = 1.0 / sc.frame_rate;
-  const int map_every = std::max(1, static_cast<int>(std::lround(sc.frame_rate / cfg.map_rate_hz)));
-
-  // Agent self-localization bias (per run).
-  Rng pose_rng(derive_seed(cfg.seed, {kAgentPose}));
-  std::vector<Eigen::Vector3d> agent_bias;  // dx, dy, dyaw
-  for (std::size_t a = 0; a < sc.agents.size(); ++a)
-    agent_bias.emplace_back(pose_rng.gaussian(cfg.agent_pos_bias_sigma), pose_rng.gaussian(cfg.agent_pos_bias_sigma),
-                            pose_rng.gaussian(cfg.agent_yaw_bias_sigma_deg * M_PI / 180.0));
-
-  Json map_clouds = Json::array();
-  std::vector<TimedPose> gt;
-  std::vector<double> pts_per_scan;
-  std::vector<std::string> errors;
-  LidarScan scan;
-  Image16 disparity;
-  std::string err;
-  auto write_cloud = [&](const std::string& rel, const LidarScan& s) {
-    const cloud_io::PointCloud c = to_cloud(s);
-    if (!cloud_io::write_pcd((root / rel).string(), c, cloud_io::PcdEncoding::kBinaryCompressed, err)) errors.push_back(err);
-  };
-
-  for (int i = 0; i < frames; ++i) {
-    const double t = i * dt_frame;
-    // Ego LiDAR sweep (raw: each point in the sensor frame at its own firing time).
-    Rng rng(derive_seed(cfg.seed, {kEgoLidar, static_cast<std::uint64_t>(i)}));
-    render_lidar_sweep(world, ego_cfg, [&](double tt) { return sc.ego.body_to_enu(tt); }, t, sim.ego_body, rng, scan);
-    pts_per_scan.push_back(static_cast<double>(scan.points.size()));
-    write_cloud(frame_file("ego_lidar", i, "pcd"), scan);
-    gt.push_back({t, sc.ego.body_to_enu(t)});
-
-    if (cfg.stereo) {
-      Rng srng(derive_seed(cfg.seed, {kStereo, static_cast<std::uint64_t>(i)}));
-      render_disparity(world, stereo_cfg, sc.ego.body_to_enu(t), t, sim.ego_body, srng, disparity);
-      if (!write_png((root / frame_file("stereo", i, "png")).string(), disparity, err)) errors.push_back(err);
-    }
-
-    if (i % map_every == 0) {
-      for (std::size_t k = 0; k < sites.size(); ++k) {
-        LidarConfig icfg = infra_lidar_config(cfg.quick);
-        icfg.name = sites[k].name;
-        icfg.mount = Eigen::Isometry3d::Identity();
-        Rng irng(derive_seed(cfg.seed, {kInfra, k, static_cast<std::uint64_t>(i)}));
-        const Eigen::Isometry3d pose = sites[k].sensor_to_enu;
-        render_lidar_sweep(world, icfg, [&](double) { return pose; }, t, -1, irng, scan);
-        const std::string rel = "infra/" + sites[k].name + frame_file("", i, "pcd");
-        write_cloud(rel, scan);
-        Json e = Json::object();
-        e.set("sensor", sites[k].name);
-        e.set("kind", "infra");
-        e.set("stamp_s", t);
-        e.set("file", rel);
-        e.set("points", scan.points.size());
-        e.set("sensor_pose_enu", pose_to_json(pose));
-        e.set("true_sensor_pose_enu", pose_to_json(pose));
-        map_clouds.push(std::move(e));
-      }
-      if (agents) {
-        for (std::size_t a = 0; a < sc.agents.size(); ++a) {
-          const Trajectory& traj = sc.agents[a];
-          const LidarConfig acfg = agent_lidar_config(cfg.quick);
-          Rng arng(derive_seed(cfg.seed, {kAgentLidar, a, static_cast<std::uint64_t>(i)}));
-          render_lidar_sweep(world, acfg, [&](double tt) { return traj.body_to_enu(tt); }, t,
-                             sim.agent_bodies[a], arng, scan);
-          // The agent shares a motion-compensated sweep: points re-expressed in the sensor frame at
-          // the stamp with its own (accurate over 0.1 s) odometry; per-point times are kept.
-          const Eigen::Isometry3d sensor_at_stamp_inv = (traj.body_to_enu(t) * acfg.mount).inverse();
-          for (auto& p : scan.points) {
-            const Eigen::Isometry3d at_fire = traj.body_to_enu(t + p.t) * acfg.mount;
-            p.p = (sensor_at_stamp_inv * (at_fire * p.p.cast<double>())).cast<float>();
-          }
-          const std::string name = "agent_" + std::to_string(a);
-          const std::string rel = "agents/" + name + frame_file("", i, "pcd");
-          write_cloud(rel, scan);
-          // Reported pose = truth + bias + noise (the agent's own localization error).
-          PlanarPose rep = traj.pose(t);
-          rep.x += agent_bias[a].x() + pose_rng.gaussian(cfg.agent_pos_noise_sigma);
-          rep.y += agent_bias[a].y() + pose_rng.gaussian(cfg.agent_pos_noise_sigma);
-          rep.yaw += agent_bias[a].z() + pose_rng.gaussian(cfg.agent_yaw_noise_sigma_deg * M_PI / 180.0);
-          Json e = Json::object();
-          e.set("sensor", name + "_lidar");
-          e.set("kind", "agent");
-          e.set("agent", name);
-          e.set("stamp_s", t);
-          e.set("file", rel);
-          e.set("points", scan.points.size());
-          e.set("sensor_pose_enu", pose_to_json(planar(rep) * acfg.mount));
-          e.set("true_sensor_pose_enu", pose_to_json(traj.body_to_enu(t) * acfg.mount));
-          map_clouds.push(std::move(e));
-        }
-      }
-    }
-    if (!errors.empty()) {
-      error = errors.front();
-      return false;
-    }
-    if (progress) progress(i + 1, frames);
-  }
-
-  // Ground truth: 10 Hz at the frame stamps, 100 Hz for vehicle signals, and the agents.
-  if (!write_tum((root / "ground_truth.tum").string(), gt, err)) errors.push_back(err);
-  std::vector<TimedPose> gt100;
-  const int n100 = static_cast<int>(std::lround(sc.duration * 100.0));
-  for (int k = 0; k < n100; ++k) gt100.push_back({k * 0.01, sc.ego.body_to_enu(k * 0.01)});
-  if (!write_tum((root / "ground_truth_100hz.tum").string(), gt100, err)) errors.push_back(err);
-  for (std::size_t a = 0; a < sc.agents.size(); ++a) {
-    std::vector<TimedPose> agt;
-    for (int f = 0; f < frames; ++f) agt.push_back({f * dt_frame, sc.agents[a].body_to_enu(f * dt_frame)});
-    if (!write_tum((root / ("agent_" + std::to_string(a) + "_ground_truth.tum")).string(), agt, err)) errors.push_back(err);
-  }
-
-  // GNSS fixes and vehicle signals (models from host_sim/gnss and host_sim/vehicle).
-  TopViewData top;
   summary = RecordingSummary{};
+  TopViewData top;
   Json gnss_json;
   Json can_json;
-  const Eigen::Vector3d antenna_in_body(0.0, 0.0, 1.75);
 #if V2XLOC_SIM_HAVE_GNSS
-  std::vector<GnssFix> fixes;
-  {
-    const v2xloc::GeodeticOrigin origin = v2xloc::make_geodetic_origin(cfg.origin_lat_deg, cfg.origin_lon_deg, cfg.origin_alt_m);
-    const GnssDrive drive = simulate_gnss_drive(sc, world, origin, cfg.seed, cfg.gnss_rate_hz, antenna_in_body);
-    std::string csv = "# t lat_deg lon_deg alt_m h_acc_m v_acc_m num_sats hdop pdop valid east_m north_m up_m true_east_m true_north_m"
-                      " vel_east vel_north speed_acc velocity_valid true_vel_east true_vel_north\n";
-    for (std::size_t k = 0; k < drive.fixes.size(); ++k) {
-      const GnssFix& f = drive.fixes[k];
-      const Eigen::Vector3d& ant = drive.true_antenna[k];
-      const Eigen::Vector3d& vel = drive.true_velocity[k];
-      char line[512];
-      std::snprintf(line, sizeof line,
-                    "%.3f %.9f %.9f %.3f %.3f %.3f %d %.2f %.2f %d %.3f %.3f %.3f %.3f %.3f %.3f %.3f %.3f %d %.3f %.3f\n", f.t,
-                    f.lat_deg, f.lon_deg, f.alt_m, f.h_acc_m, f.v_acc_m, f.num_sats, f.hdop, f.pdop, f.valid ? 1 : 0,
-                    f.enu_estimate.x(), f.enu_estimate.y(), f.enu_estimate.z(), ant.x(), ant.y(), f.vel_east, f.vel_north,
-                    f.speed_acc_mps, f.velocity_valid ? 1 : 0, vel.x(), vel.y());
-      csv += line;
-      fixes.push_back(f);
-      if (f.valid) top.gnss_fixes.push_back(f.enu_estimate.head<2>());
-    }
-    const int valid = drive.valid;
-    if (!write_text_file((root / "gnss_fixes.txt").string(), csv, err)) errors.push_back(err);
-    summary.has_gnss = true;
-    summary.gnss_fixes = valid;
-    summary.gnss_mean_h_error = drive.mean_h_error;
-    summary.gnss_max_h_error = drive.max_h_error;
-    summary.hdop_min = drive.hdop_min;
-    summary.hdop_max = drive.hdop_max;
-    gnss_json = Json::object();
-    gnss_json.set("file", "gnss_fixes.txt");
-    gnss_json.set("note", "truth-side diagnostics of the GNSS model; the ego receives the fixes on CAN");
-    gnss_json.set("rate_hz", cfg.gnss_rate_hz);
-    gnss_json.set("epoch_offset_s", sc.gnss_epoch_offset_s);
-    gnss_json.set("antenna_in_body", Json::array_of(std::vector<double>{antenna_in_body.x(), antenna_in_body.y(), antenna_in_body.z()}));
-    gnss_json.set("valid_fixes", valid);
-    gnss_json.set("mean_horizontal_error_m", summary.gnss_mean_h_error);
-    gnss_json.set("max_horizontal_error_m", summary.gnss_max_h_error);
-    gnss_json.set("hdop_min", summary.hdop_min);
-    gnss_json.set("hdop_max", summary.hdop_max);
-    gnss_json.set("mean_velocity_error_mps", drive.mean_velocity_error);
-    gnss_json.set("max_velocity_error_mps", drive.max_velocity_error);
-  }
-
+  const std::vector<GnssFix> fixes = record_gnss(s, summary, top, gnss_json);
 #if V2XLOC_SIM_HAVE_CANLOG && V2XLOC_SIM_HAVE_VEHICLE
-  // CAN log: vehicle motion at 100 Hz and the GNSS fixes (position, status, time + DOP), merged in
-  // time order, time stamps = time_origin_unix_s + t.
-  {
-    struct Timed {
-      std::int64_t us;
-      int order;
-      hal::CanFrame frame;
-    };
-    std::vector<Timed> out;
-    VehicleSignalSimulator veh(VehicleSignalConfig{}, derive_seed(cfg.seed, {kVehicle}));
-    const int nv = static_cast<int>(std::floor(sc.duration * cfg.vehicle_rate_hz + 1e-9));
-    for (int k = 0; k < nv; ++k) {
-      const double tv = k / cfg.vehicle_rate_hz;
-      const VehicleState st = sc.ego.state(tv);
-      const VehicleSignals sig = veh.sample(tv, st.speed, st.yaw_rate);
-      protocol::VehicleMotion vm;
-      vm.wheel_speed_mps = sig.wheel_speed_mps;
-      vm.yaw_rate_rps = sig.yaw_rate_rps;
-      vm.speed_valid = sig.speed_valid;
-      vm.yaw_rate_valid = sig.yaw_rate_valid;
-      vm.counter = static_cast<std::uint8_t>(sig.counter % protocol::kCounterModulo);
-      out.push_back({candump_timestamp_us(cfg.time_origin_unix_s + tv), 0, protocol::pack(vm)});
-    }
-    std::uint8_t gnss_counter = 0;
-    for (const GnssFix& f : fixes) {
-      const double unix_t = cfg.time_origin_unix_s + f.t;
-      const std::int64_t us = candump_timestamp_us(unix_t);
-      protocol::GnssPosition pos;
-      pos.lat_deg = f.lat_deg;
-      pos.lon_deg = f.lon_deg;
-      protocol::GnssStatus status;
-      status.alt_m = f.alt_m;
-      status.h_acc_m = f.h_acc_m;
-      status.v_acc_m = f.v_acc_m;
-      status.num_sats = static_cast<std::uint8_t>(std::clamp(f.num_sats, 0, 63));
-      status.fix_type = f.valid ? protocol::GnssFixType::kFix3D : protocol::GnssFixType::kNoFix;
-      status.counter = gnss_counter;
-      gnss_counter = static_cast<std::uint8_t>((gnss_counter + 1) % protocol::kCounterModulo);
-      protocol::GnssTimeDop td;
-      // GPS time = unix time - GPS epoch (1980-01-06) + leap seconds (18 s since 2017).
-      const double gps_s = unix_t - 315964800.0 + 18.0;
-      td.week = static_cast<std::uint16_t>(std::floor(gps_s / 604800.0));
-      td.time_of_week_s = gps_s - 604800.0 * td.week;
-      td.hdop = f.hdop;
-      td.pdop = f.pdop;
-      protocol::GnssVelocity vel;
-      vel.vel_east_mps = f.vel_east;
-      vel.vel_north_mps = f.vel_north;
-      vel.vel_up_mps = f.vel_up;
-      vel.speed_acc_mps = f.speed_acc_mps;
-      vel.valid = f.velocity_valid;
-      vel.counter = status.counter;  // one counter step per fix, like the status frame
-      if (f.valid) out.push_back({us, 1, protocol::pack(pos)});
-      out.push_back({us, 2, protocol::pack(status)});
-      out.push_back({us, 3, protocol::pack(vel)});
-      out.push_back({us, 4, protocol::pack(td)});
-    }
-    std::stable_sort(out.begin(), out.end(),
-                     [](const Timed& a, const Timed& b) { return a.us < b.us || (a.us == b.us && a.order < b.order); });
-    std::ofstream log(root / "gnss_vehicle.log", std::ios::binary);
-    CandumpWriter writer(log, "can0");
-    for (const auto& e : out) writer.write(e.us, e.frame);
-    if (!log) errors.push_back("cannot write gnss_vehicle.log");
-    summary.has_can_log = true;
-    can_json = Json::object();
-    can_json.set("file", "gnss_vehicle.log");
-    can_json.set("format", "candump -L: (unix_seconds.microseconds) can0 ID#HEXDATA");
-    can_json.set("frames", writer.frames_written());
-    can_json.set("vehicle_motion", "0x120 at 100 Hz (wheel speed, yaw rate)");
-    can_json.set("gnss", "0x130 position, 0x131 status, 0x133 velocity, 0x132 time + DOP at the GNSS rate");
-    can_json.set("codec", "firmware/protocol/can_messages.hpp");
-  }
+  write_can_log(s, fixes, summary, can_json);
 #endif
 #endif
-  if (!errors.empty()) {
-    error = errors.front();
-    return false;
-  }
-
-  // Manifest.
-  Json m = Json::object();
-  m.set("format", "v2xloc-recording");
-  m.set("format_version", 1);
-  Json scj = Json::object();
-  scj.set("id", sc.id);
-  scj.set("name", sc.name);
-  scj.set("description", sc.description);
-  m.set("scenario", scj);
-  m.set("permutation", permutation_name(cfg.permutation));
-  m.set("seed", static_cast<double>(cfg.seed));
-  m.set("quick", cfg.quick);
-  m.set("duration_s", sc.duration);
-  m.set("frame_rate_hz", sc.frame_rate);
-  m.set("frame_count", frames);
-  m.set("time_origin_unix_s", cfg.time_origin_unix_s);
-  Json geo = Json::object();
-  geo.set("lat_deg", cfg.origin_lat_deg);
-  geo.set("lon_deg", cfg.origin_lon_deg);
-  geo.set("alt_m", cfg.origin_alt_m);
-  m.set("geodetic_origin", geo);
-  Json units = Json::object();
-  units.set("frame", "local ENU at the intersection centre: x east, y north, z up (metres)");
-  units.set("body_frame", "vehicle body: x forward, y left, z up, origin on the ground at the footprint centre");
-  units.set("time", "seconds since the recording start; unix time = time_origin_unix_s + t");
-  units.set("pose", "[x, y, z, qx, qy, qz, qw], child frame in parent frame");
-  units.set("intensity", "[0, 1], reflectivity * cos(incidence) + noise");
-  units.set("disparity", "uint16 PNG, disparity_px = value / 256, 0 = invalid");
-  m.set("units", units);
-
-  Json files = Json::object();
-  files.set("ego_scan_pattern", "ego_lidar/%06d.pcd");
-  files.set("ego_scan_fields", "x y z intensity t (float32, PCD binary_compressed); sensor frame at each point's firing time; t = seconds since the frame stamp");
-  if (cfg.stereo) files.set("disparity_pattern", "stereo/%06d.png");
-  files.set("frame_stamp", "frame index / frame_rate_hz");
-  files.set("ground_truth", "ground_truth.tum");
-  files.set("ground_truth_100hz", "ground_truth_100hz.tum");
-  Json agt = Json::array();
-  for (std::size_t a = 0; a < sc.agents.size(); ++a) agt.push(Json("agent_" + std::to_string(a) + "_ground_truth.tum"));
-  files.set("agent_ground_truth", agt);
-  files.set("top_view", "topview.png");
-  if (summary.has_can_log) files.set("can_log", "gnss_vehicle.log");
-  m.set("files", files);
-
-  Json sensors = Json::array();
-  {
-    Json j = lidar_json(ego_cfg);
-    j.set("name", "ego_lidar");
-    j.set("carrier", "ego");
-    j.set("mount_in_body", pose_to_json(ego_cfg.mount));
-    sensors.push(std::move(j));
-  }
-  if (cfg.stereo) {
-    const StereoCalibration cal = stereo_cfg.calibration();
-    Json j = Json::object();
-    j.set("name", "ego_stereo");
-    j.set("type", "stereo_disparity");
-    j.set("carrier", "ego");
-    j.set("width", cal.width);
-    j.set("height", cal.height);
-    j.set("fx", cal.fx);
-    j.set("fy", cal.fy);
-    j.set("cx", cal.cx);
-    j.set("cy", cal.cy);
-    j.set("baseline_m", cal.baseline);
-    j.set("camera_to_body", pose_to_json(cal.camera_to_body));
-    j.set("camera_frame", "left camera optical frame: x right, y down, z forward");
-    j.set("disparity_sigma_px", stereo_cfg.disparity_sigma);
-    j.set("rate_hz", sc.frame_rate);
-    sensors.push(std::move(j));
-  }
-  for (const auto& s : sites) {
-    Json j = lidar_json(infra_lidar_config(cfg.quick));
-    j.set("name", s.name);
-    j.set("carrier", "infrastructure");
-    j.set("rate_hz_published", sc.frame_rate / map_every);
-    j.set("surveyed_pose_enu", pose_to_json(s.sensor_to_enu));
-    sensors.push(std::move(j));
-  }
-  if (agents) {
-    for (std::size_t a = 0; a < sc.agents.size(); ++a) {
-      const LidarConfig acfg = agent_lidar_config(cfg.quick);
-      Json j = lidar_json(acfg);
-      j.set("name", "agent_" + std::to_string(a) + "_lidar");
-      j.set("carrier", "agent_" + std::to_string(a));
-      j.set("rate_hz_published", sc.frame_rate / map_every);
-      j.set("mount_in_body", pose_to_json(acfg.mount));
-      j.set("motion_compensated", true);
-      sensors.push(std::move(j));
-    }
-  }
-  m.set("sensors", sensors);
-  Json mc = Json::object();
-  mc.set("fields", "x y z intensity t (float32, PCD binary_compressed), sensor frame at stamp_s");
-  mc.set("pose_note", "sensor_pose_enu is what the sender reports (agents: with their localization error); true_sensor_pose_enu is the truth");
-  mc.set("clouds", map_clouds);
-  m.set("map_clouds", mc);
-  if (!gnss_json.is_null()) m.set("gnss", gnss_json);
-  if (!can_json.is_null()) m.set("can_log", can_json);
+  if (s.failed(error)) return false;
 
   summary.name = recording_name(cfg.scenario, cfg.permutation);
-  summary.frames = frames;
-  summary.map_clouds = static_cast<int>(map_clouds.size());
-  if (!pts_per_scan.empty()) {
-    double s = 0;
-    for (double v : pts_per_scan) s += v;
-    summary.points_per_scan_mean = s / static_cast<double>(pts_per_scan.size());
-    summary.points_per_scan_min = *std::min_element(pts_per_scan.begin(), pts_per_scan.end());
-    summary.points_per_scan_max = *std::max_element(pts_per_scan.begin(), pts_per_scan.end());
-  }
-  Json stats = Json::object();
-  stats.set("ego_points_per_scan_mean", summary.points_per_scan_mean);
-  stats.set("ego_points_per_scan_min", summary.points_per_scan_min);
-  stats.set("ego_points_per_scan_max", summary.points_per_scan_max);
-  m.set("stats", stats);
-  if (!write_text_file((root / "manifest.json").string(), m.dump(2), err)) {
-    error = err;
-    return false;
-  }
+  summary.frames = s.frames;
+  summary.map_clouds = static_cast<int>(products.map_clouds.size());
+  summarize_scans(products.points_per_scan, summary);
+  const Json manifest = build_manifest(s, products, summary, gnss_json, can_json);
+  if (!write_text_file((s.root / "manifest.json").string(), manifest.dump(2), error)) return false;
+  if (cfg.top_view && !write_top_view_picture(s, top, summary.name, error)) return false;
 
-  if (cfg.top_view) {
-    top.title = summary.name;
-    for (int k = 0; k <= frames; ++k) {
-      const double tt = std::min(k * dt_frame, sc.duration);
-      const PlanarPose e = sc.ego.pose(tt);
-      top.ego_path.emplace_back(e.x, e.y);
-      top.agent_paths.resize(sc.agents.size());
-      for (std::size_t a = 0; a < sc.agents.size(); ++a) {
-        const PlanarPose p = sc.agents[a].pose(tt);
-        top.agent_paths[a].emplace_back(p.x, p.y);
-      }
-    }
-    for (const auto& s : sites) top.infra.push_back(s.sensor_to_enu.translation().head<2>());
-    top.agents_have_lidar = agents;
-    if (!write_top_view((root / "topview.png").string(), sim.iw, top, err)) {
-      error = err;
-      return false;
-    }
-  }
-  summary.bytes = folder_bytes(root);
+  summary.bytes = folder_bytes(s.root);
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   return true;
 }

@@ -1,5 +1,6 @@
 // Top-view PNG of a scenario in the style of the paper's Fig. 2: buildings, sidewalks, trees,
-// poles, infrastructure LiDARs, ego and agent paths, GNSS fixes (the truth is the ego path).
+// poles, infrastructure LiDARs, ego and agent paths, GNSS fixes (the truth is the ego path), with
+// a title, a legend, a 20 m scale bar and a north arrow.
 #pragma once
 
 #include "host_sim/world/intersection_world.hpp"

@@ -186,25 +186,28 @@ bool EventStream::next_frame(int i, std::vector<WireEvent>& out, std::string& er
 bool WireEventDecoder::feed(const WireEvent& event, DecodedFrame& frame) {
   const std::int64_t disciplined_ns = decoder_.epoch_ns() + event.time_ns;
   if (event.kind == WireEvent::Kind::kCan) {
-    decoder_.on_can(event.can, disciplined_ns, localizer_);
+    const firmware::DecodedCan decoded = decoder_.decode_can(event.can, disciplined_ns);
+    if (decoded.kind == firmware::CanInputKind::kVehicle) localizer_.on_vehicle(decoded.vehicle);
+    if (decoded.kind == firmware::CanInputKind::kGnssFix) localizer_.on_gnss(decoded.gnss);
     return false;
   }
   bool produced = false;
   for (const auto& d : event.datagrams) {
     if (!decoder_.on_datagram(d, event.time_ns)) continue;
-    const LocalizerFrameOutput* out = nullptr;
-    if (decoder_.dispatch_completed(localizer_, &out) == firmware::CloudKind::kEgoScan && out != nullptr) {
-      frame.frame = static_cast<int>(decoder_.last_frame_index());
-      frame.output = *out;
-      frame.pose = encoder_.encode(*out, decoder_.last_frame_index(), decoder_.gnss_used_in_last_frame());
-      frame.diagnostics = diagnostic_encoder_.encode(*out, decoder_.last_frame_index());
-      produced = true;
-    }
+    const firmware::DecodedCloud decoded = decoder_.decode_completed();
+    if (decoded.kind == firmware::CloudKind::kMapCloud) localizer_.on_map_cloud(decoded.map);
+    if (decoded.kind != firmware::CloudKind::kEgoScan) continue;
+    const LocalizerFrameOutput& out = localizer_.on_ego_scan(decoded.ego);
+    frame.frame = static_cast<int>(decoded.frame_index);
+    frame.output = out;
+    frame.pose = encoder_.encode(out, decoded.frame_index, decoded.gnss_used);
+    frame.diagnostics = diagnostic_encoder_.encode(out, decoded.frame_index);
+    produced = true;
   }
   return produced;
 }
 
-bool run_offline(const RecordingReader& reader, firmware::LocalizerPort& localizer, firmware::InputDecoder& decoder,
+bool run_offline(const RecordingReader& reader, Localizer& localizer, firmware::InputDecoder& decoder,
                  const EventStreamConfig& config, const std::function<void(const DecodedFrame&)>& on_frame,
                  std::string& error) {
   EventStream stream;

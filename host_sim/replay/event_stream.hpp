@@ -1,11 +1,13 @@
-// THE canonical event order of a recording, shared by the offline evaluator (in-process) and the
-// replayer (over emulated CAN + UDP), so both feed the localizer identically:
+// The event order of a recording, shared by the offline evaluator (in-process) and the replayer
+// (over emulated CAN + UDP), so both feed the localizer identically. It is the firmware's input
+// order (firmware/wire/input_decoder.hpp) applied to a recording:
 //   for each frame i at t_i: every CAN frame of the recording's candump log with t <= t_i not yet
 //   emitted (log order); then every map cloud (infra / agent) with stamp <= t_i not yet emitted
 //   (stamp order); then ego scan i.
 // Events are wire bytes: CAN frames as hal::CanFrame, clouds as the UDP datagrams of the
 // point-cloud fragmenter (quantized exactly as sent). WireEventDecoder turns them into localizer
-// inputs through the firmware's own InputDecoder, so the offline path sees the firmware's bits.
+// inputs through the firmware's own InputDecoder and applies them to the localizer itself, as the
+// firmware loop does, so the offline path sees the firmware's bits.
 // Time: every event carries its recording time in ns (the emulated firmware's SimClock time);
 // disciplined (wire) time = epoch_ns + recording time, epoch_ns = Unix time of recording t = 0.
 #pragma once
@@ -15,10 +17,10 @@
 #include <string>
 #include <vector>
 
-#include "firmware/app/diagnostic_frames.hpp"
-#include "firmware/app/input_decoder.hpp"
-#include "firmware/app/pose_frames.hpp"
-#include "firmware/app/wire_conventions.hpp"
+#include "firmware/wire/diagnostic_frames.hpp"
+#include "firmware/wire/input_decoder.hpp"
+#include "firmware/wire/pose_frames.hpp"
+#include "firmware/wire/wire_conventions.hpp"
 #include "hal/can_frame.hpp"
 #include "host_sim/recording/recording_reader.hpp"
 
@@ -85,7 +87,8 @@ class EventStream {
 };
 
 // Wire events -> localizer inputs through the firmware's InputDecoder (same decode, same order),
-// and the ego frames' outputs encoded as the firmware's pose and diagnostic CAN frames.
+// applied to the localizer here, and the ego frames' outputs encoded as the firmware's pose and
+// diagnostic CAN frames.
 struct DecodedFrame {
   int frame = -1;
   LocalizerFrameOutput output{};
@@ -95,21 +98,20 @@ struct DecodedFrame {
 
 class WireEventDecoder {
  public:
-  WireEventDecoder(firmware::InputDecoder& decoder, firmware::LocalizerPort& localizer)
-      : decoder_(decoder), localizer_(localizer) {}
+  WireEventDecoder(firmware::InputDecoder& decoder, Localizer& localizer) : decoder_(decoder), localizer_(localizer) {}
   // Returns true and fills `frame` when the event was an ego scan that produced an output.
   bool feed(const WireEvent& event, DecodedFrame& frame);
 
  private:
   firmware::InputDecoder& decoder_;
-  firmware::LocalizerPort& localizer_;
+  Localizer& localizer_;
   firmware::PoseFrameEncoder encoder_{};
   firmware::DiagnosticFrameEncoder diagnostic_encoder_{};
 };
 
 // The offline evaluator's loop: the whole event stream in-process. `decoder` is large (make it
 // with std::make_unique); its epoch is set from the recording. False + error on I/O failures.
-bool run_offline(const RecordingReader& reader, firmware::LocalizerPort& localizer, firmware::InputDecoder& decoder,
+bool run_offline(const RecordingReader& reader, Localizer& localizer, firmware::InputDecoder& decoder,
                  const EventStreamConfig& config, const std::function<void(const DecodedFrame&)>& on_frame,
                  std::string& error);
 

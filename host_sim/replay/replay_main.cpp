@@ -13,18 +13,12 @@
 
 #include "host_sim/replay/replay_session.hpp"
 
+#include <CLI/CLI.hpp>
+
 namespace {
 
 using namespace v2xloc::sim;
 using namespace v2xloc::sim::replay;
-
-int usage() {
-  std::fprintf(stderr,
-               "usage: v2xloc-replay RECORDING_DIR [--firmware PATH | --connect HOST:CANPORT,CLOUDPORT "
-               "[--local-can-port N]]\n"
-               "                     [--out DIR] [--frames N] [--timeout S] [--verbose] [-- FIRMWARE_ARGS...]\n");
-  return 2;
-}
 
 std::string default_firmware_path() {
   char buf[PATH_MAX];
@@ -42,51 +36,47 @@ void print_ape(const char* label, const ErrorStats& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2) return usage();
-  const std::string dir = argv[1];
+  // Everything after "--" goes to the firmware untouched, so it is split off before CLI11 sees it.
+  int own_argc = argc;
   ReplayOptions options;
-  std::string out_dir;
-  bool connect = false;
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
-    if (a == "--firmware") {
-      const char* v = value();
-      if (!v) return usage();
-      options.firmware_path = v;
-    } else if (a == "--connect") {
-      const char* v = value();
+  for (int i = 1; i < argc; ++i) {
+    if (std::string(argv[i]) == "--") {
+      own_argc = i;
+      for (int k = i + 1; k < argc; ++k) options.firmware_args.emplace_back(argv[k]);
+      break;
+    }
+  }
+  CLI::App app{"Replays a recording in lockstep into v2xloc-firmware (started with --emulated, or a running one\n"
+               "with --connect), writes OUT/fused.tum and prints the APE against the ground truth. Exit 0 only\n"
+               "on a complete replay. Arguments after -- go to the firmware.",
+               "v2xloc-replay"};
+  std::string dir, out_dir, connect_spec;
+  app.add_option("RECORDING_DIR", dir, "recording folder (v2xloc-sim generate)")->required();
+  auto* firmware_opt = app.add_option("--firmware", options.firmware_path,
+                                      "v2xloc-firmware to start (default: next to this executable)");
+  auto* connect_opt = app.add_option("--connect", connect_spec, "HOST:CANPORT,CLOUDPORT of a running firmware")
+                          ->excludes(firmware_opt);
+  app.add_option("--local-can-port", options.local_can_port, "our CAN UDP port with --connect");
+  app.add_option("--out", out_dir, "folder for fused.tum");
+  app.add_option("--frames", options.stream.max_frames, "replay only the first N frames");
+  app.add_option("--timeout", options.frame_timeout_s, "seconds to wait for each frame's output");
+  app.add_flag("--verbose", options.verbose, "print every exchange");
+  const bool connect = [&] {
+    try {
+      app.parse(own_argc, argv);
+      if (connect_opt->count() == 0) return false;
       unsigned can = 0, cloud = 0;
       char host[64] = {};
-      if (!v || std::sscanf(v, "%63[^:]:%u,%u", host, &can, &cloud) != 3) return usage();
+      if (std::sscanf(connect_spec.c_str(), "%63[^:]:%u,%u", host, &can, &cloud) != 3 || can > 65535 || cloud > 65535)
+        throw CLI::ValidationError("--connect", "expected HOST:CANPORT,CLOUDPORT, got '" + connect_spec + "'");
       options.host = host;
       options.firmware_can_port = static_cast<std::uint16_t>(can);
       options.firmware_cloud_port = static_cast<std::uint16_t>(cloud);
-      connect = true;
-    } else if (a == "--local-can-port") {
-      const char* v = value();
-      if (!v) return usage();
-      options.local_can_port = static_cast<std::uint16_t>(std::atoi(v));
-    } else if (a == "--out") {
-      const char* v = value();
-      if (!v) return usage();
-      out_dir = v;
-    } else if (a == "--frames") {
-      const char* v = value();
-      if (!v) return usage();
-      options.stream.max_frames = std::atoi(v);
-    } else if (a == "--timeout") {
-      const char* v = value();
-      if (!v) return usage();
-      options.frame_timeout_s = std::atof(v);
-    } else if (a == "--verbose") {
-      options.verbose = true;
-    } else if (a == "--") {
-      for (++i; i < argc; ++i) options.firmware_args.emplace_back(argv[i]);
-    } else {
-      return usage();
+      return true;
+    } catch (const CLI::ParseError& e) {
+      std::exit(app.exit(e) == 0 ? 0 : 2);  // usage errors keep exit code 2
     }
-  }
+  }();
   if (!connect && options.firmware_path.empty()) options.firmware_path = default_firmware_path();
 
   RecordingReader reader;

@@ -11,7 +11,7 @@
 #include <cstring>
 #include <thread>
 
-#include "firmware/app/wire_conventions.hpp"
+#include "firmware/wire/wire_conventions.hpp"
 #include "hal/emulated/emulated_can_bus.hpp"
 #include "hal/emulated/sim_clock.hpp"
 #include "hal/linux/udp_link.hpp"

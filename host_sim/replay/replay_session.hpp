@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "firmware/app/diagnostic_frames.hpp"
-#include "firmware/app/pose_frames.hpp"
+#include "firmware/wire/diagnostic_frames.hpp"
+#include "firmware/wire/pose_frames.hpp"
 #include "host_sim/eval/trajectory.hpp"
 #include "host_sim/recording/recording_reader.hpp"
 #include "host_sim/replay/event_stream.hpp"

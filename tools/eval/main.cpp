@@ -178,13 +178,9 @@ int main(int argc, char** argv) {
     row.metrics = v2xloc::eval::compute_metrics(records);
     if (!firmware_path.empty()) v2xloc::eval::mark_columns_not_on_can(row.metrics);
     const std::string name = "sim" + std::to_string(row.sim) + "_" + row.permutation;
-    if (!plots_dir.empty()) {
-      std::filesystem::create_directories(plots_dir);
-      if (!v2xloc::eval::write_top_view(plots_dir + "/" + name + "_topview.png", records, error) ||
-          !v2xloc::eval::write_error_plot(plots_dir + "/" + name + "_error.png", records, error)) {
-        std::fprintf(stderr, "v2xloc-eval: plots: %s\n", error.c_str());
-        return 1;
-      }
+    if (!plots_dir.empty() && !v2xloc::eval::write_plot_data(plots_dir, name, reader, records, error)) {
+      std::fprintf(stderr, "v2xloc-eval: plots: %s\n", error.c_str());
+      return 1;
     }
     if (!estimates_dir.empty()) {
       std::filesystem::create_directories(estimates_dir);
@@ -201,6 +197,13 @@ int main(int argc, char** argv) {
       }
     }
     rows.push_back(row);
+  }
+  if (!plots_dir.empty()) {  // matplotlib draws the pictures from the plot data (tools/plots/plot_run.py)
+    const v2xloc::eval::PlotRender plots = v2xloc::eval::render_plots(plots_dir, trace_dir);
+    if (!plots.ok) {
+      std::fprintf(stderr, "v2xloc-eval: plots: %s\n", plots.message.c_str());
+      if (!plots.skipped) return 1;
+    }
   }
   if (json) {
     std::printf("%s\n", v2xloc::eval::format_json(rows).c_str());

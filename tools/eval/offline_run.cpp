@@ -11,7 +11,8 @@
 #define V2XLOC_HAVE_CALLGRIND 1
 #endif
 
-#include "firmware/app/input_decoder.hpp"
+#include "firmware/wire/input_decoder.hpp"
+#include "firmware/wire/wire_conventions.hpp"
 #include "firmware/protocol/can_messages.hpp"
 #include "host_sim/cloud_io/point_cloud.hpp"
 
@@ -20,36 +21,13 @@ namespace {
 
 Mat4d to_mat(const Eigen::Isometry3d& iso) { return iso.matrix(); }
 
-// The decoder's sink: forwards to the localizer and accounts the time spent in it.
-class TimedPort final : public firmware::LocalizerPort {
- public:
-  explicit TimedPort(Localizer& localizer) : localizer_(localizer) {}
-  void on_vehicle(const VehicleInput& in) override { timed([&] { localizer_.on_vehicle(in); }); }
-  void on_gnss(const GnssInput& in) override {
-    timed([&] { localizer_.on_gnss(in); });
-    last_gnss = in;
-    ++gnss_inputs;
-  }
-  MapInsertResult on_map_cloud(const MapCloudInput& in) override { return localizer_.on_map_cloud(in); }
-  const LocalizerFrameOutput& on_ego_scan(const EgoScanInput& in) override { return localizer_.on_ego_scan(in); }
-  double take_seconds() {
-    const double s = seconds_;
-    seconds_ = 0.0;
-    return s;
-  }
-  GnssInput last_gnss{};
-  std::size_t gnss_inputs = 0;
-
- private:
-  template <class F>
-  void timed(F&& f) {
-    const auto t0 = std::chrono::steady_clock::now();
-    f();
-    seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  }
-  Localizer& localizer_;
-  double seconds_ = 0.0;
-};
+// Wall time of one localizer call [s].
+template <class F>
+double timed_seconds(F&& f) {
+  const auto t0 = std::chrono::steady_clock::now();
+  f();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
 
 // The localizer's stage probe on the host: wall time between marks per stage, and (under
 // callgrind, when asked) one stats dump per finished stage so instructions split the same way.
@@ -102,7 +80,7 @@ std::uint32_t source_id_of(const sim::MapCloudInfo& info) {
   // "infra_3" -> 1 + 3, "agent_1..." -> 32 + 1: stable ids per sensor.
   const auto digit = info.sensor.find_first_of("0123456789");
   const std::uint32_t k = digit == std::string::npos ? 0u : static_cast<std::uint32_t>(std::stoul(info.sensor.substr(digit)));
-  return info.kind == "agent" ? 32u + k : 1u + k;
+  return info.kind == "agent" ? firmware::kAgentSenderBase + k : firmware::kInfraSenderBase + k;
 }
 
 }  // namespace
@@ -130,7 +108,6 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
   std::size_t next_can = 0, next_cloud = 0;
   // CAN goes through the firmware's decoder (same DBC decoding, same fix assembly, same checks).
   auto decoder = std::make_unique<firmware::InputDecoder>(0);
-  TimedPort port(localizer);
   bool has_gnss = false;
   Eigen::Vector3d gnss_body = Eigen::Vector3d::Zero();
   cloud_io::PointCloud cloud, scan;
@@ -156,17 +133,21 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
       frame.id = f.id;
       frame.dlc = f.dlc;
       for (int b = 0; b < 8; ++b) frame.data[b] = f.data[b];
-      const firmware::CanInputKind kind =
-          decoder->on_can(frame, static_cast<std::int64_t>(std::llround(f.t * 1e9)), port);
-      if (kind == firmware::CanInputKind::kRejected) ++stats.can_decode_errors;
-      if (kind == firmware::CanInputKind::kGnssFix && port.last_gnss.valid) {
-        const GnssInput& fix = port.last_gnss;
-        const Vec3d enu = geodetic_to_enu(origin, GeodeticPoint{fix.lat_deg, fix.lon_deg, fix.alt_m});
-        gnss_body = enu - options.gnss_antenna_in_body;  // roll = pitch = 0: the lever is vertical
-        has_gnss = true;
+      const firmware::DecodedCan decoded = decoder->decode_can(frame, static_cast<std::int64_t>(std::llround(f.t * 1e9)));
+      if (decoded.kind == firmware::CanInputKind::kRejected) ++stats.can_decode_errors;
+      if (decoded.kind == firmware::CanInputKind::kVehicle) {
+        frame_seconds += timed_seconds([&] { localizer.on_vehicle(decoded.vehicle); });
+      }
+      if (decoded.kind == firmware::CanInputKind::kGnssFix) {
+        frame_seconds += timed_seconds([&] { localizer.on_gnss(decoded.gnss); });
+        if (decoded.gnss.valid) {
+          const GnssInput& fix = decoded.gnss;
+          const Vec3d enu = geodetic_to_enu(origin, GeodeticPoint{fix.lat_deg, fix.lon_deg, fix.alt_m});
+          gnss_body = enu - options.gnss_antenna_in_body;  // roll = pitch = 0: the lever is vertical
+          has_gnss = true;
+        }
       }
     }
-    frame_seconds += port.take_seconds();
     stages.mark(LocalizerStage::kIdle);
     rec.has_gnss = has_gnss;
     rec.gnss_body = gnss_body;

@@ -26,6 +26,8 @@
 #define V2XLOC_INFO_HAS_GATE 1
 #endif
 
+#include <CLI/CLI.hpp>
+
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -135,14 +137,17 @@ void print_json() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc == 1) {
-    print_text();
-    return 0;
+  CLI::App app{"Capacities and iteration caps of algo/include/v2xloc/algo/core/config.hpp and the static memory\n"
+               "they imply.",
+               "v2xloc-info"};
+  bool json = false;
+  app.add_flag("--json", json, "one JSON object instead of the table");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;  // usage errors keep exit code 2
   }
-  if (argc == 2 && std::strcmp(argv[1], "--json") == 0) {
-    print_json();
-    return 0;
-  }
-  std::fprintf(stderr, "usage: v2xloc-info [--json]\n");
-  return 2;
+  if (json) print_json();
+  else print_text();
+  return 0;
 }

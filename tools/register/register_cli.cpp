@@ -1,6 +1,7 @@
 #include "tools/register/register_cli.hpp"
 
-#include <charconv>
+#include <CLI/CLI.hpp>
+
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -8,12 +9,6 @@
 
 namespace v2xloc::tools {
 namespace {
-
-template <typename T>
-bool parse_whole(const std::string& text, T& value) {
-  const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-  return ec == std::errc() && ptr == text.data() + text.size();
-}
 
 void append_number(std::string& out, double v) {
   if (!std::isfinite(v)) {
@@ -75,74 +70,72 @@ void append_registration(std::string& out, const RegistrationResult& r) {
 
 }  // namespace
 
+namespace {
+
+// The command line, described once: parse_register_args and the usage text both come from it.
+struct RegisterCommandLine {
+  CLI::App app{"Registers SOURCE onto TARGET with the allocation-free pipeline (algo/register_clouds) and\n"
+               "prints one JSON object. Exit 0: registered, 1: registration failed, 2: usage/IO error.",
+               "v2xloc-register"};
+  std::string mode = "global";
+  float voxel = 0.0f;
+  std::string init_path;
+  std::uint64_t seed = 0;
+  std::size_t feature_visits = 0;
+
+  explicit RegisterCommandLine(RegisterOptions& o) {
+    app.add_option("SOURCE", o.source_path, ".pcd (ascii/binary/binary_compressed), .ply or KITTI .bin")->required();
+    app.add_option("TARGET", o.target_path, "the cloud SOURCE is registered onto (same formats)")->required();
+    app.add_option("--voxel", voxel, "voxel size in metres (default 0.5); other radii scale with it")
+        ->check(CLI::PositiveNumber);
+    app.add_option("--init", init_path, "4x4 row-major initial guess p_target = T p_source (--mode icp)");
+    app.add_option("--mode", mode, "global: FPFH + RANSAC + ICP (default); icp: ICP from --init")
+        ->check(CLI::IsMember({"global", "icp"}));
+    app.add_option("--seed", seed, "RANSAC random seed");
+    app.add_option("--feature-visits", feature_visits,
+                   "node-visit budget per feature query (0 = exact, default; 24: approximate, ~2x faster matching)")
+        ->check(CLI::Range(std::size_t{0}, std::size_t{1000000}));
+  }
+};
+
+}  // namespace
+
 const char* register_usage() {
-  return "usage: v2xloc-register SOURCE TARGET [--voxel M] [--init FILE_4x4] [--mode global|icp] "
-         "[--seed N] [--feature-visits N]\n"
-         "  SOURCE, TARGET  .pcd (ascii/binary/binary_compressed), .ply or KITTI .bin\n"
-         "  --voxel M       voxel size in metres (default 0.5); other radii scale with it\n"
-         "  --init FILE     4x4 row-major initial guess p_target = T p_source (--mode icp)\n"
-         "  --mode          global: FPFH + RANSAC + ICP (default); icp: ICP from --init\n"
-         "  --seed N        RANSAC random seed\n"
-         "  --feature-visits N  node-visit budget per feature query (0 = exact, default;\n"
-         "                      24: approximate, ~2x faster matching)\n"
-         "Prints one JSON object. Exit 0: registered, 1: registration failed, 2: usage/IO error.\n";
+  static const std::string text = [] {
+    RegisterOptions o;
+    RegisterCommandLine cli(o);
+    return cli.app.help();
+  }();
+  return text.c_str();
 }
 
 bool parse_register_args(const std::vector<std::string>& args, RegisterOptions& options,
                          std::string& error) {
-  std::vector<std::string> positional;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    if (a.size() > 2 && a.compare(0, 2, "--") == 0) {
-      if (i + 1 >= args.size()) {
-        error = a + " needs a value";
-        return false;
-      }
-      const std::string& value = args[++i];
-      if (a == "--voxel") {
-        float v = 0.0f;
-        if (!parse_whole(value, v) || !(v > 0.0f) || !std::isfinite(v)) {
-          error = "--voxel needs a positive number of metres, got '" + value + "'";
-          return false;
-        }
-        options.voxel = v;
-      } else if (a == "--init") {
-        options.init_path = value;
-      } else if (a == "--mode") {
-        if (value == "global") options.mode = RegistrationMode::kGlobal;
-        else if (value == "icp") options.mode = RegistrationMode::kIcpOnly;
-        else {
-          error = "--mode must be global or icp, got '" + value + "'";
-          return false;
-        }
-      } else if (a == "--seed") {
-        std::uint64_t s = 0;
-        if (!parse_whole(value, s)) {
-          error = "--seed needs a non-negative integer, got '" + value + "'";
-          return false;
-        }
-        options.seed = s;
-      } else if (a == "--feature-visits") {
-        std::uint64_t v = 0;
-        if (!parse_whole(value, v) || v > 1000000) {
-          error = "--feature-visits needs an integer 0..1000000, got '" + value + "'";
-          return false;
-        }
-        options.feature_visits = static_cast<std::size_t>(v);
-      } else {
-        error = "unknown option " + a;
-        return false;
-      }
-    } else {
-      positional.push_back(a);
-    }
-  }
-  if (positional.size() != 2) {
-    error = "expected SOURCE and TARGET, got " + std::to_string(positional.size()) + " file argument(s)";
+  RegisterOptions parsed;
+  RegisterCommandLine cli(parsed);
+  std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 takes them last first
+  try {
+    cli.app.parse(reversed);
+  } catch (const CLI::ParseError& e) {
+    error = e.what();
+    if (error.empty()) error = "bad usage";
     return false;
   }
-  options.source_path = positional[0];
-  options.target_path = positional[1];
+  // Negative numbers for unsigned options: CLI11 would wrap some of them around.
+  for (const char* name : {"--seed", "--feature-visits"}) {
+    for (const std::string& v : cli.app.get_option(name)->results()) {
+      if (!v.empty() && v.front() == '-') {
+        error = std::string(name) + " needs a non-negative integer, got '" + v + "'";
+        return false;
+      }
+    }
+  }
+  if (cli.app.count("--voxel")) parsed.voxel = cli.voxel;
+  if (cli.app.count("--init")) parsed.init_path = cli.init_path;
+  if (cli.app.count("--seed")) parsed.seed = cli.seed;
+  if (cli.app.count("--feature-visits")) parsed.feature_visits = cli.feature_visits;
+  parsed.mode = cli.mode == "icp" ? RegistrationMode::kIcpOnly : RegistrationMode::kGlobal;
+  options = parsed;
   return true;
 }
 

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "v2xloc/algo/core/det_math.hpp"
+#include "v2xloc/algo/core/finite.hpp"
 
 namespace v2xloc {
 namespace {
@@ -10,7 +11,6 @@ namespace {
 constexpr double kDegToRad = det::kPi / 180.0;
 constexpr double kRadToDeg = 180.0 / det::kPi;
 
-bool finite3(const Vec3d& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
 
 }  // namespace
 
@@ -38,7 +38,7 @@ GeodeticOrigin make_geodetic_origin(double lat_deg, double lon_deg, double alt_m
 
 EcefToGeodeticResult ecef_to_geodetic(const Vec3d& ecef, const EcefToGeodeticCriteria& criteria) {
   EcefToGeodeticResult r;
-  if (!finite3(ecef)) return r;
+  if (!is_finite_point(ecef)) return r;
   const double x = ecef.x(), y = ecef.y(), z = ecef.z();
   const double p = std::sqrt(x * x + y * y);
   if (p == 0.0 && z == 0.0) return r;  // the centre has no geodetic coordinates

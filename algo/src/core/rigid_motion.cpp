@@ -35,6 +35,16 @@ Mat3d so3_exp(const Vec3d& w) {
   return Mat3d::Identity() + k.a * W + k.b * (W * W);
 }
 
+Mat3d so3_exp_closed_form(const Vec3d& w) {
+  const double theta2 = w.squaredNorm();
+  const Mat3d k = skew(w);
+  if (theta2 < 1e-20) return Mat3d::Identity() + k;
+  const double theta = std::sqrt(theta2);
+  const double a = det::sin(theta) / theta;
+  const double b = (1.0 - det::cos(theta)) / theta2;
+  return Mat3d::Identity() + a * k + b * (k * k);
+}
+
 Vec3d so3_log(const Mat3d& R) {
   double cos_theta = 0.5 * (R.trace() - 1.0);
   if (cos_theta > 1.0) cos_theta = 1.0;

@@ -10,6 +10,7 @@
 #include "v2xloc/algo/registration/icp.hpp"
 #include "v2xloc/algo/registration/normals.hpp"
 #include "v2xloc/algo/registration/pose_search.hpp"
+#include "v2xloc/algo/core/finite.hpp"
 #include "v2xloc/algo/core/rigid_motion.hpp"
 
 namespace v2xloc {
@@ -18,10 +19,6 @@ namespace {
 Vec3f transform_point(const Mat4d& T, const Vec3f& p) {
   const Vec3d q = T.topLeftCorner<3, 3>() * p.cast<double>() + T.topRightCorner<3, 1>();
   return q.cast<float>();
-}
-
-bool finite_point(const Vec3f& p) {
-  return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
 }
 
 double horizontal_distance(const Mat4d& pose, const Vec3d& enu) {
@@ -196,7 +193,7 @@ void Localizer::prepare_scan(const EgoScanInput& in) {
   for (std::size_t i = 0; i < in.points.size(); ++i) {
     const Vec3f& p = in.points[i];
     const float r2 = p.squaredNorm();
-    if (!finite_point(p) || r2 < min2 || r2 > max2 || (has_times && !std::isfinite(in.point_times[i]))) {
+    if (!is_finite_point(p) || r2 < min2 || r2 > max2 || (has_times && !std::isfinite(in.point_times[i]))) {
       ++dropped;
       continue;
     }

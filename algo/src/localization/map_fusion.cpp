@@ -2,15 +2,12 @@
 
 #include <cmath>
 
+#include "v2xloc/algo/core/spatial_hash.hpp"
+
 namespace v2xloc {
 
 namespace {
-constexpr std::uint32_t kMaxProbes = 64;
-std::uint32_t hash_key(const std::int32_t k[3]) {
-  return (static_cast<std::uint32_t>(k[0]) * 73856093u) ^
-         (static_cast<std::uint32_t>(k[1]) * 19349669u) ^
-         (static_cast<std::uint32_t>(k[2]) * 83492791u);
-}
+constexpr auto kMaxProbes = static_cast<std::uint32_t>(config::kVoxelMaxProbes);
 }  // namespace
 
 MapFusion::MapFusion(const MapFusionParams& params) : params_(params) {}
@@ -45,31 +42,28 @@ bool MapFusion::cell_key(const Vec3f& p, double cell, std::int32_t level,
 }
 
 bool MapFusion::mark(const std::int32_t key[3]) {
-  std::uint32_t slot = hash_key(key) & static_cast<std::uint32_t>(kSlots - 1);
-  for (std::uint32_t probe = 0; probe < kMaxProbes; ++probe) {
-    Cell& c = cells_[slot];
-    if (c.stamp != stamp_) {
-      c.key[0] = key[0];
-      c.key[1] = key[1];
-      c.key[2] = key[2];
-      c.stamp = stamp_;
-      return true;
-    }
-    if (c.key[0] == key[0] && c.key[1] == key[1] && c.key[2] == key[2]) return true;
-    slot = (slot + 1) & static_cast<std::uint32_t>(kSlots - 1);
-  }
-  return false;
+  return linear_probe(spatial_hash(key), kSlots, kMaxProbes, [&](std::size_t slot) {
+           Cell& c = cells_[slot];
+           if (c.stamp != stamp_) {
+             c.key[0] = key[0];
+             c.key[1] = key[1];
+             c.key[2] = key[2];
+             c.stamp = stamp_;
+             return true;
+           }
+           return c.key[0] == key[0] && c.key[1] == key[1] && c.key[2] == key[2];
+         }).stopped;
 }
 
 bool MapFusion::occupied(const std::int32_t key[3]) const {
-  std::uint32_t slot = hash_key(key) & static_cast<std::uint32_t>(kSlots - 1);
-  for (std::uint32_t probe = 0; probe < kMaxProbes; ++probe) {
+  bool found = false;
+  linear_probe(spatial_hash(key), kSlots, kMaxProbes, [&](std::size_t slot) {
     const Cell& c = cells_[slot];
-    if (c.stamp != stamp_) return false;
-    if (c.key[0] == key[0] && c.key[1] == key[1] && c.key[2] == key[2]) return true;
-    slot = (slot + 1) & static_cast<std::uint32_t>(kSlots - 1);
-  }
-  return false;
+    if (c.stamp != stamp_) return true;
+    found = c.key[0] == key[0] && c.key[1] == key[1] && c.key[2] == key[2];
+    return found;
+  });
+  return found;
 }
 
 bool MapFusion::occupied_around(const Vec3f& p, double cell, std::int32_t level) const {

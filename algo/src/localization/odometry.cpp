@@ -6,18 +6,12 @@
 
 #include "v2xloc/algo/core/det_math.hpp"
 #include "v2xloc/algo/core/rigid_motion.hpp"
+#include "v2xloc/algo/core/spatial_hash.hpp"
 
 namespace v2xloc {
 
 namespace {
-constexpr std::uint32_t kMaxProbes = 64;
-
-std::uint32_t hash_key(const std::int32_t k[3]) {
-  // Teschner et al. 2003 spatial hash.
-  return (static_cast<std::uint32_t>(k[0]) * 73856093u) ^
-         (static_cast<std::uint32_t>(k[1]) * 19349669u) ^
-         (static_cast<std::uint32_t>(k[2]) * 83492791u);
-}
+constexpr auto kMaxProbes = static_cast<std::uint32_t>(config::kVoxelMaxProbes);
 
 Vec3d transform(const Mat4d& T, const Vec3f& p) {
   return T.topLeftCorner<3, 3>() * p.cast<double>() + T.topRightCorner<3, 1>();
@@ -58,36 +52,35 @@ bool LidarOdometry::voxel_key(const Vec3d& p, std::int32_t key[3]) const {
 }
 
 std::uint32_t LidarOdometry::find_voxel(const std::int32_t key[3]) const {
-  std::uint32_t slot = hash_key(key) & static_cast<std::uint32_t>(kSlots - 1);
-  for (std::uint32_t probe = 0; probe < kMaxProbes; ++probe) {
+  std::uint32_t found = kNone;
+  linear_probe(spatial_hash(key), kSlots, kMaxProbes, [&](std::size_t slot) {
     const std::uint32_t v = slots_[slot];
-    if (v == 0) return kNone;
+    if (v == 0) return true;
     const Voxel& vx = voxels_[active_][v - 1];
-    if (vx.key[0] == key[0] && vx.key[1] == key[1] && vx.key[2] == key[2]) return v - 1;
-    slot = (slot + 1) & static_cast<std::uint32_t>(kSlots - 1);
-  }
-  return kNone;
+    if (vx.key[0] == key[0] && vx.key[1] == key[1] && vx.key[2] == key[2]) {
+      found = v - 1;
+      return true;
+    }
+    return false;
+  });
+  return found;
 }
 
 std::uint32_t LidarOdometry::insert_voxel(const std::int32_t key[3]) {
   if (num_voxels_ == kMaxPoints) return kNone;
-  std::uint32_t slot = hash_key(key) & static_cast<std::uint32_t>(kSlots - 1);
-  for (std::uint32_t probe = 0; probe < kMaxProbes; ++probe) {
-    if (slots_[slot] == 0) {
-      Voxel& vx = voxels_[active_][num_voxels_];
-      vx.key[0] = key[0];
-      vx.key[1] = key[1];
-      vx.key[2] = key[2];
-      vx.begin = 0;
-      vx.count = 0;
-      vx.pending = 0;
-      vx.slot = slot;
-      slots_[slot] = static_cast<std::uint32_t>(++num_voxels_);
-      return static_cast<std::uint32_t>(num_voxels_ - 1);
-    }
-    slot = (slot + 1) & static_cast<std::uint32_t>(kSlots - 1);
-  }
-  return kNone;
+  const ProbeResult probe = linear_probe(spatial_hash(key), kSlots, kMaxProbes,
+                                         [&](std::size_t slot) { return slots_[slot] == 0; });
+  if (!probe.stopped) return kNone;
+  Voxel& vx = voxels_[active_][num_voxels_];
+  vx.key[0] = key[0];
+  vx.key[1] = key[1];
+  vx.key[2] = key[2];
+  vx.begin = 0;
+  vx.count = 0;
+  vx.pending = 0;
+  vx.slot = static_cast<std::uint32_t>(probe.slot);
+  slots_[probe.slot] = static_cast<std::uint32_t>(++num_voxels_);
+  return static_cast<std::uint32_t>(num_voxels_ - 1);
 }
 
 bool LidarOdometry::nearest(const Vec3d& p, double max_d2, Vec3d& q, double& d2) const {
@@ -357,17 +350,15 @@ void LidarOdometry::update_map(const Mat4d& pose, OdometryResult& r) {
 void LidarOdometry::rebuild_index() {
   for (std::size_t v = 0; v < num_voxels_; ++v) {
     Voxel& vx = voxels_[active_][v];
-    std::uint32_t slot = hash_key(vx.key) & static_cast<std::uint32_t>(kSlots - 1);
     // The table holds at most kMaxPoints <= kSlots voxels; probing beyond the cap would only
     // happen for a pathological key set and then the voxel is unreachable (still counted in map).
-    for (std::uint32_t probe = 0; probe < kMaxProbes; ++probe) {
-      if (slots_[slot] == 0) {
-        slots_[slot] = static_cast<std::uint32_t>(v + 1);
-        vx.slot = slot;
-        break;
-      }
-      if (probe + 1 == kMaxProbes) vx.slot = 0;  // unreachable voxel; slot 0 cleared harmlessly
-      slot = (slot + 1) & static_cast<std::uint32_t>(kSlots - 1);
+    const ProbeResult probe = linear_probe(spatial_hash(vx.key), kSlots, kMaxProbes,
+                                           [&](std::size_t slot) { return slots_[slot] == 0; });
+    if (probe.stopped) {
+      slots_[probe.slot] = static_cast<std::uint32_t>(v + 1);
+      vx.slot = static_cast<std::uint32_t>(probe.slot);
+    } else {
+      vx.slot = 0;  // unreachable voxel; slot 0 cleared harmlessly
     }
   }
 }

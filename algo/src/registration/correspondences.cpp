@@ -2,6 +2,9 @@
 
 #include <cmath>
 
+#include "v2xloc/algo/core/finite.hpp"
+#include "v2xloc/algo/core/symmetric_eigen.hpp"
+
 namespace v2xloc {
 
 CorrespondenceResult match_features(std::span<const Feature33> source_features,
@@ -97,7 +100,13 @@ namespace {
 
 constexpr int kN = kFpfhBins;
 
-// Cyclic Jacobi on the symmetric a (Golub & Van Loan 8.5.3; rows are Feature33), rotations
+// Rows of Feature33 seen as a matrix, for the core's Jacobi sweep.
+struct FeatureRows {
+  Feature33* rows;
+  float& operator()(int i, int j) { return rows[i][j]; }
+};
+
+// Cyclic Jacobi on the symmetric a (core/symmetric_eigen.hpp; rows are Feature33), rotations
 // accumulated in v: +,-,*,/,sqrt only in a fixed order, so the same bits on every ISA. Float is
 // enough for a pruning basis: v stays orthonormal to ~1e-6 whatever the convergence, far inside
 // the filter's 1e-4 margin.
@@ -109,46 +118,15 @@ void jacobi_eigen(Feature33* a, Feature33* v) {
   for (int i = 0; i < kN; ++i) {
     for (int j = 0; j < kN; ++j) total += a[i][j] * a[i][j];
   }
+  FeatureRows rows_a{a}, rows_v{v};
   for (int sweep = 0; sweep < 12; ++sweep) {
     float off = 0.0f;
     for (int i = 0; i < kN; ++i) {
       for (int j = i + 1; j < kN; ++j) off += a[i][j] * a[i][j];
     }
     if (!(off > 1e-12f * total)) break;
-    for (int p = 0; p < kN - 1; ++p) {
-      for (int q = p + 1; q < kN; ++q) {
-        const float apq = a[p][q];
-        if (apq == 0.0f) continue;
-        const float theta = (a[q][q] - a[p][p]) / (2.0f * apq);
-        const float t = (theta >= 0.0f ? 1.0f : -1.0f) /
-                        (std::abs(theta) + std::sqrt(theta * theta + 1.0f));
-        const float c = 1.0f / std::sqrt(t * t + 1.0f);
-        const float s = t * c;
-        for (int k = 0; k < kN; ++k) {
-          const float akp = a[k][p], akq = a[k][q];
-          a[k][p] = c * akp - s * akq;
-          a[k][q] = s * akp + c * akq;
-        }
-        for (int k = 0; k < kN; ++k) {
-          const float apk = a[p][k], aqk = a[q][k];
-          a[p][k] = c * apk - s * aqk;
-          a[q][k] = s * apk + c * aqk;
-        }
-        for (int k = 0; k < kN; ++k) {
-          const float vkp = v[k][p], vkq = v[k][q];
-          v[k][p] = c * vkp - s * vkq;
-          v[k][q] = s * vkp + c * vkq;
-        }
-      }
-    }
+    jacobi_sweep<float, kN>(rows_a, &rows_v);
   }
-}
-
-bool finite_feature(const Feature33& f) {
-  for (int d = 0; d < kN; ++d) {
-    if (!std::isfinite(f[d])) return false;
-  }
-  return true;
 }
 
 }  // namespace
@@ -162,7 +140,7 @@ bool compute_feature_basis(std::span<const Feature33> a, std::span<const Feature
   std::size_t count = 0;
   for (const std::span<const Feature33> set : {a, b}) {
     for (std::size_t i = 0; i < set.size(); i += stride) {
-      if (!finite_feature(set[i])) continue;
+      if (!is_finite_point(set[i])) continue;
       for (int d = 0; d < kN; ++d) basis.mean[d] += set[i][d];
       ++count;
     }
@@ -176,7 +154,7 @@ bool compute_feature_basis(std::span<const Feature33> a, std::span<const Feature
     double row[kN] = {};
     for (const std::span<const Feature33> set : {a, b}) {
       for (std::size_t i = 0; i < set.size(); i += stride) {
-        if (!finite_feature(set[i])) continue;
+        if (!is_finite_point(set[i])) continue;
         const double cd = set[i][d] - basis.mean[d];
         for (int e = d; e < kN; ++e) row[e] += cd * (set[i][e] - basis.mean[e]);
       }

@@ -4,15 +4,12 @@
 #include <cmath>
 
 #include "v2xloc/algo/core/det_math.hpp"
+#include "v2xloc/algo/core/finite.hpp"
 
 namespace v2xloc {
 namespace {
 
 constexpr int kBinsPerFeature = 11;
-
-bool finite3(const Vec3f& p) {
-  return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
-}
 
 // Open3D's bin index: floor, then clamp to [0, 10]. The argument is finite here.
 int clamp_bin(double x) {
@@ -131,7 +128,7 @@ FpfhResult compute_fpfh(const KdNeighborhoods& neighborhoods, std::span<const Ve
   for (std::size_t i = 0; i < n; ++i) {
     Feature33& spfh = spfh_scratch[i];
     spfh.setZero();
-    if (!finite3(points[i])) {
+    if (!is_finite_point(points[i])) {
       ++r.non_finite_points;
       continue;
     }
@@ -163,7 +160,7 @@ FpfhResult compute_fpfh(const KdNeighborhoods& neighborhoods, std::span<const Ve
   for (std::size_t i = 0; i < n; ++i) {
     Feature33& out = features[i];
     out.setZero();
-    if (!finite3(points[i])) continue;
+    if (!is_finite_point(points[i])) continue;
     const KdQueryResult kr = neighborhoods.get(i, params.radius, max_nn, buffer);
     r.search.add(kr);
     if (kr.count <= 1) {

@@ -4,6 +4,8 @@
 #include <cmath>
 
 #include "v2xloc/algo/core/det_math.hpp"
+#include "v2xloc/algo/core/rigid_motion.hpp"
+#include "v2xloc/algo/core/symmetric_eigen.hpp"
 #include "v2xloc/algo/registration/kabsch.hpp"
 
 namespace v2xloc {
@@ -31,25 +33,8 @@ double RobustKernel::weight(double residual) const {
 
 namespace {
 
-Mat3d skew_matrix(const Vec3d& v) {
-  Mat3d m;
-  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
-  return m;
-}
-
-// SO(3) exponential (Rodrigues) with the core's deterministic sin/cos.
-Mat3d rotation_exp(const Vec3d& w) {
-  const double theta2 = w.squaredNorm();
-  const Mat3d k = skew_matrix(w);
-  if (theta2 < 1e-20) return Mat3d::Identity() + k;
-  const double theta = std::sqrt(theta2);
-  const double a = det::sin(theta) / theta;
-  const double b = (1.0 - det::cos(theta)) / theta2;
-  return Mat3d::Identity() + a * k + b * (k * k);
-}
-
 // Re-orthonormalises R (Gram-Schmidt on rows) so products of many updates stay in SO(3).
-void orthonormalize(Mat4d& t) {
+void orthonormalize_rows(Mat4d& t) {
   Vec3d x = t.block<1, 3>(0, 0).transpose();
   Vec3d y = t.block<1, 3>(1, 0).transpose();
   x /= x.norm();
@@ -79,26 +64,7 @@ double preconditioned_eigen_ratio(const Mat6d& h) {
       for (int j = i + 1; j < 6; ++j) off += s(i, j) * s(i, j);
     }
     if (off < 1e-30) break;
-    for (int p = 0; p < 6; ++p) {
-      for (int q = p + 1; q < 6; ++q) {
-        if (s(p, q) == 0.0) continue;
-        // Rotation angle that zeroes s(p, q): tan(2 phi) = 2 s_pq / (s_qq - s_pp).
-        const double theta = (s(q, q) - s(p, p)) / (2.0 * s(p, q));
-        const double t = (theta >= 0.0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1.0));
-        const double c = 1.0 / std::sqrt(t * t + 1.0);
-        const double sn = t * c;
-        for (int k = 0; k < 6; ++k) {  // columns p, q
-          const double skp = s(k, p), skq = s(k, q);
-          s(k, p) = c * skp - sn * skq;
-          s(k, q) = sn * skp + c * skq;
-        }
-        for (int k = 0; k < 6; ++k) {  // rows p, q
-          const double spk = s(p, k), sqk = s(q, k);
-          s(p, k) = c * spk - sn * sqk;
-          s(q, k) = sn * spk + c * sqk;
-        }
-      }
-    }
+    jacobi_sweep<double, 6>(s, static_cast<Mat6d*>(nullptr));
   }
   double lo = s(0, 0), hi = s(0, 0);
   for (int i = 1; i < 6; ++i) {
@@ -130,8 +96,8 @@ struct Pass {
     Mat6d info = Mat6d::Zero();
     const double n = double(inliers);
     info.topLeftCorner<3, 3>() = qq_sum.trace() * Mat3d::Identity() - qq_sum;
-    info.topRightCorner<3, 3>() = skew_matrix(q_sum);
-    info.bottomLeftCorner<3, 3>() = skew_matrix(q_sum).transpose();
+    info.topRightCorner<3, 3>() = skew(q_sum);
+    info.bottomLeftCorner<3, 3>() = skew(q_sum).transpose();
     info.bottomRightCorner<3, 3>() = n * Mat3d::Identity();
     return info;
   }
@@ -292,10 +258,10 @@ RegistrationResult icp(std::span<const Vec3f> source, const IcpTarget& target, c
       }
       const Vec6d delta = pass.h.ldlt().solve(-pass.b);
       Mat4d update = Mat4d::Identity();
-      update.topLeftCorner<3, 3>() = rotation_exp(delta.head<3>());
+      update.topLeftCorner<3, 3>() = so3_exp_closed_form(delta.head<3>());
       update.topRightCorner<3, 1>() = delta.tail<3>();
       next = update * transform;
-      orthonormalize(next);
+      orthonormalize_rows(next);
     } else {
       KabschParams kp;
       kp.min_singular_ratio = params.min_eigenvalue_ratio;

@@ -3,12 +3,11 @@
 #include <algorithm>
 #include <cmath>
 
+#include "v2xloc/algo/core/finite.hpp"
+#include "v2xloc/algo/core/symmetric_eigen.hpp"
+
 namespace v2xloc {
 namespace {
-
-bool finite3(const Vec3f& p) {
-  return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
-}
 
 // Orientation rule of Open3D's orient_normals_towards_camera_location: flip when pointing away;
 // a zero normal becomes the (normalised) direction to the camera, or (0,0,1).
@@ -21,58 +20,6 @@ Vec3d orient(const Vec3d& n, const Vec3d& to_view) {
 }
 
 }  // namespace
-
-// Cyclic Jacobi (Golub & Van Loan, Alg. 8.5.3): rotations from +,-,*,/,sqrt only.
-void symmetric_eigen3(const Mat3d& input, Vec3d& eigenvalues, Mat3d& eigenvectors) {
-  Mat3d a = input;
-  Mat3d v = Mat3d::Identity();
-  const double scale = a.cwiseAbs().maxCoeff();
-  for (std::uint32_t sweep = 0; sweep < config::kJacobiMaxSweeps; ++sweep) {
-    const double off = std::abs(a(0, 1)) + std::abs(a(0, 2)) + std::abs(a(1, 2));
-    if (off <= 1e-300 || off <= scale * 1e-18) break;
-    for (int p = 0; p < 2; ++p) {
-      for (int q = p + 1; q < 3; ++q) {
-        const double apq = a(p, q);
-        if (apq == 0.0) continue;
-        const double theta = (a(q, q) - a(p, p)) / (2.0 * apq);
-        const double t = (theta >= 0.0 ? 1.0 : -1.0) /
-                         (std::abs(theta) + std::sqrt(theta * theta + 1.0));
-        const double c = 1.0 / std::sqrt(t * t + 1.0);
-        const double s = t * c;
-        // A <- J^T A J with J the (p,q) rotation [c s; -s c].
-        for (int k = 0; k < 3; ++k) {
-          const double akp = a(k, p);
-          const double akq = a(k, q);
-          a(k, p) = c * akp - s * akq;
-          a(k, q) = s * akp + c * akq;
-        }
-        for (int k = 0; k < 3; ++k) {
-          const double apk = a(p, k);
-          const double aqk = a(q, k);
-          a(p, k) = c * apk - s * aqk;
-          a(q, k) = s * apk + c * aqk;
-        }
-        for (int k = 0; k < 3; ++k) {
-          const double vkp = v(k, p);
-          const double vkq = v(k, q);
-          v(k, p) = c * vkp - s * vkq;
-          v(k, q) = s * vkp + c * vkq;
-        }
-      }
-    }
-  }
-  // Sort ascending (stable, by index on ties) with the eigenvectors as columns.
-  int order[3] = {0, 1, 2};
-  for (int i = 1; i < 3; ++i) {
-    for (int j = i; j > 0 && a(order[j], order[j]) < a(order[j - 1], order[j - 1]); --j) {
-      std::swap(order[j], order[j - 1]);
-    }
-  }
-  for (int i = 0; i < 3; ++i) {
-    eigenvalues[i] = a(order[i], order[i]);
-    eigenvectors.col(i) = v.col(order[i]);
-  }
-}
 
 NormalsResult estimate_normals(const KdTree<Vec3f>& tree, const NormalParams& params,
                                std::span<Vec3f> normals, std::span<NormalQuality> quality) {
@@ -109,7 +56,7 @@ NormalsResult normals_of_range(const KdNeighborhoods& neighborhoods, const Norma
   for (std::size_t i = begin; i < end; ++i) {
     const Vec3f& p = points[i];
     NormalQuality q = NormalQuality::kOk;
-    if (!finite3(p)) {
+    if (!is_finite_point(p)) {
       normals[i] = Vec3f(0.0f, 0.0f, 1.0f);
       ++r.non_finite;
       if (!quality.empty()) quality[i] = NormalQuality::kNonFinitePoint;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "v2xloc/algo/core/symmetric_eigen.hpp"
+
 namespace v2xloc {
 namespace {
 

@@ -3,20 +3,11 @@
 #include <algorithm>
 #include <cmath>
 
+#include "v2xloc/algo/core/finite.hpp"
+#include "v2xloc/algo/core/spatial_hash.hpp"
+
 namespace v2xloc {
 namespace {
-
-bool finite3(const Vec3f& p) {
-  return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
-}
-
-// Spatial hash of Teschner et al. 2003 (large primes, xor), on unsigned to avoid overflow UB.
-std::uint32_t voxel_hash(std::int32_t x, std::int32_t y, std::int32_t z) {
-  const std::uint32_t h = (static_cast<std::uint32_t>(x) * 73856093u) ^
-                          (static_cast<std::uint32_t>(y) * 19349669u) ^
-                          (static_cast<std::uint32_t>(z) * 83492791u);
-  return h ^ (h >> 16);  // fold high bits in: the table index uses the low bits only
-}
 
 constexpr double kMaxVoxelIndex = 2147483520.0;  // < 2^31, exactly representable
 
@@ -43,7 +34,7 @@ VoxelDownsampleResult voxel_downsample(std::span<const Vec3f> points, float voxe
   // Pass 1: bounds of the finite points.
   double lo[3] = {INFINITY, INFINITY, INFINITY};
   for (const Vec3f& p : points) {
-    if (!finite3(p)) {
+    if (!is_finite_point(p)) {
       ++r.non_finite_dropped;
       continue;
     }
@@ -57,12 +48,12 @@ VoxelDownsampleResult voxel_downsample(std::span<const Vec3f> points, float voxe
   const double origin[3] = {lo[0] - voxel * 0.5, lo[1] - voxel * 0.5, lo[2] - voxel * 0.5};
 
   // Pass 2: accumulate per voxel, voxels numbered in order of first occurrence.
-  const std::size_t mask = num_slots - 1;
+  const auto max_probes = static_cast<std::uint32_t>(std::min(config::kVoxelMaxProbes, num_slots));
   std::size_t num_voxels = 0;
   VoxelAccumulator* last = nullptr;  // voxel of the previous accepted point
   std::int32_t last_ix = 0, last_iy = 0, last_iz = 0;
   for (const Vec3f& p : points) {
-    if (!finite3(p)) continue;
+    if (!is_finite_point(p)) continue;
     double ref[3];
     bool in_range = true;
     for (int d = 0; d < 3; ++d) {
@@ -84,28 +75,26 @@ VoxelDownsampleResult voxel_downsample(std::span<const Vec3f> points, float voxe
       ++last->count;
       continue;
     }
-    std::size_t s = voxel_hash(ix, iy, iz) & mask;
-    std::uint32_t probes = 0;
     VoxelAccumulator* acc = nullptr;
-    bool no_slot = true;
-    for (; probes < config::kVoxelMaxProbes && probes < num_slots; ++probes, s = (s + 1) & mask) {
-      VoxelHashSlot& slot = slots[s];
-      if (slot.voxel_plus_one == 0) {  // new voxel
-        no_slot = false;
-        if (num_voxels == max_voxels) break;  // output full: counted below
-        slot = {ix, iy, iz, static_cast<std::uint32_t>(num_voxels + 1)};
-        acc = &accumulators[num_voxels];
-        *acc = {{0.0, 0.0, 0.0}, 0, static_cast<std::uint32_t>(s)};
-        ++num_voxels;
-        break;
-      }
-      if (slot.ix == ix && slot.iy == iy && slot.iz == iz) {
-        no_slot = false;
-        acc = &accumulators[slot.voxel_plus_one - 1];
-        break;
-      }
-    }
-    r.max_probe = std::max(r.max_probe, no_slot ? probes : probes + 1);
+    const ProbeResult probe = linear_probe(
+        spatial_hash_folded(ix, iy, iz), num_slots, max_probes, [&](std::size_t s) {
+          VoxelHashSlot& slot = slots[s];
+          if (slot.voxel_plus_one == 0) {  // new voxel
+            if (num_voxels == max_voxels) return true;  // output full: counted below
+            slot = {ix, iy, iz, static_cast<std::uint32_t>(num_voxels + 1)};
+            acc = &accumulators[num_voxels];
+            *acc = {{0.0, 0.0, 0.0}, 0, static_cast<std::uint32_t>(s)};
+            ++num_voxels;
+            return true;
+          }
+          if (slot.ix == ix && slot.iy == iy && slot.iz == iz) {
+            acc = &accumulators[slot.voxel_plus_one - 1];
+            return true;
+          }
+          return false;
+        });
+    const bool no_slot = !probe.stopped;
+    r.max_probe = std::max(r.max_probe, no_slot ? probe.probes : probe.probes + 1);
     if (acc == nullptr) {
       if (no_slot) {
         ++r.hash_overflow;

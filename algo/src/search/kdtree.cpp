@@ -4,17 +4,10 @@
 #include <cmath>
 #include <cstring>
 
+#include "v2xloc/algo/core/finite.hpp"
+
 namespace v2xloc {
 namespace {
-
-template <class P>
-bool is_finite_point(const P& p) {
-  const float* a = p.data();
-  for (int d = 0; d < P::RowsAtCompileTime; ++d) {
-    if (!std::isfinite(a[d])) return false;
-  }
-  return true;
-}
 
 // Squared distance in float, serial sum (same bits everywhere with -ffp-contract=off).
 template <int D>

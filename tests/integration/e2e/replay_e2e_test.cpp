@@ -102,11 +102,10 @@ TEST_F(ReplayE2e, FirmwarePoseFramesAreBitIdenticalToTheOfflinePath) {
   auto decoder = std::make_unique<firmware::InputDecoder>();
   firmware::configure_localizer(g_offline_localizer,
                                 make_geodetic_origin(reader_.origin_lat_deg(), reader_.origin_lon_deg(), reader_.origin_alt_m()));
-  firmware::LocalizerAdapter<firmware::SelectedLocalizer> port(g_offline_localizer);
   std::vector<DecodedFrame> offline;
   EventStreamConfig offline_config;
   offline_config.max_frames = kFrames;
-  ASSERT_TRUE(run_offline(reader_, port, *decoder, offline_config, [&](const DecodedFrame& f) { offline.push_back(f); },
+  ASSERT_TRUE(run_offline(reader_, g_offline_localizer, *decoder, offline_config, [&](const DecodedFrame& f) { offline.push_back(f); },
                           error))
       << error;
   ASSERT_EQ(offline.size(), replayed.frames.size());
@@ -164,11 +163,10 @@ TEST_F(ReplayE2e, FirmwarePathRecordsMatchTheInProcessRecordsWithinCanResolution
   auto decoder = std::make_unique<firmware::InputDecoder>();
   firmware::configure_localizer(g_offline_localizer,
                                 make_geodetic_origin(reader_.origin_lat_deg(), reader_.origin_lon_deg(), reader_.origin_alt_m()));
-  firmware::LocalizerAdapter<firmware::SelectedLocalizer> port(g_offline_localizer);
   std::vector<LocalizerFrameOutput> outputs;
   EventStreamConfig offline_config;
   offline_config.max_frames = kFrames;
-  ASSERT_TRUE(run_offline(reader_, port, *decoder, offline_config,
+  ASSERT_TRUE(run_offline(reader_, g_offline_localizer, *decoder, offline_config,
                           [&](const DecodedFrame& f) { outputs.push_back(f.output); }, error))
       << error;
   std::vector<eval::FrameRecord> in_process;

@@ -3,7 +3,7 @@
 
 #include <vector>
 
-#include "alloc_counter.hpp"
+#include "firmware/app/alloc_counter.hpp"
 #include "registration_test_support.hpp"
 #include "v2xloc/algo/registration/kabsch.hpp"
 #include "v2xloc/algo/registration/register_clouds.hpp"
@@ -24,7 +24,7 @@ testing::CloudPair make_pair() {
 
 TEST(AllocFree, CounterSeesHeapAllocations) {
   // The counter itself works (otherwise 0 below would prove nothing).
-  testing::AllocationScope scope;
+  firmware::alloc_counter::Scope scope;
   std::vector<int>* v = new std::vector<int>(100);
   delete v;
   EXPECT_GE(scope.allocations(), 2u);
@@ -36,14 +36,14 @@ TEST(AllocFree, WholePipelineAndEveryStageAllocateNothing) {
   params.voxel_size = 0.4f;
   RegisterCloudsResult global, icp_only;
   {
-    testing::AllocationScope scope;
+    firmware::alloc_counter::Scope scope;
     global = register_clouds(pair.source, pair.target, params, Mat4d::Identity(), g_workspace);
     EXPECT_EQ(scope.allocations(), 0u) << "global pipeline";
   }
   ASSERT_EQ(global.registration.status, RegistrationStatus::kOk);
   ASSERT_GT(global.stats.correspondences, 0u);
   {
-    testing::AllocationScope scope;
+    firmware::alloc_counter::Scope scope;
     params.mode = RegistrationMode::kIcpOnly;
     icp_only = register_clouds(pair.source, pair.target, params, global.registration.transform,
                                g_workspace);
@@ -55,7 +55,7 @@ TEST(AllocFree, WholePipelineAndEveryStageAllocateNothing) {
   RegistrationWorkspace& ws = g_workspace;
   const std::span<const Vec3f> src = ws.source_down.span();
   const std::span<const Vec3f> tgt = ws.target_down.span();
-  testing::AllocationScope scope;
+  firmware::alloc_counter::Scope scope;
   FixedVector<Vec3f, 4096> small_out;
   static VoxelDownsampleStorage<1u << 14, 4096> voxel;
   // At most 3000 points of the source (the scene may hold fewer: ASan caught a read past it).
@@ -100,7 +100,7 @@ TEST(AllocFree, WholePipelineAndEveryStageAllocateNothing) {
   kabsch_fit(src.first(10), tgt.first(10), {}, k);
   EXPECT_EQ(scope.allocations(), 0u) << "individual stages";
   EXPECT_EQ(rr.registration.status, RegistrationStatus::kOk) << to_string(rr.registration.status);
-  if (!testing::malloc_is_counted()) {
+  if (!firmware::alloc_counter::malloc_is_counted()) {
     std::printf("note: malloc not interposed in this build (sanitizer); operator new counted\n");
   }
 }

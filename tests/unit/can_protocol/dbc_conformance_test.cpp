@@ -35,6 +35,53 @@ TEST(DbcConformance, FileDescribesEveryMessage) {
   }
 }
 
+// The codec's signal table is the DBC's, field by field: one source of truth, any drift fails.
+TEST(DbcConformance, CodecSignalTableEqualsDbc) {
+  const Dbc dbc = read_dbc(dbc_path());
+  std::size_t scaled_in_dbc = 0;
+  for (const auto& [id, m] : dbc.messages) {
+    for (const auto& [name, s] : m.signals) {
+      const bool fixed_bits = s.length == 1 || name == "Crc" || (name == "Counter" && s.length == 4);
+      if (!fixed_bits) ++scaled_in_dbc;
+    }
+  }
+  std::size_t checked = 0;
+  for (const protocol::NamedCanSignal& c : protocol::can_signal_table()) {
+    ASSERT_TRUE(dbc.messages.count(c.message_id)) << std::hex << c.message_id << " " << c.name;
+    const DbcMessage& m = dbc.messages.at(c.message_id);
+    ASSERT_TRUE(m.signals.count(c.name)) << m.name << "." << c.name << " is not in the DBC";
+    const DbcSignal& s = m.signals.at(c.name);
+    const std::string where = m.name + "." + c.name;
+    EXPECT_EQ(c.start, s.start) << where;
+    EXPECT_EQ(c.length, s.length) << where;
+    EXPECT_EQ(c.is_signed, s.is_signed) << where;
+    EXPECT_TRUE(s.little_endian) << where;
+    EXPECT_DOUBLE_EQ(c.factor, s.factor) << where;
+    EXPECT_DOUBLE_EQ(c.offset, s.offset) << where;
+    EXPECT_DOUBLE_EQ(c.min, s.min) << where;
+    EXPECT_DOUBLE_EQ(c.max, s.max) << where;
+    ++checked;
+  }
+  // Every multi-bit DBC signal other than the rolling counters and CRCs has its table entry (the
+  // GnssStatus counter is in the table too: it is the one counter read through a Signal).
+  EXPECT_EQ(checked, scaled_in_dbc + 1);
+}
+
+// The test bindings name exactly the DBC's signals (CRC aside), both ways.
+TEST(DbcConformance, BindingsNameExactlyTheDbcSignals) {
+  const Dbc dbc = read_dbc(dbc_path());
+  for (const auto& b : message_bindings()) {
+    const DbcMessage& m = dbc.messages.at(b.id);
+    Values decoded;
+    b.unpack(b.pack({}, nullptr), decoded);
+    for (const auto& [name, s] : m.signals) {
+      if (name == "Crc") continue;
+      EXPECT_TRUE(decoded.count(name)) << m.name << "." << name << " has no binding";
+    }
+    for (const auto& [name, v] : decoded) EXPECT_TRUE(m.signals.count(name)) << m.name << "." << name << " is not in the DBC";
+  }
+}
+
 TEST(DbcConformance, RandomPhysicalValuesMatchDbcScaling) {
   const Dbc dbc = read_dbc(dbc_path());
   std::mt19937_64 rng(20261123);

@@ -11,7 +11,7 @@
 #include "firmware/app/emulated_wiring.hpp"
 #include "firmware/app/firmware_app.hpp"
 #include "firmware/app/selected_localizer.hpp"
-#include "firmware/app/wire_conventions.hpp"
+#include "firmware/wire/wire_conventions.hpp"
 #include "hal/emulated/emulated_can_bus.hpp"
 #include "hal/linux/udp_link.hpp"
 
@@ -77,7 +77,7 @@ TEST(FirmwareAppLoop, NoHeapAllocationAfterStartUpAndOnePosePerFrame) {
 
   configure_localizer(g_localizer, make_geodetic_origin(48.1374, 11.5755, 520.0));
   static LocalizerAdapter<SelectedLocalizer> port(g_localizer);
-  FirmwareApp app(FirmwareHal{fw_sim_bus, fw_cloud, clock, &pps, &led, nullptr}, g_decoder, port);
+  FirmwareApp app(FirmwareHal{fw_sim_bus, fw_cloud, clock, &pps, &led}, g_decoder, port);
   ASSERT_EQ(app.start(), hal::Status::kOk);
 
   // Everything the test sends is prepared before the counted loop.

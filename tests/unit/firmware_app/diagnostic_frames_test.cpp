@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "firmware/app/diagnostic_frames.hpp"
+#include "firmware/wire/diagnostic_frames.hpp"
 
 namespace v2xloc::firmware {
 namespace {

@@ -5,9 +5,9 @@
 #include <memory>
 #include <vector>
 
-#include "firmware/app/input_decoder.hpp"
-#include "firmware/app/wire_conventions.hpp"
-#include "recording_sink.hpp"
+#include "firmware/wire/input_decoder.hpp"
+#include "firmware/wire/wire_conventions.hpp"
+#include "decoded_log.hpp"
 
 namespace v2xloc::firmware {
 namespace {
@@ -47,7 +47,7 @@ std::vector<float> ramp_points(std::size_t n) {
 
 TEST(InputDecoder, VehicleFrameDecodesWithTimeAndBadFramesAreCounted) {
   auto dec = std::make_unique<InputDecoder>(kEpoch);
-  test::RecordingSink sink;
+  test::DecodedLog decoded;
   protocol::VehicleMotion m;
   m.wheel_speed_mps = 7.25;
   m.yaw_rate_rps = -0.1234;
@@ -58,31 +58,31 @@ TEST(InputDecoder, VehicleFrameDecodesWithTimeAndBadFramesAreCounted) {
   bad_crc.data[0] ^= 0x01;
   hal::CanFrame short_dlc = good;
   short_dlc.dlc = 5;
-  EXPECT_EQ(dec->on_can(bad_crc, kEpoch + 1'000'000, sink), CanInputKind::kRejected);
-  EXPECT_EQ(dec->on_can(short_dlc, kEpoch + 1'000'000, sink), CanInputKind::kRejected);
-  EXPECT_EQ(dec->on_can(good, kEpoch + 1'500'000'000, sink), CanInputKind::kVehicle);
+  EXPECT_EQ(decoded.can(*dec, bad_crc, kEpoch + 1'000'000), CanInputKind::kRejected);
+  EXPECT_EQ(decoded.can(*dec, short_dlc, kEpoch + 1'000'000), CanInputKind::kRejected);
+  EXPECT_EQ(decoded.can(*dec, good, kEpoch + 1'500'000'000), CanInputKind::kVehicle);
   hal::CanFrame unknown;
   unknown.id = 0x7AB;
   unknown.dlc = 8;
-  EXPECT_EQ(dec->on_can(unknown, kEpoch, sink), CanInputKind::kUnknownId);
+  EXPECT_EQ(decoded.can(*dec, unknown, kEpoch), CanInputKind::kUnknownId);
 
-  ASSERT_EQ(sink.vehicle.size(), 1u);
-  EXPECT_DOUBLE_EQ(sink.vehicle[0].t, 1.5);
-  EXPECT_NEAR(sink.vehicle[0].wheel_speed, 7.25, 0.005);
-  EXPECT_NEAR(sink.vehicle[0].yaw_rate, -0.1234, 0.00005);
+  ASSERT_EQ(decoded.vehicle.size(), 1u);
+  EXPECT_DOUBLE_EQ(decoded.vehicle[0].t, 1.5);
+  EXPECT_NEAR(decoded.vehicle[0].wheel_speed, 7.25, 0.005);
+  EXPECT_NEAR(decoded.vehicle[0].yaw_rate, -0.1234, 0.00005);
   EXPECT_EQ(dec->counters().can_rejected, 2u);
   EXPECT_EQ(dec->counters().can_unknown_id, 1u);
   EXPECT_EQ(dec->counters().vehicle_inputs, 1u);
 
   m.speed_valid = false;
-  EXPECT_EQ(dec->on_can(protocol::pack(m), kEpoch, sink), CanInputKind::kInvalid);
+  EXPECT_EQ(decoded.can(*dec, protocol::pack(m), kEpoch), CanInputKind::kInvalid);
   EXPECT_EQ(dec->counters().vehicle_invalid, 1u);
-  EXPECT_EQ(sink.vehicle.size(), 1u);
+  EXPECT_EQ(decoded.vehicle.size(), 1u);
 }
 
 TEST(InputDecoder, GnssFixIsAssembledFromPositionStatusAndTime) {
   auto dec = std::make_unique<InputDecoder>(kEpoch);
-  test::RecordingSink sink;
+  test::DecodedLog decoded;
   protocol::GnssPosition pos{48.1374123, 11.5755456};
   protocol::GnssStatus st;
   st.alt_m = 521.25;
@@ -96,14 +96,14 @@ TEST(InputDecoder, GnssFixIsAssembledFromPositionStatusAndTime) {
   td.hdop = 1.2;
 
   // Time frame without a status frame: incomplete, counted, nothing forwarded.
-  EXPECT_EQ(dec->on_can(protocol::pack(td), kEpoch, sink), CanInputKind::kInvalid);
+  EXPECT_EQ(decoded.can(*dec, protocol::pack(td), kEpoch), CanInputKind::kInvalid);
   EXPECT_EQ(dec->counters().gnss_incomplete, 1u);
 
-  EXPECT_EQ(dec->on_can(protocol::pack(pos), kEpoch + 200'000'000, sink), CanInputKind::kGnssPart);
-  EXPECT_EQ(dec->on_can(protocol::pack(st), kEpoch + 200'000'000, sink), CanInputKind::kGnssPart);
-  EXPECT_EQ(dec->on_can(protocol::pack(td), kEpoch + 200'000'000, sink), CanInputKind::kGnssFix);
-  ASSERT_EQ(sink.gnss.size(), 1u);
-  const GnssInput& g = sink.gnss[0];
+  EXPECT_EQ(decoded.can(*dec, protocol::pack(pos), kEpoch + 200'000'000), CanInputKind::kGnssPart);
+  EXPECT_EQ(decoded.can(*dec, protocol::pack(st), kEpoch + 200'000'000), CanInputKind::kGnssPart);
+  EXPECT_EQ(decoded.can(*dec, protocol::pack(td), kEpoch + 200'000'000), CanInputKind::kGnssFix);
+  ASSERT_EQ(decoded.gnss.size(), 1u);
+  const GnssInput& g = decoded.gnss[0];
   EXPECT_TRUE(g.valid);
   EXPECT_DOUBLE_EQ(g.t, 0.2);
   EXPECT_NEAR(g.lat_deg, 48.1374123, 1e-7);
@@ -116,10 +116,10 @@ TEST(InputDecoder, GnssFixIsAssembledFromPositionStatusAndTime) {
 
   // No position frame (receiver without a fix): forwarded as invalid.
   st.fix_type = protocol::GnssFixType::kNoFix;
-  dec->on_can(protocol::pack(st), kEpoch + 400'000'000, sink);
-  EXPECT_EQ(dec->on_can(protocol::pack(td), kEpoch + 400'000'000, sink), CanInputKind::kGnssFix);
-  ASSERT_EQ(sink.gnss.size(), 2u);
-  EXPECT_FALSE(sink.gnss[1].valid);
+  decoded.can(*dec, protocol::pack(st), kEpoch + 400'000'000);
+  EXPECT_EQ(decoded.can(*dec, protocol::pack(td), kEpoch + 400'000'000), CanInputKind::kGnssFix);
+  ASSERT_EQ(decoded.gnss.size(), 2u);
+  EXPECT_FALSE(decoded.gnss[1].valid);
 
   // A fix with its Doppler velocity (0x133 before the closing time frame).
   st.fix_type = protocol::GnssFixType::kFix3D;
@@ -128,38 +128,38 @@ TEST(InputDecoder, GnssFixIsAssembledFromPositionStatusAndTime) {
   vel.vel_north_mps = -3.5;
   vel.speed_acc_mps = 0.14;
   vel.valid = true;
-  dec->on_can(protocol::pack(pos), kEpoch + 600'000'000, sink);
-  dec->on_can(protocol::pack(st), kEpoch + 600'000'000, sink);
-  EXPECT_EQ(dec->on_can(protocol::pack(vel), kEpoch + 600'000'000, sink), CanInputKind::kGnssPart);
-  EXPECT_EQ(dec->on_can(protocol::pack(td), kEpoch + 600'000'000, sink), CanInputKind::kGnssFix);
-  ASSERT_EQ(sink.gnss.size(), 3u);
-  EXPECT_TRUE(sink.gnss[2].velocity_valid);
-  EXPECT_NEAR(sink.gnss[2].vel_east, 7.25, 0.005);
-  EXPECT_NEAR(sink.gnss[2].vel_north, -3.5, 0.005);
-  EXPECT_NEAR(sink.gnss[2].speed_acc, 0.14, 0.01);
+  decoded.can(*dec, protocol::pack(pos), kEpoch + 600'000'000);
+  decoded.can(*dec, protocol::pack(st), kEpoch + 600'000'000);
+  EXPECT_EQ(decoded.can(*dec, protocol::pack(vel), kEpoch + 600'000'000), CanInputKind::kGnssPart);
+  EXPECT_EQ(decoded.can(*dec, protocol::pack(td), kEpoch + 600'000'000), CanInputKind::kGnssFix);
+  ASSERT_EQ(decoded.gnss.size(), 3u);
+  EXPECT_TRUE(decoded.gnss[2].velocity_valid);
+  EXPECT_NEAR(decoded.gnss[2].vel_east, 7.25, 0.005);
+  EXPECT_NEAR(decoded.gnss[2].vel_north, -3.5, 0.005);
+  EXPECT_NEAR(decoded.gnss[2].speed_acc, 0.14, 0.01);
   // The velocity belongs to that fix only: the next fix without 0x133 has none.
-  dec->on_can(protocol::pack(pos), kEpoch + 800'000'000, sink);
-  dec->on_can(protocol::pack(st), kEpoch + 800'000'000, sink);
-  dec->on_can(protocol::pack(td), kEpoch + 800'000'000, sink);
-  ASSERT_EQ(sink.gnss.size(), 4u);
-  EXPECT_FALSE(sink.gnss[3].velocity_valid);
+  decoded.can(*dec, protocol::pack(pos), kEpoch + 800'000'000);
+  decoded.can(*dec, protocol::pack(st), kEpoch + 800'000'000);
+  decoded.can(*dec, protocol::pack(td), kEpoch + 800'000'000);
+  ASSERT_EQ(decoded.gnss.size(), 4u);
+  EXPECT_FALSE(decoded.gnss[3].velocity_valid);
   // A corrupted velocity frame is rejected and counted; the fix still arrives without it.
   hal::CanFrame bad = protocol::pack(vel);
   bad.data[0] ^= 0x01;
   const auto rejected_before = dec->counters().can_rejected;
-  dec->on_can(protocol::pack(pos), kEpoch + 1'000'000'000, sink);
-  dec->on_can(protocol::pack(st), kEpoch + 1'000'000'000, sink);
-  EXPECT_EQ(dec->on_can(bad, kEpoch + 1'000'000'000, sink), CanInputKind::kRejected);
-  dec->on_can(protocol::pack(td), kEpoch + 1'000'000'000, sink);
+  decoded.can(*dec, protocol::pack(pos), kEpoch + 1'000'000'000);
+  decoded.can(*dec, protocol::pack(st), kEpoch + 1'000'000'000);
+  EXPECT_EQ(decoded.can(*dec, bad, kEpoch + 1'000'000'000), CanInputKind::kRejected);
+  decoded.can(*dec, protocol::pack(td), kEpoch + 1'000'000'000);
   EXPECT_EQ(dec->counters().can_rejected, rejected_before + 1);
-  ASSERT_EQ(sink.gnss.size(), 5u);
-  EXPECT_TRUE(sink.gnss[4].valid);
-  EXPECT_FALSE(sink.gnss[4].velocity_valid);
+  ASSERT_EQ(decoded.gnss.size(), 5u);
+  EXPECT_TRUE(decoded.gnss[4].valid);
+  EXPECT_FALSE(decoded.gnss[4].velocity_valid);
 }
 
 TEST(InputDecoder, CloudsSurviveTruncatedCorruptAndDuplicateFragments) {
   auto dec = std::make_unique<InputDecoder>(kEpoch);
-  test::RecordingSink sink;
+  test::DecodedLog decoded;
   const std::vector<float> xyz = ramp_points(1000);
   std::vector<std::uint16_t> times;
   for (std::size_t i = 0; i < 1000; ++i) times.push_back(static_cast<std::uint16_t>(i * 50));
@@ -183,57 +183,56 @@ TEST(InputDecoder, CloudsSurviveTruncatedCorruptAndDuplicateFragments) {
     }
   }
   ASSERT_TRUE(completed);
-  const LocalizerFrameOutput* out = nullptr;
-  EXPECT_EQ(dec->dispatch_completed(sink, &out), CloudKind::kEgoScan);
-  EXPECT_EQ(dec->dispatch_completed(sink, &out), CloudKind::kNone);  // dispatched once
-  ASSERT_NE(out, nullptr);
+  EXPECT_EQ(decoded.cloud(*dec), CloudKind::kEgoScan);
+  EXPECT_EQ(decoded.cloud(*dec), CloudKind::kNone);  // returned once
   EXPECT_EQ(dec->counters().datagrams_rejected, 2u);
   EXPECT_EQ(dec->reassembly_counters().duplicates, 1u);
   EXPECT_EQ(dec->reassembly_counters().truncated + dec->reassembly_counters().bad_crc, 2u);
 
-  ASSERT_EQ(sink.ego.size(), 1u);
-  EXPECT_DOUBLE_EQ(sink.ego[0].t, 0.3);
-  ASSERT_EQ(sink.ego_points[0].size(), 1000u);
-  ASSERT_EQ(sink.ego_times[0].size(), 1000u);
+  ASSERT_EQ(decoded.ego.size(), 1u);
+  EXPECT_DOUBLE_EQ(decoded.ego[0].t, 0.3);
+  ASSERT_EQ(decoded.ego_points[0].size(), 1000u);
+  ASSERT_EQ(decoded.ego_times[0].size(), 1000u);
   for (std::size_t i = 0; i < 1000; ++i) {
-    for (int a = 0; a < 3; ++a) EXPECT_NEAR(sink.ego_points[0][i][a], xyz[3 * i + a], 0.5 * kCloudScaleM + 1e-5);
-    EXPECT_FLOAT_EQ(sink.ego_times[0][i], static_cast<float>(times[i] * protocol::kPointTimeTick));
+    for (int a = 0; a < 3; ++a) EXPECT_NEAR(decoded.ego_points[0][i][a], xyz[3 * i + a], 0.5 * kCloudScaleM + 1e-5);
+    EXPECT_FLOAT_EQ(decoded.ego_times[0][i], static_cast<float>(times[i] * protocol::kPointTimeTick));
   }
-  EXPECT_DOUBLE_EQ(sink.ego[0].body_T_lidar(0, 3), 9.5);
-  EXPECT_EQ(dec->last_frame_index(), 0u);
+  EXPECT_DOUBLE_EQ(decoded.ego[0].body_T_lidar(0, 3), 9.5);
+  EXPECT_EQ(decoded.ego_frame_index[0], 0u);
+  EXPECT_FALSE(decoded.ego_gnss_used[0]);
 }
 
 TEST(InputDecoder, MapSharesCarrySourceIdAgentFlagAndPose) {
   auto dec = std::make_unique<InputDecoder>(kEpoch);
-  test::RecordingSink sink;
+  test::DecodedLog decoded;
   const std::vector<float> xyz = ramp_points(300);
   for (std::uint32_t sender : {kInfraSenderBase + 2, kAgentSenderBase + 1}) {
     const auto frags = fragment_cloud(protocol::CloudMessageType::kMapShare, sender, 0, 500'000'000, xyz, {});
     bool done = false;
     for (const auto& f : frags) done = dec->on_datagram(f, 0);
     ASSERT_TRUE(done);
-    EXPECT_EQ(dec->dispatch_completed(sink), CloudKind::kMapCloud);
+    EXPECT_EQ(decoded.cloud(*dec), CloudKind::kMapCloud);
   }
-  ASSERT_EQ(sink.map.size(), 2u);
-  EXPECT_EQ(sink.map[0].source_id, 3u);
-  EXPECT_FALSE(sink.map[0].is_agent);
-  EXPECT_EQ(sink.map[1].source_id, 33u);
-  EXPECT_TRUE(sink.map[1].is_agent);
-  EXPECT_DOUBLE_EQ(sink.map[1].t, 0.5);
-  EXPECT_DOUBLE_EQ(sink.map[1].world_T_sensor(2, 3), 5.0);
-  EXPECT_EQ(sink.map_points[1].size(), 300u);
+  ASSERT_EQ(decoded.map.size(), 2u);
+  EXPECT_EQ(decoded.map[0].source_id, 3u);
+  EXPECT_FALSE(decoded.map[0].is_agent);
+  EXPECT_EQ(decoded.map[1].source_id, 33u);
+  EXPECT_TRUE(decoded.map[1].is_agent);
+  EXPECT_DOUBLE_EQ(decoded.map[1].t, 0.5);
+  EXPECT_DOUBLE_EQ(decoded.map[1].world_T_sensor(2, 3), 5.0);
+  EXPECT_EQ(decoded.map_points[1].size(), 300u);
   EXPECT_EQ(dec->counters().map_clouds, 2u);
 }
 
 TEST(InputDecoder, EgoScanFromAnotherSenderIsRejectedAndCounted) {
   auto dec = std::make_unique<InputDecoder>(kEpoch);
-  test::RecordingSink sink;
+  test::DecodedLog decoded;
   const auto frags = fragment_cloud(protocol::CloudMessageType::kEgoScan, 5, 0, 0, ramp_points(10), {});
   ASSERT_EQ(frags.size(), 1u);
   ASSERT_TRUE(dec->on_datagram(frags[0], 0));
-  EXPECT_EQ(dec->dispatch_completed(sink), CloudKind::kRejected);
+  EXPECT_EQ(decoded.cloud(*dec), CloudKind::kRejected);
   EXPECT_EQ(dec->counters().clouds_rejected, 1u);
-  EXPECT_TRUE(sink.ego.empty());
+  EXPECT_TRUE(decoded.ego.empty());
 }
 
 TEST(WireConventions, SimTimeFrameRoundTrips) {

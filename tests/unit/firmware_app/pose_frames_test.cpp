@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "firmware/app/pose_frames.hpp"
+#include "firmware/wire/pose_frames.hpp"
 
 namespace v2xloc::firmware {
 namespace {

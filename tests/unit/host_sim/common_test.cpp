@@ -1,5 +1,4 @@
 #include "host_sim/common/json.hpp"
-#include "host_sim/common/png.hpp"
 #include "host_sim/common/rng.hpp"
 
 #include <gtest/gtest.h>
@@ -8,32 +7,6 @@
 
 namespace v2xloc::sim {
 namespace {
-
-std::span<const std::uint8_t> bytes_of(const std::string& s) {
-  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
-}
-
-TEST(HostSimCommon, Crc32AndAdler32MatchReferenceValues) {
-  EXPECT_EQ(crc32(bytes_of("123456789")), 0xCBF43926u);  // the standard CRC-32 check value
-  EXPECT_EQ(adler32(bytes_of("Wikipedia")), 0x11E60398u);  // RFC 1950 example value
-}
-
-TEST(HostSimCommon, Png16RoundTripsThroughStoredDeflate) {
-  Image16 img;
-  img.width = 300;  // > 65535 bytes of rows -> several stored blocks
-  img.height = 150;
-  for (int i = 0; i < img.width * img.height; ++i) img.pixels.push_back(static_cast<std::uint16_t>(i * 37));
-  const auto bytes = encode_png(img);
-  Image16 back;
-  std::string err;
-  ASSERT_TRUE(decode_png16(bytes, back, err)) << err;
-  EXPECT_EQ(back.width, img.width);
-  EXPECT_EQ(back.height, img.height);
-  EXPECT_EQ(back.pixels, img.pixels);
-  auto corrupt = bytes;
-  corrupt[60] ^= 0x01;  // inside IDAT -> CRC mismatch
-  EXPECT_FALSE(decode_png16(corrupt, back, err));
-}
 
 TEST(HostSimCommon, JsonRoundTrip) {
   Json j = Json::object();

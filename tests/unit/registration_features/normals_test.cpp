@@ -1,5 +1,6 @@
 // PCA normals on analytic surfaces, orientation, degenerate neighbourhoods, eigen solver.
 #include "v2xloc/algo/registration/normals.hpp"
+#include "v2xloc/algo/core/symmetric_eigen.hpp"
 
 #include <gtest/gtest.h>
 

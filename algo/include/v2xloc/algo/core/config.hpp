@@ -29,7 +29,7 @@ inline constexpr std::size_t kMaxMapPoints = kEmbeddedProfile ? 8192 : 131072;
 // ---- Voxel downsampling ---------------------------------------------------------------------
 // Open-addressing slots; a power of two, >= 2x the point capacity keeps probe chains short.
 inline constexpr std::size_t kVoxelHashSlots = kEmbeddedProfile ? 32768 : 262144;
-inline constexpr std::size_t kVoxelMaxProbes = 64;  // bounded probing; beyond -> counted drop
+inline constexpr std::size_t kVoxelMaxProbes = 64;  // every voxel-key hash (core/spatial_hash.hpp): probes; beyond -> counted drop
 
 // ---- k-d tree -------------------------------------------------------------------------------
 inline constexpr std::size_t kKdLeafSize = 8;           // points per leaf

@@ -11,6 +11,10 @@ namespace v2xloc {
 Mat3d skew(const Vec3d& v);
 // Rodrigues: rotation by |w| about w / |w| (series near 0).
 Mat3d so3_exp(const Vec3d& w);
+// Rodrigues in closed form down to |w|^2 = 1e-20, first order (I + [w]x) below: the ICP
+// update's exponential. Not merged with so3_exp (Taylor below 1e-4 rad): the two round
+// differently and the registration results are pinned to these bits (golden tests).
+Mat3d so3_exp_closed_form(const Vec3d& w);
 // Rotation vector of R, angle in [0, pi].
 Vec3d so3_log(const Mat3d& R);
 Mat4d se3_exp(const Vec6d& xi);

@@ -67,8 +67,4 @@ NormalsResult estimate_normals(const KdNeighborhoods& neighborhoods, const Norma
                                std::span<Vec3f> normals,
                                std::span<NormalQuality> quality = {});
 
-// Smallest-eigenvalue eigenvector of a symmetric 3x3 matrix (unit length) and the eigenvalues
-// ascending. Exposed for tests and for other stages (e.g. plane fits).
-void symmetric_eigen3(const Mat3d& a, Vec3d& eigenvalues, Mat3d& eigenvectors);
-
 }  // namespace v2xloc

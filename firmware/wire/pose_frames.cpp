@@ -1,4 +1,4 @@
-#include "firmware/app/pose_frames.hpp"
+#include "firmware/wire/pose_frames.hpp"
 
 #include "v2xloc/algo/core/det_math.hpp"
 

@@ -1,4 +1,4 @@
-#include "firmware/app/diagnostic_frames.hpp"
+#include "firmware/wire/diagnostic_frames.hpp"
 
 #include "v2xloc/algo/core/det_math.hpp"
 

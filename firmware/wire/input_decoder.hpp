@@ -1,7 +1,12 @@
 // Wire -> localizer inputs. CAN frames (vehicle motion, GNSS position/status/velocity/time) are decoded with
 // the DBC codec; point-cloud datagrams are reassembled and dequantized into an ego scan or a map
-// share. The firmware loop and the offline evaluator both feed this one class, so the offline
-// path applies exactly the firmware's quantization and decoding (bit-identical inputs).
+// share. The decoder RETURNS typed inputs and never calls the localizer: the firmware loop
+// (firmware/app), the offline evaluator and the replayer's in-process path each hand them to their
+// localizer themselves, so every path applies exactly the firmware's quantization and decoding.
+//
+// Input order (the firmware's contract; every other path follows it): a completed cloud is handed
+// to the localizer only after every CAN frame received before its last fragment, so per ego frame
+// the localizer sees CAN inputs (receive order), then map clouds, then the ego scan.
 // Allocation-free; all storage (reassembler, decoded cloud) is inside: make the object static.
 #pragma once
 
@@ -9,10 +14,10 @@
 #include <cstdint>
 #include <span>
 
-#include "firmware/app/localizer_port.hpp"
 #include "firmware/protocol/can_messages.hpp"
 #include "firmware/protocol/pointcloud_udp.hpp"
 #include "v2xloc/algo/core/config.hpp"
+#include "v2xloc/algo/localization/localizer.hpp"
 
 namespace v2xloc::firmware {
 
@@ -22,8 +27,8 @@ inline constexpr std::size_t kMaxCloudFragments = 2048;            // >= 131072 
 using CloudReassembler = protocol::StaticPointCloudReassembler<kReassemblySlots, kMaxCloudPoints, kMaxCloudFragments>;
 
 enum class CanInputKind : std::uint8_t {
-  kVehicle,       // delivered a VehicleInput
-  kGnssFix,       // delivered a GnssInput (on the time/DOP frame that closes a fix)
+  kVehicle,       // decoded a VehicleInput
+  kGnssFix,       // decoded a GnssInput (on the time/DOP frame that closes a fix)
   kGnssPart,      // position or status of a fix, stored until the time frame
   kInvalid,       // decoded, but flagged invalid by the sender (counted, not forwarded)
   kRejected,      // wrong DLC, CRC or range (counted)
@@ -31,6 +36,23 @@ enum class CanInputKind : std::uint8_t {
 };
 
 enum class CloudKind : std::uint8_t { kNone, kEgoScan, kMapCloud, kRejected };
+
+// One decoded CAN frame: `vehicle` is set for kVehicle, `gnss` for kGnssFix.
+struct DecodedCan {
+  CanInputKind kind = CanInputKind::kUnknownId;
+  VehicleInput vehicle{};
+  GnssInput gnss{};
+};
+
+// One completed cloud: `map` is set for kMapCloud, `ego` for kEgoScan. The point spans refer to
+// the decoder's buffers and stay valid until the next datagram.
+struct DecodedCloud {
+  CloudKind kind = CloudKind::kNone;
+  MapCloudInput map{};
+  EgoScanInput ego{};
+  std::uint32_t frame_index = 0;  // kEgoScan: ego scans decoded before this one
+  bool gnss_used = false;         // kEgoScan: a GNSS fix was decoded since the previous ego scan (pose flag GnssUsed)
+};
 
 struct DecoderCounters {
   std::uint64_t can_frames = 0;
@@ -55,30 +77,24 @@ class InputDecoder {
   std::int64_t epoch_ns() const { return epoch_ns_; }
 
   // One CAN frame received at disciplined time time_ns.
-  CanInputKind on_can(const hal::CanFrame& frame, std::int64_t time_ns, LocalizerPort& sink);
+  DecodedCan decode_can(const hal::CanFrame& frame, std::int64_t time_ns);
   // Latest GNSS time frame (valid after kGnssFix), for PPS discipline.
   const protocol::GnssTimeDop& last_gnss_time() const { return gnss_time_; }
 
   // One datagram received at monotonic now_ns. True when it completed a cloud: the caller first
-  // drains earlier inputs (CAN), then calls dispatch_completed() before the next datagram.
+  // drains earlier inputs (CAN), then calls decode_completed() before the next datagram.
   bool on_datagram(std::span<const std::uint8_t> datagram, std::int64_t now_ns);
-  // Hands the completed cloud to the localizer. Returns its kind; for an ego scan, `output`
-  // points at the localizer's frame output and `frame_index` is the ego scan count - 1.
-  CloudKind dispatch_completed(LocalizerPort& sink, const LocalizerFrameOutput** output = nullptr);
+  // The cloud the last datagram completed, as a localizer input (kNone when there is none; a
+  // cloud is returned once).
+  DecodedCloud decode_completed();
   std::size_t expire(std::int64_t now_ns) { return reassembler_.expire(now_ns); }
-
-  // True when a GNSS fix reached the localizer between the previous ego scan and the latest one
-  // (pose flag GnssUsed of the latest frame).
-  bool gnss_used_in_last_frame() const { return gnss_flag_for_frame_; }
-  std::uint32_t last_frame_index() const { return last_frame_index_; }
-  const MapInsertResult& last_map_insert() const { return last_map_insert_; }
 
   const DecoderCounters& counters() const { return counters_; }
   const protocol::ReassemblyCounters& reassembly_counters() const { return reassembler_.counters(); }
 
-  static constexpr std::size_t static_bytes() { return sizeof(InputDecoder); }
-
  private:
+  // The fix closed by the time/DOP frame, from the stored position, status and velocity frames.
+  GnssInput assemble_gnss_fix(double t) const;
   bool pose_to_matrix(const protocol::SensorPose& pose, Mat4d& out) const;
 
   std::int64_t epoch_ns_ = 0;
@@ -95,9 +111,6 @@ class InputDecoder {
   bool have_status_ = false;
   bool have_velocity_ = false;
   bool gnss_since_last_scan_ = false;
-  bool gnss_flag_for_frame_ = false;
-  std::uint32_t last_frame_index_ = 0;
-  MapInsertResult last_map_insert_{};
   DecoderCounters counters_{};
 };
 

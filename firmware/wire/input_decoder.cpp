@@ -1,17 +1,22 @@
-#include "firmware/app/input_decoder.hpp"
+#include "firmware/wire/input_decoder.hpp"
 
 #include <cmath>
 
-#include "firmware/app/wire_conventions.hpp"
+#include "firmware/wire/wire_conventions.hpp"
 
 namespace v2xloc::firmware {
 
-CanInputKind InputDecoder::on_can(const hal::CanFrame& frame, std::int64_t time_ns, LocalizerPort& sink) {
+DecodedCan InputDecoder::decode_can(const hal::CanFrame& frame, std::int64_t time_ns) {
   ++counters_.can_frames;
   const double t = localizer_time_s(time_ns, epoch_ns_);
-  const auto rejected = [this] {
+  DecodedCan out;
+  const auto kind = [&out](CanInputKind k) {
+    out.kind = k;
+    return out;
+  };
+  const auto rejected = [this, &kind] {
     ++counters_.can_rejected;
-    return CanInputKind::kRejected;
+    return kind(CanInputKind::kRejected);
   };
   switch (frame.id) {
     case protocol::kVehicleMotionId: {
@@ -19,24 +24,24 @@ CanInputKind InputDecoder::on_can(const hal::CanFrame& frame, std::int64_t time_
       if (protocol::unpack(frame, m) != protocol::DecodeStatus::kOk) return rejected();
       if (!m.speed_valid || !m.yaw_rate_valid) {
         ++counters_.vehicle_invalid;
-        return CanInputKind::kInvalid;
+        return kind(CanInputKind::kInvalid);
       }
-      sink.on_vehicle(VehicleInput{t, m.wheel_speed_mps, m.yaw_rate_rps});
+      out.vehicle = VehicleInput{t, m.wheel_speed_mps, m.yaw_rate_rps};
       ++counters_.vehicle_inputs;
-      return CanInputKind::kVehicle;
+      return kind(CanInputKind::kVehicle);
     }
     case protocol::kGnssPositionId:
       if (protocol::unpack(frame, gnss_position_) != protocol::DecodeStatus::kOk) return rejected();
       have_position_ = true;
-      return CanInputKind::kGnssPart;
+      return kind(CanInputKind::kGnssPart);
     case protocol::kGnssStatusId:
       if (protocol::unpack(frame, gnss_status_) != protocol::DecodeStatus::kOk) return rejected();
       have_status_ = true;
-      return CanInputKind::kGnssPart;
+      return kind(CanInputKind::kGnssPart);
     case protocol::kGnssVelocityId:
       if (protocol::unpack(frame, gnss_velocity_) != protocol::DecodeStatus::kOk) return rejected();
       have_velocity_ = true;
-      return CanInputKind::kGnssPart;
+      return kind(CanInputKind::kGnssPart);
     case protocol::kGnssTimeDopId: {
       // The time/DOP frame closes a fix (sent last: position, status, time). A fix without its
       // status frame is incomplete; without a position it is forwarded as invalid (no fix).
@@ -44,38 +49,42 @@ CanInputKind InputDecoder::on_can(const hal::CanFrame& frame, std::int64_t time_
       if (!have_status_) {
         have_position_ = have_velocity_ = false;
         ++counters_.gnss_incomplete;
-        return CanInputKind::kInvalid;
+        return kind(CanInputKind::kInvalid);
       }
-      GnssInput g;
-      g.t = t;
-      const bool fixed = gnss_status_.fix_type == protocol::GnssFixType::kFix2D ||
-                         gnss_status_.fix_type == protocol::GnssFixType::kFix3D;
-      g.valid = fixed && have_position_;
-      if (have_position_) {
-        g.lat_deg = gnss_position_.lat_deg;
-        g.lon_deg = gnss_position_.lon_deg;
-      }
-      g.alt_m = gnss_status_.alt_m;
-      g.h_acc = gnss_status_.h_acc_m;
-      g.v_acc = gnss_status_.v_acc_m;
-      g.num_sats = gnss_status_.num_sats;
-      g.hdop = gnss_time_.hdop;
-      if (have_velocity_ && gnss_velocity_.valid) {
-        g.velocity_valid = true;
-        g.vel_east = gnss_velocity_.vel_east_mps;
-        g.vel_north = gnss_velocity_.vel_north_mps;
-        g.speed_acc = gnss_velocity_.speed_acc_mps;
-      }
+      out.gnss = assemble_gnss_fix(t);
       have_position_ = have_status_ = have_velocity_ = false;
-      sink.on_gnss(g);
       ++counters_.gnss_inputs;
       gnss_since_last_scan_ = true;
-      return CanInputKind::kGnssFix;
+      return kind(CanInputKind::kGnssFix);
     }
     default:
       ++counters_.can_unknown_id;
-      return CanInputKind::kUnknownId;
+      return kind(CanInputKind::kUnknownId);
   }
+}
+
+GnssInput InputDecoder::assemble_gnss_fix(double t) const {
+  GnssInput g;
+  g.t = t;
+  const bool fixed = gnss_status_.fix_type == protocol::GnssFixType::kFix2D ||
+                     gnss_status_.fix_type == protocol::GnssFixType::kFix3D;
+  g.valid = fixed && have_position_;
+  if (have_position_) {
+    g.lat_deg = gnss_position_.lat_deg;
+    g.lon_deg = gnss_position_.lon_deg;
+  }
+  g.alt_m = gnss_status_.alt_m;
+  g.h_acc = gnss_status_.h_acc_m;
+  g.v_acc = gnss_status_.v_acc_m;
+  g.num_sats = gnss_status_.num_sats;
+  g.hdop = gnss_time_.hdop;
+  if (have_velocity_ && gnss_velocity_.valid) {
+    g.velocity_valid = true;
+    g.vel_east = gnss_velocity_.vel_east_mps;
+    g.vel_north = gnss_velocity_.vel_north_mps;
+    g.speed_acc = gnss_velocity_.speed_acc_mps;
+  }
+  return g;
 }
 
 bool InputDecoder::on_datagram(std::span<const std::uint8_t> datagram, std::int64_t now_ns) {
@@ -113,8 +122,13 @@ bool InputDecoder::pose_to_matrix(const protocol::SensorPose& pose, Mat4d& out) 
   return true;
 }
 
-CloudKind InputDecoder::dispatch_completed(LocalizerPort& sink, const LocalizerFrameOutput** output) {
-  if (!completed_pending_) return CloudKind::kNone;
+DecodedCloud InputDecoder::decode_completed() {
+  DecodedCloud out;
+  const auto kind = [&out](CloudKind k) {
+    out.kind = k;
+    return out;
+  };
+  if (!completed_pending_) return kind(CloudKind::kNone);
   completed_pending_ = false;
   const protocol::ReassembledCloud& cloud = reassembler_.completed();
   const protocol::CloudFrameInfo& info = cloud.info;
@@ -122,7 +136,7 @@ CloudKind InputDecoder::dispatch_completed(LocalizerPort& sink, const LocalizerF
   const std::uint32_t n = cloud.point_count;
   if (!pose_to_matrix(info.pose, pose) || n > points_.size() || cloud.xyz.size() < 3u * n) {
     ++counters_.clouds_rejected;
-    return CloudKind::kRejected;
+    return kind(CloudKind::kRejected);
   }
   for (std::uint32_t i = 0; i < n; ++i) {
     points_[i] = Vec3f(cloud.xyz[3u * i], cloud.xyz[3u * i + 1], cloud.xyz[3u * i + 2]);
@@ -131,21 +145,20 @@ CloudKind InputDecoder::dispatch_completed(LocalizerPort& sink, const LocalizerF
   const std::span<const Vec3f> points(points_.data(), n);
 
   if (info.type == protocol::CloudMessageType::kMapShare) {
-    MapCloudInput in;
+    MapCloudInput& in = out.map;
     in.source_id = info.sender_id;
     in.is_agent = sender_is_agent(info.sender_id);
     in.t = t;
     in.world_T_sensor = pose;
     in.points = points;
-    last_map_insert_ = sink.on_map_cloud(in);
     ++counters_.map_clouds;
-    return CloudKind::kMapCloud;
+    return kind(CloudKind::kMapCloud);
   }
   if (info.type != protocol::CloudMessageType::kEgoScan || info.sender_id != kEgoSenderId) {
     ++counters_.clouds_rejected;
-    return CloudKind::kRejected;
+    return kind(CloudKind::kRejected);
   }
-  EgoScanInput in;
+  EgoScanInput& in = out.ego;
   in.t = t;
   in.points = points;
   if (cloud.time_offset_ticks.size() == n) {
@@ -153,13 +166,11 @@ CloudKind InputDecoder::dispatch_completed(LocalizerPort& sink, const LocalizerF
     in.point_times = std::span<const float>(point_times_.data(), n);
   }
   in.body_T_lidar = pose;
-  gnss_flag_for_frame_ = gnss_since_last_scan_;
+  out.gnss_used = gnss_since_last_scan_;
   gnss_since_last_scan_ = false;
-  last_frame_index_ = static_cast<std::uint32_t>(counters_.ego_scans);
+  out.frame_index = static_cast<std::uint32_t>(counters_.ego_scans);
   ++counters_.ego_scans;
-  const LocalizerFrameOutput& out = sink.on_ego_scan(in);
-  if (output != nullptr) *output = &out;
-  return CloudKind::kEgoScan;
+  return kind(CloudKind::kEgoScan);
 }
 
 }  // namespace v2xloc::firmware

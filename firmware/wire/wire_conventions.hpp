@@ -6,6 +6,7 @@
 #include <cstdint>
 
 #include "hal/can_frame.hpp"
+#include "hal/little_endian.hpp"
 
 namespace v2xloc::firmware {
 
@@ -36,16 +37,13 @@ inline hal::CanFrame make_sim_time_frame(std::int64_t monotonic_ns) {
   hal::CanFrame f;
   f.id = kSimTimeCanId;
   f.dlc = 8;
-  const auto v = static_cast<std::uint64_t>(monotonic_ns);
-  for (std::size_t i = 0; i < 8; ++i) f.data[i] = static_cast<std::uint8_t>(v >> (8 * i));
+  hal::le::put_u64(f.data, static_cast<std::uint64_t>(monotonic_ns));
   return f;
 }
 
 inline bool parse_sim_time_frame(const hal::CanFrame& f, std::int64_t& monotonic_ns) {
   if (f.id != kSimTimeCanId || f.dlc != 8) return false;
-  std::uint64_t v = 0;
-  for (std::size_t i = 0; i < 8; ++i) v |= static_cast<std::uint64_t>(f.data[i]) << (8 * i);
-  monotonic_ns = static_cast<std::int64_t>(v);
+  monotonic_ns = static_cast<std::int64_t>(hal::le::get_u64(f.data));
   return true;
 }
 

@@ -1,0 +1,50 @@
+// The one spatial hash of the core: integer voxel keys hashed with Teschner et al. 2003
+// ("Optimized Spatial Hashing for Collision Detection of Deformable Objects": three large primes,
+// xor) into a power-of-two open-addressing table with bounded linear probing. Used by the voxel
+// downsampler, the odometry's voxel map and the map fusion's occupancy cells; each keeps its own
+// slot layout (what a slot stores differs) and calls linear_probe() to walk it.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace v2xloc {
+
+// Teschner et al. 2003, eq. (1) without the modulo; unsigned arithmetic (wraps, no overflow UB).
+inline std::uint32_t spatial_hash(std::int32_t x, std::int32_t y, std::int32_t z) {
+  return (static_cast<std::uint32_t>(x) * 73856093u) ^ (static_cast<std::uint32_t>(y) * 19349669u) ^
+         (static_cast<std::uint32_t>(z) * 83492791u);
+}
+inline std::uint32_t spatial_hash(const std::int32_t key[3]) { return spatial_hash(key[0], key[1], key[2]); }
+
+// The hash with its high half folded into the low bits, for tables indexed by the low bits of a
+// small mask (the downsampler's).
+inline std::uint32_t spatial_hash_folded(std::int32_t x, std::int32_t y, std::int32_t z) {
+  const std::uint32_t h = spatial_hash(x, y, z);
+  return h ^ (h >> 16);
+}
+
+struct ProbeResult {
+  bool stopped = false;     // visit() returned true at slot `slot`
+  std::uint32_t probes = 0; // index of that probe if stopped, else the number of slots visited
+  std::size_t slot = 0;
+};
+
+// Linear probing over a table of num_slots (a power of two) starting at hash & (num_slots - 1):
+// calls visit(slot) for at most max_probes consecutive slots until it returns true.
+template <class Visit>
+ProbeResult linear_probe(std::uint32_t hash, std::size_t num_slots, std::uint32_t max_probes, Visit&& visit) {
+  const std::size_t mask = num_slots - 1;
+  ProbeResult r;
+  std::size_t s = hash & mask;
+  for (; r.probes < max_probes; ++r.probes, s = (s + 1) & mask) {
+    if (visit(s)) {
+      r.stopped = true;
+      r.slot = s;
+      return r;
+    }
+  }
+  return r;
+}
+
+}  // namespace v2xloc
