@@ -70,9 +70,19 @@ void FirmwareApp::apply_can(const DecodedCan& decoded, std::int64_t rx_monotonic
 
 void FirmwareApp::apply_cloud(const DecodedCloud& decoded) {
   if (decoded.kind == CloudKind::kMapCloud) {
-    localizer_.on_map_cloud(decoded.map);
+    switch (localizer_.on_map_cloud(decoded.map).status) {
+      case MapInsertStatus::kRejectedInconsistent: ++counters_.map_inconsistent; break;
+      case MapInsertStatus::kHeldBack: ++counters_.map_held_back; break;
+      case MapInsertStatus::kNoSourceSlot: ++counters_.map_no_slot; break;
+      case MapInsertStatus::kStale: ++counters_.map_stale; break;
+      default: break;
+    }
   } else if (decoded.kind == CloudKind::kEgoScan) {
     publish_pose(localizer_.on_ego_scan(decoded.ego), decoded.frame_index, decoded.gnss_used);
+  } else if (decoded.kind == CloudKind::kEgoRejected) {
+    // A pose every frame: the last one again (nothing new was fused), or "no pose" before any.
+    ++counters_.ego_frames_held;
+    publish_pose(has_output_ ? LocalizerFrameOutput(latest_) : LocalizerFrameOutput{}, decoded.frame_index, false);
   }
 }
 
@@ -84,7 +94,13 @@ void FirmwareApp::discipline_clock(std::int64_t rx_monotonic_ns) {
   pps_pending_ = false;
   if (age >= 1'000'000'000) return;  // no time message within the second: edge unusable
   const protocol::GnssTimeDop& t = decoder_.last_gnss_time();
-  if (hal_.clock.set_time(gps_second_to_unix_ns(t.week, t.time_of_week_s), pps_edge_ns_) == hal::Status::kOk) {
+  const std::int64_t gnss_ns = gps_second_to_unix_ns(t.week, t.time_of_week_s);
+  const std::int64_t step = gnss_ns - disciplined(pps_edge_ns_);
+  if (counters_.clock_disciplined > 0 && (step > config_.max_clock_step_ns || step < -config_.max_clock_step_ns)) {
+    ++counters_.gnss_time_rejected;
+    return;
+  }
+  if (hal_.clock.set_time(gnss_ns, pps_edge_ns_) == hal::Status::kOk) {
     ++counters_.clock_disciplined;
   }
 }
@@ -105,9 +121,15 @@ std::size_t FirmwareApp::poll_pps() {
 
 std::size_t FirmwareApp::drain_datagrams() {
   std::size_t n = 0;
+  if (hal_.ego != nullptr) n += drain_link(*hal_.ego, true);
+  return n + drain_link(hal_.clouds, false);
+}
+
+std::size_t FirmwareApp::drain_link(hal::DatagramLink& link, bool ego_link) {
+  std::size_t n = 0;
   hal::DatagramInfo info;
   while (n < config_.max_datagrams_per_poll) {
-    const hal::Status s = hal_.clouds.receive(datagram_buffer_, info);
+    const hal::Status s = link.receive(datagram_buffer_, info);
     if (s == hal::Status::kBufferTooSmall) {
       ++counters_.datagrams_oversize;
       ++n;
@@ -118,7 +140,13 @@ std::size_t FirmwareApp::drain_datagrams() {
     ++counters_.datagrams_rx;
     const std::int64_t now = hal_.clock.monotonic_ns();
     last_datagram_ns_ = now;
-    if (!decoder_.on_datagram(std::span<const std::uint8_t>(datagram_buffer_.data(), info.size), now)) continue;
+    const std::span<const std::uint8_t> bytes(datagram_buffer_.data(), info.size);
+    DatagramChannel channel = ego_link ? DatagramChannel::kEgo : DatagramChannel::kV2x;
+    if (hal_.ego == nullptr && info.size > 5 && !protocol::is_signature_datagram(bytes) &&
+        bytes[5] == static_cast<std::uint8_t>(protocol::CloudMessageType::kEgoScan)) {
+      channel = DatagramChannel::kEgo;  // legacy single socket
+    }
+    if (!decoder_.on_datagram(bytes, now, disciplined(now), channel)) continue;
     // Input order: every CAN frame sent before this cloud's last fragment goes first.
     drain_can();
     apply_cloud(decoder_.decode_completed());
@@ -172,7 +200,9 @@ protocol::Heartbeat FirmwareApp::heartbeat_now() const {
   hb.uptime_s = static_cast<double>(now - start_ns_) * 1e-9;
   hb.can_rx_errors = saturate_u8(d.can_rejected + counters_.can_error_frames);
   hb.udp_dropped = saturate_u8(d.datagrams_rejected + counters_.datagrams_oversize + r.frames_timed_out +
-                               r.frames_evicted + d.clouds_rejected);
+                               r.frames_evicted + d.clouds_rejected + d.shares_untrusted + d.wrong_channel +
+                               d.ego_time_rejected + counters_.map_inconsistent + counters_.map_held_back +
+                               counters_.map_no_slot);
   hb.counter = heartbeat_counter_;
   return hb;
 }

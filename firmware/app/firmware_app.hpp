@@ -23,16 +23,21 @@ namespace v2xloc::firmware {
 
 struct FirmwareHal {
   hal::CanBus& can;              // vehicle bus: GNSS + vehicle motion in, pose + heartbeat out
-  hal::DatagramLink& clouds;     // UDP: ego scans and V2X map shares
+  hal::DatagramLink& clouds;     // UDP: V2X map shares (and their signatures)
   hal::Clock& clock;
   hal::GpioLine* pps = nullptr;  // GNSS PPS input (optional)
   hal::GpioLine* led = nullptr;  // "localized" LED output (optional)
+  hal::DatagramLink* ego = nullptr;  // UDP: ego sensor scans on their own endpoint (null: legacy,
+                                     // one socket, classified by message type: spoofable)
 };
 
 struct FirmwareConfig {
   std::int64_t heartbeat_period_ns = 1'000'000'000;
   std::int64_t input_timeout_ns = 1'000'000'000;   // heartbeat error bits: CAN / UDP silent
   std::int64_t gnss_timeout_ns = 2'000'000'000;
+  // Once disciplined, a GNSS second may move the clock by at most this (a receiver's time does
+  // not jump; a week number going 2300 -> 0 -> 65535 is a fault or a spoof, not a correction).
+  std::int64_t max_clock_step_ns = 1'000'000'000;
   std::size_t max_datagrams_per_poll = 4096;       // bounded work per poll
   std::size_t max_can_frames_per_drain = 65536;
 };
@@ -49,6 +54,12 @@ struct FirmwareCounters {
   std::uint64_t heartbeats = 0;
   std::uint64_t pps_edges = 0;
   std::uint64_t clock_disciplined = 0;
+  std::uint64_t gnss_time_rejected = 0;  // GNSS time implausible against the running clock: not applied
+  std::uint64_t map_inconsistent = 0;    // verified shares map fusion refused: disagree with the infrastructure
+  std::uint64_t map_held_back = 0;       // agent shares with too little overlap to be checked
+  std::uint64_t map_no_slot = 0;         // per-role source cap reached
+  std::uint64_t map_stale = 0;           // not newer than the source's stored cloud
+  std::uint64_t ego_frames_held = 0;     // ego scans refused for their time: last pose published again
   std::uint64_t led_changes = 0;
 };
 
@@ -72,6 +83,7 @@ class FirmwareApp {
   void apply_can(const DecodedCan& decoded, std::int64_t rx_monotonic_ns);
   void apply_cloud(const DecodedCloud& decoded);
   std::size_t drain_datagrams();
+  std::size_t drain_link(hal::DatagramLink& link, bool ego_link);
   std::size_t poll_pps();
   void maybe_heartbeat();
   void publish_pose(const LocalizerFrameOutput& out, std::uint32_t frame_index, bool gnss_used);

@@ -18,6 +18,7 @@
 #include "firmware/app/emulated_wiring.hpp"
 #include "firmware/app/firmware_app.hpp"
 #include "firmware/app/selected_localizer.hpp"
+#include "firmware/trust/trust_list.hpp"
 #include "hal/emulated/emulated_can_bus.hpp"
 #include "hal/emulated/sim_clock.hpp"
 #include "hal/linux/gpiod_line.hpp"
@@ -47,7 +48,9 @@ void on_signal(int) { g_stop = 1; }
 int usage() {
   std::fprintf(stderr,
                "usage: v2xloc-firmware [--config FILE] [--emulated] [options]\n"
-               "  common:   --cloud-port N (UDP clouds, default 47200; 0 = ephemeral)  --cloud-bind A.B.C.D\n"
+               "  common:   --cloud-port N (UDP V2X map shares, default 47200; 0 = ephemeral)  --cloud-bind A.B.C.D\n"
+               "            --ego-port N (UDP ego scans, default 47201; 0 = ephemeral)  --ego-bind A.B.C.D\n"
+               "            --trust-list FILE (provisioned V2X signers; without it every map share is refused)\n"
                "            --origin LAT,LON,ALT (required: the local ENU origin of the map and the poses)\n"
                "            --epoch-ns N (Unix ns of localizer t = 0)\n"
                "            --max-frames N (exit after N published frames)  --rcvbuf BYTES (default 33554432)\n"
@@ -55,7 +58,7 @@ int usage() {
                "            --led-chip gpiochip0 --led-line N\n"
                "  emulated: --can-port N (firmware's CAN-over-UDP port, 0 = ephemeral)  --can-peer-port N\n"
                "            --pps 0|1 (scripted PPS, default 1)\n"
-               "Prints 'v2xloc-firmware: ready can=PORT cloud=PORT' once the sockets are bound.\n");
+               "Prints 'v2xloc-firmware: ready can=PORT cloud=PORT ego=PORT' once the sockets are bound.\n");
   return 2;
 }
 
@@ -116,6 +119,22 @@ void print_counters(const FirmwareApp& app) {
               (unsigned long long)d.can_rejected, (unsigned long long)d.can_unknown_id,
               (unsigned long long)d.ego_scans, (unsigned long long)d.map_clouds, (unsigned long long)d.clouds_rejected,
               (unsigned long long)d.datagrams_rejected);
+  const trust::VerifierCounters& v = app.decoder().verifier().counters();
+  std::printf("v2xloc-firmware: trust shares accepted %llu rejected %llu (missing_signature %llu unknown_signer %llu"
+              " sender_mismatch %llu too_old %llu future %llu stamp_skew %llu replay %llu bad_signature %llu crypto_error %llu)"
+              " signatures %llu malformed %llu; wrong_channel %llu ego_time_rejected %llu ego_frames_held %llu\n",
+              (unsigned long long)v.accepted, (unsigned long long)v.rejected(), (unsigned long long)v.missing_signature,
+              (unsigned long long)v.unknown_signer, (unsigned long long)v.sender_mismatch, (unsigned long long)v.too_old,
+              (unsigned long long)v.future, (unsigned long long)v.stamp_skew, (unsigned long long)v.replay,
+              (unsigned long long)v.bad_signature, (unsigned long long)v.crypto_error, (unsigned long long)v.signatures_rx,
+              (unsigned long long)v.signatures_malformed, (unsigned long long)d.wrong_channel,
+              (unsigned long long)d.ego_time_rejected, (unsigned long long)c.ego_frames_held);
+  std::printf("v2xloc-firmware: can_repeated %llu can_counter_gaps %llu gnss_time_rejected %llu\n",
+              (unsigned long long)d.can_repeated, (unsigned long long)d.can_counter_gaps,
+              (unsigned long long)c.gnss_time_rejected);
+  std::printf("v2xloc-firmware: map fusion of trusted shares: inconsistent %llu held_back %llu no_slot %llu stale %llu\n",
+              (unsigned long long)c.map_inconsistent, (unsigned long long)c.map_held_back,
+              (unsigned long long)c.map_no_slot, (unsigned long long)c.map_stale);
   std::printf("v2xloc-firmware: reassembly fragments %llu frames %llu duplicates %llu stale %llu timed_out %llu evicted %llu"
               " bad_crc %llu truncated %llu malformed %llu over_capacity %llu\n",
               (unsigned long long)r.fragments_accepted, (unsigned long long)r.frames_completed,
@@ -182,12 +201,13 @@ bool read_origin(const Options& options, GeodeticOrigin& origin) {
 // ---- Backends: what main() hands the application, and what the exit report reads. ----
 struct Backends {
   hal::UdpLink* cloud_link = nullptr;
+  hal::UdpLink* ego_link = nullptr;
   hal::UdpLink* can_link = nullptr;      // emulated only
   hal::CanBus* can = nullptr;
   hal::Clock* clock = nullptr;
   hal::GpioLine* pps = nullptr;
   hal::GpioLine* led = nullptr;
-  int poll_fds[3] = {-1, -1, -1};        // cloud socket, CAN socket, PPS events
+  int poll_fds[4] = {-1, -1, -1, -1};    // cloud socket, CAN socket, PPS events, ego socket
   // Emulation only, for the exit report.
   hal::SimClock* sim_clock = nullptr;
   hal::EmulatedCanBus* emulated_can = nullptr;
@@ -210,6 +230,46 @@ bool open_cloud_link(const Options& options, Backends& b) {
   force_receive_buffer(cloud_link.fd(), static_cast<int>(options.get_ll("rcvbuf", 32 << 20)));
   b.cloud_link = &cloud_link;
   b.poll_fds[0] = cloud_link.fd();
+  // Ego sensors on their own endpoint: the V2X socket never carries an ego scan.
+  static hal::UdpLink ego_link;
+  hal::UdpOptions e;
+  if (!hal::parse_ipv4(options.get("ego-bind", options.emulated ? "127.0.0.1" : "0.0.0.0").c_str(), e.bind.address)) {
+    usage();
+    return false;
+  }
+  e.bind.port = static_cast<std::uint16_t>(options.get_ll("ego-port", 47201));
+  if (ego_link.open(e) != hal::Status::kOk) {
+    std::fprintf(stderr, "v2xloc-firmware: ego UDP: %s\n", ego_link.last_error());
+    return false;
+  }
+  force_receive_buffer(ego_link.fd(), static_cast<int>(options.get_ll("rcvbuf", 32 << 20)));
+  b.ego_link = &ego_link;
+  b.poll_fds[3] = ego_link.fd();
+  return true;
+}
+
+// The provisioned trust list (--trust-list FILE), read at start-up (heap allowed here).
+bool provision_trust(const Options& options) {
+  if (!options.has("trust-list")) {
+    std::printf("v2xloc-firmware: no trust list: every V2X map share will be refused\n");
+    return true;
+  }
+  const std::string path = options.kv.at("trust-list");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    std::fprintf(stderr, "v2xloc-firmware: cannot read trust list %s\n", path.c_str());
+    return false;
+  }
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  static trust::TrustList list;
+  const trust::TrustListParseResult r = trust::parse_trust_list(
+      std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()), list);
+  if (r.status != trust::TrustListStatus::kOk) {
+    std::fprintf(stderr, "v2xloc-firmware: %s:%zu: %s\n", path.c_str(), r.line, trust::to_string(r.status));
+    return false;
+  }
+  g_decoder.provision_trust(list);
+  std::printf("v2xloc-firmware: trust list: %zu signers\n", list.count);
   return true;
 }
 
@@ -295,7 +355,7 @@ bool open_real_backends(const Options& options, Backends& b) {
 // Polls until SIGINT/SIGTERM or max_frames published frames (0: no limit); idle polls wait on the
 // sockets (or the heartbeat tick). No allocation in here: counted, reported at exit.
 void run_loop(FirmwareApp& app, const Backends& b, long long max_frames) {
-  pollfd fds[3];
+  pollfd fds[4];
   nfds_t nfds = 0;
   for (int fd : b.poll_fds) {
     if (fd >= 0) fds[nfds++] = pollfd{fd, POLLIN, 0};
@@ -338,16 +398,18 @@ int main(int argc, char** argv) {
 
   Backends b;
   if (!open_cloud_link(options, b)) return 1;
+  if (!provision_trust(options)) return 1;
   if (!(options.emulated ? open_emulated_backends(options, epoch_ns, b) : open_real_backends(options, b))) return 1;
-  static FirmwareApp app(FirmwareHal{*b.can, *b.cloud_link, *b.clock, b.pps, b.led}, g_decoder, port);
+  static FirmwareApp app(FirmwareHal{*b.can, *b.cloud_link, *b.clock, b.pps, b.led, b.ego_link}, g_decoder, port);
   if (app.start() != hal::Status::kOk) {
     std::fprintf(stderr, "v2xloc-firmware: CAN filter set-up failed\n");
     return 1;
   }
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
-  std::printf("v2xloc-firmware: ready can=%u cloud=%u mode=%s\n",
+  std::printf("v2xloc-firmware: ready can=%u cloud=%u ego=%u mode=%s\n",
               b.can_link != nullptr ? b.can_link->local_endpoint().port : 0u, b.cloud_link->local_endpoint().port,
+              b.ego_link->local_endpoint().port,
               options.emulated ? "emulated" : "real");
 
   run_loop(app, b, options.get_ll("max-frames", 0));

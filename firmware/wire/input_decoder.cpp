@@ -6,6 +6,17 @@
 
 namespace v2xloc::firmware {
 
+bool InputDecoder::counter_ok(protocol::RollingCounterMonitor& monitor, std::uint8_t counter) {
+  const std::uint32_t repeated = monitor.repeated(), lost = monitor.lost();
+  monitor.update(counter);
+  counters_.can_counter_gaps += monitor.lost() - lost;
+  if (monitor.repeated() != repeated) {
+    ++counters_.can_repeated;
+    return false;
+  }
+  return true;
+}
+
 DecodedCan InputDecoder::decode_can(const hal::CanFrame& frame, std::int64_t time_ns) {
   ++counters_.can_frames;
   const double t = localizer_time_s(time_ns, epoch_ns_);
@@ -22,6 +33,7 @@ DecodedCan InputDecoder::decode_can(const hal::CanFrame& frame, std::int64_t tim
     case protocol::kVehicleMotionId: {
       protocol::VehicleMotion m;
       if (protocol::unpack(frame, m) != protocol::DecodeStatus::kOk) return rejected();
+      if (!counter_ok(vehicle_counter_, m.counter)) return kind(CanInputKind::kRejected);
       if (!m.speed_valid || !m.yaw_rate_valid) {
         ++counters_.vehicle_invalid;
         return kind(CanInputKind::kInvalid);
@@ -36,10 +48,12 @@ DecodedCan InputDecoder::decode_can(const hal::CanFrame& frame, std::int64_t tim
       return kind(CanInputKind::kGnssPart);
     case protocol::kGnssStatusId:
       if (protocol::unpack(frame, gnss_status_) != protocol::DecodeStatus::kOk) return rejected();
+      if (!counter_ok(gnss_status_counter_, gnss_status_.counter)) return kind(CanInputKind::kRejected);
       have_status_ = true;
       return kind(CanInputKind::kGnssPart);
     case protocol::kGnssVelocityId:
       if (protocol::unpack(frame, gnss_velocity_) != protocol::DecodeStatus::kOk) return rejected();
+      if (!counter_ok(gnss_velocity_counter_, gnss_velocity_.counter)) return kind(CanInputKind::kRejected);
       have_velocity_ = true;
       return kind(CanInputKind::kGnssPart);
     case protocol::kGnssTimeDopId: {
@@ -88,8 +102,33 @@ GnssInput InputDecoder::assemble_gnss_fix(double t) const {
 }
 
 bool InputDecoder::on_datagram(std::span<const std::uint8_t> datagram, std::int64_t now_ns) {
+  const bool ego = datagram.size() > 5 && !protocol::is_signature_datagram(datagram) &&
+                   datagram[5] == static_cast<std::uint8_t>(protocol::CloudMessageType::kEgoScan);
+  return on_datagram(datagram, now_ns, epoch_ns_ + now_ns, ego ? DatagramChannel::kEgo : DatagramChannel::kV2x);
+}
+
+bool InputDecoder::on_datagram(std::span<const std::uint8_t> datagram, std::int64_t now_ns, std::int64_t local_time_ns,
+                               DatagramChannel channel) {
   ++counters_.datagrams;
   completed_pending_ = false;
+  if (protocol::is_signature_datagram(datagram)) {
+    if (channel != DatagramChannel::kV2x) {
+      ++counters_.wrong_channel;
+      return false;
+    }
+    verifier_.on_signature_datagram(datagram, now_ns);
+    return false;
+  }
+  // Message type (byte 5 of the cloud header; the CRC is checked by the reassembler): an ego scan
+  // only on the ego endpoint, a map share only on the V2X one.
+  if (datagram.size() > 5) {
+    const bool is_ego = datagram[5] == static_cast<std::uint8_t>(protocol::CloudMessageType::kEgoScan);
+    if (is_ego != (channel == DatagramChannel::kEgo)) {
+      ++counters_.wrong_channel;
+      return false;
+    }
+  }
+  completed_local_time_ns_ = local_time_ns;
   const protocol::CloudStatus s = reassembler_.push(datagram, now_ns);
   switch (s) {
     case protocol::CloudStatus::kFrameComplete:
@@ -145,9 +184,16 @@ DecodedCloud InputDecoder::decode_completed() {
   const std::span<const Vec3f> points(points_.data(), n);
 
   if (info.type == protocol::CloudMessageType::kMapShare) {
+    // Trust before fusion: a signature over the whole cloud by a provisioned signer, fresh by the
+    // local clock, not a replay. Role and source id come from the trust list, not the header.
+    const trust::ShareVerifyResult verdict = verifier_.verify(cloud, completed_local_time_ns_);
+    if (verdict.verdict != trust::ShareVerdict::kAccepted) {
+      ++counters_.shares_untrusted;
+      return kind(CloudKind::kRejected);
+    }
     MapCloudInput& in = out.map;
-    in.source_id = info.sender_id;
-    in.is_agent = sender_is_agent(info.sender_id);
+    in.source_id = verdict.signer->sender_id;
+    in.is_agent = verdict.signer->role == trust::SignerRole::kAgent;
     in.t = t;
     in.world_T_sensor = pose;
     in.points = points;
@@ -158,6 +204,18 @@ DecodedCloud InputDecoder::decode_completed() {
     ++counters_.clouds_rejected;
     return kind(CloudKind::kRejected);
   }
+  // Plausible time: near the local clock and newer than the last accepted scan. A refused scan is
+  // counted and leaves no trace, so it cannot freeze the scans after it.
+  const std::int64_t stamp = static_cast<std::int64_t>(info.timestamp_ns & 0x7FFFFFFFFFFFFFFFull);
+  if (info.timestamp_ns > 0x7FFFFFFFFFFFFFFFull || stamp > completed_local_time_ns_ + kEgoScanMaxClockSkewNs ||
+      stamp < completed_local_time_ns_ - kEgoScanMaxClockSkewNs ||
+      (have_ego_time_ && info.timestamp_ns <= last_ego_stamp_ns_)) {
+    ++counters_.ego_time_rejected;
+    out.frame_index = ego_frames_++;
+    return kind(CloudKind::kEgoRejected);
+  }
+  have_ego_time_ = true;
+  last_ego_stamp_ns_ = info.timestamp_ns;
   EgoScanInput& in = out.ego;
   in.t = t;
   in.points = points;
@@ -168,7 +226,7 @@ DecodedCloud InputDecoder::decode_completed() {
   in.body_T_lidar = pose;
   out.gnss_used = gnss_since_last_scan_;
   gnss_since_last_scan_ = false;
-  out.frame_index = static_cast<std::uint32_t>(counters_.ego_scans);
+  out.frame_index = ego_frames_++;
   ++counters_.ego_scans;
   return kind(CloudKind::kEgoScan);
 }

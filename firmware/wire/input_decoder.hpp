@@ -16,6 +16,7 @@
 
 #include "firmware/protocol/can_messages.hpp"
 #include "firmware/protocol/pointcloud_udp.hpp"
+#include "firmware/trust/map_share_verifier.hpp"
 #include "v2xloc/algo/core/config.hpp"
 #include "v2xloc/algo/localization/localizer.hpp"
 
@@ -35,7 +36,19 @@ enum class CanInputKind : std::uint8_t {
   kUnknownId,     // not ours (counted)
 };
 
-enum class CloudKind : std::uint8_t { kNone, kEgoScan, kMapCloud, kRejected };
+// kEgoRejected: an ego scan refused for its time stamp; it still consumes a frame index
+// (DecodedCloud::frame_index), and the caller publishes the last pose again for it (a pose every
+// frame, nothing new fused).
+enum class CloudKind : std::uint8_t { kNone, kEgoScan, kMapCloud, kRejected, kEgoRejected };
+
+// Which endpoint a datagram came in on. Ego sensors have their own socket: an ego scan on the V2X
+// endpoint, or a map share / signature on the ego endpoint, is rejected (counted) before it
+// reaches the reassembler.
+enum class DatagramChannel : std::uint8_t { kEgo, kV2x };
+
+// Ego scans must carry a time stamp within this of the local (disciplined) clock: one scan dated
+// far in the future would otherwise make every later real scan look stale to the localizer.
+inline constexpr std::int64_t kEgoScanMaxClockSkewNs = 500'000'000;  // [ns] 5 sweep periods
 
 // One decoded CAN frame: `vehicle` is set for kVehicle, `gnss` for kGnssFix.
 struct DecodedCan {
@@ -67,6 +80,11 @@ struct DecoderCounters {
   std::uint64_t ego_scans = 0;
   std::uint64_t map_clouds = 0;
   std::uint64_t clouds_rejected = 0;     // complete but unusable (bad pose, wrong message type)
+  std::uint64_t wrong_channel = 0;       // datagram type not allowed on the endpoint it came in on
+  std::uint64_t shares_untrusted = 0;    // map shares the verifier refused (reasons: verifier counters)
+  std::uint64_t ego_time_rejected = 0;   // ego scans dated implausibly far from the local clock / not newer
+  std::uint64_t can_repeated = 0;        // rolling counter did not advance: replayed / stuck frame, dropped
+  std::uint64_t can_counter_gaps = 0;    // frames lost by the rolling counter (accepted, counted)
 };
 
 class InputDecoder {
@@ -83,11 +101,24 @@ class InputDecoder {
 
   // One datagram received at monotonic now_ns. True when it completed a cloud: the caller first
   // drains earlier inputs (CAN), then calls decode_completed() before the next datagram.
+  // local_time_ns: the disciplined clock now (freshness of map shares and ego scans).
+  bool on_datagram(std::span<const std::uint8_t> datagram, std::int64_t now_ns, std::int64_t local_time_ns,
+                   DatagramChannel channel);
+  // Emulation / offline convenience: local time = epoch + now_ns (the SimClock's relation), and
+  // the channel taken from the datagram's message type (single-socket legacy wiring).
   bool on_datagram(std::span<const std::uint8_t> datagram, std::int64_t now_ns);
   // The cloud the last datagram completed, as a localizer input (kNone when there is none; a
-  // cloud is returned once).
+  // cloud is returned once). A map share is returned only when the verifier accepted it; its
+  // source id and agent flag come from the provisioned trust list, not from the header.
   DecodedCloud decode_completed();
-  std::size_t expire(std::int64_t now_ns) { return reassembler_.expire(now_ns); }
+  std::size_t expire(std::int64_t now_ns) {
+    verifier_.expire(now_ns);
+    return reassembler_.expire(now_ns);
+  }
+
+  // Provisioned trust list (start-up). Without one, every map share is refused (unknown signer).
+  void provision_trust(const trust::TrustList& list) { verifier_.provision(list); }
+  const trust::MapShareVerifier& verifier() const { return verifier_; }
 
   const DecoderCounters& counters() const { return counters_; }
   const protocol::ReassemblyCounters& reassembly_counters() const { return reassembler_.counters(); }
@@ -96,12 +127,20 @@ class InputDecoder {
   // The fix closed by the time/DOP frame, from the stored position, status and velocity frames.
   GnssInput assemble_gnss_fix(double t) const;
   bool pose_to_matrix(const protocol::SensorPose& pose, Mat4d& out) const;
+  // Rolling counters of the frames that carry one (0x120, 0x131, 0x133): a repeat is dropped.
+  bool counter_ok(protocol::RollingCounterMonitor& monitor, std::uint8_t counter);
 
   std::int64_t epoch_ns_ = 0;
   CloudReassembler reassembler_{};
   std::array<Vec3f, kMaxCloudPoints> points_{};
   std::array<float, kMaxCloudPoints> point_times_{};
   bool completed_pending_ = false;
+  std::int64_t completed_local_time_ns_ = 0;
+  bool have_ego_time_ = false;
+  std::uint64_t last_ego_stamp_ns_ = 0;
+  std::uint32_t ego_frames_ = 0;  // ego frames consumed (fused or refused for their time)
+  trust::MapShareVerifier verifier_{};
+  protocol::RollingCounterMonitor vehicle_counter_{}, gnss_status_counter_{}, gnss_velocity_counter_{};
 
   protocol::GnssPosition gnss_position_{};
   protocol::GnssStatus gnss_status_{};

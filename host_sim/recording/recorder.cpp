@@ -4,6 +4,7 @@
 #include "host_sim/common/png.hpp"
 #include "host_sim/common/rng.hpp"
 #include "host_sim/recording/pose_io.hpp"
+#include "host_sim/recording/sim_trust.hpp"
 #include "host_sim/recording/topview.hpp"
 #include "host_sim/scenario/simulation.hpp"
 #include "host_sim/sensors/lidar.hpp"
@@ -451,7 +452,25 @@ Json manifest_files(const Session& s, const RecordingSummary& summary) {
   files.set("agent_ground_truth", agt);
   files.set("top_view", "topview.png");
   if (summary.has_can_log) files.set("can_log", "gnss_vehicle.log");
+  files.set("trust_list", kTrustListFile);
   return files;
+}
+
+// trust_list.txt: every map-cloud sensor's deterministic test key (sim_trust.hpp), the list the
+// firmware is provisioned with when this recording is replayed.
+bool write_trust_list(Session& s, std::string& error) {
+  std::vector<SimSigner> signers;
+  for (const auto& site : s.sites) {
+    SimSigner signer;
+    if (sim_signer("infra", site.name, signer)) signers.push_back(signer);
+  }
+  if (s.agents) {
+    for (std::size_t a = 0; a < s.scenario().agents.size(); ++a) {
+      SimSigner signer;
+      if (sim_signer("agent", "agent_" + std::to_string(a) + "_lidar", signer)) signers.push_back(signer);
+    }
+  }
+  return write_text_file((s.root / kTrustListFile).string(), trust_list_text(trust_list_of(signers)), error);
 }
 
 Json manifest_sensors(const Session& s) {
@@ -625,6 +644,7 @@ bool generate_recording(const RecorderConfig& cfg, RecordingSummary& summary, st
   summary.frames = s.frames;
   summary.map_clouds = static_cast<int>(products.map_clouds.size());
   summarize_scans(products.points_per_scan, summary);
+  if (!write_trust_list(s, error)) return false;
   const Json manifest = build_manifest(s, products, summary, gnss_json, can_json);
   if (!write_text_file((s.root / "manifest.json").string(), manifest.dump(2), error)) return false;
   if (cfg.top_view && !write_top_view_picture(s, top, summary.name, error)) return false;

@@ -145,6 +145,11 @@ std::vector<Eigen::Isometry3d> RecordingReader::infra_surveyed_poses() const {
   return out;
 }
 
+std::string RecordingReader::trust_list_path() const {
+  const std::string f = manifest_["files"]["trust_list"].as_string();
+  return f.empty() ? std::string() : dir_ + "/" + f;
+}
+
 std::string RecordingReader::can_log_path() const {
   const std::string f = manifest_["files"]["can_log"].as_string();
   return f.empty() ? std::string() : dir_ + "/" + f;

@@ -81,6 +81,8 @@ class RecordingReader {
 
   // CAN log (candump -L format: "(unix.usec) iface ID#DATA"). False if the recording has none.
   std::string can_log_path() const;
+  // trust_list.txt of the recording (manifest files.trust_list); empty for recordings made before it.
+  std::string trust_list_path() const;
   bool can_frames(std::vector<CanLogFrame>& out, std::string& error) const;
 
  private:

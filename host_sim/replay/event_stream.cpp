@@ -5,6 +5,7 @@
 #include <cstdlib>
 
 #include "host_sim/canlog/candump_log.hpp"
+#include "firmware/trust/cloud_digest.hpp"
 
 namespace v2xloc::sim::replay {
 namespace {
@@ -22,30 +23,10 @@ protocol::SensorPose to_sensor_pose(const Eigen::Isometry3d& T) {
   return p;
 }
 
-// Trailing index of a sensor name after `prefix` ("infra_2" -> 2, "agent_1_lidar" -> 1).
-bool index_after(const std::string& name, const std::string& prefix, std::uint32_t& index) {
-  if (name.rfind(prefix, 0) != 0 || name.size() == prefix.size()) return false;
-  char* end = nullptr;
-  const unsigned long v = std::strtoul(name.c_str() + prefix.size(), &end, 10);
-  if (end == name.c_str() + prefix.size()) return false;
-  index = static_cast<std::uint32_t>(v);
-  return true;
-}
-
 }  // namespace
 
 bool EventStream::sender_id_for(const MapCloudInfo& info, std::uint32_t& sender_id) {
-  std::uint32_t k = 0;
-  if (info.kind == "infra" && index_after(info.sensor, "infra_", k) &&
-      k < firmware::kAgentSenderBase - firmware::kInfraSenderBase) {
-    sender_id = firmware::kInfraSenderBase + k;
-    return true;
-  }
-  if (info.kind == "agent" && index_after(info.sensor, "agent_", k)) {
-    sender_id = firmware::kAgentSenderBase + k;
-    return true;
-  }
-  return false;
+  return sim_sender_id(info.kind, info.sensor, sender_id);
 }
 
 bool EventStream::open(const RecordingReader& reader, const EventStreamConfig& config, std::string& error) {
@@ -72,6 +53,21 @@ bool EventStream::open(const RecordingReader& reader, const EventStreamConfig& c
       error = "map cloud with unknown sensor name: " + c.sensor + " (" + c.kind + ")";
       return false;
     }
+    bool known = false;
+    for (const SimSigner& s : signers_) known = known || s.sensor == c.sensor;
+    SimSigner signer;
+    if (!known && sim_signer(c.kind, c.sensor, signer)) signers_.push_back(signer);
+  }
+  // The provisioned list: the recording's file, or (older recordings) derived from the sensors.
+  const std::string trust_path = reader.trust_list_path();
+  if (!trust_path.empty()) {
+    if (!load_trust_list(trust_path, trust_list_, error)) return false;
+  } else {
+    trust_list_ = trust_list_of(signers_);
+  }
+  faults_.configure(config.faults);
+  if (config.sign_map_shares) {
+    own_reassembler_ = std::make_shared<firmware::CloudReassembler>();
   }
   return true;
 }
@@ -127,6 +123,36 @@ bool EventStream::fragment(protocol::CloudMessageType type, std::uint32_t sender
   return true;
 }
 
+bool EventStream::map_share(const MapCloudInfo& info, std::uint32_t id, std::uint32_t seq, std::int64_t stamp_ns,
+                            const Eigen::Isometry3d& pose, const cloud_io::PointCloud& cloud, const SimSigner* signer,
+                            WireEvent& ev, std::string& error) {
+  (void)info;
+  ev.kind = WireEvent::Kind::kMapCloud;
+  ev.time_ns = stamp_ns;
+  if (!fragment(protocol::CloudMessageType::kMapShare, id, seq, stamp_ns, pose, cloud, false, ev, error)) return false;
+  if (signer == nullptr || !own_reassembler_) return true;
+  // Sign what the receiver will reassemble: run our own fragments through a reassembler.
+  own_reassembler_->reset();
+  bool complete = false;
+  for (const auto& d : ev.datagrams) {
+    complete = own_reassembler_->push(d, 0) == protocol::CloudStatus::kFrameComplete;
+  }
+  if (!complete) {
+    error = "map share did not reassemble for signing";
+    return false;
+  }
+  protocol::CloudSignature sig;
+  if (trust::sign_cloud(signer->priv, signer->pub, own_reassembler_->completed(),
+                        static_cast<std::uint64_t>(epoch_ns_ + stamp_ns), sig) != trust::CryptoStatus::kOk) {
+    error = "signing failed";
+    return false;
+  }
+  std::vector<std::uint8_t> d(protocol::signature_wire::kBytes);
+  protocol::encode_signature_datagram(sig, d);
+  ev.datagrams.insert(ev.datagrams.begin(), std::move(d));  // the signature precedes the fragments
+  return true;
+}
+
 bool EventStream::next_frame(int i, std::vector<WireEvent>& out, std::string& error) {
   if (i != next_frame_ || i >= frame_count_) {
     error = "frames must be requested in order (expected " + std::to_string(next_frame_) + ", got " + std::to_string(i) + ")";
@@ -135,13 +161,37 @@ bool EventStream::next_frame(int i, std::vector<WireEvent>& out, std::string& er
   ++next_frame_;
   const std::int64_t t_i = frame_time_ns(i);
 
+  const FaultSpec& fs = faults_.spec();
+  FaultStats& fst = stats_.faults;
+  const std::int64_t burst_ns = seconds_to_ns(fs.can_burst_at_s);
   for (; next_can_ < can_.size() && can_[next_can_].time_ns <= t_i; ++next_can_) {
+    const TimedCan& c = can_[next_can_];
+    if (faults_.gnss_dropped(c.frame.id, static_cast<double>(c.time_ns) * 1e-9)) {
+      ++fst.gnss_frames_dropped;
+      continue;
+    }
     WireEvent ev;
     ev.kind = WireEvent::Kind::kCan;
-    ev.time_ns = can_[next_can_].time_ns;
-    ev.can = can_[next_can_].frame;
-    out.push_back(std::move(ev));
+    ev.time_ns = c.time_ns;
+    ev.can = c.frame;
+    out.push_back(ev);
     ++stats_.can_frames;
+    if (fs.can_burst > 0 && !burst_done_ && c.time_ns >= burst_ns) {
+      // A burst of corrupt frames right after this one: bit flips (CRC), verbatim repeats
+      // (rolling counter), wrong DLC.
+      burst_done_ = true;
+      for (int k = 0; k < fs.can_burst; ++k) {
+        WireEvent bad = ev;
+        const int kind = faults_.rng().uniform_int(0, 2);
+        if (kind == 0) {
+          bad.can.data[faults_.rng().uniform_int(0, 7)] ^= static_cast<std::uint8_t>(1u << faults_.rng().uniform_int(0, 7));
+        } else if (kind == 2) {
+          bad.can.dlc = static_cast<std::uint8_t>(faults_.rng().uniform_int(0, 7));
+        }
+        out.push_back(bad);
+        ++fst.can_corrupt_sent;
+      }
+    }
   }
 
   const auto& clouds = reader_->map_clouds();
@@ -149,21 +199,76 @@ bool EventStream::next_frame(int i, std::vector<WireEvent>& out, std::string& er
     const MapCloudInfo& info = clouds[next_cloud_];
     std::uint32_t id = 0;
     sender_id_for(info, id);
+    if (info.kind == "infra" && faults_.infra_dropped(info.stamp)) {
+      ++fst.infra_shares_dropped;
+      continue;
+    }
     cloud_io::PointCloud cloud;
     if (!reader_->load_map_cloud(info, cloud, error)) return false;
     if (cloud_seq_.size() <= id) cloud_seq_.resize(id + 1, 0);
+    const SimSigner* signer = nullptr;
+    if (config_.sign_map_shares) {
+      for (const SimSigner& sg : signers_) {
+        if (sg.sensor == info.sensor) signer = &sg;
+      }
+    }
+    const bool rogue = (fs.rogue_shift_m != 0 || fs.rogue_future_s > 0) &&
+                       (fs.rogue_source == info.sensor || (fs.rogue_source == "all-infra" && info.kind == "infra"));
+    Eigen::Isometry3d shifted = Eigen::Translation3d(fs.rogue_shift_m, 0, 0) * info.sensor_pose;
+    const std::int64_t stamp_ns = seconds_to_ns(info.stamp);
+    const std::uint32_t seq = cloud_seq_[id]++;
     WireEvent ev;
-    ev.kind = WireEvent::Kind::kMapCloud;
-    ev.time_ns = seconds_to_ns(info.stamp);
-    if (!fragment(protocol::CloudMessageType::kMapShare, id, cloud_seq_[id]++, ev.time_ns, info.sensor_pose, cloud,
-                  false, ev, error)) {
-      return false;
+    const bool insider = rogue && fs.rogue_signed && fs.rogue_shift_m != 0;
+    if (!map_share(info, id, seq, stamp_ns, insider ? shifted : info.sensor_pose, cloud, signer, ev, error)) return false;
+    if (insider) ++fst.rogue_shares;
+    std::vector<WireEvent> extra;
+    if (rogue && !fs.rogue_signed && fs.rogue_shift_m != 0) {  // outsider: unsigned shifted copy
+      WireEvent r;
+      if (!map_share(info, id, seq + 0x40000000u, stamp_ns, shifted, cloud, nullptr, r, error)) return false;
+      extra.push_back(std::move(r));
+      ++fst.rogue_shares;
+    }
+    if (rogue && fs.rogue_future_s > 0) {  // a copy dated in the future (signed: by the source's key)
+      WireEvent r;
+      if (!map_share(info, id, seq + 0x50000000u, stamp_ns + seconds_to_ns(fs.rogue_future_s), info.sensor_pose, cloud,
+                     fs.rogue_signed ? signer : nullptr, r, error)) {
+        return false;
+      }
+      r.time_ns = stamp_ns;  // sent now, dated ahead
+      extra.push_back(std::move(r));
+      ++fst.rogue_shares;
+    }
+    if (fs.rogue_ids > 0 && info.sensor == clouds.front().sensor) {  // once per share period
+      for (int k = 0; k < fs.rogue_ids; ++k) {
+        WireEvent r;
+        const std::uint32_t fake = 64u + static_cast<std::uint32_t>(k);
+        if (!map_share(info, fake, seq, stamp_ns, info.sensor_pose, cloud, nullptr, r, error)) return false;
+        extra.push_back(std::move(r));
+        ++fst.rogue_shares;
+      }
     }
     stats_.points_dropped += ev.points_dropped;
-    stats_.datagrams += ev.datagrams.size();
     ++stats_.map_clouds;
-    out.push_back(std::move(ev));
+    extra.insert(extra.begin(), std::move(ev));
+    for (WireEvent& e : extra) {
+      faults_.transport(e.datagrams, fst);
+      if (fs.delay_s > 0) {
+        e.time_ns += seconds_to_ns(fs.delay_s);
+        ++fst.shares_delayed;
+      }
+      delayed_.push_back(std::move(e));
+    }
   }
+  // Deliver every share whose (possibly delayed) arrival time has come, in arrival order.
+  std::stable_sort(delayed_.begin(), delayed_.end(),
+                   [](const WireEvent& a, const WireEvent& b) { return a.time_ns < b.time_ns; });
+  std::size_t n_due = 0;
+  while (n_due < delayed_.size() && delayed_[n_due].time_ns <= t_i) ++n_due;
+  for (std::size_t k = 0; k < n_due; ++k) {
+    stats_.datagrams += delayed_[k].datagrams.size();
+    out.push_back(std::move(delayed_[k]));
+  }
+  delayed_.erase(delayed_.begin(), delayed_.begin() + static_cast<std::ptrdiff_t>(n_due));
 
   cloud_io::PointCloud scan;
   if (!reader_->ego_scan(i, scan, error)) return false;
@@ -171,7 +276,12 @@ bool EventStream::next_frame(int i, std::vector<WireEvent>& out, std::string& er
   ev.kind = WireEvent::Kind::kEgoScan;
   ev.time_ns = t_i;
   ev.frame = i;
-  if (!fragment(protocol::CloudMessageType::kEgoScan, firmware::kEgoSenderId, static_cast<std::uint32_t>(i), t_i,
+  std::int64_t ego_stamp = t_i;
+  if (i == fs.ego_time_jump_frame) {  // one scan dated 1e18 ns (Unix), far in the future
+    ego_stamp = 1'000'000'000'000'000'000LL - epoch_ns_;
+    ++fst.ego_time_jumps;
+  }
+  if (!fragment(protocol::CloudMessageType::kEgoScan, firmware::kEgoSenderId, static_cast<std::uint32_t>(i), ego_stamp,
                 reader_->ego_lidar_mount(), scan, config_.ego_point_times, ev, error)) {
     return false;
   }
@@ -196,10 +306,19 @@ bool WireEventDecoder::feed(const WireEvent& event, DecodedFrame& frame) {
     if (!decoder_.on_datagram(d, event.time_ns)) continue;
     const firmware::DecodedCloud decoded = decoder_.decode_completed();
     if (decoded.kind == firmware::CloudKind::kMapCloud) localizer_.on_map_cloud(decoded.map);
+    if (decoded.kind == firmware::CloudKind::kEgoRejected) {  // as the firmware: the last pose again
+      frame.frame = static_cast<int>(decoded.frame_index);
+      frame.output = last_output_;
+      frame.pose = encoder_.encode(last_output_, decoded.frame_index, false);
+      frame.diagnostics = diagnostic_encoder_.encode(last_output_, decoded.frame_index);
+      produced = true;
+      continue;
+    }
     if (decoded.kind != firmware::CloudKind::kEgoScan) continue;
     const LocalizerFrameOutput& out = localizer_.on_ego_scan(decoded.ego);
     frame.frame = static_cast<int>(decoded.frame_index);
     frame.output = out;
+    last_output_ = out;
     frame.pose = encoder_.encode(out, decoded.frame_index, decoded.gnss_used);
     frame.diagnostics = diagnostic_encoder_.encode(out, decoded.frame_index);
     produced = true;
@@ -213,6 +332,7 @@ bool run_offline(const RecordingReader& reader, Localizer& localizer, firmware::
   EventStream stream;
   if (!stream.open(reader, config, error)) return false;
   decoder.set_epoch_ns(stream.epoch_ns());
+  decoder.provision_trust(stream.trust_list());
   WireEventDecoder wire(decoder, localizer);
   std::vector<WireEvent> events;
   for (int i = 0; i < stream.frame_count(); ++i) {

@@ -14,6 +14,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,8 @@
 #include "firmware/wire/wire_conventions.hpp"
 #include "hal/can_frame.hpp"
 #include "host_sim/recording/recording_reader.hpp"
+#include "host_sim/recording/sim_trust.hpp"
+#include "host_sim/replay/fault_injection.hpp"
 
 namespace v2xloc::sim::replay {
 
@@ -44,11 +47,14 @@ struct EventStreamConfig {
   bool ego_point_times = true;          // send per-point times (deskew)
   std::size_t max_datagram_bytes = protocol::pointcloud_wire::kMaxDatagramBytes;
   int max_frames = -1;                  // < 0: all frames of the recording
+  bool sign_map_shares = true;          // signature datagram before each share (sim test keys)
+  FaultSpec faults{};                   // fault injection (fault_injection.hpp); default none
 };
 
 struct EventStreamStats {
   std::size_t can_frames = 0, map_clouds = 0, ego_scans = 0, datagrams = 0;
   std::uint64_t points_dropped = 0, times_clamped = 0;
+  FaultStats faults{};
 };
 
 class EventStream {
@@ -62,11 +68,17 @@ class EventStream {
   // Appends frame i's events in canonical order. Frames must be requested in order 0, 1, 2, ...
   bool next_frame(int i, std::vector<WireEvent>& out, std::string& error);
   const EventStreamStats& stats() const { return stats_; }
+  // The trust list the firmware is provisioned with: the recording's trust_list.txt, or, for
+  // recordings made before it existed, the same list derived from the map-cloud sensor names.
+  const trust::TrustList& trust_list() const { return trust_list_; }
 
   // Sender id of a map-cloud sensor name ("infra_2" -> 3, "agent_1_lidar" -> 33); false if unknown.
   static bool sender_id_for(const MapCloudInfo& info, std::uint32_t& sender_id);
 
  private:
+  bool map_share(const MapCloudInfo& info, std::uint32_t id, std::uint32_t seq, std::int64_t stamp_ns,
+                 const Eigen::Isometry3d& pose, const cloud_io::PointCloud& cloud, const SimSigner* signer,
+                 WireEvent& ev, std::string& error);
   bool fragment(protocol::CloudMessageType type, std::uint32_t sender_id, std::uint32_t seq,
                 std::int64_t stamp_ns, const Eigen::Isometry3d& pose, const cloud_io::PointCloud& cloud,
                 bool with_times, WireEvent& ev, std::string& error) const;
@@ -84,6 +96,12 @@ class EventStream {
   int next_frame_ = 0;
   std::vector<std::uint32_t> cloud_seq_;  // per sender id
   EventStreamStats stats_{};
+  trust::TrustList trust_list_{};
+  std::vector<SimSigner> signers_;
+  std::shared_ptr<protocol::PointCloudReassembler> own_reassembler_;  // the receiver's view, for the digest
+  FaultInjector faults_{};
+  std::vector<WireEvent> delayed_;        // V2X shares held back by the delay fault
+  bool burst_done_ = false;
 };
 
 // Wire events -> localizer inputs through the firmware's InputDecoder (same decode, same order),
@@ -107,6 +125,7 @@ class WireEventDecoder {
   Localizer& localizer_;
   firmware::PoseFrameEncoder encoder_{};
   firmware::DiagnosticFrameEncoder diagnostic_encoder_{};
+  LocalizerFrameOutput last_output_{};  // held for an ego scan refused for its time stamp
 };
 
 // The offline evaluator's loop: the whole event stream in-process. `decoder` is large (make it

@@ -61,6 +61,10 @@ int main(int argc, char** argv) {
   app.add_option("--frames", options.stream.max_frames, "replay only the first N frames");
   app.add_option("--timeout", options.frame_timeout_s, "seconds to wait for each frame's output");
   app.add_flag("--verbose", options.verbose, "print every exchange");
+  std::string faults_spec;
+  app.add_option("--faults", faults_spec,
+                 "fault injection, comma-separated key=value (e.g. loss=0.3,delay=0.5,rogue-shift=3; keys in "
+                 "host_sim/replay/fault_injection.hpp)");
   const bool connect = [&] {
     try {
       app.parse(own_argc, argv);
@@ -77,6 +81,10 @@ int main(int argc, char** argv) {
       std::exit(app.exit(e) == 0 ? 0 : 2);  // usage errors keep exit code 2
     }
   }();
+  if (std::string ferr; !faults_spec.empty() && !parse_fault_spec(faults_spec, options.stream.faults, ferr)) {
+    std::fprintf(stderr, "v2xloc-replay: --faults: %s\n", ferr.c_str());
+    return 2;
+  }
   if (!connect && options.firmware_path.empty()) options.firmware_path = default_firmware_path();
 
   RecordingReader reader;
@@ -100,6 +108,16 @@ int main(int argc, char** argv) {
               result.wall_seconds > 0 ? result.frames.size() / result.wall_seconds : 0.0, result.can_frames_sent,
               result.datagrams_sent, s.map_clouds, s.ego_scans, (unsigned long long)s.points_dropped,
               (unsigned long long)s.times_clamped);
+  const FaultStats& fs = result.stream_stats.faults;
+  std::printf("v2xloc-replay: faults %s: shares lost %llu, datagrams dropped %llu reordered %llu duplicated %llu, "
+              "shares delayed %llu, GNSS frames dropped %llu, infra shares dropped %llu, corrupt CAN %llu, rogue shares "
+              "%llu, ego time jumps %llu\n",
+              describe(options.stream.faults).c_str(), (unsigned long long)fs.shares_lost,
+              (unsigned long long)fs.datagrams_dropped, (unsigned long long)fs.datagrams_reordered,
+              (unsigned long long)fs.datagrams_duplicated, (unsigned long long)fs.shares_delayed,
+              (unsigned long long)fs.gnss_frames_dropped, (unsigned long long)fs.infra_shares_dropped,
+              (unsigned long long)fs.can_corrupt_sent, (unsigned long long)fs.rogue_shares,
+              (unsigned long long)fs.ego_time_jumps);
   std::printf("v2xloc-replay: heartbeats %zu, pose decode errors %zu, diagnostic decode errors %zu, timeouts %d, "
               "send retries %zu\n",
               result.heartbeats, result.pose_decode_errors, result.diagnostic_decode_errors, result.timeouts,

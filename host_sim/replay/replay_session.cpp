@@ -1,5 +1,7 @@
 #include "host_sim/replay/replay_session.hpp"
 
+#include <fstream>
+
 #include <poll.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -58,7 +60,7 @@ class FirmwareProcess {
   }
 
   // Reads lines until the "ready" line; returns its ports.
-  bool wait_ready(double timeout_s, unsigned& can_port, unsigned& cloud_port, std::string& error) {
+  bool wait_ready(double timeout_s, unsigned& can_port, unsigned& cloud_port, unsigned& ego_port, std::string& error) {
     const auto t0 = Clock::now();
     std::string line;
     while (seconds_since(t0) < timeout_s) {
@@ -75,7 +77,7 @@ class FirmwareProcess {
         line.push_back(c);
         continue;
       }
-      if (std::sscanf(line.c_str(), "v2xloc-firmware: ready can=%u cloud=%u", &can_port, &cloud_port) == 2) {
+      if (std::sscanf(line.c_str(), "v2xloc-firmware: ready can=%u cloud=%u ego=%u", &can_port, &cloud_port, &ego_port) >= 2) {
         reader_ = std::thread([this] { drain(); });
         return true;
       }
@@ -170,8 +172,20 @@ bool replay_recording(const RecordingReader& reader, const ReplayOptions& option
     return false;
   }
 
+  hal::UdpLink ego_link;
+  if (ego_link.open(cloud_options) != hal::Status::kOk) {
+    error = std::string("ego UDP socket: ") + ego_link.last_error();
+    return false;
+  }
   FirmwareProcess process;
-  unsigned fw_can = options.firmware_can_port, fw_cloud = options.firmware_cloud_port;
+  unsigned fw_can = options.firmware_can_port, fw_cloud = options.firmware_cloud_port, fw_ego = options.firmware_ego_port;
+  // The firmware is provisioned with the recording's trust list (older recordings: the derived
+  // one, written next to the temporary files).
+  std::string trust_path = reader.trust_list_path();
+  if (trust_path.empty()) {
+    trust_path = "/tmp/v2xloc-replay-trust-" + std::to_string(getpid()) + ".txt";
+    std::ofstream(trust_path) << trust_list_text(stream.trust_list());
+  }
   if (!options.firmware_path.empty()) {
     char origin[128];
     std::snprintf(origin, sizeof origin, "%.10f,%.10f,%.4f", reader.origin_lat_deg(), reader.origin_lon_deg(),
@@ -179,12 +193,14 @@ bool replay_recording(const RecordingReader& reader, const ReplayOptions& option
     std::vector<std::string> args{"--emulated",
                                   "--can-port", "0",
                                   "--cloud-port", "0",
+                                  "--ego-port", "0",
+                                  "--trust-list", trust_path,
                                   "--can-peer-port", std::to_string(can_link.local_endpoint().port),
                                   "--epoch-ns", std::to_string(stream.epoch_ns()),
                                   "--origin", origin};
     args.insert(args.end(), options.firmware_args.begin(), options.firmware_args.end());
     if (!process.start(options.firmware_path, args, error)) return false;
-    if (!process.wait_ready(options.startup_timeout_s, fw_can, fw_cloud, error)) {
+    if (!process.wait_ready(options.startup_timeout_s, fw_can, fw_cloud, fw_ego, error)) {
       result.firmware_exit_code = process.stop();
       return false;
     }
@@ -195,6 +211,8 @@ bool replay_recording(const RecordingReader& reader, const ReplayOptions& option
   }
   can_link.set_peer(hal::Ipv4Endpoint{host, static_cast<std::uint16_t>(fw_can)});
   cloud_link.set_peer(hal::Ipv4Endpoint{host, static_cast<std::uint16_t>(fw_cloud)});
+  // Ego scans on the firmware's ego endpoint (a firmware without one: the cloud port).
+  ego_link.set_peer(hal::Ipv4Endpoint{host, static_cast<std::uint16_t>(fw_ego != 0 ? fw_ego : fw_cloud)});
   hal::SimClock stamp_clock;  // our receive stamps are irrelevant; only the frames matter
   hal::EmulatedCanBus can(can_link, stamp_clock);
   can.accept_all();
@@ -237,7 +255,8 @@ bool replay_recording(const RecordingReader& reader, const ReplayOptions& option
         if (ev.kind == WireEvent::Kind::kEgoScan) ok = send_time(ev.time_ns);
         for (const auto& d : ev.datagrams) {
           if (!ok) break;
-          ok = send_with_retry([&] { return cloud_link.send(d); }, result.send_retries);
+          hal::UdpLink& link = ev.kind == WireEvent::Kind::kEgoScan ? ego_link : cloud_link;
+          ok = send_with_retry([&] { return link.send(d); }, result.send_retries);
           ++result.datagrams_sent;
         }
       }

@@ -26,6 +26,7 @@ struct ReplayOptions {
   std::string host = "127.0.0.1";      // connect mode: the firmware's address and ports
   std::uint16_t firmware_can_port = 0;
   std::uint16_t firmware_cloud_port = 0;
+  std::uint16_t firmware_ego_port = 0;     // connect mode: 0 = ego scans to the cloud port
   std::uint16_t local_can_port = 0;    // our CAN-over-UDP port (0 = ephemeral; connect mode: the
                                        // firmware's --can-peer-port)
   double frame_timeout_s = 60.0;       // per frame, waiting for the pose and diagnostic frames

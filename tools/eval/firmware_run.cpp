@@ -166,6 +166,7 @@ bool run_firmware(const sim::RecordingReader& reader, const FirmwareRunOptions& 
   replay.firmware_path = options.firmware_path;
   replay.frame_timeout_s = options.frame_timeout_s;
   replay.stream.max_frames = options.max_frames;
+  replay.stream.faults = options.faults;
   const int total = options.max_frames < 0 ? reader.frame_count() : std::min(options.max_frames, reader.frame_count());
   if (!options.quiet) {
     replay.on_frame = [&](const sim::replay::ReplayedFrame& f) {
@@ -194,6 +195,29 @@ bool run_firmware(const sim::RecordingReader& reader, const FirmwareRunOptions& 
                  "decode errors %zu, firmware exit %d\n",
                  result.frames.size(), result.wall_seconds, result.can_frames_sent, result.datagrams_sent,
                  result.heartbeats, stats.can_decode_errors, result.firmware_exit_code);
+  }
+  if (options.faults.any() || !options.quiet) {
+    // The firmware's own account of what it refused (trust, channel, time, CAN) and the injector's.
+    const sim::replay::FaultStats& f = result.stream_stats.faults;
+    std::fprintf(stderr, "  faults %s: shares lost %llu, datagrams dropped %llu reordered %llu duplicated %llu, delayed %llu,"
+                 " GNSS frames dropped %llu, infra shares dropped %llu, corrupt CAN %llu, rogue shares %llu, ego time jumps %llu\n",
+                 sim::replay::describe(options.faults).c_str(), (unsigned long long)f.shares_lost,
+                 (unsigned long long)f.datagrams_dropped, (unsigned long long)f.datagrams_reordered,
+                 (unsigned long long)f.datagrams_duplicated, (unsigned long long)f.shares_delayed,
+                 (unsigned long long)f.gnss_frames_dropped, (unsigned long long)f.infra_shares_dropped,
+                 (unsigned long long)f.can_corrupt_sent, (unsigned long long)f.rogue_shares,
+                 (unsigned long long)f.ego_time_jumps);
+    std::size_t pos = 0;
+    while (pos < result.firmware_output.size()) {
+      const std::size_t end = result.firmware_output.find('\n', pos);
+      const std::string line = result.firmware_output.substr(pos, end == std::string::npos ? std::string::npos : end - pos);
+      if (line.find("trust shares") != std::string::npos || line.find("decoded vehicle") != std::string::npos ||
+          line.find("map fusion") != std::string::npos || line.find("reassembly") != std::string::npos) {
+        std::fprintf(stderr, "  %s\n", line.c_str());
+      }
+      if (end == std::string::npos) break;
+      pos = end + 1;
+    }
   }
   return true;
 }

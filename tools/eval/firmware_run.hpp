@@ -27,6 +27,7 @@ struct FirmwareRunOptions {
   Eigen::Vector3d gnss_antenna_in_body{0.0, 0.0, 1.75};   // as RunOptions
   double frame_timeout_s = 120.0;                         // per frame (lockstep)
   bool quiet = false;
+  sim::replay::FaultSpec faults{};                        // --faults SPEC (fault_injection.hpp)
 };
 
 // Replays `reader` through the firmware and fills one record per frame. RunStats: seconds = wall

@@ -29,7 +29,7 @@ int usage() {
                "                   [--timing] (host ms per period and stage: table and JSON \"timing\")\n"
                "                   [--callgrind-dumps] (under callgrind: a stats dump per stage of each period;\n"
                "                   tools/timing/frame_instructions.py)\n"
-               "                   [--firmware PATH_TO_v2xloc-firmware]  (replay through the firmware over\n"
+               "                   [--firmware PATH_TO_v2xloc-firmware [--faults SPEC]]  (replay through the firmware over\n"
                "                   emulated CAN/UDP instead of the in-process localizer; localizer options\n"
                "                   other than --frames do not apply)\n");
   return 2;
@@ -106,6 +106,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> dirs;
   bool json = false;
   std::string plots_dir, estimates_dir, trace_dir;
+  v2xloc::sim::replay::FaultSpec faults;  // --faults SPEC (with --firmware)
   std::string firmware_path;  // --firmware: table from the firmware's CAN output (tools/eval/firmware_run.hpp)
   v2xloc::eval::RunOptions options;
   for (int i = 1; i < argc; ++i) {
@@ -122,6 +123,13 @@ int main(int argc, char** argv) {
     else if (a == "--estimates") estimates_dir = next("--estimates");
     else if (a == "--trace") trace_dir = next("--trace");
     else if (a == "--firmware") firmware_path = next("--firmware");
+    else if (a == "--faults") {
+      std::string ferr;
+      if (!v2xloc::sim::replay::parse_fault_spec(next("--faults"), faults, ferr)) {
+        std::fprintf(stderr, "v2xloc-eval: --faults: %s\n", ferr.c_str());
+        return 2;
+      }
+    }
     else if (a == "--frames") options.max_frames = std::atoi(next("--frames"));
     else if (a == "--quiet") options.quiet = true;
     else if (a == "--timing") options.timing = true;
@@ -165,6 +173,7 @@ int main(int argc, char** argv) {
       v2xloc::eval::FirmwareRunOptions fw;
       fw.firmware_path = firmware_path;
       fw.max_frames = options.max_frames;
+      fw.faults = faults;
       fw.gnss_antenna_in_body = options.gnss_antenna_in_body;
       fw.quiet = options.quiet;
       ran = v2xloc::eval::run_firmware(reader, fw, records, row.stats, error);

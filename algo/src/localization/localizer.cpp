@@ -85,7 +85,7 @@ void Localizer::on_vehicle(const VehicleInput& in) {
   have_vehicle_ = true;
   if (!params_.use_vehicle_signals || !ekf_.initialized()) return;
   ekf_.on_vehicle_signals(in.t, in.wheel_speed, in.yaw_rate);
-  ekf_all_.on_vehicle_signals(in.t, in.wheel_speed, in.yaw_rate);
+  if (params_.shadow_ungated_filter) ekf_all_.on_vehicle_signals(in.t, in.wheel_speed, in.yaw_rate);
 }
 
 void Localizer::on_gnss(const GnssInput& in) {
@@ -114,7 +114,7 @@ void Localizer::on_gnss(const GnssInput& in) {
   }
   if (!params_.use_gnss || !ekf_.initialized()) return;
   ekf_.on_gnss(in.t, enu, in.h_acc, in.v_acc);
-  ekf_all_.on_gnss(in.t, enu, in.h_acc, in.v_acc);
+  if (params_.shadow_ungated_filter) ekf_all_.on_gnss(in.t, enu, in.h_acc, in.v_acc);
 }
 
 void Localizer::update_gnss_heading(const GnssInput& in) {
@@ -159,7 +159,7 @@ const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
     push_track_sample();
     if (ekf_.initialized()) {
       ekf_.predict_to(in.t);
-      ekf_all_.predict_to(in.t);
+      if (params_.shadow_ungated_filter) ekf_all_.predict_to(in.t);
     }
     probe_(LocalizerStage::kMapRefresh);
     refresh_map(in.t);
@@ -242,7 +242,7 @@ void Localizer::run_odometry(const EgoScanInput& in) {
   const std::span<const Vec3f> scan(scan_deskewed_, scan_deskewed_count_);
   // Prediction from the vehicle signals over the actual frame gap (a dropped scan doubles it).
   Mat4d predicted = Mat4d::Identity();
-  const bool predict = have_vehicle_delta_ && have_frame_ && in.t - last_frame_t_ < 1.0;
+  const bool predict = have_vehicle_delta_ && have_frame_ && in.t - last_frame_t_ < params_.odometry_prediction_max_gap;
   if (predict) {
     const double dt = in.t - last_frame_t_;
     Vec6d xi = Vec6d::Zero();
@@ -264,7 +264,7 @@ void Localizer::run_odometry(const EgoScanInput& in) {
   const Mat4d body_delta = in.body_T_lidar * r.delta * lidar_T_body;
   const double dt = in.t - last_frame_t_;
   ekf_.on_odometry(in.t, dt, body_delta);
-  ekf_all_.on_odometry(in.t, dt, body_delta);
+  if (params_.shadow_ungated_filter) ekf_all_.on_odometry(in.t, dt, body_delta);
 }
 
 // Rebuilds the registration target (merged points, k-d tree, normals) when the map changed,
@@ -308,7 +308,7 @@ bool Localizer::map_build_step(double t) {
       map_active_ = 1 - map_active_;
       map_revision_ = map_build_revision_;
       map_phase_ = MapBuildPhase::kIdle;
-      map_ready_ = next.points.size() >= 100;
+      map_ready_ = next.points.size() >= params_.map_min_points;
       ++counters_.map_rebuilds;
       return false;
     }
@@ -452,7 +452,7 @@ bool Localizer::global_search(double t, RegistrationResult& result) {
     RegisterCloudsParams gp = params_.global;
     gp.ransac.prior.center = Vec3d(last_gnss_enu_.x(), last_gnss_enu_.y(), searched.ground_z);
     gp.ransac.prior.max_horizontal = region;
-    gp.ransac.prior.max_vertical = 3.0;
+    gp.ransac.prior.max_vertical = params_.global_max_vertical;
     const RegisterCloudsResult coarse = register_clouds(scan_down_.span(), map_crop_.span(), gp,
                                                         Mat4d::Identity(), global_workspace_);
     if (coarse.registration.ok()) {
@@ -585,7 +585,7 @@ void Localizer::register_stereo(double t) {
   RegistrationCovarianceParams cp = params_.registration_covariance;
   cp.scale *= params_.stereo_covariance_scale;
   const Eigen::Matrix<double, 4, 4> cov = registration_covariance(r.information, sigma, r.transform, cp);
-  ekf_all_.on_registration(t, r.transform, cov);
+  if (params_.shadow_ungated_filter) ekf_all_.on_registration(t, r.transform, cov);
   if (ekf_.on_registration(t, r.transform, cov) == EkfFuseStatus::kFused) {
     output_.stereo_fused = true;
     ++counters_.stereo_fused;
@@ -642,7 +642,7 @@ void Localizer::restart_filter(Ekf& ekf, double t, const Mat4d& pose) {
   s.speed = last_speed_;
   s.yaw_rate = last_yaw_rate_;
   EkfCovariance P = EkfCovariance::Zero();
-  const double sigmas[kEkfStateSize] = {0.1, 0.1, 0.1, 0.01, 0.5, 0.05, 0.005, 0.02};
+  const double* sigmas = params_.restart_sigmas;
   for (int i = 0; i < kEkfStateSize; ++i) P(i, i) = sigmas[i] * sigmas[i];
   ekf.initialize(t, s, P);
   ekf.predict_to(t);
@@ -650,7 +650,7 @@ void Localizer::restart_filter(Ekf& ekf, double t, const Mat4d& pose) {
 
 void Localizer::initialize_filters(double t, const Mat4d& pose) {
   restart_filter(ekf_, t, pose);
-  restart_filter(ekf_all_, t, pose);
+  if (params_.shadow_ungated_filter) restart_filter(ekf_all_, t, pose);
   failed_frames_ = 0;
 }
 
@@ -668,7 +668,7 @@ void Localizer::fuse_gated(double t, const RegistrationResult& result, bool atte
     reg.covariance = registration_covariance(result.information, result.inlier_rmse, result.transform,
                                              params_.registration_covariance);
     bool fused_all = false;
-    fuse_registration(ekf_all_, reg, t, fused_all);
+    if (params_.shadow_ungated_filter) fuse_registration(ekf_all_, reg, t, fused_all);
   }
   const GateSample sample{result.fitness, result.inlier_rmse, reg.ok};
   bool fused = false;
@@ -768,7 +768,7 @@ void Localizer::fill_output(double t) {
     return;
   }
   output_.fused_pose = ekf_.state().pose();
-  output_.fused_pose_ungated = ekf_all_.state().pose();
+  output_.fused_pose_ungated = params_.shadow_ungated_filter ? ekf_all_.state().pose() : output_.fused_pose;
   const EkfCovariance& P = ekf_.covariance();
   output_.sigma_x = std::sqrt(P(ekf_index::kPosX, ekf_index::kPosX));
   output_.sigma_y = std::sqrt(P(ekf_index::kPosY, ekf_index::kPosY));

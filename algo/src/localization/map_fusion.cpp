@@ -86,14 +86,16 @@ void MapFusion::new_cell_generation() {
   }
 }
 
-double MapFusion::consistency(std::size_t slot, std::uint32_t& overlap_points) {
+double MapFusion::consistency(std::size_t slot, std::uint32_t& overlap_points, double& best_probe) {
   overlap_points = 0;
+  best_probe = 0.0;
   new_cell_generation();
   // Fine cells of size inlier_distance / 2: a candidate with another source's point in its 27
   // neighbour cells has one within ~0.87 * inlier_distance * ... (<= 1.5 cells per axis).
+  // The reference is the surveyed infrastructure only: agents never vouch for each other.
   const double fine = 0.5 * params_.inlier_distance;
   for (std::size_t i = 0; i < num_points_; ++i) {
-    if (point_source_[i] == slot) continue;
+    if (point_source_[i] == slot || !sources_[point_source_[i]].trusted) continue;
     std::int32_t key[3];
     if (cell_key(points_[i], fine, 0, key)) mark(key);
     if (cell_key(points_[i], params_.overlap_cell, 1, key)) mark(key);
@@ -104,7 +106,27 @@ double MapFusion::consistency(std::size_t slot, std::uint32_t& overlap_points) {
     ++overlap_points;
     if (occupied_around(p, fine, 0)) ++inliers;
   }
-  return overlap_points > 0 ? static_cast<double>(inliers) / overlap_points : 1.0;
+  if (overlap_points == 0) return 1.0;
+  // Shift probes over an even subsample of the overlap points (the same points for every probe).
+  const float d = static_cast<float>(params_.probe_step);
+  const Vec3f probes[] = {{d, 0, 0},  {-d, 0, 0}, {0, d, 0},      {0, -d, 0},      {d, d, 0},  {d, -d, 0},
+                          {-d, d, 0}, {-d, -d, 0}, {2 * d, 0, 0}, {-2 * d, 0, 0}, {0, 2 * d, 0}, {0, -2 * d, 0}};
+  const std::uint32_t stride =
+      params_.max_probe_points > 0 ? (overlap_points + params_.max_probe_points - 1) / params_.max_probe_points : 1;
+  for (const Vec3f& o : probes) {
+    std::uint32_t seen = 0, counted = 0, hits = 0;
+    for (const Vec3f& p : candidate_) {
+      if (!occupied_around(p, params_.overlap_cell, 1)) continue;
+      if (seen++ % stride != 0) continue;
+      ++counted;
+      if (occupied_around(p + o, fine, 0)) ++hits;
+    }
+    if (counted > 0) {
+      const double f = static_cast<double>(hits) / counted;
+      if (f > best_probe) best_probe = f;
+    }
+  }
+  return static_cast<double>(inliers) / overlap_points;
 }
 
 std::uint32_t MapFusion::drop_covered_by_trusted(std::size_t slot) {
@@ -146,16 +168,21 @@ MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
   }
   bool displace = false;
   if (!known) {
+    // Per-role cap: at the cap, a new source may only displace the oldest source of its own role.
+    std::uint32_t same_role = 0;
+    for (const MapSourceInfo& s : sources_) same_role += (s.active && s.trusted == trusted) ? 1u : 0u;
+    const bool at_cap = same_role >= (trusted ? params_.max_trusted_sources : params_.max_agent_sources);
     std::size_t oldest = config::kMaxMapSources;
-    for (std::size_t s = 0; s < config::kMaxMapSources && slot == config::kMaxMapSources; ++s) {
+    for (std::size_t s = 0; s < config::kMaxMapSources && slot == config::kMaxMapSources && !at_cap; ++s) {
       if (!sources_[s].active) slot = s;
     }
     if (slot == config::kMaxMapSources) {
       for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
+        if (!sources_[s].active || sources_[s].trusted != trusted) continue;
         if (oldest == config::kMaxMapSources || sources_[s].timestamp < sources_[oldest].timestamp)
           oldest = s;
       }
-      if (sources_[oldest].timestamp < timestamp) {
+      if (oldest < config::kMaxMapSources && sources_[oldest].timestamp < timestamp) {
         slot = oldest;
         displace = true;
       }
@@ -184,16 +211,28 @@ MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
   r.capacity_dropped += ds.output_overflow + ds.hash_overflow + ds.range_overflow;
   counters_.non_finite_dropped += r.non_finite_dropped;
 
-  if (params_.check_consistency && !trusted && !candidate_.empty()) {
-    r.consistency_fitness = consistency(known ? slot : config::kMaxMapSources, r.overlap_points);
-    if (r.overlap_points >= params_.min_overlap_points &&
-        r.consistency_fitness < params_.min_fitness) {
-      r.status = MapInsertStatus::kRejectedInconsistent;
-      ++counters_.rejected_inconsistent;
-      r.consistency_fitness = r.consistency_fitness;
+  if (params_.check_consistency && !candidate_.empty()) {
+    // Agents against the infrastructure: low fitness, or a better fit shifted, is a wrong pose;
+    // too little overlap to tell is held back (an agent whose cloud cannot be checked adds
+    // nothing the map can trust). Infrastructure units against each other where they overlap:
+    // their absolute fitness is low even for exact poses (different faces of the buildings), so
+    // only the shift test applies, and without overlap a surveyed unit is accepted.
+    r.consistency_fitness =
+        consistency(known ? slot : config::kMaxMapSources, r.overlap_points, r.best_probe_fitness);
+    const bool checkable = r.overlap_points >= params_.min_overlap_points;
+    const double margin = trusted ? params_.infra_probe_margin : params_.probe_margin;
+    const bool shifted = checkable && r.best_probe_fitness > r.consistency_fitness + margin;
+    if (!trusted && !checkable) {
+      r.status = MapInsertStatus::kHeldBack;
+      ++counters_.held_back;
       return r;
     }
-    if (r.overlap_points < params_.min_overlap_points) r.consistency_fitness = 1.0;
+    if (shifted || (!trusted && r.consistency_fitness < params_.min_fitness)) {
+      r.status = MapInsertStatus::kRejectedInconsistent;
+      ++counters_.rejected_inconsistent;
+      return r;
+    }
+    if (!checkable) r.consistency_fitness = 1.0;
   }
 
   if (!trusted && params_.agent_fill_cell > 0.0) {

@@ -165,9 +165,8 @@ PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& 
     if (seen++ % stride == 0 && n < want) score_pts[n++] = p;
   }
 
-  // Not around the fix's altitude: a canyon fix can be 50 m off vertically (measured: Sim 2's
-  // first fix), which put every hypothesis far above the road.
-  road_height_near(map.points, center, params.radius + 10.0, out.ground_z);
+  // Not around the fix's altitude: a canyon fix can be far off vertically (TUNING.md).
+  road_height_near(map.points, center, params.radius + params.ground_margin, out.ground_z);
   Candidate top[kPoseSearchRefine];
   const double d2max = params.score_distance * params.score_distance;
   // A hit needs the nearest map point within score_distance: a bounded search answers exactly

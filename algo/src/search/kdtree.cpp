@@ -177,6 +177,93 @@ struct BuildTask {
   std::uint32_t depth;
 };
 
+// Build step 1: the finite points' indices in input order; drops counted in `result`.
+template <class P>
+std::size_t index_finite_points(std::span<const P> points, std::span<std::uint32_t> index_storage,
+                                KdBuildResult& result) {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!is_finite_point(points[i])) {
+      ++result.non_finite_dropped;
+      continue;
+    }
+    if (n == index_storage.size()) {
+      ++result.capacity_dropped;
+      continue;
+    }
+    index_storage[n++] = static_cast<std::uint32_t>(i);
+  }
+  return n;
+}
+
+// Build step 2: the split axis of a node, the largest extent of its points (largest variance in
+// high dimension); `extent` is the largest extent (0: all points identical).
+template <class P>
+int choose_split_axis(std::span<const P> points, const std::uint32_t* idx, const BuildTask& t,
+                      float& extent) {
+  constexpr int kDim = P::RowsAtCompileTime;
+  const std::uint32_t count = t.end - t.begin;
+  float lo[kDim];
+  float hi[kDim];
+  for (int d = 0; d < kDim; ++d) lo[d] = hi[d] = points[idx[t.begin]][d];
+  for (std::uint32_t s = t.begin + 1; s < t.end; ++s) {
+    const float* p = points[idx[s]].data();
+    for (int d = 0; d < kDim; ++d) {
+      lo[d] = std::min(lo[d], p[d]);
+      hi[d] = std::max(hi[d], p[d]);
+    }
+  }
+  int axis = 0;
+  extent = hi[0] - lo[0];
+  for (int d = 1; d < kDim; ++d) {
+    if (hi[d] - lo[d] > extent) {
+      extent = hi[d] - lo[d];
+      axis = d;
+    }
+  }
+  if constexpr (kDim > 8) {
+    // High dimension: split on the largest variance instead (extents are set by a few
+    // outliers; FPFH spreads over many bins). Serial double sums: deterministic.
+    double sum[kDim] = {};
+    double sum2[kDim] = {};
+    for (std::uint32_t s = t.begin; s < t.end; ++s) {
+      const float* p = points[idx[s]].data();
+      for (int d = 0; d < kDim; ++d) {
+        sum[d] += p[d];
+        sum2[d] += static_cast<double>(p[d]) * p[d];
+      }
+    }
+    double best = -1.0;
+    for (int d = 0; d < kDim; ++d) {
+      const double var = sum2[d] - sum[d] * sum[d] / static_cast<double>(count);
+      if (var > best && hi[d] > lo[d]) {
+        best = var;
+        axis = d;
+      }
+    }
+  }
+  return axis;
+}
+
+// Build step 3: the median along the axis at `mid` (ties by index: deterministic), smaller
+// coordinates before it. Returns the left child's largest coordinate along the axis (equal
+// values may sit on both sides of the median).
+template <class P>
+float partition_at_median(std::span<const P> points, std::uint32_t* idx, const BuildTask& t,
+                          std::uint32_t mid, int axis) {
+  std::nth_element(idx + t.begin, idx + mid, idx + t.end,
+                   [&points, axis](std::uint32_t a, std::uint32_t b) {
+                     const float va = points[a][axis];
+                     const float vb = points[b][axis];
+                     return va < vb || (va == vb && a < b);
+                   });
+  float left_max = points[idx[t.begin]][axis];
+  for (std::uint32_t s = t.begin + 1; s < mid; ++s) {
+    left_max = std::max(left_max, points[idx[s]][axis]);
+  }
+  return left_max;
+}
+
 }  // namespace
 
 template <class P>
@@ -192,19 +279,7 @@ KdBuildResult KdTree<P>::build(std::span<const P> points, std::span<std::uint32_
   max_node_visits_ = params.max_node_visits;
   const std::size_t leaf_size = params.leaf_size > 0 ? params.leaf_size : 1;
 
-  // Index the finite points in input order.
-  std::size_t n = 0;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (!is_finite_point(points[i])) {
-      ++result.non_finite_dropped;
-      continue;
-    }
-    if (n == index_storage.size()) {
-      ++result.capacity_dropped;
-      continue;
-    }
-    index_storage[n++] = static_cast<std::uint32_t>(i);
-  }
+  const std::size_t n = index_finite_points(points, index_storage, result);
   result.points_indexed = static_cast<std::uint32_t>(n);
   if (n == 0) {
     result.status = KdBuildStatus::kEmpty;
@@ -231,57 +306,16 @@ KdBuildResult KdTree<P>::build(std::span<const P> points, std::span<std::uint32_
       node = {0.0f, 0.0f, t.begin, t.end, KdNode::kLeaf};
       continue;
     }
-    // Split axis: largest extent of the node's points.
-    float lo[kDim];
-    float hi[kDim];
-    for (int d = 0; d < kDim; ++d) lo[d] = hi[d] = points[idx[t.begin]][d];
-    for (std::uint32_t s = t.begin + 1; s < t.end; ++s) {
-      const float* p = points[idx[s]].data();
-      for (int d = 0; d < kDim; ++d) {
-        lo[d] = std::min(lo[d], p[d]);
-        hi[d] = std::max(hi[d], p[d]);
-      }
-    }
-    int axis = 0;
-    float extent = hi[0] - lo[0];
-    for (int d = 1; d < kDim; ++d) {
-      if (hi[d] - lo[d] > extent) {
-        extent = hi[d] - lo[d];
-        axis = d;
-      }
-    }
-    if constexpr (kDim > 8) {
-      // High dimension: split on the largest variance instead (extents are set by a few
-      // outliers; FPFH spreads over many bins). Serial double sums: deterministic.
-      double sum[kDim] = {};
-      double sum2[kDim] = {};
-      for (std::uint32_t s = t.begin; s < t.end; ++s) {
-        const float* p = points[idx[s]].data();
-        for (int d = 0; d < kDim; ++d) {
-          sum[d] += p[d];
-          sum2[d] += static_cast<double>(p[d]) * p[d];
-        }
-      }
-      double best = -1.0;
-      for (int d = 0; d < kDim; ++d) {
-        const double var = sum2[d] - sum[d] * sum[d] / static_cast<double>(count);
-        if (var > best && hi[d] > lo[d]) {
-          best = var;
-          axis = d;
-        }
-      }
-    }
+    float extent = 0.0f;
+    const int axis = choose_split_axis(points, idx, t, extent);
     if (extent <= 0.0f) {  // all points identical: nothing to split
       node = {0.0f, 0.0f, t.begin, t.end, KdNode::kLeaf};
       continue;
     }
     const std::uint32_t mid = t.begin + count / 2;
-    std::nth_element(idx + t.begin, idx + mid, idx + t.end,
-                     [&points, axis](std::uint32_t a, std::uint32_t b) {
-                       const float va = points[a][axis];
-                       const float vb = points[b][axis];
-                       return va < vb || (va == vb && a < b);
-                     });
+    // Children's extents along the axis: right starts at the selected element, left ends at
+    // the largest coordinate below it.
+    const float left_max = partition_at_median(points, idx, t, mid, axis);
     if (used + 2 > node_storage.size()) {
       result.status = KdBuildStatus::kNodeStorageTooSmall;
       result.nodes = static_cast<std::uint32_t>(used);
@@ -290,12 +324,6 @@ KdBuildResult KdTree<P>::build(std::span<const P> points, std::span<std::uint32_
     const auto left = static_cast<std::uint32_t>(used);
     const auto right = static_cast<std::uint32_t>(used + 1);
     used += 2;
-    // Children's extents along the axis: right starts at the selected element, left ends at
-    // the largest coordinate below it (equal values may sit on both sides).
-    float left_max = points[idx[t.begin]][axis];
-    for (std::uint32_t s = t.begin + 1; s < mid; ++s) {
-      left_max = std::max(left_max, points[idx[s]][axis]);
-    }
     node = {left_max, points[idx[mid]][axis], left, right, static_cast<std::uint32_t>(axis)};
     stack[top++] = {right, mid, t.end, t.depth + 1};
     stack[top++] = {left, t.begin, mid, t.depth + 1};

@@ -12,6 +12,7 @@
 #include "firmware/app/firmware_app.hpp"
 #include "firmware/app/selected_localizer.hpp"
 #include "firmware/wire/wire_conventions.hpp"
+#include "share_signing.hpp"
 #include "hal/emulated/emulated_can_bus.hpp"
 #include "hal/linux/udp_link.hpp"
 
@@ -91,7 +92,17 @@ TEST(FirmwareAppLoop, NoHeapAllocationAfterStartUpAndOnePosePerFrame) {
   protocol::VehicleMotion vm;
   vm.wheel_speed_mps = 5.0;
   vm.speed_valid = vm.yaw_rate_valid = true;
-  const hal::CanFrame vehicle = protocol::pack(vm);
+  std::vector<hal::CanFrame> vehicle;
+  for (int i = 0; i < kFrames; ++i) {
+    vm.counter = static_cast<std::uint8_t>(i % protocol::kCounterModulo);
+    vehicle.push_back(protocol::pack(vm));
+  }
+  // The share is signed by a provisioned infrastructure unit: verification (SHA-256 over the
+  // cloud, ECDSA P-256) runs inside poll_once(), so the zero-allocation check covers it.
+  trust::TrustList list;
+  test::add_signer(list, kInfraSenderBase, trust::SignerRole::kInfrastructure);
+  g_decoder.provision_trust(list);
+  const std::vector<std::uint8_t> signature = test::sign_share(map, kInfraSenderBase, static_cast<std::uint64_t>(kEpoch));
 
   std::uint64_t allocations = 0;
   auto poll_until = [&](std::uint64_t frames) {
@@ -103,17 +114,19 @@ TEST(FirmwareAppLoop, NoHeapAllocationAfterStartUpAndOnePosePerFrame) {
     allocations = alloc_counter::allocations();
   };
 
+  ASSERT_EQ(tx_cloud.send(signature), hal::Status::kOk);
   for (const auto& d : map) ASSERT_EQ(tx_cloud.send(d), hal::Status::kOk);
   for (int i = 0; i < kFrames; ++i) {
     const std::int64_t t_ns = i * 100'000'000LL;
     ASSERT_EQ(tx_bus.send(make_sim_time_frame(t_ns + 1)), hal::Status::kOk);
-    ASSERT_EQ(tx_bus.send(vehicle), hal::Status::kOk);
+    ASSERT_EQ(tx_bus.send(vehicle[static_cast<std::size_t>(i)]), hal::Status::kOk);
     for (const auto& d : scans[static_cast<std::size_t>(i)]) ASSERT_EQ(tx_cloud.send(d), hal::Status::kOk);
     poll_until(static_cast<std::uint64_t>(i + 1));
     ASSERT_EQ(app.counters().frames_published, static_cast<std::uint64_t>(i + 1));
   }
   EXPECT_EQ(allocations, 0u) << alloc_counter::bytes() << " bytes allocated inside poll_once()";
   EXPECT_EQ(app.decoder().counters().map_clouds, 1u);
+  EXPECT_EQ(app.decoder().verifier().counters().accepted, 1u);
   EXPECT_EQ(app.decoder().counters().ego_scans, static_cast<std::uint64_t>(kFrames));
   EXPECT_EQ(app.decoder().counters().vehicle_inputs, static_cast<std::uint64_t>(kFrames));
   EXPECT_GE(fw_sim_bus.time_frames(), static_cast<std::uint64_t>(kFrames));

@@ -8,6 +8,7 @@
 #include "firmware/wire/input_decoder.hpp"
 #include "firmware/wire/wire_conventions.hpp"
 #include "decoded_log.hpp"
+#include "share_signing.hpp"
 
 namespace v2xloc::firmware {
 namespace {
@@ -75,9 +76,18 @@ TEST(InputDecoder, VehicleFrameDecodesWithTimeAndBadFramesAreCounted) {
   EXPECT_EQ(dec->counters().vehicle_inputs, 1u);
 
   m.speed_valid = false;
+  m.counter = 1;  // the sender's rolling counter advances (a repeat would be dropped)
   EXPECT_EQ(decoded.can(*dec, protocol::pack(m), kEpoch), CanInputKind::kInvalid);
   EXPECT_EQ(dec->counters().vehicle_invalid, 1u);
   EXPECT_EQ(decoded.vehicle.size(), 1u);
+}
+
+// Each transmission advances the message's rolling counter, as a sender does (repeats are dropped).
+template <typename M>
+M next_counter(M& m) {
+  const M sent = m;
+  m.counter = static_cast<std::uint8_t>((m.counter + 1) % protocol::kCounterModulo);
+  return sent;
 }
 
 TEST(InputDecoder, GnssFixIsAssembledFromPositionStatusAndTime) {
@@ -100,7 +110,7 @@ TEST(InputDecoder, GnssFixIsAssembledFromPositionStatusAndTime) {
   EXPECT_EQ(dec->counters().gnss_incomplete, 1u);
 
   EXPECT_EQ(decoded.can(*dec, protocol::pack(pos), kEpoch + 200'000'000), CanInputKind::kGnssPart);
-  EXPECT_EQ(decoded.can(*dec, protocol::pack(st), kEpoch + 200'000'000), CanInputKind::kGnssPart);
+  EXPECT_EQ(decoded.can(*dec, protocol::pack(next_counter(st)), kEpoch + 200'000'000), CanInputKind::kGnssPart);
   EXPECT_EQ(decoded.can(*dec, protocol::pack(td), kEpoch + 200'000'000), CanInputKind::kGnssFix);
   ASSERT_EQ(decoded.gnss.size(), 1u);
   const GnssInput& g = decoded.gnss[0];
@@ -116,7 +126,7 @@ TEST(InputDecoder, GnssFixIsAssembledFromPositionStatusAndTime) {
 
   // No position frame (receiver without a fix): forwarded as invalid.
   st.fix_type = protocol::GnssFixType::kNoFix;
-  decoded.can(*dec, protocol::pack(st), kEpoch + 400'000'000);
+  decoded.can(*dec, protocol::pack(next_counter(st)), kEpoch + 400'000'000);
   EXPECT_EQ(decoded.can(*dec, protocol::pack(td), kEpoch + 400'000'000), CanInputKind::kGnssFix);
   ASSERT_EQ(decoded.gnss.size(), 2u);
   EXPECT_FALSE(decoded.gnss[1].valid);
@@ -129,8 +139,8 @@ TEST(InputDecoder, GnssFixIsAssembledFromPositionStatusAndTime) {
   vel.speed_acc_mps = 0.14;
   vel.valid = true;
   decoded.can(*dec, protocol::pack(pos), kEpoch + 600'000'000);
-  decoded.can(*dec, protocol::pack(st), kEpoch + 600'000'000);
-  EXPECT_EQ(decoded.can(*dec, protocol::pack(vel), kEpoch + 600'000'000), CanInputKind::kGnssPart);
+  decoded.can(*dec, protocol::pack(next_counter(st)), kEpoch + 600'000'000);
+  EXPECT_EQ(decoded.can(*dec, protocol::pack(next_counter(vel)), kEpoch + 600'000'000), CanInputKind::kGnssPart);
   EXPECT_EQ(decoded.can(*dec, protocol::pack(td), kEpoch + 600'000'000), CanInputKind::kGnssFix);
   ASSERT_EQ(decoded.gnss.size(), 3u);
   EXPECT_TRUE(decoded.gnss[2].velocity_valid);
@@ -139,16 +149,16 @@ TEST(InputDecoder, GnssFixIsAssembledFromPositionStatusAndTime) {
   EXPECT_NEAR(decoded.gnss[2].speed_acc, 0.14, 0.01);
   // The velocity belongs to that fix only: the next fix without 0x133 has none.
   decoded.can(*dec, protocol::pack(pos), kEpoch + 800'000'000);
-  decoded.can(*dec, protocol::pack(st), kEpoch + 800'000'000);
+  decoded.can(*dec, protocol::pack(next_counter(st)), kEpoch + 800'000'000);
   decoded.can(*dec, protocol::pack(td), kEpoch + 800'000'000);
   ASSERT_EQ(decoded.gnss.size(), 4u);
   EXPECT_FALSE(decoded.gnss[3].velocity_valid);
   // A corrupted velocity frame is rejected and counted; the fix still arrives without it.
-  hal::CanFrame bad = protocol::pack(vel);
+  hal::CanFrame bad = protocol::pack(next_counter(vel));
   bad.data[0] ^= 0x01;
   const auto rejected_before = dec->counters().can_rejected;
   decoded.can(*dec, protocol::pack(pos), kEpoch + 1'000'000'000);
-  decoded.can(*dec, protocol::pack(st), kEpoch + 1'000'000'000);
+  decoded.can(*dec, protocol::pack(next_counter(st)), kEpoch + 1'000'000'000);
   EXPECT_EQ(decoded.can(*dec, bad, kEpoch + 1'000'000'000), CanInputKind::kRejected);
   decoded.can(*dec, protocol::pack(td), kEpoch + 1'000'000'000);
   EXPECT_EQ(dec->counters().can_rejected, rejected_before + 1);
@@ -206,10 +216,16 @@ TEST(InputDecoder, MapSharesCarrySourceIdAgentFlagAndPose) {
   auto dec = std::make_unique<InputDecoder>(kEpoch);
   test::DecodedLog decoded;
   const std::vector<float> xyz = ramp_points(300);
+  // Source id and role come from the provisioned trust list (the header's id must match it).
+  trust::TrustList list;
+  test::add_signer(list, kInfraSenderBase + 2, trust::SignerRole::kInfrastructure);
+  test::add_signer(list, kAgentSenderBase + 1, trust::SignerRole::kAgent);
+  dec->provision_trust(list);
   for (std::uint32_t sender : {kInfraSenderBase + 2, kAgentSenderBase + 1}) {
     const auto frags = fragment_cloud(protocol::CloudMessageType::kMapShare, sender, 0, 500'000'000, xyz, {});
+    EXPECT_FALSE(dec->on_datagram(test::sign_share(frags, sender, kEpoch + 500'000'000), 500'000'000));
     bool done = false;
-    for (const auto& f : frags) done = dec->on_datagram(f, 0);
+    for (const auto& f : frags) done = dec->on_datagram(f, 500'000'000);
     ASSERT_TRUE(done);
     EXPECT_EQ(decoded.cloud(*dec), CloudKind::kMapCloud);
   }
@@ -222,6 +238,22 @@ TEST(InputDecoder, MapSharesCarrySourceIdAgentFlagAndPose) {
   EXPECT_DOUBLE_EQ(decoded.map[1].world_T_sensor(2, 3), 5.0);
   EXPECT_EQ(decoded.map_points[1].size(), 300u);
   EXPECT_EQ(dec->counters().map_clouds, 2u);
+  EXPECT_EQ(dec->verifier().counters().accepted, 2u);
+
+  // The same share again (replay), and one without a signature: refused, counted, not returned.
+  for (bool sign : {true, false}) {
+    const auto frags = fragment_cloud(protocol::CloudMessageType::kMapShare, kInfraSenderBase + 2, sign ? 1 : 2,
+                                      500'000'000, xyz, {});
+    if (sign) dec->on_datagram(test::sign_share(frags, kInfraSenderBase + 2, kEpoch + 500'000'000), 500'000'000);
+    bool done = false;
+    for (const auto& f : frags) done = dec->on_datagram(f, 500'000'000);
+    ASSERT_TRUE(done);
+    EXPECT_EQ(decoded.cloud(*dec), CloudKind::kRejected);
+  }
+  EXPECT_EQ(decoded.map.size(), 2u);
+  EXPECT_EQ(dec->verifier().counters().replay, 1u);
+  EXPECT_EQ(dec->verifier().counters().missing_signature, 1u);
+  EXPECT_EQ(dec->counters().shares_untrusted, 2u);
 }
 
 TEST(InputDecoder, EgoScanFromAnotherSenderIsRejectedAndCounted) {

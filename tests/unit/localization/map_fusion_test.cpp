@@ -51,21 +51,21 @@ TEST(MapFusion, ReplacementStaleAndAgeing) {
   MapFusion& map = fresh_map(params);
   const auto scene = corner_scene();
   const Mat4d pose_a = sensor_pose(12.0, 12.0, 2.0);
-  auto r = map.insert(7, 10.0, pose_a, in_sensor_frame(scene, pose_a));
+  auto r = map.insert(7, 10.0, pose_a, in_sensor_frame(scene, pose_a), true);
   ASSERT_EQ(r.status, MapInsertStatus::kInserted);
   const std::size_t n1 = map.point_count();
   EXPECT_GT(n1, 1000u);
   EXPECT_EQ(n1, r.stored_points);
   // The same source re-scans: replaced, not accumulated.
-  r = map.insert(7, 10.1, pose_a, in_sensor_frame(scene, pose_a));
+  r = map.insert(7, 10.1, pose_a, in_sensor_frame(scene, pose_a), true);
   EXPECT_EQ(r.status, MapInsertStatus::kReplaced);
   EXPECT_EQ(map.point_count(), n1);
   // Reordered (older) message: stale.
-  r = map.insert(7, 10.05, pose_a, in_sensor_frame(scene, pose_a));
+  r = map.insert(7, 10.05, pose_a, in_sensor_frame(scene, pose_a), true);
   EXPECT_EQ(r.status, MapInsertStatus::kStale);
-  // A second source: points add up; consistent overlap accepted.
+  // A second (surveyed) source: points add up; consistent overlap accepted (shift probes agree).
   const Mat4d pose_b = sensor_pose(-5.0, 15.0, -0.7);
-  r = map.insert(8, 10.5, pose_b, in_sensor_frame(scene, pose_b));
+  r = map.insert(8, 10.5, pose_b, in_sensor_frame(scene, pose_b), true);
   EXPECT_EQ(r.status, MapInsertStatus::kInserted);
   EXPECT_GT(r.consistency_fitness, 0.95);
   EXPECT_GT(r.overlap_points, 1000u);
@@ -125,7 +125,7 @@ TEST(MapFusion, InconsistentSourceRejected) {
   MapFusion& map = fresh_map();
   const auto scene = corner_scene();
   const Mat4d pose_a = sensor_pose(12.0, 12.0, 2.0);
-  ASSERT_EQ(map.insert(1, 0.0, pose_a, in_sensor_frame(scene, pose_a)).status,
+  ASSERT_EQ(map.insert(1, 0.0, pose_a, in_sensor_frame(scene, pose_a), true).status,
             MapInsertStatus::kInserted);
   // Agent claims a pose 1.5 m / 0.5 m up / 5 deg off its true one: its cloud lands beside the map.
   const Mat4d true_pose = sensor_pose(3.0, 20.0, -1.0);
@@ -157,19 +157,61 @@ TEST(MapFusion, CapacityAndSourceSlotOverflowCounted) {
   EXPECT_EQ(map.point_count(), config::kMaxMapPoints);
   EXPECT_EQ(r.stored_points + r.capacity_dropped, static_cast<std::uint32_t>(n * n));
   EXPECT_GT(map.counters().points_dropped_capacity, 0u);
-  // Source slots: fill all, then a newer source displaces the oldest, an older one is refused.
+  // Source slots per role: half infrastructure, half agents. At the agent cap a newer agent
+  // displaces the oldest agent, an older one is refused; no agent ever displaces infrastructure.
   map.clear();
   std::vector<Vec3f> small = {Vec3f(0, 0, 0), Vec3f(1, 0, 0)};
-  for (std::uint32_t s = 0; s < config::kMaxMapSources; ++s)
-    EXPECT_EQ(map.insert(100 + s, 1.0 + s, Mat4d::Identity(), small).status,
-              MapInsertStatus::kInserted);
-  EXPECT_EQ(map.insert(999, 0.5, Mat4d::Identity(), small).status, MapInsertStatus::kNoSourceSlot);
+  const std::uint32_t half = config::kMaxMapSources / 2;
+  for (std::uint32_t s = 0; s < half; ++s)
+    EXPECT_EQ(map.insert(1 + s, 0.5, Mat4d::Identity(), small, true).status, MapInsertStatus::kInserted);
+  for (std::uint32_t s = 0; s < half; ++s)
+    EXPECT_EQ(map.insert(100 + s, 1.0 + s, Mat4d::Identity(), small).status, MapInsertStatus::kInserted);
+  EXPECT_EQ(map.insert(999, 0.7, Mat4d::Identity(), small).status, MapInsertStatus::kNoSourceSlot);
   EXPECT_EQ(map.insert(1000, 50.0, Mat4d::Identity(), small).status, MapInsertStatus::kInserted);
   EXPECT_EQ(map.counters().sources_evicted_slot, 1u);
   EXPECT_EQ(map.counters().no_source_slot, 1u);
-  bool oldest_present = false;
-  for (const MapSourceInfo& s : map.sources()) oldest_present |= s.active && s.id == 100;
-  EXPECT_FALSE(oldest_present);
+  bool oldest_agent_present = false;
+  std::uint32_t infra_present = 0;
+  for (const MapSourceInfo& s : map.sources()) {
+    oldest_agent_present |= s.active && s.id == 100;
+    infra_present += (s.active && s.trusted) ? 1u : 0u;
+  }
+  EXPECT_FALSE(oldest_agent_present);
+  EXPECT_EQ(infra_present, half);
+  // Invented agent ids, all newer than the infrastructure: they only churn the agent slots.
+  for (std::uint32_t s = 0; s < 16; ++s) map.insert(5000 + s, 100.0 + s, Mat4d::Identity(), small);
+  infra_present = 0;
+  for (const MapSourceInfo& s : map.sources()) infra_present += (s.active && s.trusted) ? 1u : 0u;
+  EXPECT_EQ(infra_present, half);
+}
+
+// Consistency before trust: an agent shifted by as little as 0.25 m fits the infrastructure better
+// displaced back (shift probe) and is rejected; one shifted out of the overlap entirely cannot be
+// checked and is held back, not accepted with fitness 1.
+TEST(MapFusion, ShiftedAgentRejectedAndUncheckableAgentHeldBack) {
+  const auto scene = corner_scene();
+  const Mat4d infra = sensor_pose(12.0, 12.0, 2.0);
+  const Mat4d agent = sensor_pose(-5.0, 15.0, -0.7);
+  for (const double shift : {0.0, 0.25, 3.0, 200.0}) {
+    MapFusion& map = fresh_map();
+    ASSERT_EQ(map.insert(1, 1.0, infra, in_sensor_frame(scene, infra), true).status, MapInsertStatus::kInserted);
+    Mat4d claimed = agent;
+    claimed(0, 3) += shift;
+    const MapInsertResult r = map.insert(40, 1.0, claimed, in_sensor_frame(scene, agent));
+    std::printf("agent shifted %.2f m: fitness %.3f, best probe %.3f, overlap %u -> status %d\n", shift,
+                r.consistency_fitness, r.best_probe_fitness, r.overlap_points, static_cast<int>(r.status));
+    if (shift == 0.0) {
+      EXPECT_EQ(r.status, MapInsertStatus::kInserted);
+    } else if (shift > 100.0) {
+      EXPECT_EQ(r.status, MapInsertStatus::kHeldBack);
+      EXPECT_EQ(map.counters().held_back, 1u);
+    } else {
+      EXPECT_EQ(r.status, MapInsertStatus::kRejectedInconsistent);
+    }
+  }
+  // Without any infrastructure in the map an agent cannot be checked: held back.
+  MapFusion& map = fresh_map();
+  EXPECT_EQ(map.insert(40, 1.0, agent, in_sensor_frame(scene, agent)).status, MapInsertStatus::kHeldBack);
 }
 
 }  // namespace

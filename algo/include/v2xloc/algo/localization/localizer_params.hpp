@@ -1,5 +1,6 @@
-// Every tuning value of the localizer, with units and reasons. Defaults are what v2xloc-eval
-// runs; the ablations in the evaluation flip the switches at the bottom.
+// Every tuning value of the localizer: one line each, unit and rule. Defaults are what v2xloc-eval
+// runs; the ablations flip the switches at the bottom. Why a value is what it is, measured on
+// which recording: algo/TUNING.md.
 #pragma once
 
 #include <cstdint>
@@ -23,134 +24,91 @@ enum class GateMode : std::uint8_t {
 
 struct LocalizerParams {
   // ---- Scan preprocessing ----
-  double frame_period = 0.1;          // [s] LiDAR sweep period (deskew span)
-  float min_range = 3.0f;             // [m] drops returns from the ego vehicle body
-  float max_range = 80.0f;            // [m] far returns are sparse and noisy
-  float registration_voxel = 0.5f;    // [m] ego scan downsampling for map registration
+  double frame_period = 0.1;          // [s] LiDAR sweep period: deskew span and vehicle-signal delta
+  float min_range = 3.0f;             // [m] returns closer than this are the ego body: dropped
+  float max_range = 80.0f;            // [m] returns farther than this are sparse and noisy: dropped
+  float registration_voxel = 0.5f;    // [m] voxel of the ego scan registered to the map
+  double odometry_prediction_max_gap = 1.0;  // [s] frame gap up to which the signals predict odometry
 
   // ---- Reference map ----
-  MapFusionParams map{};              // voxel 0.2 m, consistency check on
+  MapFusionParams map{};              // fused infrastructure + agent clouds (map_fusion.hpp)
   double map_refresh_period = 0.5;    // [s] rebuild map points / normals / tree at most this often
-  // A rebuild runs beside the registration, one step per period: extract, k-d tree, then the
-  // normals this many points per period (~25 M instructions on the host); registration keeps
-  // the previous map meanwhile. The first map is built at once (nothing to register against).
+  float map_normal_radius = 0.6f;     // [m] normal estimation radius on the map (3 map voxels)
+  std::uint32_t map_min_points = 100; // [points] a map with fewer is not registered against
+  // [points/period] a map rebuild runs beside the registration, one step per period (extract,
+  // k-d tree, then this many normals); registration keeps the previous map meanwhile. The first
+  // map is built at once (nothing to register against).
   std::uint32_t map_normals_per_period = 32768;
-  float map_normal_radius = 0.6f;     // [m] (3 map voxels)
 
   // ---- Odometry ----
-  OdometryParams odometry{};
+  OdometryParams odometry{};          // KISS-ICP-style LiDAR odometry (odometry.hpp)
 
   // ---- Registration to the map ----
-  IcpParams icp = default_icp();      // tracking: point-to-plane from the EKF prediction
-  RegisterCloudsParams global = default_global();   // the paper's FPFH + RANSAC
-  PoseSearchParams search = default_search();        // GNSS-seeded exhaustive search
-  bool use_fpfh_ransac = true;        // try FPFH + RANSAC too; the better ICP fitness wins
-  // Scan points the pose search (start-up, audit) refines and compares its candidates on: every
-  // k-th point of the registration scan, <= config::kMaxSearchPoints. The accepted pose is refined
-  // again on the whole scan; this only picks the basin (a 0.5 m-voxel scan holds 5-20k points).
+  IcpParams icp = default_icp();      // tracking ICP: point-to-plane from the EKF prediction
+  RegisterCloudsParams global = default_global();   // start-up FPFH + RANSAC (paper)
+  PoseSearchParams search = default_search();        // start-up GNSS-seeded exhaustive search
+  bool use_fpfh_ransac = true;        // also try FPFH + RANSAC at start-up; better ICP fitness wins
+  // [points] the pose search (start-up, audit) refines and compares its candidates on every k-th
+  // registration-scan point, <= config::kMaxSearchPoints; the accepted pose is refined again on
+  // the whole scan (this only picks the basin; a 0.5 m-voxel scan holds 5-20k points).
   std::uint32_t search_points = 1024;
-  double global_map_radius = 70.0;    // [m] map crop around the GNSS fix for the global search
-  double global_gnss_gate_sigmas = 4.0;  // accept a global solution within this many GNSS sigmas
-  // ... but never closer than this [m]: a canyon receiver reports sigma_uere * HDOP (3-8 m) while
-  // NLOS errors reach 20-30 m (host_sim GNSS: mean 8-17 m, max 32 m); a region built from the
-  // reported sigma excluded the true pose (measured at Sim 0's first frames).
-  double global_min_region = 30.0;
-  double global_min_fitness = 0.3;    // and with at least this ICP fitness
-  // Before the filter starts, the output's height is the map's road surface within
-  // global_map_radius of the fix when at least this many map points lie in its 0.2 m bin.
-  std::uint32_t road_height_min_points = 50;
-  // ... and distinct: runner-up basin's tight fitness / winner's below this. Far from the
-  // intersection the sparse map makes aliased poses along the street nearly as good; we wait
-  // (GNSS only) until the answer is unambiguous instead of locking onto a wrong basin.
-  double global_max_ambiguity = 0.85;
-  // [m] a registration above this inlier RMSE is a failure. Off by default: at a 1 m inlier
-  // threshold the RMSE of a correct alignment is 0.3-0.5 m (scan parts the map lacks still find
-  // a neighbour), so it does not separate good from bad; the validity gate does that.
-  double max_inlier_rmse = 1e9;
+  double global_map_radius = 70.0;    // [m] map crop (and road-height disc) around the GNSS fix
+  double global_gnss_gate_sigmas = 4.0;  // [sigma] start-up region radius in inflated GNSS sigmas (+1 m)
+  double global_min_region = 30.0;    // [m] start-up region radius floor (canyon NLOS; TUNING.md)
+  double global_max_vertical = 3.0;   // [m] RANSAC prior: hypothesis height off the road surface
+  double global_min_fitness = 0.3;    // [0-1] start-up solution needs at least this ICP fitness
+  std::uint32_t road_height_min_points = 50;  // [points] in the 0.2 m bin to output the road height
+  double global_max_ambiguity = 0.85; // [0-1] runner-up / winner tight fitness above: ambiguous
+  double max_inlier_rmse = 1e9;       // [m] registration above this RMSE fails (off; TUNING.md)
   double tracking_max_sigma_xy = 0.5; // [m] EKF position sigma above which we search globally
-  std::uint32_t max_failed_frames = 10;  // consecutive unfused registrations -> global search
-  std::uint32_t global_retry_frames = 2;  // frames between two global searches (bounded cost)
-  // A global solution starts the filter only when a second, independent search within this many
-  // frames agrees with it through the odometry's relative motion. Why: a straight street matches
-  // itself turned by 180 deg; such a flipped pose predicts the opposite motion and fails the
-  // check within a metre of travel (measured: an unconfirmed flip at Sim 3's approach tracked
-  // backwards for 10 s). Until confirmed the output is the candidate, flagged not localized.
-  // 0: the first accepted search starts the filter.
-  std::uint32_t global_confirm_window = 10;
-  double global_confirm_distance = 0.5;   // [m] horizontal disagreement allowed
-  double global_confirm_yaw = 0.035;      // [rad] (2 deg) heading disagreement allowed
-  // Basin audit while tracking: every audit_period frames an exhaustive pose search within
-  // audit_radius of the tracked pose; a distinct pose explaining clearly more of the scan at the
-  // tight threshold (ratio) means tracking sits in an aliased basin (facade detail repeats along
-  // a street; measured: a 4 m offset tracked at fitness 0.7 through Sim 3's intersection). The
-  // filter then restarts from that pose once a global search confirms it. 0: off.
-  std::uint32_t audit_period_frames = 10;
-  double audit_radius = 8.0;              // [m]
-  double audit_switch_ratio = 1.15;
-  // Ambiguity resolution by the GNSS track: when the two best basins explain the scan equally
-  // well (a symmetric intersection matches itself turned by 180 deg some 25 m away), each is
-  // carried back along the odometry track of the last frames and compared with the GNSS fixes
-  // there; the one whose track is closer on average wins if it is closer by both a factor and a
-  // margin. Many fixes average the canyon's NLOS errors down; one fix does not.
-  std::uint32_t track_frames = 30;           // <= kTrackFrames (3 s at 10 Hz)
-  std::uint32_t track_min_fixes = 10;        // frames with a fix needed to decide
-  double track_distance_ratio = 0.6;         // winner's mean distance < ratio * loser's
-  double track_distance_margin = 5.0;        // [m] and smaller by at least this
-  // Any global solution whose track lies farther than this from the fixes on average is wrong
-  // (the canyon's mean GNSS error is 8-17 m); one without enough fixes yet is kept as a
-  // candidate but not output (the GNSS fix is).
-  double track_max_distance = 25.0;          // [m]
-  // Start-up heading from the GNSS Doppler velocity: while the vehicle drives forward, the course
-  // over ground is its heading (antenna on the body axis, side slip of a car at urban speeds
-  // < 2 deg). Doppler survives the canyon far better than the position does (an NLOS range rate
-  // is biased only by the motion towards the reflecting facade: measured 1-3 deg mean error where
-  // the position is 8-17 m off), so it rules out the intersection's 180-deg mirror at the first
-  // frame instead of after 3 s of GNSS track. Used as a yaw window on the global search.
-  bool use_gnss_heading = true;
-  double heading_min_speed = 3.0;         // [m/s] Doppler speed and wheel speed both above this
-  double heading_max_sigma = 0.17;        // [rad] reported course sigma atan(speed_acc / speed)
+  std::uint32_t max_failed_frames = 10;   // [frames] consecutive unfused registrations -> global search
+  std::uint32_t global_retry_frames = 2;  // [frames] between two global searches (bounded cost)
+  std::uint32_t global_confirm_window = 10;  // [frames] a second search within this confirms (0: off)
+  double global_confirm_distance = 0.5;   // [m] confirmation: horizontal disagreement allowed
+  double global_confirm_yaw = 0.035;      // [rad] confirmation: heading disagreement allowed (2 deg)
+  std::uint32_t audit_period_frames = 10; // [frames] between basin audits while tracking (0: off)
+  double audit_radius = 8.0;              // [m] basin audit: search disc around the tracked pose
+  double audit_switch_ratio = 1.15;       // [ratio] audit pose's tight fitness over tracked: switch
+  std::uint32_t track_frames = 30;        // [frames] GNSS track compared (<= kTrackFrames)
+  std::uint32_t track_min_fixes = 10;     // [fixes] needed in the track to decide
+  double track_distance_ratio = 0.6;      // [ratio] winner's mean track distance < ratio * loser's
+  double track_distance_margin = 5.0;     // [m] ... and smaller by at least this
+  double track_max_distance = 25.0;       // [m] a solution whose track is farther is wrong
+  bool use_gnss_heading = true;           // GNSS course over ground as start-up yaw window
+  double heading_min_speed = 3.0;         // [m/s] Doppler and wheel speed both above this
+  double heading_max_sigma = 0.17;        // [rad] course sigma atan(speed_acc / speed) at most this
   double heading_max_age = 1.0;           // [s] a course older than this is not used
-  double heading_search_tolerance = 0.79; // [rad] (45 deg) yaw window around the course
-  // A candidate found with that yaw window is output before confirmation (as a GNSS-track-
-  // checked one is): it cannot be the mirror, and it is centimetres, not metres, off.
-  // Lost-track monitor: this many GNSS fixes in a row farther from the filter than
-  // max(distance, sigmas * reported h_acc) mean the filter, not the GNSS, is wrong (canyon fixes
-  // are off by 8-17 m on average, rarely 30 m, never for seconds in a row): restart globally.
-  double gnss_divergence_distance = 30.0;  // [m]
-  double gnss_divergence_sigmas = 6.0;
-  std::uint32_t gnss_divergence_fixes = 10;  // 2 s at 5 Hz
+  double heading_search_tolerance = 0.79; // [rad] yaw window half-width around the course (45 deg)
+  double gnss_divergence_distance = 30.0; // [m] lost track: fix farther than max(this, sigmas * h_acc)
+  double gnss_divergence_sigmas = 6.0;    // [sigma] ... in reported h_acc
+  std::uint32_t gnss_divergence_fixes = 10;  // [fixes] in a row -> restart globally (2 s at 5 Hz)
 
   // ---- Stereo modality (LiDAR + stereo configuration) ----
-  // While tracking, the stereo cloud is registered to the map like the LiDAR scan (own ICP from
-  // the same prediction, own causal validity gate) and fused as a second pose measurement whose
-  // covariance uses max(inlier RMSE, mean depth sigma): z-noise grows with z^2 (stereo_cloud.hpp),
-  // so points beyond max_depth_sigma are dropped and the rest weigh by their noise.
-  bool use_stereo = false;
-  StereoParams stereo = default_stereo();
-  float stereo_voxel = 0.3f;          // [m]
-  std::uint32_t stereo_min_points = 200;
-  // Stereo point-to-plane residuals are correlated along each disparity row (one matching error
-  // moves a whole surface patch), so its ICP covariance is far more optimistic than LiDAR's:
-  // measured 0.1-1.8 m errors at a few-cm ICP sigma on the 1/8-resolution rig.
-  double stereo_covariance_scale = 25.0;
-  IcpParams stereo_icp = default_icp();
+  bool use_stereo = false;            // register and fuse the stereo cloud while tracking
+  StereoParams stereo = default_stereo();  // disparity -> cloud (stereo_cloud.hpp)
+  float stereo_voxel = 0.3f;          // [m] stereo cloud downsampling
+  std::uint32_t stereo_min_points = 200;   // [points] fewer after downsampling: not registered
+  double stereo_covariance_scale = 25.0;   // [ratio] stereo covariance over the ICP's (TUNING.md)
+  IcpParams stereo_icp = default_icp();    // stereo ICP from the same prediction
 
   // ---- Validity gate and fusion ----
-  GateMode gate_mode = GateMode::kFixedLag;
-  // The paper's envelope test plus one absolute floor: below 30 % of the scan within 1 m of the
-  // map, the map covers too little of the scan to pin the pose (measured on Sim 0 / 2_infra:
-  // 20 of 24 registrations off by > 10 cm had fitness < 0.3, none of 159 within 3 cm did).
-  ValidityGateParams gate = default_gate();
-  EkfParams ekf{};
-  RegistrationCovarianceParams registration_covariance{};
-  std::uint32_t reset_after_rejections = 3;  // NIS-rejected registrations in a row -> restart
-  double localized_sigma_xy = 0.10;   // [m] Reid et al. 2019 local-street budget, 1 sigma
+  GateMode gate_mode = GateMode::kFixedLag;  // which validity gate feeds the EKF
+  ValidityGateParams gate = default_gate();  // paper's envelope + absolute floors (TUNING.md)
+  EkfParams ekf{};                           // filter noise and NIS gates (ekf.hpp)
+  RegistrationCovarianceParams registration_covariance{};  // ICP information -> pose covariance
+  std::uint32_t reset_after_rejections = 3;  // [registrations] NIS-rejected in a row -> restart
+  double localized_sigma_xy = 0.10;   // [m] fused 1-sigma budget (Reid et al. 2019 local street)
+  // [m, m, m, rad, m/s, rad/s, rad/s, -] 1-sigma of each state (ekf_index order) at a (re)start.
+  double restart_sigmas[kEkfStateSize] = {0.1, 0.1, 0.1, 0.01, 0.5, 0.05, 0.005, 0.02};
 
   // ---- Switches (ablations) ----
-  bool use_gnss = true;
-  bool use_vehicle_signals = true;
-  bool use_odometry = true;
-  bool deskew = true;
+  bool use_gnss = true;               // fuse GNSS fixes (and use them for track checks)
+  bool use_vehicle_signals = true;    // fuse wheel speed / yaw rate; deskew and predict with them
+  bool use_odometry = true;           // fuse the LiDAR odometry's relative motion
+  bool deskew = true;                 // deskew scans with per-point times
+  // Evaluation only: a second filter fed every ok registration (no validity gate), for the paper's
+  // "Fused" column (LocalizerFrameOutput::fused_pose_ungated). The ECU leaves it off.
+  bool shadow_ungated_filter = false;
 
   static IcpParams default_icp() {
     IcpParams p;

@@ -26,6 +26,7 @@ struct PoseSearchParams {
   std::uint32_t score_points = 256;
   double score_distance = 1.0;     // [m]
   double min_height = 0.5;         // [m] scan points below this (body frame) are ground: not scored
+  double ground_margin = 10.0;     // [m] road height taken from the map within radius + this
   std::uint32_t max_hypotheses = 40000;  // hard cap (worst-case time)
   IcpParams icp{};                 // coarse refinement of the best hypotheses
   IcpParams fine_icp{};            // then fine ICP; the winner has the highest fitness at

@@ -1,0 +1,134 @@
+#include "firmware/trust/map_share_verifier.hpp"
+
+#include "firmware/trust/cloud_digest.hpp"
+
+namespace v2xloc::trust {
+
+const char* to_string(ShareVerdict v) {
+  switch (v) {
+    case ShareVerdict::kAccepted: return "accepted";
+    case ShareVerdict::kMissingSignature: return "missing signature";
+    case ShareVerdict::kUnknownSigner: return "unknown signer";
+    case ShareVerdict::kSenderMismatch: return "sender id mismatch";
+    case ShareVerdict::kTooOld: return "too old";
+    case ShareVerdict::kFuture: return "from the future";
+    case ShareVerdict::kStampSkew: return "time stamp far from generation time";
+    case ShareVerdict::kReplay: return "replay";
+    case ShareVerdict::kBadSignature: return "bad signature";
+    case ShareVerdict::kCryptoError: return "crypto error";
+  }
+  return "?";
+}
+
+void MapShareVerifier::provision(const TrustList& list) {
+  list_ = list;
+  last_generation_ns_ = {};
+  has_last_ = {};
+  pending_ = {};
+}
+
+protocol::SignatureParseStatus MapShareVerifier::on_signature_datagram(std::span<const std::uint8_t> datagram,
+                                                                       std::int64_t now_ns) {
+  protocol::CloudSignature sig;
+  const protocol::SignatureParseStatus s = protocol::parse_signature_datagram(datagram, sig);
+  if (s != protocol::SignatureParseStatus::kOk) {
+    ++counters_.signatures_malformed;
+    return s;
+  }
+  ++counters_.signatures_rx;
+  // Same cloud again (duplicate datagram or a second signature for it): the newest one counts.
+  Pending* slot = nullptr;
+  for (Pending& p : pending_) {
+    if (p.used && p.sig.sender_id == sig.sender_id && p.sig.sensor_id == sig.sensor_id &&
+        p.sig.frame_seq == sig.frame_seq) {
+      slot = &p;
+      break;
+    }
+  }
+  if (slot == nullptr) {
+    for (Pending& p : pending_) {
+      if (!p.used) {
+        slot = &p;
+        break;
+      }
+    }
+  }
+  if (slot == nullptr) {  // full: the oldest pending signature gives way
+    slot = &pending_[0];
+    for (Pending& p : pending_) {
+      if (p.rx_ns < slot->rx_ns) slot = &p;
+    }
+    ++counters_.signatures_evicted;
+  }
+  *slot = Pending{sig, now_ns, true};
+  return s;
+}
+
+void MapShareVerifier::expire(std::int64_t now_ns) {
+  for (Pending& p : pending_) {
+    if (p.used && now_ns - p.rx_ns > config_.pending_timeout_ns) {
+      p.used = false;
+      ++counters_.signatures_expired;
+    }
+  }
+}
+
+ShareVerifyResult MapShareVerifier::reject(ShareVerdict v, const TrustedSigner* signer) {
+  switch (v) {
+    case ShareVerdict::kMissingSignature: ++counters_.missing_signature; break;
+    case ShareVerdict::kUnknownSigner: ++counters_.unknown_signer; break;
+    case ShareVerdict::kSenderMismatch: ++counters_.sender_mismatch; break;
+    case ShareVerdict::kTooOld: ++counters_.too_old; break;
+    case ShareVerdict::kFuture: ++counters_.future; break;
+    case ShareVerdict::kStampSkew: ++counters_.stamp_skew; break;
+    case ShareVerdict::kReplay: ++counters_.replay; break;
+    case ShareVerdict::kBadSignature: ++counters_.bad_signature; break;
+    case ShareVerdict::kCryptoError: ++counters_.crypto_error; break;
+    case ShareVerdict::kAccepted: break;
+  }
+  return ShareVerifyResult{v, signer};
+}
+
+ShareVerifyResult MapShareVerifier::verify(const protocol::ReassembledCloud& cloud, std::int64_t local_time_ns) {
+  const protocol::CloudFrameInfo& info = cloud.info;
+  Pending* pending = nullptr;
+  for (Pending& p : pending_) {
+    if (p.used && p.sig.sender_id == info.sender_id && p.sig.sensor_id == info.sensor_id &&
+        p.sig.frame_seq == info.frame_seq) {
+      pending = &p;
+      break;
+    }
+  }
+  if (pending == nullptr) return reject(ShareVerdict::kMissingSignature);
+  const protocol::CloudSignature sig = pending->sig;
+  pending->used = false;  // one verification per signature, whatever the outcome
+
+  const TrustedSigner* signer = list_.find(sig.signer);
+  if (signer == nullptr) return reject(ShareVerdict::kUnknownSigner);
+  if (signer->sender_id != info.sender_id) return reject(ShareVerdict::kSenderMismatch, signer);
+  // Time: unsigned wire values compared in signed 128-bit-safe form (both are Unix ns < 2^63).
+  const auto gen = static_cast<std::int64_t>(sig.generation_time_ns & 0x7FFFFFFFFFFFFFFFull);
+  if (sig.generation_time_ns > 0x7FFFFFFFFFFFFFFFull || gen > local_time_ns + config_.max_future_ns) {
+    return reject(ShareVerdict::kFuture, signer);
+  }
+  if (gen < local_time_ns - config_.max_age_ns) return reject(ShareVerdict::kTooOld, signer);
+  const auto stamp = static_cast<std::int64_t>(info.timestamp_ns & 0x7FFFFFFFFFFFFFFFull);
+  if (info.timestamp_ns > 0x7FFFFFFFFFFFFFFFull || stamp > gen + config_.max_future_ns ||
+      stamp < gen - config_.max_stamp_skew_ns) {
+    return reject(ShareVerdict::kStampSkew, signer);
+  }
+  const std::size_t index = static_cast<std::size_t>(signer - list_.signers.data());
+  if (has_last_[index] && sig.generation_time_ns <= last_generation_ns_[index]) {
+    return reject(ShareVerdict::kReplay, signer);
+  }
+  const Digest digest = signed_digest(sig, cloud_digest(cloud));
+  const CryptoStatus c = verify_digest(signer->key, digest, sig.signature);
+  if (c == CryptoStatus::kBadSignature || c == CryptoStatus::kBadKey) return reject(ShareVerdict::kBadSignature, signer);
+  if (c != CryptoStatus::kOk) return reject(ShareVerdict::kCryptoError, signer);
+  last_generation_ns_[index] = sig.generation_time_ns;
+  has_last_[index] = true;
+  ++counters_.accepted;
+  return ShareVerifyResult{ShareVerdict::kAccepted, signer};
+}
+
+}  // namespace v2xloc::trust

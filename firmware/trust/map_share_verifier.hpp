@@ -1,0 +1,109 @@
+// Gatekeeper between the V2X channel and the map: a reassembled map share reaches map fusion only
+// when its signature datagram arrived, names a provisioned signer whose sender id matches the
+// cloud, the generation time is fresh by the LOCAL disciplined clock, it is newer than anything
+// accepted from that signer (replay), and the ECDSA P-256 signature over the whole cloud's digest
+// verifies. Every rejection is counted by reason (the firmware reports them on CAN).
+//
+// Freshness window: max_age 1.0 s. Map fusion ages sources out after 2 s (map_fusion.hpp), the
+// infrastructure re-sends every 100 ms, and a V2X hop plus reassembly takes tens of ms; 1 s
+// admits a share delayed by ten periods (the fault matrix delays by 0.5 s) while a recorded share
+// replayed later than that is refused without touching the crypto. Future: 40 ms (clocks
+// disciplined by GNSS agree to well under a millisecond; 40 ms is the ETSI/1609.2 style margin the
+// brief fixes). Replay: per signer, the generation time must strictly increase (a signer signs at
+// most one cloud per sensor per instant; a duplicated or re-sent cloud is a replay).
+//
+// Checks run cheapest first; the ECDSA verification (the only expensive step) runs last, so
+// garbage, unknown signers, stale and replayed shares cost no crypto. Allocation-free.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+
+#include "firmware/protocol/cloud_signature.hpp"
+#include "firmware/protocol/pointcloud_udp.hpp"
+#include "firmware/trust/trust_list.hpp"
+
+namespace v2xloc::trust {
+
+struct MapShareVerifierConfig {
+  std::int64_t max_age_ns = 1'000'000'000;      // [ns] generation time older than now - this: too old
+  std::int64_t max_future_ns = 40'000'000;      // [ns] generation time later than now + this: future
+  std::int64_t max_stamp_skew_ns = 1'000'000'000;  // [ns] |cloud time stamp - generation time| allowed
+  std::int64_t pending_timeout_ns = 1'000'000'000; // [ns] a signature waits this long for its cloud
+};
+
+enum class ShareVerdict : std::uint8_t {
+  kAccepted,
+  kMissingSignature,  // no signature datagram for this cloud (unsigned, lost or late)
+  kUnknownSigner,     // HashedId8 not in the trust list
+  kSenderMismatch,    // cloud's sender id is not the signer's provisioned id
+  kTooOld,            // generation time older than max_age by the local clock
+  kFuture,            // generation time more than max_future ahead of the local clock
+  kStampSkew,         // the cloud's own time stamp far from its generation time
+  kReplay,            // not newer than the last share accepted from this signer
+  kBadSignature,
+  kCryptoError,       // arena exhausted or mbedTLS error (fail closed)
+};
+const char* to_string(ShareVerdict v);
+
+struct ShareVerifyResult {
+  ShareVerdict verdict = ShareVerdict::kMissingSignature;
+  const TrustedSigner* signer = nullptr;  // provisioned signer (set from kSenderMismatch on)
+};
+
+struct VerifierCounters {
+  std::uint64_t signatures_rx = 0;
+  std::uint64_t signatures_malformed = 0;
+  std::uint64_t signatures_evicted = 0;   // pending table full: oldest dropped
+  std::uint64_t signatures_expired = 0;   // no cloud within pending_timeout
+  std::uint64_t accepted = 0;
+  std::uint64_t missing_signature = 0;
+  std::uint64_t unknown_signer = 0;
+  std::uint64_t sender_mismatch = 0;
+  std::uint64_t too_old = 0;
+  std::uint64_t future = 0;
+  std::uint64_t stamp_skew = 0;
+  std::uint64_t replay = 0;
+  std::uint64_t bad_signature = 0;
+  std::uint64_t crypto_error = 0;
+  std::uint64_t rejected() const {
+    return missing_signature + unknown_signer + sender_mismatch + too_old + future + stamp_skew + replay +
+           bad_signature + crypto_error;
+  }
+};
+
+class MapShareVerifier {
+ public:
+  static constexpr std::size_t kPendingSignatures = 16;
+
+  explicit MapShareVerifier(const MapShareVerifierConfig& config = {}) : config_(config) {}
+  void provision(const TrustList& list);
+  const TrustList& trust_list() const { return list_; }
+  bool provisioned() const { return list_.count > 0; }
+
+  // A datagram carrying the signature magic, received at monotonic now_ns.
+  protocol::SignatureParseStatus on_signature_datagram(std::span<const std::uint8_t> datagram, std::int64_t now_ns);
+  // A completed map share; local_time_ns = the firmware's disciplined clock now.
+  ShareVerifyResult verify(const protocol::ReassembledCloud& cloud, std::int64_t local_time_ns);
+  void expire(std::int64_t now_ns);
+
+  const VerifierCounters& counters() const { return counters_; }
+
+ private:
+  struct Pending {
+    protocol::CloudSignature sig{};
+    std::int64_t rx_ns = 0;
+    bool used = false;
+  };
+  ShareVerifyResult reject(ShareVerdict v, const TrustedSigner* signer = nullptr);
+
+  MapShareVerifierConfig config_;
+  TrustList list_{};
+  std::array<std::uint64_t, kMaxTrustedSigners> last_generation_ns_{};
+  std::array<bool, kMaxTrustedSigners> has_last_{};
+  std::array<Pending, kPendingSignatures> pending_{};
+  VerifierCounters counters_{};
+};
+
+}  // namespace v2xloc::trust

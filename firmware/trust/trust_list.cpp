@@ -1,0 +1,195 @@
+#include "firmware/trust/trust_list.hpp"
+
+#include <cstdio>
+#include <cstring>
+
+namespace v2xloc::trust {
+namespace {
+
+constexpr std::size_t kMaxLine = 512;
+constexpr std::size_t kMaxTokens = 6;
+
+struct Token {
+  const char* p = nullptr;
+  std::size_t n = 0;
+  bool is(const char* s) const { return std::strlen(s) == n && std::memcmp(p, s, n) == 0; }
+};
+
+int hex_value(char c) {
+  if (c >= '0' && c <= '9') return c - '0';
+  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+  return -1;
+}
+
+bool parse_u32(const Token& t, std::uint32_t& out) {
+  if (t.n == 0 || t.n > 10) return false;
+  std::uint64_t v = 0;
+  for (std::size_t i = 0; i < t.n; ++i) {
+    if (t.p[i] < '0' || t.p[i] > '9') return false;
+    v = v * 10 + static_cast<std::uint64_t>(t.p[i] - '0');
+  }
+  if (v > 0xFFFFFFFFull) return false;
+  out = static_cast<std::uint32_t>(v);
+  return true;
+}
+
+bool parse_key(const Token& t, PublicKey& key) {
+  if (t.n != 2 * key.size()) return false;
+  for (std::size_t i = 0; i < key.size(); ++i) {
+    const int hi = hex_value(t.p[2 * i]), lo = hex_value(t.p[2 * i + 1]);
+    if (hi < 0 || lo < 0) return false;
+    key[i] = static_cast<std::uint8_t>(hi * 16 + lo);
+  }
+  return true;
+}
+
+}  // namespace
+
+const char* to_string(SignerRole r) { return r == SignerRole::kInfrastructure ? "infrastructure" : "agent"; }
+
+const char* to_string(TrustListStatus s) {
+  switch (s) {
+    case TrustListStatus::kOk: return "ok";
+    case TrustListStatus::kTooLarge: return "file too large";
+    case TrustListStatus::kBadHeader: return "missing header 'v2xloc-trust-list 1'";
+    case TrustListStatus::kSyntax: return "syntax error";
+    case TrustListStatus::kBadRole: return "role must be infrastructure or agent";
+    case TrustListStatus::kBadSenderId: return "bad sender id";
+    case TrustListStatus::kBadKey: return "bad public key";
+    case TrustListStatus::kDuplicate: return "duplicate signer or sender id";
+    case TrustListStatus::kTooMany: return "too many signers";
+  }
+  return "?";
+}
+
+const TrustedSigner* TrustList::find(const HashedId8& id) const {
+  for (std::size_t i = 0; i < count; ++i) {
+    if (signers[i].id == id) return &signers[i];
+  }
+  return nullptr;
+}
+
+TrustListParseResult parse_trust_list(std::span<const std::uint8_t> text, TrustList& out) {
+  TrustList list;
+  TrustListParseResult res;
+  if (text.size() > kMaxTrustListBytes) {
+    res.status = TrustListStatus::kTooLarge;
+    return res;
+  }
+  const char* const data = reinterpret_cast<const char*>(text.data());
+  bool header = false;
+  std::size_t pos = 0;
+  while (pos < text.size()) {
+    ++res.line;
+    std::size_t end = pos;
+    while (end < text.size() && data[end] != '\n') ++end;
+    const std::size_t len = end - pos;
+    const char* line = data + pos;
+    pos = end + 1;
+    if (len > kMaxLine) {
+      res.status = TrustListStatus::kSyntax;
+      return res;
+    }
+    Token tok[kMaxTokens];
+    std::size_t nt = 0;
+    for (std::size_t i = 0; i < len;) {
+      const char c = line[i];
+      if (c == '#') break;
+      if (c == ' ' || c == '\t' || c == '\r') {
+        ++i;
+        continue;
+      }
+      if (static_cast<unsigned char>(c) < 0x21 || static_cast<unsigned char>(c) > 0x7E) {
+        res.status = TrustListStatus::kSyntax;
+        return res;
+      }
+      if (nt == kMaxTokens) {
+        res.status = TrustListStatus::kSyntax;
+        return res;
+      }
+      std::size_t j = i;
+      while (j < len && line[j] != ' ' && line[j] != '\t' && line[j] != '\r' && line[j] != '#') ++j;
+      tok[nt++] = Token{line + i, j - i};
+      i = j;
+    }
+    if (nt == 0) continue;
+    if (!header) {
+      if (nt != 2 || !tok[0].is("v2xloc-trust-list") || !tok[1].is("1")) {
+        res.status = TrustListStatus::kBadHeader;
+        return res;
+      }
+      header = true;
+      continue;
+    }
+    if (!tok[0].is("signer") || nt < 4 || nt > 5) {
+      res.status = TrustListStatus::kSyntax;
+      return res;
+    }
+    TrustedSigner s;
+    if (tok[1].is("infrastructure")) {
+      s.role = SignerRole::kInfrastructure;
+    } else if (tok[1].is("agent")) {
+      s.role = SignerRole::kAgent;
+    } else {
+      res.status = TrustListStatus::kBadRole;
+      return res;
+    }
+    if (!parse_u32(tok[2], s.sender_id)) {
+      res.status = TrustListStatus::kBadSenderId;
+      return res;
+    }
+    if (!parse_key(tok[3], s.key) || check_public_key(s.key) != CryptoStatus::kOk) {
+      res.status = TrustListStatus::kBadKey;
+      return res;
+    }
+    s.id = hashed_id8(s.key);
+    if (nt == 5) {
+      const std::size_t n = tok[4].n < s.name.size() - 1 ? tok[4].n : s.name.size() - 1;
+      std::memcpy(s.name.data(), tok[4].p, n);
+    }
+    for (std::size_t k = 0; k < list.count; ++k) {
+      if (list.signers[k].id == s.id || list.signers[k].sender_id == s.sender_id) {
+        res.status = TrustListStatus::kDuplicate;
+        return res;
+      }
+    }
+    if (list.count == kMaxTrustedSigners) {
+      res.status = TrustListStatus::kTooMany;
+      return res;
+    }
+    list.signers[list.count++] = s;
+  }
+  if (!header) {
+    res.status = TrustListStatus::kBadHeader;
+    return res;
+  }
+  out = list;
+  res.status = TrustListStatus::kOk;
+  return res;
+}
+
+std::size_t format_trust_list(const TrustList& list, std::span<char> out) {
+  std::size_t used = 0;
+  const auto put = [&](const char* s) {
+    const std::size_t n = std::strlen(s);
+    if (used + n > out.size()) return false;
+    std::memcpy(out.data() + used, s, n);
+    used += n;
+    return true;
+  };
+  if (!put("# v2xloc trust list: signer <role> <sender id> <P-256 public key 04||X||Y hex> [name]\n"
+           "v2xloc-trust-list 1\n")) {
+    return 0;
+  }
+  for (const TrustedSigner& s : list.view()) {
+    char line[256];
+    int n = std::snprintf(line, sizeof line, "signer %s %u ", to_string(s.role), s.sender_id);
+    for (const std::uint8_t b : s.key) n += std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), "%02x", b);
+    std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), "%s%s\n", s.name[0] ? " " : "", s.name.data());
+    if (!put(line)) return 0;
+  }
+  return used;
+}
+
+}  // namespace v2xloc::trust
