@@ -1,5 +1,6 @@
 // v2xloc-eval RECORDING_DIR... [--json] [--plots DIR] [--estimates DIR] [--trace DIR] [--frames N]
 //   [--gate fixed-lag|causal|off] [--no-gnss-gate] [--no-odometry] [--no-gnss-heading] [--quiet]
+//   [--timing] [--callgrind-dumps]
 // Runs the localizer offline over each recording and prints the paper's Table 1 (unaligned and
 // aligned) with the paper's numbers beside ours; --json prints one JSON object instead.
 #include <cmath>
@@ -25,6 +26,9 @@ int usage() {
                "usage: v2xloc-eval RECORDING_DIR... [--json] [--plots DIR] [--estimates DIR] [--trace DIR]\n"
                "                   [--frames N] [--gate fixed-lag|causal|off] [--no-gnss-gate]\n"
                "                   [--no-odometry] [--no-vehicle] [--no-gnss-heading] [--stereo] [--quiet]\n"
+               "                   [--timing] (host ms per period and stage: table and JSON \"timing\")\n"
+               "                   [--callgrind-dumps] (under callgrind: a stats dump per stage of each period;\n"
+               "                   tools/timing/frame_instructions.py)\n"
                "                   [--firmware PATH_TO_v2xloc-firmware [--faults SPEC]]  (replay through the firmware over\n"
                "                   emulated CAN/UDP instead of the in-process localizer; localizer options\n"
                "                   other than --frames do not apply)\n");
@@ -128,6 +132,8 @@ int main(int argc, char** argv) {
     }
     else if (a == "--frames") options.max_frames = std::atoi(next("--frames"));
     else if (a == "--quiet") options.quiet = true;
+    else if (a == "--timing") options.timing = true;
+    else if (a == "--callgrind-dumps") options.callgrind_dumps = true;
     else if (a == "--no-gnss-gate") options.params.ekf.gates.gnss_gate_enabled = false;
     else if (a == "--no-odometry") options.params.use_odometry = false;
     else if (a == "--no-vehicle") options.params.use_vehicle_signals = false;
@@ -213,6 +219,8 @@ int main(int argc, char** argv) {
   } else {
     std::printf("%s\n%s", v2xloc::eval::format_table(rows, false).c_str(),
                 v2xloc::eval::format_table(rows, true).c_str());
+    const std::string timing = v2xloc::eval::format_timing(rows);
+    if (!timing.empty()) std::printf("\n%s", timing.c_str());
     if (!plots_dir.empty()) std::printf("\nplots: %s\n", plots_dir.c_str());
   }
   return 0;

@@ -1,10 +1,16 @@
 #include "tools/eval/offline_run.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <memory>
+
+#if __has_include(<valgrind/callgrind.h>)
+#include <valgrind/callgrind.h>
+#define V2XLOC_HAVE_CALLGRIND 1
+#endif
 
 #include "firmware/wire/input_decoder.hpp"
 #include "firmware/wire/wire_conventions.hpp"
@@ -22,6 +28,53 @@ double timed_seconds(F&& f) {
   const auto t0 = std::chrono::steady_clock::now();
   f();
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The localizer's stage probe on the host: wall time between marks per stage, and (under
+// callgrind, when asked) one stats dump per finished stage so instructions split the same way.
+class StageClock {
+ public:
+  using Clock = std::chrono::steady_clock;
+  StageClock(bool timing, bool dumps) : timing_(timing), dumps_(dumps) {}
+  static void on_mark(void* self, LocalizerStage s) { static_cast<StageClock*>(self)->mark(s); }
+  StageProbe probe() { return StageProbe{&StageClock::on_mark, this}; }
+  bool active() const { return timing_ || dumps_; }
+  void mark(LocalizerStage s) {
+    if (!active()) return;
+    const auto now = Clock::now();
+    if (current_ != LocalizerStage::kIdle) {
+      ms_[static_cast<std::size_t>(current_)] += std::chrono::duration<double, std::milli>(now - last_).count();
+    }
+#ifdef V2XLOC_HAVE_CALLGRIND
+    if (dumps_ && RUNNING_ON_VALGRIND) {
+      char label[64];
+      std::snprintf(label, sizeof label, "frame %d %s", frame_, stage_name(current_));
+      CALLGRIND_DUMP_STATS_AT(label);
+    }
+#endif
+    current_ = s;
+    last_ = Clock::now();
+  }
+  void begin_period(int frame) {
+    mark(LocalizerStage::kIdle);
+    frame_ = frame;
+    ms_.fill(0.0);
+  }
+  const StageMs& period_ms() const { return ms_; }
+
+ private:
+  bool timing_, dumps_;
+  int frame_ = -1;
+  LocalizerStage current_ = LocalizerStage::kIdle;
+  Clock::time_point last_ = Clock::now();
+  StageMs ms_{};
+};
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const std::size_t k = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size()))) ;
+  return v[std::min(v.size() - 1, k > 0 ? k - 1 : 0)];
 }
 
 // "infra_3" -> 1 + 3, "agent_1..." -> 32 + 1: stable ids per sensor. The number comes from the
@@ -77,6 +130,8 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
   std::vector<float> scan_times;
   sim::Image16 disparity;
   using Clock = std::chrono::steady_clock;
+  StageClock stages(options.timing, options.callgrind_dumps);
+  localizer.set_stage_probe(stages.active() ? stages.probe() : StageProbe{});
 
   for (int i = 0; i < frames; ++i) {
     const double t = reader.frame_time(i);
@@ -84,6 +139,8 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
     rec.t = t;
     rec.truth = reader.ground_truth()[static_cast<std::size_t>(i)].pose;
     double frame_seconds = 0.0;
+    stages.begin_period(i);
+    stages.mark(LocalizerStage::kInputs);
     // 1. CAN frames up to t.
     for (; next_can < can.size() && can[next_can].t <= t + 1e-9; ++next_can) {
       const sim::CanLogFrame& f = can[next_can];
@@ -106,6 +163,7 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
         }
       }
     }
+    stages.mark(LocalizerStage::kIdle);
     rec.has_gnss = has_gnss;
     rec.gnss_body = gnss_body;
     // 2. Map clouds up to t.
@@ -118,9 +176,11 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
       in.t = info.stamp;
       in.world_T_sensor = to_mat(info.sensor_pose);
       in.points = std::span<const Vec3f>(cloud.points.data(), cloud.points.size());
+      stages.mark(LocalizerStage::kMapInsert);
       const auto t0 = Clock::now();
       const MapInsertResult r = localizer.on_map_cloud(in);
       frame_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
+      stages.mark(LocalizerStage::kIdle);
       ++stats.map_clouds;
       if (r.status == MapInsertStatus::kRejectedInconsistent) ++stats.map_clouds_rejected;
     }
@@ -153,6 +213,8 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
     frame_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
     stats.seconds += frame_seconds;
     stats.max_frame_ms = std::max(stats.max_frame_ms, frame_seconds * 1e3);
+    stages.mark(LocalizerStage::kIdle);  // on_ego_scan ends idle; here for inputs-only periods
+    if (options.timing) stats.period_stage_ms.push_back(stages.period_ms());
     take_revisions(localizer.backfill(), static_cast<std::size_t>(i), records);
     if (rec.out.gate_decided && rec.out.gate_decided_frame < records.size()) {
       records[rec.out.gate_decided_frame].gate_decided = true;
@@ -167,6 +229,7 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
                    frame_seconds * 1e3);
     }
   }
+  localizer.set_stage_probe(StageProbe{});
   stats.counters = localizer.counters();
   if (!options.quiet) {
     const LocalizerCounters& c = stats.counters;
@@ -187,6 +250,34 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
                  static_cast<unsigned long long>(localizer.ekf().counters().history_overflows));
   }
   return true;
+}
+
+}  // namespace v2xloc::eval
+
+namespace v2xloc::eval {
+
+TimingSummary summarize_timing(const std::vector<StageMs>& periods) {
+  TimingSummary out;
+  if (periods.empty()) return out;
+  std::vector<double> totals;
+  for (std::size_t i = 0; i < periods.size(); ++i) {
+    double sum = 0.0;
+    for (double v : periods[i]) sum += v;
+    totals.push_back(sum);
+    if (out.worst_frame < 0 || sum > out.max_ms) {
+      out.max_ms = sum;
+      out.worst_frame = static_cast<int>(i);
+    }
+  }
+  out.median_ms = percentile(totals, 0.5);
+  out.p99_ms = percentile(totals, 0.99);
+  out.worst_stages_ms = periods[static_cast<std::size_t>(out.worst_frame)];
+  for (std::size_t s = 0; s < out.median_stages_ms.size(); ++s) {
+    std::vector<double> v;
+    for (const StageMs& p : periods) v.push_back(p[s]);
+    out.median_stages_ms[s] = percentile(v, 0.5);
+  }
+  return out;
 }
 
 }  // namespace v2xloc::eval

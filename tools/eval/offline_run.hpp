@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <array>
 #include <string>
 #include <vector>
 
@@ -32,7 +33,17 @@ struct RunOptions {
   int max_frames = -1;                                     // -1: all
   Eigen::Vector3d gnss_antenna_in_body{0.0, 0.0, 1.75};    // recording's GNSS lever arm [m]
   bool quiet = false;
+  // Per-period host time by stage (v2xloc-eval --timing): the period is everything the localizer
+  // does for one frame (CAN inputs up to the frame, map clouds, the ego scan); recording I/O is
+  // not in it.
+  bool timing = false;
+  // Under valgrind --tool=callgrind: one CALLGRIND_DUMP_STATS per stage of every period, labelled
+  // "frame N stage" (tools/timing/frame_instructions.py reads them). No effect otherwise.
+  bool callgrind_dumps = false;
 };
+
+// Host milliseconds of one period, by LocalizerStage (stage_probe.hpp).
+using StageMs = std::array<double, static_cast<std::size_t>(LocalizerStage::kCount)>;
 
 struct RunStats {
   double seconds = 0.0;          // wall time of the localizer calls only
@@ -41,7 +52,17 @@ struct RunStats {
   std::size_t can_decode_errors = 0;
   std::size_t map_clouds = 0;
   std::size_t map_clouds_rejected = 0;
+  std::vector<StageMs> period_stage_ms;  // one per frame when RunOptions::timing
 };
+
+struct TimingSummary {
+  double median_ms = 0.0, p99_ms = 0.0, max_ms = 0.0;
+  int worst_frame = -1;
+  StageMs worst_stages_ms{};   // the worst period's breakdown
+  StageMs median_stages_ms{};  // per stage, the median over periods
+};
+// Empty (worst_frame -1) without timing data.
+TimingSummary summarize_timing(const std::vector<StageMs>& periods);
 
 // Copies the latest pose of every frame the backfill still holds (records up to `newest`) into
 // lagged_pose / revised: called after each frame, a record's value is final once it leaves.

@@ -30,7 +30,50 @@ std::string columns_json(const ColumnErrors& c) {
          ",\"fused_valid\":" + number(c.fused_valid) + ",\"fused_ungated\":" + number(c.fused_ungated) + ",\"fused_lag\":" + number(c.fused_lag) + ",\"gps_3d\":" + number(c.gps_3d) + "}";
 }
 
+std::string stages_json(const StageMs& ms) {
+  std::string out = "{";
+  bool first = true;
+  for (std::size_t s = 1; s < ms.size(); ++s) {  // kIdle is never charged
+    if (!first) out += ",";
+    first = false;
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "\"%s\":%.3f", stage_name(static_cast<LocalizerStage>(s)), ms[s]);
+    out += buf;
+  }
+  return out + "}";
+}
+
+std::string stages_text(const StageMs& ms) {
+  std::string out;
+  for (std::size_t s = 1; s < ms.size(); ++s) {
+    if (ms[s] < 0.05) continue;
+    char buf[96];
+    std::snprintf(buf, sizeof buf, " %s %.1f", stage_name(static_cast<LocalizerStage>(s)), ms[s]);
+    out += buf;
+  }
+  return out;
+}
+
 }  // namespace
+
+std::string format_timing(const std::vector<RowReport>& rows) {
+  std::string out;
+  char buf[256];
+  for (const RowReport& r : rows) {
+    if (r.stats.period_stage_ms.empty()) continue;
+    if (out.empty()) {
+      out = "Timing, host ms per 100 ms period (CAN inputs + map clouds + ego scan; recording I/O excluded)\n";
+      std::snprintf(buf, sizeof buf, "%-4s %-16s %8s %8s %8s %6s  %s\n", "Sim", "Permutation", "median",
+                    "p99", "max", "worst", "worst period by stage (ms)");
+      out += buf;
+    }
+    const TimingSummary t = summarize_timing(r.stats.period_stage_ms);
+    std::snprintf(buf, sizeof buf, "%-4d %-16s %8.1f %8.1f %8.1f %6d ", r.sim, r.permutation.c_str(), t.median_ms,
+                  t.p99_ms, t.max_ms, t.worst_frame);
+    out += buf + stages_text(t.worst_stages_ms) + "\n";
+  }
+  return out;
+}
 
 std::string format_table(const std::vector<RowReport>& rows, bool aligned) {
   std::string out;
@@ -88,6 +131,15 @@ std::string format_json(const std::vector<RowReport>& rows) {
                   number(r.metrics.frames ? 1e3 * r.stats.seconds / r.metrics.frames : 0.0).c_str(),
                   number(r.stats.max_frame_ms).c_str());
     out += head;
+    if (!r.stats.period_stage_ms.empty()) {
+      const TimingSummary t = summarize_timing(r.stats.period_stage_ms);
+      char buf[256];
+      std::snprintf(buf, sizeof buf, "\"timing\":{\"frame_ms\":{\"median\":%.3f,\"p99\":%.3f,\"max\":%.3f},\"worst_frame\":%d,",
+                    t.median_ms, t.p99_ms, t.max_ms, t.worst_frame);
+      out += buf;
+      out += "\"stages_ms\":" + stages_json(t.worst_stages_ms) +
+             ",\"stages_median_ms\":" + stages_json(t.median_stages_ms) + "},";
+    }
     out += "\"unaligned\":" + columns_json(r.metrics.unaligned) +
            ",\"aligned\":" + columns_json(r.metrics.aligned) + "}";
   }

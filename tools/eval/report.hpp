@@ -17,6 +17,8 @@ struct RowReport {
 };
 
 std::string format_table(const std::vector<RowReport>& rows, bool aligned);
+// Per-row period timing (rows run with --timing), empty otherwise.
+std::string format_timing(const std::vector<RowReport>& rows);
 std::string format_json(const std::vector<RowReport>& rows);
 
 }  // namespace v2xloc::eval

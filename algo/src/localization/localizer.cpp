@@ -67,7 +67,12 @@ void Localizer::configure(const LocalizerParams& params, const GeodeticOrigin& o
   odometry_.configure(params.odometry);
   odometry_.reset();
   map_.configure(params.map);
-  map_points_.clear();
+  map_targets_[0].points.clear();
+  map_targets_[1].points.clear();
+  map_active_ = 0;
+  map_phase_ = MapBuildPhase::kIdle;
+  map_normals_done_ = 0;
+  map_build_revision_ = 0;
   map_revision_ = ~0ull;
   map_built_t_ = -1e300;
   map_ready_ = false;
@@ -144,20 +149,25 @@ const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
   ++counters_.frames;
   body_T_lidar_ = in.body_T_lidar;
   if (std::isfinite(in.t) && (!have_frame_ || in.t > last_frame_t_)) {
+    probe_(LocalizerStage::kScanPrep);
     prepare_scan(in);
     stereo_down_.clear();
     if (params_.use_stereo && !in.stereo.disparity.empty()) prepare_stereo(in.stereo);
+    probe_(LocalizerStage::kOdometry);
     run_odometry(in);
+    probe_(LocalizerStage::kFusion);
     push_track_sample();
     if (ekf_.initialized()) {
       ekf_.predict_to(in.t);
       if (params_.shadow_ungated_filter) ekf_all_.predict_to(in.t);
     }
+    probe_(LocalizerStage::kMapRefresh);
     refresh_map(in.t);
     register_scan(in.t);
     last_frame_t_ = in.t;
     have_frame_ = true;
   }
+  probe_(LocalizerStage::kFusion);
   fill_output(in.t);
   BackfillSample sample;
   sample.frame = frame_;
@@ -167,6 +177,7 @@ const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
   sample.odometry_ok = output_.odometry_ok;
   output_.revised_frames = backfill_.push(sample);
   ++frame_;
+  probe_(LocalizerStage::kIdle);
   return output_;
 }
 
@@ -223,8 +234,8 @@ void Localizer::prepare_scan(const EgoScanInput& in) {
 }
 
 IcpTarget Localizer::map_target() const {
-  return IcpTarget{map_points_.span(), std::span<const Vec3f>(map_normals_, map_points_.size()),
-                   &map_tree_.tree};
+  const MapTarget& m = map_targets_[map_active_];
+  return IcpTarget{m.points.span(), std::span<const Vec3f>(m.normals, m.points.size()), &m.tree.tree};
 }
 
 void Localizer::run_odometry(const EgoScanInput& in) {
@@ -261,18 +272,48 @@ void Localizer::run_odometry(const EgoScanInput& in) {
 // the static scene hardly changes between them.
 void Localizer::refresh_map(double t) {
   map_.expire(t);
-  if (map_.revision() == map_revision_) return;
-  if (map_ready_ && t - map_built_t_ < params_.map_refresh_period) return;
-  map_.extract(map_points_);
-  map_tree_.build(map_points_.span());
-  NormalParams np;
-  np.radius = params_.map_normal_radius;
-  np.orient_to_viewpoint = false;  // point-to-plane residuals do not care about the sign
-  estimate_normals(map_tree_.tree, np, std::span<Vec3f>(map_normals_, map_points_.size()));
-  map_revision_ = map_.revision();
-  map_built_t_ = t;
-  map_ready_ = map_points_.size() >= params_.map_min_points;
-  ++counters_.map_rebuilds;
+  // One build step per period while a map is in use; the first one is built at once.
+  const std::uint32_t steps = map_ready_ ? 1u : kMapBuildSteps;
+  for (std::uint32_t s = 0; s < steps; ++s) {
+    if (!map_build_step(t)) break;
+  }
+}
+
+bool Localizer::map_build_step(double t) {
+  MapTarget& next = map_targets_[1 - map_active_];
+  switch (map_phase_) {
+    case MapBuildPhase::kIdle:
+      if (map_.revision() == map_revision_) return false;
+      if (map_ready_ && t - map_built_t_ < params_.map_refresh_period) return false;
+      map_.extract(next.points);
+      map_build_revision_ = map_.revision();
+      map_built_t_ = t;
+      map_phase_ = MapBuildPhase::kTree;
+      return true;
+    case MapBuildPhase::kTree:
+      next.tree.build(next.points.span());
+      map_normals_done_ = 0;
+      map_phase_ = MapBuildPhase::kNormals;
+      return true;
+    case MapBuildPhase::kNormals: {
+      NormalParams np;
+      np.radius = params_.map_normal_radius;
+      np.orient_to_viewpoint = false;  // point-to-plane residuals do not care about the sign
+      const std::size_t n = next.points.size();
+      const std::size_t slice = map_ready_ && params_.map_normals_per_period > 0 ? params_.map_normals_per_period : n;
+      estimate_normals_range(next.tree.tree, np, map_normals_done_, slice,
+                             std::span<Vec3f>(next.normals, config::kMaxMapPoints));
+      map_normals_done_ += slice;
+      if (map_normals_done_ < n) return false;  // more next period
+      map_active_ = 1 - map_active_;
+      map_revision_ = map_build_revision_;
+      map_phase_ = MapBuildPhase::kIdle;
+      map_ready_ = next.points.size() >= params_.map_min_points;
+      ++counters_.map_rebuilds;
+      return false;
+    }
+  }
+  return false;
 }
 
 void Localizer::register_scan(double t) {
@@ -282,11 +323,20 @@ void Localizer::register_scan(double t) {
     return;
   }
   // Source: the deskewed scan in the body frame, downsampled.
+  probe_(LocalizerStage::kDownsample);
   scan_body_.clear();
   for (std::size_t i = 0; i < scan_deskewed_count_; ++i) {
     scan_body_.push_back(transform_point(body_T_lidar_, scan_deskewed_[i]));
   }
   voxel_.run(scan_body_.span(), params_.registration_voxel, scan_down_);
+  search_scan_.clear();
+  {
+    const std::size_t want = params_.search_points < config::kMaxSearchPoints ? params_.search_points
+                                                                               : config::kMaxSearchPoints;
+    const std::size_t n = scan_down_.size();
+    const std::size_t stride = want > 0 && n > want ? (n + want - 1) / want : 1;
+    for (std::size_t i = 0; i < n; i += stride) search_scan_.push_back(scan_down_[i]);
+  }
 
   const IcpTarget target = map_target();
   const double sigma_xy = ekf_.initialized()
@@ -298,14 +348,18 @@ void Localizer::register_scan(double t) {
   RegistrationResult result;
   if (tracking) {
     output_.mode = LocalizationMode::kTracking;
+    probe_(LocalizerStage::kTracking);
     ++counters_.tracking_registrations;
-    result = icp(scan_down_.span(), target, ekf_.state().pose(), params_.icp);
+    result = icp(scan_down_.span(), target, ekf_.state().pose(), params_.icp,
+                 std::span<std::uint32_t>(icp_hints_, config::kMaxDownsampledPoints));
     if (result.ok() && result.inlier_rmse > params_.max_inlier_rmse) {
       result.status = RegistrationStatus::kDidNotConverge;  // counted as a failed frame
     }
     if (result.ok() && params_.audit_period_frames > 0 && ++frames_since_audit_ >= params_.audit_period_frames) {
       frames_since_audit_ = 0;
+      probe_(LocalizerStage::kAudit);
       if (!audit_basin(result)) result.status = RegistrationStatus::kDidNotConverge;
+      probe_(LocalizerStage::kTracking);
     }
     if (result.ok() && stereo_down_.size() >= params_.stereo_min_points) register_stereo(t);
   } else {
@@ -315,7 +369,10 @@ void Localizer::register_scan(double t) {
       return;
     }
     frames_since_global_ = 0;
-    if (!global_search(t, result)) {
+    probe_(LocalizerStage::kGlobalSearch);
+    const bool found = global_search(t, result);
+    probe_(LocalizerStage::kFusion);
+    if (!found) {
       output_.registration_attempted = true;
       output_.registration_status = result.status;
       output_.registration_pose = result.transform;
@@ -326,6 +383,7 @@ void Localizer::register_scan(double t) {
       return;
     }
   }
+  probe_(LocalizerStage::kFusion);
   output_.registration_attempted = true;
   output_.registration_status = result.status;
   output_.registration_pose = result.transform;
@@ -356,7 +414,9 @@ bool Localizer::global_search(double t, RegistrationResult& result) {
     sp.yaw_prior_tolerance = params_.heading_search_tolerance;
     ++counters_.heading_searches;
   }
-  const PoseSearchResult searched = search_pose(scan_down_.span(), target, last_gnss_enu_, sp);
+  const PoseSearchResult searched =
+      search_pose(search_scan_.span(), target, last_gnss_enu_, sp,
+                  std::span<std::uint32_t>(icp_hints_, config::kMaxDownsampledPoints));
   output_.searched = true;
   output_.search_heading_used = heading_known;
   output_.search_best_tight = searched.best_tight_fitness;
@@ -385,7 +445,7 @@ bool Localizer::global_search(double t, RegistrationResult& result) {
   if (params_.use_fpfh_ransac) {
     map_crop_.clear();
     const double r2 = params_.global_map_radius * params_.global_map_radius;
-    for (const Vec3f& p : map_points_) {
+    for (const Vec3f& p : map_targets_[map_active_].points) {
       const double dx = p.x() - last_gnss_enu_.x(), dy = p.y() - last_gnss_enu_.y();
       if (dx * dx + dy * dy <= r2) map_crop_.push_back(p);
     }
@@ -397,7 +457,9 @@ bool Localizer::global_search(double t, RegistrationResult& result) {
                                                         Mat4d::Identity(), global_workspace_);
     if (coarse.registration.ok()) {
       // Only confirms the exhaustive search (same basin); alone it is not trusted in a canyon.
-      const RegistrationResult r = icp(scan_down_.span(), target, coarse.registration.transform, sp.icp);
+      // On the search's points, so that its fitness compares with the search's candidates.
+      const RegistrationResult r = icp(search_scan_.span(), target, coarse.registration.transform, sp.icp,
+                                       std::span<std::uint32_t>(icp_hints_, config::kMaxDownsampledPoints));
       if (r.ok() && best.ok() && r.fitness > best.fitness &&
           horizontal_distance(r.transform, best.transform.topRightCorner<3, 1>()) < sp.distinct_distance) {
         best = r;
@@ -409,7 +471,8 @@ bool Localizer::global_search(double t, RegistrationResult& result) {
     return false;
   }
   // Final refinement with the tracking ICP, then the acceptance checks.
-  result = icp(scan_down_.span(), target, best.transform, params_.icp);
+  result = icp(scan_down_.span(), target, best.transform, params_.icp,
+               std::span<std::uint32_t>(icp_hints_, config::kMaxDownsampledPoints));
   if (!result.ok()) return false;
   double track_distance = 0.0;
   const bool track_known = params_.use_gnss && track_gnss_distance(result.transform, track_distance);
@@ -536,13 +599,15 @@ bool Localizer::audit_basin(const RegistrationResult& tracked) {
   PoseSearchParams sp = params_.search;
   sp.radius = params_.audit_radius;
   sp.sensor_in_body = body_T_lidar_.topRightCorner<3, 1>();
-  const PoseSearchResult s = search_pose(scan_down_.span(), target, tracked.transform.topRightCorner<3, 1>(), sp);
+  const PoseSearchResult s =
+      search_pose(search_scan_.span(), target, tracked.transform.topRightCorner<3, 1>(), sp,
+                  std::span<std::uint32_t>(icp_hints_, config::kMaxDownsampledPoints));
   if (!s.best.ok()) return true;
   const Mat4d d = se3_inverse(tracked.transform) * s.best.transform;
   const bool distinct = std::sqrt(d(0, 3) * d(0, 3) + d(1, 3) * d(1, 3)) >= sp.distinct_distance ||
                         std::abs(det::wrap_pi(yaw_of(d.topLeftCorner<3, 3>()))) >= sp.distinct_yaw;
   if (!distinct) return true;
-  const double tracked_tight = evaluate_registration(scan_down_.span(), target, tracked.transform,
+  const double tracked_tight = evaluate_registration(search_scan_.span(), target, tracked.transform,
                                                      sp.select_distance).fitness;
   if (!(s.best_tight_fitness > params_.audit_switch_ratio * tracked_tight)) return true;
   ++counters_.basin_switches;
@@ -684,7 +749,7 @@ void Localizer::fill_output(double t) {
     pose.topRightCorner<3, 1>() = last_gnss_enu_;
     double road_z = 0.0;
     if (have_gnss_ && map_ready_ &&
-        road_height_near(map_points_.span(), last_gnss_enu_, params_.global_map_radius, road_z,
+        road_height_near(map_targets_[map_active_].points.span(), last_gnss_enu_, params_.global_map_radius, road_z,
                     params_.road_height_min_points)) {
       pose(2, 3) = road_z;
       ++counters_.road_height_outputs;

@@ -187,10 +187,17 @@ OdometryResult LidarOdometry::register_frame(std::span<const Vec3f> scan, const 
     NormalParams np;
     np.radius = static_cast<float>(params_.normal_radius);
     np.orient_to_viewpoint = false;  // the residual is squared: the sign does not matter
-    estimate_normals(fine_tree_.tree, np, std::span<Vec3f>(fine_normals_, frame_fine_.size()));
+    // Only the fine points some coarse point takes its normal from (about one in three) need
+    // one: computed on first use, each exactly as the whole-frame pass would.
+    for (std::size_t i = 0; i < frame_fine_.size(); ++i) fine_has_normal_[i] = 0;
+    const std::span<Vec3f> fine_normals(fine_normals_, frame_fine_.size());
     for (std::size_t i = 0; i < frame_coarse_.size(); ++i) {
       Neighbor nb{0, 0.0f};
       const KdQueryResult q = fine_tree_.tree.nearest(frame_coarse_[i], nb);
+      if (q.count > 0 && fine_has_normal_[nb.index] == 0) {
+        estimate_normals_range(fine_tree_.tree, np, nb.index, 1, fine_normals);
+        fine_has_normal_[nb.index] = 1;
+      }
       coarse_normals_[i] = q.count > 0 ? fine_normals_[nb.index] : Vec3f::Zero();
     }
   }

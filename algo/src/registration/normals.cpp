@@ -26,8 +26,11 @@ NormalsResult estimate_normals(const KdTree<Vec3f>& tree, const NormalParams& pa
   return estimate_normals(KdNeighborhoods(tree), params, normals, quality);
 }
 
-NormalsResult estimate_normals(const KdNeighborhoods& neighborhoods, const NormalParams& params,
-                               std::span<Vec3f> normals, std::span<NormalQuality> quality) {
+namespace {
+
+NormalsResult normals_of_range(const KdNeighborhoods& neighborhoods, const NormalParams& params,
+                               std::span<Vec3f> normals, std::span<NormalQuality> quality,
+                               std::size_t first, std::size_t count) {
   NormalsResult r;
   const KdTree<Vec3f>& tree = neighborhoods.tree();
   const std::span<const Vec3f> points = tree.points();
@@ -47,8 +50,10 @@ NormalsResult estimate_normals(const KdNeighborhoods& neighborhoods, const Norma
   }
   Neighbor neighbors[config::kMaxNeighbors];
   const Vec3d viewpoint = params.viewpoint.cast<double>();
+  const std::size_t begin = first < points.size() ? first : points.size();
+  const std::size_t end = count < points.size() - begin ? begin + count : points.size();
 
-  for (std::size_t i = 0; i < points.size(); ++i) {
+  for (std::size_t i = begin; i < end; ++i) {
     const Vec3f& p = points[i];
     NormalQuality q = NormalQuality::kOk;
     if (!is_finite_point(p)) {
@@ -102,9 +107,21 @@ NormalsResult estimate_normals(const KdNeighborhoods& neighborhoods, const Norma
     normals[i] = normal.cast<float>();
     if (!quality.empty()) quality[i] = q;
   }
-  r.points = static_cast<std::uint32_t>(points.size());
+  r.points = static_cast<std::uint32_t>(end - begin);
   r.status = NormalsStatus::kOk;
   return r;
+}
+
+}  // namespace
+
+NormalsResult estimate_normals(const KdNeighborhoods& neighborhoods, const NormalParams& params,
+                               std::span<Vec3f> normals, std::span<NormalQuality> quality) {
+  return normals_of_range(neighborhoods, params, normals, quality, 0, neighborhoods.tree().points().size());
+}
+
+NormalsResult estimate_normals_range(const KdTree<Vec3f>& tree, const NormalParams& params,
+                                     std::size_t first, std::size_t count, std::span<Vec3f> normals) {
+  return normals_of_range(KdNeighborhoods(tree), params, normals, {}, first, count);
 }
 
 }  // namespace v2xloc

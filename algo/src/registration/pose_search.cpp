@@ -142,7 +142,8 @@ double ray_conflict_ratio(std::span<const Vec3f> scan_body, const IcpTarget& map
 }
 
 PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& map,
-                             const Vec3d& center, const PoseSearchParams& params) {
+                             const Vec3d& center, const PoseSearchParams& params,
+                             std::span<std::uint32_t> neighbor_scratch) {
   PoseSearchResult out;
   out.best.status = RegistrationStatus::kNotEnoughPoints;
   if (map.tree == nullptr || map.points.empty() || scan_body.empty() || !(params.step > 0.0) ||
@@ -168,6 +169,10 @@ PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& 
   road_height_near(map.points, center, params.radius + params.ground_margin, out.ground_z);
   Candidate top[kPoseSearchRefine];
   const double d2max = params.score_distance * params.score_distance;
+  // A hit needs the nearest map point within score_distance: a bounded search answers exactly
+  // that without exploring the tree beyond it (the unbounded nearest of a point in free space
+  // visits most of the tree).
+  const float d2max_f = static_cast<float>(d2max);
   const int cells = static_cast<int>(std::floor(params.radius / params.step));
   for (int iy = -cells; iy <= cells; ++iy) {
     for (int ix = -cells; ix <= cells; ++ix) {
@@ -187,7 +192,10 @@ PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& 
                         static_cast<float>(s * p.x() + c * p.y() + y),
                         static_cast<float>(p.z() + out.ground_z));
           Neighbor nb{0, 0.0f};
-          if (map.tree->nearest(q, nb).count > 0 && nb.squared_distance <= d2max) ++hits;
+          if (map.tree->nearest_within(q, d2max_f, KdTree<Vec3f>::kNoHint, nb).count > 0 &&
+              nb.squared_distance <= d2max) {
+            ++hits;
+          }
         }
         const double score = static_cast<double>(hits) / n;
         keep_distinct_best(top, Candidate{score, x, y, yaw}, params);
@@ -203,9 +211,9 @@ PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& 
     refined[i].status = RegistrationStatus::kDidNotConverge;
     if (cand.score < 0.0) continue;
     const RegistrationResult coarse =
-        icp(scan_body, map, pose_of(cand.x, cand.y, out.ground_z, cand.yaw), params.icp);
+        icp(scan_body, map, pose_of(cand.x, cand.y, out.ground_z, cand.yaw), params.icp, neighbor_scratch);
     if (!coarse.ok()) continue;
-    refined[i] = icp(scan_body, map, coarse.transform, params.fine_icp);
+    refined[i] = icp(scan_body, map, coarse.transform, params.fine_icp, neighbor_scratch);
     if (refined[i].ok() && params.use_yaw_prior &&
         std::abs(det::wrap_pi(yaw_of(refined[i].transform.topLeftCorner<3, 3>()) - params.yaw_prior)) >
             params.yaw_prior_tolerance) {

@@ -55,6 +55,11 @@ inline constexpr std::uint32_t kRansacMaxValidations = 1000;    // full inlier c
 
 // ---- ICP ------------------------------------------------------------------------------------
 inline constexpr std::uint32_t kIcpMaxIterations = 64;
+// Pose search (start-up, lost track, basin audit): scan points its hypotheses are refined and
+// compared on, a uniform subsample of the registration scan. Its ICPs are 2 x 10 candidates x
+// <= 30 iterations: this caps their nearest-neighbour queries at ~1.2 M per search whatever the
+// scan size (LocalizerParams::search_points picks the number, <= this).
+inline constexpr std::size_t kMaxSearchPoints = 2048;
 
 // ---- Localization ---------------------------------------------------------------------------
 inline constexpr std::size_t kGateMaxWindow = 64;          // validity-gate window w (frames)

@@ -29,6 +29,7 @@
 #include "v2xloc/algo/localization/localizer_params.hpp"
 #include "v2xloc/algo/localization/stereo_cloud.hpp"
 #include "v2xloc/algo/localization/odometry.hpp"
+#include "v2xloc/algo/localization/stage_probe.hpp"
 #include "v2xloc/algo/localization/trajectory_backfill.hpp"
 #include "v2xloc/algo/registration/register_clouds.hpp"
 #include "v2xloc/algo/registration/voxel_downsample.hpp"
@@ -173,6 +174,10 @@ class Localizer {
   // Processes one ego frame; the returned reference stays valid until the next call.
   const LocalizerFrameOutput& on_ego_scan(const EgoScanInput& input);
 
+  // Optional observer of the stage boundaries inside on_ego_scan (host timing / profiling);
+  // survives configure().
+  void set_stage_probe(const StageProbe& probe) { probe_ = probe; }
+
   const LocalizerParams& params() const { return params_; }
   const Ekf& ekf() const { return ekf_; }
   // A second filter fed with every successful registration (no validity gate), for the paper's
@@ -180,7 +185,7 @@ class Localizer {
   const Ekf& ekf_ungated() const { return ekf_all_; }
   const MapFusion& map() const { return map_; }
   const LocalizerCounters& counters() const { return counters_; }
-  std::span<const Vec3f> map_points() const { return map_points_.span(); }
+  std::span<const Vec3f> map_points() const { return map_targets_[map_active_].points.span(); }
   // The last config::kBackfillFrames outputs, start-up frames revised once the filter starts.
   const TrajectoryBackfill& backfill() const { return backfill_; }
 
@@ -197,6 +202,7 @@ class Localizer {
   static constexpr std::size_t kPendingCapacity = config::kGateMaxWindow;
 
   void refresh_map(double t);
+  bool map_build_step(double t);                 // false: nothing (more) to do this period
   void prepare_scan(const EgoScanInput& input);  // filter + deskew into scan_deskewed_
   IcpTarget map_target() const;                  // the reference map as an ICP target
   void run_odometry(const EgoScanInput& input);
@@ -221,6 +227,7 @@ class Localizer {
   void fill_output(double t);
 
   LocalizerParams params_{};
+  StageProbe probe_{};
   GeodeticOrigin origin_{};
   LocalizerCounters counters_{};
   LocalizerFrameOutput output_{};
@@ -276,9 +283,20 @@ class Localizer {
 
   // Reference map and its registration products.
   MapFusion map_{};
-  FixedVector<Vec3f, config::kMaxMapPoints> map_points_;
-  Vec3f map_normals_[config::kMaxMapPoints];
-  KdTreeStorage<Vec3f, config::kMaxMapPoints> map_tree_;
+  // The registration target, double-buffered: registration reads map_targets_[map_active_]
+  // while the next one is built over several periods (refresh_map).
+  struct MapTarget {
+    FixedVector<Vec3f, config::kMaxMapPoints> points;
+    Vec3f normals[config::kMaxMapPoints];
+    KdTreeStorage<Vec3f, config::kMaxMapPoints> tree;
+  };
+  enum class MapBuildPhase : std::uint8_t { kIdle, kTree, kNormals };
+  static constexpr std::uint32_t kMapBuildSteps = 3;  // extract, tree, normals: one rebuild
+  MapTarget map_targets_[2];
+  std::uint32_t map_active_ = 0;
+  MapBuildPhase map_phase_ = MapBuildPhase::kIdle;
+  std::size_t map_normals_done_ = 0;
+  std::uint64_t map_build_revision_ = 0;
   std::uint64_t map_revision_ = ~0ull;
   double map_built_t_ = -1e300;
   bool map_ready_ = false;
@@ -290,6 +308,10 @@ class Localizer {
   std::size_t scan_deskewed_count_ = 0;
   FixedVector<Vec3f, config::kMaxScanPoints> scan_body_;
   FixedVector<Vec3f, config::kMaxDownsampledPoints> scan_down_;
+  // Each scan point's map match of the last ICP iteration seeds its next search (same matches,
+  // fewer k-d tree nodes).
+  std::uint32_t icp_hints_[config::kMaxDownsampledPoints];
+  FixedVector<Vec3f, config::kMaxSearchPoints> search_scan_;  // pose search's subsample
   VoxelDownsampleStorage<config::kVoxelHashSlots, config::kMaxDownsampledPoints> voxel_;
   FixedVector<Vec3f, config::kMaxMapPoints> map_crop_;
   Vec3f stereo_points_[config::kMaxStereoPoints];

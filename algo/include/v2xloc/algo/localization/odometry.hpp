@@ -137,6 +137,7 @@ class LidarOdometry {
   std::uint32_t fine_voxel_[config::kMaxDownsampledPoints];
   KdTreeStorage<Vec3f, config::kMaxDownsampledPoints> fine_tree_;
   Vec3f fine_normals_[config::kMaxDownsampledPoints];
+  std::uint8_t fine_has_normal_[config::kMaxDownsampledPoints];  // computed this frame
   Vec3f coarse_normals_[config::kMaxDownsampledPoints];
 };
 

@@ -56,6 +56,11 @@ struct NormalsResult {
 NormalsResult estimate_normals(const KdTree<Vec3f>& tree, const NormalParams& params,
                                std::span<Vec3f> normals,
                                std::span<NormalQuality> quality = {});
+// Normals of points [first, first + count) of tree.points() only (clamped to the cloud; the rest
+// of `normals` is left as it is), each exactly as the whole-cloud call computes it: a caller can
+// spread one cloud's normals over several calls (bounded work per call).
+NormalsResult estimate_normals_range(const KdTree<Vec3f>& tree, const NormalParams& params,
+                                     std::size_t first, std::size_t count, std::span<Vec3f> normals);
 // Same, with the neighbourhoods taken from a shared cache (e.g. the FPFH search, when
 // params.radius / max_nn do not exceed the cache's): the same normals, bit for bit.
 NormalsResult estimate_normals(const KdNeighborhoods& neighborhoods, const NormalParams& params,

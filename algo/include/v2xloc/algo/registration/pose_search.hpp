@@ -91,7 +91,11 @@ bool road_height(std::span<const Vec3f> map, const Vec3d& center, double radius,
 bool road_height_near(std::span<const Vec3f> map, const Vec3d& center, double radius, double& height,
                       std::uint32_t min_points = 1);
 
+// Work: hypotheses * score_points bounded nearest queries, then 2 * kPoseSearchRefine ICPs over
+// scan_body (callers bound its size: the localizer passes <= config::kMaxSearchPoints points).
+// neighbor_scratch (optional, >= scan_body.size()): ICP match hints (icp.hpp); same result.
 PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& map,
-                             const Vec3d& center, const PoseSearchParams& params);
+                             const Vec3d& center, const PoseSearchParams& params,
+                             std::span<std::uint32_t> neighbor_scratch = {});
 
 }  // namespace v2xloc

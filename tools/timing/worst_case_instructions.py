@@ -1,0 +1,71 @@
+#!/usr/bin/env python3
+"""Runs the worst-case localizer test binary under callgrind and checks every adversarial
+period against the instruction budget (100 M per 100 ms period, A53-class core at 10 Hz).
+
+The binary (tests/worst_case/localizer) brackets each counted period with callgrind dumps
+labelled "CASE period N"; set-up work is dumped as "setup" and ignored. Prints one row per case
+(max instructions per period, periods) and fails when any period exceeds the budget or the
+gtest itself fails.
+
+  tools/timing/worst_case_instructions.py build/host/bin/test_worst_case_localizer [--filter X]
+"""
+import argparse
+import os
+import re
+import subprocess
+import sys
+import tempfile
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from frame_instructions import parse_parts  # noqa: E402
+
+BUDGET = 100e6
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("binary")
+    ap.add_argument("--filter", default="WorstCase.*", help="gtest filter")
+    ap.add_argument("--budget", type=float, default=BUDGET)
+    ap.add_argument("--markdown", action="store_true", help="print the table as Markdown")
+    args = ap.parse_args()
+    with tempfile.TemporaryDirectory(prefix="worst-case-") as d:
+        out = os.path.join(d, "callgrind.out")
+        cmd = ["valgrind", "--tool=callgrind", "--callgrind-out-file=" + out, "--combine-dumps=yes",
+               "--dump-instr=no", "--compress-pos=no", args.binary, "--gtest_filter=" + args.filter]
+        r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        sys.stdout.write(r.stdout[-3000:])
+        if r.returncode != 0:
+            sys.stderr.write(r.stderr[-3000:])
+            print("FAIL: the worst-case test binary failed under callgrind")
+            return 1
+        cases = {}
+        for label, instr in parse_parts(out):
+            m = re.match(r"(\S+) period (\d+)$", label)
+            if m:
+                cases.setdefault(m.group(1), []).append(instr)
+    if not cases:
+        print("FAIL: no counted periods found")
+        return 1
+    over = 0
+    if args.markdown:
+        print("| adversarial input | periods | max instructions per period | budget |")
+        print("|---|---|---|---|")
+    for name, values in cases.items():
+        worst = max(values)
+        ok = worst <= args.budget
+        over += 0 if ok else 1
+        if args.markdown:
+            print("| %s | %d | %.1f M | %s |" % (name, len(values), worst / 1e6, "ok" if ok else "OVER"))
+        else:
+            print("%-28s periods %3d  max %8.1f M  %s" % (name, len(values), worst / 1e6,
+                                                         "ok" if ok else "OVER BUDGET"))
+    if over:
+        print("FAIL: %d case(s) over %.0f M instructions per period" % (over, args.budget / 1e6))
+        return 1
+    print("all periods within %.0f M instructions" % (args.budget / 1e6))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
