@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The whole test suite, as CI runs it: host build + tests, ASan/UBSan tests, aarch64 cross build +
-# tests under qemu-aarch64, and the bare-metal Cortex-R52 build with its link check.
+# tests under qemu-aarch64, the bare-metal Cortex-R52 build with its link check, the installed
+# package's consumers and the fuzz targets.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 JOBS=${JOBS:-$(nproc)}
@@ -31,5 +32,10 @@ tools/check-baremetal.sh build/cortex-r52/bin/v2xloc_baremetal.elf
 
 step "install: find_package(v2xloc) consumers for host, aarch64 (qemu) and Cortex-R52 (link)"
 ctest --test-dir build/host -L install --output-on-failure
+
+step "fuzz: a libFuzzer target per parser (clang-14, ASan + UBSan), time-limited runs"
+cmake --preset fuzz >/dev/null
+cmake --build --preset fuzz -j "$JOBS"
+ctest --preset fuzz
 
 step "all test stages passed"
