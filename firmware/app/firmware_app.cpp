@@ -120,9 +120,11 @@ std::size_t FirmwareApp::poll_pps() {
 }
 
 std::size_t FirmwareApp::drain_datagrams() {
-  std::size_t n = 0;
+  // V2X first: the shares received before an ego scan reach its period boundary (the input order
+  // the offline paths use: map clouds up to t, then the scan at t).
+  std::size_t n = drain_link(hal_.clouds, false);
   if (hal_.ego != nullptr) n += drain_link(*hal_.ego, true);
-  return n + drain_link(hal_.clouds, false);
+  return n;
 }
 
 std::size_t FirmwareApp::drain_link(hal::DatagramLink& link, bool ego_link) {
