@@ -610,12 +610,25 @@ bool Localizer::audit_basin(const RegistrationResult& tracked) {
   const double tracked_tight = evaluate_registration(search_scan_.span(), target, tracked.transform,
                                                      sp.select_distance).fitness;
   if (!(s.best_tight_fitness > params_.audit_switch_ratio * tracked_tight)) return true;
+  // The subset only nominates a basin. The switch is decided on the full scan: the candidate is
+  // refined there with the tracking ICP (as an accepted pose would be) and must still be another
+  // basin and beat the tracked pose's full-scan tight fitness by audit_full_switch_ratio.
+  const RegistrationResult full = icp(scan_down_.span(), target, s.best.transform, params_.icp,
+                                      std::span<std::uint32_t>(icp_hints_, config::kMaxDownsampledPoints));
+  const double tracked_full = evaluate_registration(scan_down_.span(), target, tracked.transform,
+                                                    sp.select_distance).fitness;
+  const double cand_full = full.ok() ? evaluate_registration(scan_down_.span(), target, full.transform,
+                                                             sp.select_distance).fitness : 0.0;
+  const Mat4d df = se3_inverse(tracked.transform) * full.transform;
+  const bool still_distinct = std::sqrt(df(0, 3) * df(0, 3) + df(1, 3) * df(1, 3)) >= sp.distinct_distance ||
+                              std::abs(det::wrap_pi(yaw_of(df.topLeftCorner<3, 3>()))) >= sp.distinct_yaw;
+  if (!full.ok() || !still_distinct || !(cand_full > params_.audit_full_switch_ratio * tracked_full)) return true;
   ++counters_.basin_switches;
   lose_track();
   candidate_.valid = true;  // a global search must confirm it before the filter restarts
   candidate_.output = true;  // found next to a tracked pose: a better estimate than GNSS
   candidate_.frame = frame_;
-  candidate_.pose = s.best.transform;
+  candidate_.pose = full.transform;
   candidate_.odom = odom_T_body_;
   return false;
 }

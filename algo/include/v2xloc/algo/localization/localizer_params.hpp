@@ -69,6 +69,7 @@ struct LocalizerParams {
   std::uint32_t audit_period_frames = 10; // [frames] between basin audits while tracking (0: off)
   double audit_radius = 8.0;              // [m] basin audit: search disc around the tracked pose
   double audit_switch_ratio = 1.15;       // [ratio] audit pose's tight fitness over tracked: switch
+  double audit_full_switch_ratio = 1.15;  // [ratio] ... and again on the full scan after ICP: switch
   std::uint32_t track_frames = 30;        // [frames] GNSS track compared (<= kTrackFrames)
   std::uint32_t track_min_fixes = 10;     // [fixes] needed in the track to decide
   double track_distance_ratio = 0.6;      // [ratio] winner's mean track distance < ratio * loser's
