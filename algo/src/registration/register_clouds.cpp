@@ -49,30 +49,25 @@ bool is_collinear(std::span<const Vec3f> cloud) {
   return !(eigenvalues(1) > 1e-10 * eigenvalues(2)) || !(eigenvalues(2) > 0.0);
 }
 
-}  // namespace
+// One call's state shared by its steps.
+struct Pipeline {
+  const RegisterCloudsParams& params;
+  RegistrationWorkspace& ws;
+  RegisterCloudsResult& out;
+  StageTimer& timer;
+  float voxel = 0.0f;
+  VoxelDownsampleResult ds_source{}, ds_target{};
+};
 
-RegisterCloudsResult register_clouds(std::span<const Vec3f> source, std::span<const Vec3f> target,
-                                     const RegisterCloudsParams& params, const Mat4d& initial,
-                                     RegistrationWorkspace& ws) {
-  RegisterCloudsResult out;
-  RegistrationResult& reg = out.registration;
-  RegisterStageStats& stats = out.stats;
-  reg.transform = params.mode == RegistrationMode::kIcpOnly ? initial : Mat4d::Identity();
-  out.coarse.transform = reg.transform;
-  stats.source_input = static_cast<std::uint32_t>(source.size());
-  stats.target_input = static_cast<std::uint32_t>(target.size());
+bool params_valid(const RegisterCloudsParams& params, const Mat4d& initial) {
   const float voxel = params.voxel_size;
-  if (!std::isfinite(voxel) || !(voxel > 0.0f) || !initial.allFinite() ||
-      !(params.normal_radius_voxels > 0.0f) || !(params.fpfh_radius_voxels > 0.0f) ||
-      !(params.ransac_distance_voxels > 0.0) || !(params.icp_distance_voxels > 0.0) ||
-      !(params.icp_kernel_voxels > 0.0)) {
-    reg.status = RegistrationStatus::kInvalidInput;
-    out.coarse.status = reg.status;
-    return out;
-  }
-  StageTimer timer(params.clock, stats);
+  return std::isfinite(voxel) && voxel > 0.0f && initial.allFinite() && params.normal_radius_voxels > 0.0f &&
+         params.fpfh_radius_voxels > 0.0f && params.ransac_distance_voxels > 0.0 &&
+         params.icp_distance_voxels > 0.0 && params.icp_kernel_voxels > 0.0;
+}
 
-  // Truncate what does not fit a scan buffer (counted, never silent).
+// Truncates what does not fit a scan buffer (counted, never silent).
+void truncate_inputs(std::span<const Vec3f>& source, std::span<const Vec3f>& target, RegisterStageStats& stats) {
   if (source.size() > config::kMaxScanPoints) {
     stats.source_truncated = static_cast<std::uint32_t>(source.size() - config::kMaxScanPoints);
     source = source.first(config::kMaxScanPoints);
@@ -81,152 +76,145 @@ RegisterCloudsResult register_clouds(std::span<const Vec3f> source, std::span<co
     stats.target_truncated = static_cast<std::uint32_t>(target.size() - config::kMaxScanPoints);
     target = target.first(config::kMaxScanPoints);
   }
+}
 
-  // 1. Downsampling (one hash table, reused: the stage leaves it empty).
-  const VoxelDownsampleResult ds_source = ws.voxel.run(source, voxel, ws.source_down);
-  const VoxelDownsampleResult ds_target = ws.voxel.run(target, voxel, ws.target_down);
-  timer.lap(RegisterStage::kDownsample);
-  stats.source_downsampled = static_cast<std::uint32_t>(ws.source_down.size());
-  stats.target_downsampled = static_cast<std::uint32_t>(ws.target_down.size());
-  stats.downsample_overflow = overflow_of(ds_source) + overflow_of(ds_target);
-  reg.nonfinite_dropped = ds_source.non_finite_dropped + ds_target.non_finite_dropped;
-  reg.overflow_dropped = stats.source_truncated + stats.target_truncated + stats.downsample_overflow;
-  auto finish = [&](RegistrationStatus status) {
-    reg.status = status;
-    if (params.mode == RegistrationMode::kIcpOnly || out.coarse.status == RegistrationStatus::kInvalidInput) {
-      out.coarse.status = status;
-    }
-    reg.nonfinite_dropped = ds_source.non_finite_dropped + ds_target.non_finite_dropped;
-    reg.overflow_dropped = stats.source_truncated + stats.target_truncated +
-                           stats.downsample_overflow + stats.correspondences_truncated;
-    return out;
-  };
-  if (ws.source_down.size() < 3 || ws.target_down.size() < 3) {
-    return finish(RegistrationStatus::kNotEnoughPoints);
+// 1. Downsampling (one hash table, reused: the stage leaves it empty).
+void downsample(Pipeline& p, std::span<const Vec3f> source, std::span<const Vec3f> target) {
+  RegisterStageStats& stats = p.out.stats;
+  p.ds_source = p.ws.voxel.run(source, p.voxel, p.ws.source_down);
+  p.ds_target = p.ws.voxel.run(target, p.voxel, p.ws.target_down);
+  p.timer.lap(RegisterStage::kDownsample);
+  stats.source_downsampled = static_cast<std::uint32_t>(p.ws.source_down.size());
+  stats.target_downsampled = static_cast<std::uint32_t>(p.ws.target_down.size());
+  stats.downsample_overflow = overflow_of(p.ds_source) + overflow_of(p.ds_target);
+  p.out.registration.nonfinite_dropped = p.ds_source.non_finite_dropped + p.ds_target.non_finite_dropped;
+  p.out.registration.overflow_dropped = stats.source_truncated + stats.target_truncated + stats.downsample_overflow;
+}
+
+// The final status and the drop counts of every stage.
+RegisterCloudsResult& finish(Pipeline& p, RegistrationStatus status) {
+  RegisterCloudsResult& out = p.out;
+  const RegisterStageStats& stats = out.stats;
+  out.registration.status = status;
+  if (p.params.mode == RegistrationMode::kIcpOnly || out.coarse.status == RegistrationStatus::kInvalidInput) {
+    out.coarse.status = status;
   }
-  const std::span<const Vec3f> src = ws.source_down.span();
-  const std::span<const Vec3f> tgt = ws.target_down.span();
-  if (is_collinear(src) || is_collinear(tgt)) return finish(RegistrationStatus::kDegenerate);
+  out.registration.nonfinite_dropped = p.ds_source.non_finite_dropped + p.ds_target.non_finite_dropped;
+  out.registration.overflow_dropped = stats.source_truncated + stats.target_truncated + stats.downsample_overflow +
+                                      stats.correspondences_truncated;
+  return out;
+}
 
-  // 2./3. Trees, normals, FPFH. In global mode each cloud is searched once at the FPFH radius
-  // and the lists feed its normals (a prefix, see KdNeighborhoods) and both FPFH passes; the
-  // list storage is reused for the second cloud. ICP-only mode needs just the target normals.
-  const bool global = params.mode == RegistrationMode::kGlobal;
+// 2./3. Tree, normals and, in global mode, FPFH of one cloud. In global mode the cloud is
+// searched once at the FPFH radius and the lists feed its normals (a prefix, see
+// KdNeighborhoods) and both FPFH passes; the list storage is reused for the second cloud.
+// False: the tree could not be built.
+bool describe(Pipeline& p, std::span<const Vec3f> cloud, KdTreeStorage<Vec3f, RegistrationWorkspace::kMaxPoints>& tree,
+              const Vec3f& viewpoint, Vec3f* normals_out, std::span<Feature33> features, FpfhStatus& fpfh_status) {
+  const bool global = p.params.mode == RegistrationMode::kGlobal;
+  RegistrationWorkspace& ws = p.ws;
+  RegisterStageStats& stats = p.out.stats;
   NormalParams np;
-  np.radius = params.normal_radius_voxels * voxel;
-  np.max_nn = params.normal_max_nn;
+  np.radius = p.params.normal_radius_voxels * p.voxel;
+  np.max_nn = p.params.normal_max_nn;
+  np.viewpoint = viewpoint;
   FpfhParams fp;
-  fp.radius = params.fpfh_radius_voxels * voxel;
-  fp.max_nn = params.fpfh_max_nn;
-  const std::span<Feature33> scratch(ws.spfh_scratch, RegistrationWorkspace::kMaxPoints);
-  const std::span<Feature33> fsrc(ws.source_features, src.size());
-  const std::span<Feature33> ftgt(ws.target_features, tgt.size());
-  // Normals (and, in global mode, features) of one cloud; false: the tree could not be built.
-  const auto describe = [&](std::span<const Vec3f> cloud, KdTreeStorage<Vec3f, RegistrationWorkspace::kMaxPoints>& tree,
-                            const Vec3f& viewpoint, Vec3f* normals_out, std::span<Feature33> features,
-                            FpfhStatus& fpfh_status) {
-    if (tree.build(cloud).status != KdBuildStatus::kOk) return false;
-    const std::span<Vec3f> normals(normals_out, cloud.size());
-    np.viewpoint = viewpoint;
-    KdNeighborhoods lists(tree.tree);
-    if (global) {
-      lists.build(fp.radius > np.radius ? fp.radius : np.radius,
-                  fp.max_nn > np.max_nn ? fp.max_nn : np.max_nn,
-                  std::span<KdNeighborhoods::Slot>(ws.neighborhood_entries, RegistrationWorkspace::kListEntries),
-                  std::span<std::uint32_t>(ws.mutual_scratch, RegistrationWorkspace::kMaxPoints),
-                  std::span<std::uint8_t>(ws.neighborhood_count, RegistrationWorkspace::kListPoints));
-      stats.search_cap_hits += lists.build_search().visit_cap_hits;
-      stats.neighborhoods_not_cached += lists.not_cached();
-      timer.lap(RegisterStage::kFpfh);
-    }
-    const NormalsResult nr = estimate_normals(lists, np, normals);
-    stats.search_cap_hits += nr.search.visit_cap_hits;
-    timer.lap(RegisterStage::kNormals);
-    if (global) {
-      const FpfhResult fr = compute_fpfh(lists, normals, fp, scratch, features);
-      stats.search_cap_hits += fr.search.visit_cap_hits;
-      fpfh_status = fr.status;
-      timer.lap(RegisterStage::kFpfh);
-    }
-    return true;
-  };
-  FpfhStatus fpfh_source = FpfhStatus::kOk, fpfh_target = FpfhStatus::kOk;
-  if (global && !describe(src, ws.source_tree, params.source_viewpoint, ws.source_normals, fsrc, fpfh_source)) {
-    return finish(RegistrationStatus::kNotEnoughPoints);
-  }
-  if (!describe(tgt, ws.target_tree, params.target_viewpoint, ws.target_normals, ftgt, fpfh_target)) {
-    return finish(RegistrationStatus::kNotEnoughPoints);
-  }
-
-  Mat4d start = initial;
+  fp.radius = p.params.fpfh_radius_voxels * p.voxel;
+  fp.max_nn = p.params.fpfh_max_nn;
+  if (tree.build(cloud).status != KdBuildStatus::kOk) return false;
+  const std::span<Vec3f> normals(normals_out, cloud.size());
+  KdNeighborhoods lists(tree.tree);
   if (global) {
-    if (fpfh_source != FpfhStatus::kOk || fpfh_target != FpfhStatus::kOk) {
-      return finish(RegistrationStatus::kInvalidInput);
-    }
-
-    // 4. Nearest-feature correspondences (optionally mutual).
-    ws.target_feature_tree.build(std::span<const Feature33>(ftgt));
-    const KdTree<Feature33>* source_feature_tree = nullptr;
-    if (params.mutual_filter) {
-      ws.source_feature_tree.build(std::span<const Feature33>(fsrc));
-      source_feature_tree = &ws.source_feature_tree.tree;
-    }
-    // Exact projection pre-filter for the 33-D searches: principal axes of both feature sets;
-    // the SPFH scratch is free once the features exist: first the Jacobi matrices, then the
-    // projections (source point i at spfh_scratch[i][0..7], target at [8..15]).
-    CorrespondenceParams cp;
-    cp.mutual_filter = params.mutual_filter;
-    compute_feature_basis(fsrc, ftgt, 4, scratch, ws.feature_basis);
-    float* const projections = ws.spfh_scratch[0].data();
-    constexpr std::size_t kStride = sizeof(Feature33) / sizeof(float);
-    static_assert(kStride == kFpfhBins && 2 * FeatureBasis::kAxes <= kFpfhBins);
-    const float max_abs =
-        std::max(project_features(fsrc, ws.feature_basis, projections, kStride),
-                 project_features(ftgt, ws.feature_basis, projections + FeatureBasis::kAxes, kStride));
-    cp.projections = {projections, projections + FeatureBasis::kAxes, kStride};
-    ws.target_feature_tree.tree.set_projections(cp.projections.target, kStride, max_abs);
-    if (source_feature_tree != nullptr) {
-      ws.source_feature_tree.tree.set_projections(cp.projections.source, kStride, max_abs);
-    }
-    const bool approximate = params.feature_search_visits > 0 &&
-                             params.feature_search_visits < config::kKdMaxNodeVisits;
-    const std::size_t visits =
-        approximate ? params.feature_search_visits : config::kKdMaxNodeVisits;
-    ws.target_feature_tree.tree.set_max_node_visits(visits);
-    ws.source_feature_tree.tree.set_max_node_visits(visits);
-    const CorrespondenceResult cr = match_features(
-        fsrc, ws.target_feature_tree.tree, cp, ws.correspondences, source_feature_tree,
-        std::span<std::uint32_t>(ws.mutual_scratch, RegistrationWorkspace::kMaxPoints));
-    stats.correspondences = cr.count;
-    stats.correspondences_truncated = cr.truncated;
-    if (approximate) {
-      stats.feature_queries_cut += cr.search.visit_cap_hits;
-    } else {
-      stats.search_cap_hits += cr.search.visit_cap_hits;
-    }
-    timer.lap(RegisterStage::kCorrespondences);
-    if (cr.count < 3) {
-      out.coarse.status = RegistrationStatus::kNoCorrespondences;
-      return finish(RegistrationStatus::kNoCorrespondences);
-    }
-
-    // 5. RANSAC.
-    RansacParams rp = params.ransac;
-    rp.max_correspondence_distance = params.ransac_distance_voxels * voxel;
-    rp.distance_check_threshold = rp.max_correspondence_distance;
-    const RansacResult rr = ransac(src, tgt, ws.correspondences.span(), ws.target_tree.tree, rp);
-    timer.lap(RegisterStage::kRansac);
-    out.coarse = rr.registration;
-    stats.ransac_validations = rr.validations;
-    stats.ransac_correspondence_inliers = rr.correspondence_inliers;
-    if (!rr.registration.ok()) return finish(rr.registration.status);
-    start = rr.registration.transform;
+    lists.build(fp.radius > np.radius ? fp.radius : np.radius, fp.max_nn > np.max_nn ? fp.max_nn : np.max_nn,
+                std::span<KdNeighborhoods::Slot>(ws.neighborhood_entries, RegistrationWorkspace::kListEntries),
+                std::span<std::uint32_t>(ws.mutual_scratch, RegistrationWorkspace::kMaxPoints),
+                std::span<std::uint8_t>(ws.neighborhood_count, RegistrationWorkspace::kListPoints));
+    stats.search_cap_hits += lists.build_search().visit_cap_hits;
+    stats.neighborhoods_not_cached += lists.not_cached();
+    p.timer.lap(RegisterStage::kFpfh);
   }
+  const NormalsResult nr = estimate_normals(lists, np, normals);
+  stats.search_cap_hits += nr.search.visit_cap_hits;
+  p.timer.lap(RegisterStage::kNormals);
+  if (global) {
+    const std::span<Feature33> scratch(ws.spfh_scratch, RegistrationWorkspace::kMaxPoints);
+    const FpfhResult fr = compute_fpfh(lists, normals, fp, scratch, features);
+    stats.search_cap_hits += fr.search.visit_cap_hits;
+    fpfh_status = fr.status;
+    p.timer.lap(RegisterStage::kFpfh);
+  }
+  return true;
+}
 
-  // 6. ICP refinement against the target view.
-  IcpParams ip = params.icp;
-  ip.max_correspondence_distance = params.icp_distance_voxels * voxel;
-  ip.kernel.scale = params.icp_kernel_voxels * voxel;
+// The exact projection pre-filter of the 33-D searches: principal axes of both feature sets.
+// The SPFH scratch is free once the features exist: first the Jacobi matrices, then the
+// projections (source point i at spfh_scratch[i][0..7], target at [8..15]).
+void prepare_feature_projections(RegistrationWorkspace& ws, std::span<const Feature33> fsrc,
+                                 std::span<const Feature33> ftgt, bool mutual, CorrespondenceParams& cp) {
+  const std::span<Feature33> scratch(ws.spfh_scratch, RegistrationWorkspace::kMaxPoints);
+  compute_feature_basis(fsrc, ftgt, 4, scratch, ws.feature_basis);
+  float* const projections = ws.spfh_scratch[0].data();
+  constexpr std::size_t kStride = sizeof(Feature33) / sizeof(float);
+  static_assert(kStride == kFpfhBins && 2 * FeatureBasis::kAxes <= kFpfhBins);
+  const float max_abs =
+      std::max(project_features(fsrc, ws.feature_basis, projections, kStride),
+               project_features(ftgt, ws.feature_basis, projections + FeatureBasis::kAxes, kStride));
+  cp.projections = {projections, projections + FeatureBasis::kAxes, kStride};
+  ws.target_feature_tree.tree.set_projections(cp.projections.target, kStride, max_abs);
+  if (mutual) ws.source_feature_tree.tree.set_projections(cp.projections.source, kStride, max_abs);
+}
+
+// 4. Nearest-feature correspondences (optionally mutual); false: fewer than three.
+bool find_correspondences(Pipeline& p, std::span<const Feature33> fsrc, std::span<const Feature33> ftgt) {
+  RegistrationWorkspace& ws = p.ws;
+  RegisterStageStats& stats = p.out.stats;
+  ws.target_feature_tree.build(ftgt);
+  const KdTree<Feature33>* source_feature_tree = nullptr;
+  if (p.params.mutual_filter) {
+    ws.source_feature_tree.build(fsrc);
+    source_feature_tree = &ws.source_feature_tree.tree;
+  }
+  CorrespondenceParams cp;
+  cp.mutual_filter = p.params.mutual_filter;
+  prepare_feature_projections(ws, fsrc, ftgt, source_feature_tree != nullptr, cp);
+  const bool approximate = p.params.feature_search_visits > 0 && p.params.feature_search_visits < config::kKdMaxNodeVisits;
+  const std::size_t visits = approximate ? p.params.feature_search_visits : config::kKdMaxNodeVisits;
+  ws.target_feature_tree.tree.set_max_node_visits(visits);
+  ws.source_feature_tree.tree.set_max_node_visits(visits);
+  const CorrespondenceResult cr =
+      match_features(fsrc, ws.target_feature_tree.tree, cp, ws.correspondences, source_feature_tree,
+                     std::span<std::uint32_t>(ws.mutual_scratch, RegistrationWorkspace::kMaxPoints));
+  stats.correspondences = cr.count;
+  stats.correspondences_truncated = cr.truncated;
+  if (approximate) {
+    stats.feature_queries_cut += cr.search.visit_cap_hits;
+  } else {
+    stats.search_cap_hits += cr.search.visit_cap_hits;
+  }
+  p.timer.lap(RegisterStage::kCorrespondences);
+  return cr.count >= 3;
+}
+
+// 5. RANSAC over the correspondences: the coarse result.
+const RegistrationResult& coarse_ransac(Pipeline& p, std::span<const Vec3f> src, std::span<const Vec3f> tgt) {
+  RansacParams rp = p.params.ransac;
+  rp.max_correspondence_distance = p.params.ransac_distance_voxels * p.voxel;
+  rp.distance_check_threshold = rp.max_correspondence_distance;
+  const RansacResult rr = ransac(src, tgt, p.ws.correspondences.span(), p.ws.target_tree.tree, rp);
+  p.timer.lap(RegisterStage::kRansac);
+  p.out.coarse = rr.registration;
+  p.out.stats.ransac_validations = rr.validations;
+  p.out.stats.ransac_correspondence_inliers = rr.correspondence_inliers;
+  return p.out.coarse;
+}
+
+// 6. ICP refinement against the target view.
+RegisterCloudsResult& refine_icp(Pipeline& p, std::span<const Vec3f> src, std::span<const Vec3f> tgt,
+                                 const Mat4d& start) {
+  RegistrationWorkspace& ws = p.ws;
+  IcpParams ip = p.params.icp;
+  ip.max_correspondence_distance = p.params.icp_distance_voxels * p.voxel;
+  ip.kernel.scale = p.params.icp_kernel_voxels * p.voxel;
   IcpTarget view;
   view.points = tgt;
   view.normals = std::span<const Vec3f>(ws.target_normals, tgt.size());
@@ -234,11 +222,59 @@ RegisterCloudsResult register_clouds(std::span<const Vec3f> source, std::span<co
   // The mutual-match scratch is free by now: it holds the per-point warm-start matches.
   const RegistrationResult fine =
       icp(src, view, start, ip, std::span<std::uint32_t>(ws.mutual_scratch, RegistrationWorkspace::kMaxPoints));
-  timer.lap(RegisterStage::kIcp);
-  stats.icp_iterations = fine.iterations;
-  stats.search_cap_hits += fine.search_truncated;
-  reg = fine;
-  return finish(fine.status);
+  p.timer.lap(RegisterStage::kIcp);
+  p.out.stats.icp_iterations = fine.iterations;
+  p.out.stats.search_cap_hits += fine.search_truncated;
+  p.out.registration = fine;
+  return finish(p, fine.status);
+}
+
+}  // namespace
+
+RegisterCloudsResult register_clouds(std::span<const Vec3f> source, std::span<const Vec3f> target,
+                                     const RegisterCloudsParams& params, const Mat4d& initial,
+                                     RegistrationWorkspace& ws) {
+  RegisterCloudsResult out;
+  out.registration.transform = params.mode == RegistrationMode::kIcpOnly ? initial : Mat4d::Identity();
+  out.coarse.transform = out.registration.transform;
+  out.stats.source_input = static_cast<std::uint32_t>(source.size());
+  out.stats.target_input = static_cast<std::uint32_t>(target.size());
+  if (!params_valid(params, initial)) {
+    out.registration.status = RegistrationStatus::kInvalidInput;
+    out.coarse.status = out.registration.status;
+    return out;
+  }
+  StageTimer timer(params.clock, out.stats);
+  Pipeline p{params, ws, out, timer, params.voxel_size};
+  truncate_inputs(source, target, out.stats);
+  downsample(p, source, target);
+  if (ws.source_down.size() < 3 || ws.target_down.size() < 3) return finish(p, RegistrationStatus::kNotEnoughPoints);
+  const std::span<const Vec3f> src = ws.source_down.span();
+  const std::span<const Vec3f> tgt = ws.target_down.span();
+  if (is_collinear(src) || is_collinear(tgt)) return finish(p, RegistrationStatus::kDegenerate);
+
+  // ICP-only mode needs just the target normals.
+  const bool global = params.mode == RegistrationMode::kGlobal;
+  const std::span<Feature33> fsrc(ws.source_features, src.size());
+  const std::span<Feature33> ftgt(ws.target_features, tgt.size());
+  FpfhStatus fpfh_source = FpfhStatus::kOk, fpfh_target = FpfhStatus::kOk;
+  if (global && !describe(p, src, ws.source_tree, params.source_viewpoint, ws.source_normals, fsrc, fpfh_source)) {
+    return finish(p, RegistrationStatus::kNotEnoughPoints);
+  }
+  if (!describe(p, tgt, ws.target_tree, params.target_viewpoint, ws.target_normals, ftgt, fpfh_target)) {
+    return finish(p, RegistrationStatus::kNotEnoughPoints);
+  }
+  if (!global) return refine_icp(p, src, tgt, initial);
+  if (fpfh_source != FpfhStatus::kOk || fpfh_target != FpfhStatus::kOk) {
+    return finish(p, RegistrationStatus::kInvalidInput);
+  }
+  if (!find_correspondences(p, fsrc, ftgt)) {
+    out.coarse.status = RegistrationStatus::kNoCorrespondences;
+    return finish(p, RegistrationStatus::kNoCorrespondences);
+  }
+  const RegistrationResult& coarse = coarse_ransac(p, src, tgt);
+  if (!coarse.ok()) return finish(p, coarse.status);
+  return refine_icp(p, src, tgt, coarse.transform);
 }
 
 }  // namespace v2xloc
