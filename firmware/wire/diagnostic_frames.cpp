@@ -21,7 +21,7 @@ DiagnosticFrames DiagnosticFrameEncoder::encode(const LocalizerFrameOutput& out,
   DiagnosticFrames frames;
 
   // Registration: 0x211 first, so a clamped z / RMSE raises the flag carried by 0x210.
-  const Mat4d& R = out.registration_pose;
+  const Mat4d& R = out.registration_pose.matrix();
   protocol::RegistrationQuality quality;
   quality.z_m = R(2, 3);
   quality.fitness = out.fitness;
@@ -52,7 +52,7 @@ DiagnosticFrames DiagnosticFrameEncoder::encode(const LocalizerFrameOutput& out,
 
   // Odometry: the clamped flag covers both frames, so 0x214 is packed first, then 0x213, and
   // 0x214 again with the flag when only 0x213 saturated.
-  const Mat4d& O = out.odometry_pose;
+  const Mat4d& O = out.odometry_pose.matrix();
   protocol::OdometryAttitude attitude;
   attitude.z_m = O(2, 3);
   attitude.yaw_rad = det::atan2(O(1, 0), O(0, 0));

@@ -15,7 +15,7 @@ protocol::PoseFlags pose_flags(const LocalizerFrameOutput& out, bool gnss_used) 
 
 PoseFrames PoseFrameEncoder::encode(const LocalizerFrameOutput& out, std::uint32_t frame_index, bool gnss_used) {
   const protocol::PoseFlags flags = pose_flags(out, gnss_used);
-  const Mat4d& T = out.fused_pose;
+  const Mat4d& T = out.fused_pose.matrix();
   protocol::PackStats stats;
 
   protocol::PosePosition position;

@@ -133,7 +133,7 @@ bool records_from_outputs(const sim::RecordingReader& reader, const std::vector<
     rec.has_gnss = gnss.has_fix();
     rec.gnss_body = gnss.body();
     rec.out = outputs[i];
-    rec.lagged_pose = rec.out.fused_pose;
+    rec.lagged_pose = rec.out.fused_pose.matrix();
   }
   // Revisions are not on the wire, but everything they need is (fused pose, FilterInitialized,
   // odometry pose and OdometryOk): a receiver revises the start-up frames itself, with the
@@ -142,8 +142,8 @@ bool records_from_outputs(const sim::RecordingReader& reader, const std::vector<
   for (std::size_t i = 0; i < records.size(); ++i) {
     BackfillSample sample;
     sample.frame = records[i].out.frame;
-    sample.odom_T_body = records[i].out.odometry_pose;
-    sample.world_T_body = records[i].out.fused_pose;
+    sample.odom_T_body = records[i].out.odometry_pose.matrix();
+    sample.world_T_body = records[i].out.fused_pose.matrix();
     sample.anchored = records[i].out.filter_initialized;
     sample.odometry_ok = records[i].out.odometry_ok;
     backfill.push(sample);

@@ -78,8 +78,8 @@ bool write_trace(const std::string& path, const std::vector<v2xloc::eval::FrameR
     }
     const auto& o = r.out;
     const Eigen::Vector3d truth = r.truth.translation();
-    auto err_xy = [&](const v2xloc::Mat4d& T) { return (T.topRightCorner<2, 1>() - truth.head<2>()).norm(); };
-    const Eigen::Matrix3d dr = r.truth.linear().transpose() * o.fused_pose.topLeftCorner<3, 3>();
+    auto err_xy = [&](const v2xloc::Pose3d& T) { return (T.translation().head<2>() - truth.head<2>()).norm(); };
+    const Eigen::Matrix3d dr = r.truth.linear().transpose() * o.fused_pose.linear();
     const double yaw_err = std::atan2(dr(1, 0), dr(0, 0)) * 180.0 / M_PI;
     std::fprintf(f, "%u %.3f %d %d %d %.4f %.4f %d %d %d %.4f %.4f %.4f %.3f %.4f %d %d %.4f %.3f %.4f %d %d %d %.4f %.4f %.3f %.3f %.4f %.4f %d %.3f %.3f\n",
                  o.frame, r.t,
@@ -92,7 +92,7 @@ bool write_trace(const std::string& path, const std::vector<v2xloc::eval::FrameR
                  o.search_heading_used ? 1 : 0, o.search_best_tight, o.search_runner_up_tight,
                  o.searched ? err_xy(o.search_best_pose) : -1.0,
                  o.searched && o.search_runner_up_tight > 0.0 ? err_xy(o.search_runner_up_pose) : -1.0,
-                 (o.fused_pose.topRightCorner<3, 1>() - truth).norm(),
+                 (o.fused_pose.translation() - truth).norm(),
                  (r.lagged_pose.topRightCorner<3, 1>() - truth).norm(), r.revised ? 1 : 0,
                  o.search_best_conflicts, o.search_runner_up_conflicts);
   }

@@ -23,6 +23,7 @@ struct Series {
 };
 
 Eigen::Vector3d position(const Mat4d& m) { return m.topRightCorner<3, 1>(); }
+Eigen::Vector3d position(const Pose3d& p) { return p.translation(); }
 
 }  // namespace
 

@@ -209,7 +209,7 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
     }
     const auto t0 = Clock::now();
     rec.out = localizer.on_ego_scan(in);
-    rec.lagged_pose = rec.out.fused_pose;
+    rec.lagged_pose = rec.out.fused_pose.matrix();
     frame_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
     stats.seconds += frame_seconds;
     stats.max_frame_ms = std::max(stats.max_frame_ms, frame_seconds * 1e3);
@@ -221,7 +221,7 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
       records[rec.out.gate_decided_frame].gate_valid = rec.out.gate_decided_valid;
     }
     if (!options.quiet) {
-      const Eigen::Vector3d fused = rec.out.fused_pose.topRightCorner<3, 1>();
+      const Eigen::Vector3d fused = rec.out.fused_pose.translation();
       std::fprintf(stderr,
                    "\r  frame %4d/%d  mode %d  fit %.3f rmse %.3f  err fused %.3f m  %.0f ms   ",
                    i + 1, frames, static_cast<int>(rec.out.mode), rec.out.fitness,

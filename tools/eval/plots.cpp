@@ -17,6 +17,7 @@ namespace v2xloc::eval {
 namespace {
 
 Eigen::Vector3d position(const Mat4d& m) { return m.topRightCorner<3, 1>(); }
+Eigen::Vector3d position(const Pose3d& p) { return p.translation(); }
 
 // RAII for the CSV files (fprintf keeps the number formatting explicit).
 struct File {

@@ -35,10 +35,10 @@ void check(const firmware::DecodedCan& d) {
 }
 
 void check(const firmware::DecodedCloud& d) {
-  if (d.kind == firmware::CloudKind::kMapCloud && (!finite_points(d.map.points) || !d.map.world_T_sensor.allFinite()))
+  if (d.kind == firmware::CloudKind::kMapCloud && (!finite_points(d.map.points) || !d.map.world_T_sensor.matrix().allFinite()))
     std::abort();
   if (d.kind == firmware::CloudKind::kEgoScan &&
-      (!finite_points(d.ego.points) || !d.ego.body_T_lidar.allFinite() ||
+      (!finite_points(d.ego.points) || !d.ego.body_T_lidar.matrix().allFinite() ||
        (!d.ego.point_times.empty() && d.ego.point_times.size() != d.ego.points.size())))
     std::abort();
 }

@@ -188,7 +188,7 @@ TEST_F(ReplayE2e, FirmwarePathRecordsMatchTheInProcessRecordsWithinCanResolution
   constexpr double kSigma = 2.5e-3 + 1e-9;  // sigmas: 5 mm
   constexpr double kYaw = 0.5e-4 + 1e-9;    // 1e-4 rad
   constexpr double kQuality = 0.5e-3 + 1e-9;
-  auto yaw_of = [](const Mat4d& T) { return std::atan2(T(1, 0), T(0, 0)); };
+  auto yaw_of = [](const Pose3d& T) { return std::atan2(T(1, 0), T(0, 0)); };
   auto yaw_diff = [](double a, double b) { return std::abs(std::remainder(a - b, 2.0 * M_PI)); };
   int attempted = 0, ok = 0, decided = 0;
   for (std::size_t i = 0; i < fw.size(); ++i) {

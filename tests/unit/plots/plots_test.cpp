@@ -49,7 +49,7 @@ std::vector<FrameRecord> synthetic_run() {
     r.out.registration_status = i % 6 == 5 ? RegistrationStatus::kDidNotConverge : RegistrationStatus::kOk;
     r.out.registration_pose = at(x + 0.03, y - 0.02);
     r.out.fused_pose = at(x + 0.01 + 0.001 * i, y);
-    r.lagged_pose = r.out.fused_pose;
+    r.lagged_pose = r.out.fused_pose.matrix();
     r.gate_decided = i < 56;
     r.gate_valid = i >= 10 && r.gate_decided && i % 3 != 0;
     records.push_back(r);

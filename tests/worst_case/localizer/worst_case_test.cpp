@@ -114,7 +114,7 @@ class Drive {
     } else {
       WC_DUMP("setup");
     }
-    EXPECT_TRUE(out.fused_pose.allFinite()) << name_ << " frame " << out.frame;
+    EXPECT_TRUE(out.fused_pose.matrix().allFinite()) << name_ << " frame " << out.frame;
     EXPECT_TRUE(std::isfinite(out.sigma_x) && std::isfinite(out.sigma_y)) << name_;
     return out;
   }

@@ -1,0 +1,116 @@
+// The one owner of the pose EKF (PX4 EKF2's habit: every aiding source enters through one
+// component). It holds the main filter, the validity gates (fixed-lag or causal for the map
+// registration, causal for stereo), the ring of registrations waiting for the fixed-lag
+// decision, the NIS-rejection count that restarts the filter at a registration, the GNSS
+// divergence monitor and the count of frames without a fused registration.
+// The optional shadow filter takes every ok registration without the validity gate (the
+// evaluator's "Fused (ungated)" column); with LocalizerParams::shadow_ungated_filter off it is
+// never touched.
+#pragma once
+
+#include <cstdint>
+
+#include "v2xloc/algo/core/config.hpp"
+#include "v2xloc/algo/localization/ekf.hpp"
+#include "v2xloc/algo/localization/localizer_params.hpp"
+#include "v2xloc/algo/localization/localizer_types.hpp"
+#include "v2xloc/algo/localization/validity_gate.hpp"
+#include "v2xloc/algo/registration/registration_result.hpp"
+
+namespace v2xloc {
+
+// One frame's registration handed to the filter.
+struct FrameRegistration {
+  std::uint32_t frame = 0;          // localizer frame index
+  double t = 0.0;                   // [s] frame time
+  RegistrationResult result{};
+  bool attempted_ok = false;        // false: reported, but neither gated nor fused
+  Pose3d odom_T_body = Pose3d::Identity();  // this frame's odometry (carries late restarts)
+  VehicleMotion vehicle{};          // speed and yaw rate for a restart
+};
+
+// What the validity gate and the EKF made of it.
+struct RegistrationFusion {
+  bool fused = false;               // this frame's (or, fixed-lag, an earlier frame's) registration
+  bool gate_decided = false;        // a gate decision became available ...
+  std::uint32_t gate_decided_frame = 0;  // ... for this frame ...
+  bool gate_decided_valid = false;  // ... and this is it
+};
+
+enum class GnssFusion : std::uint8_t { kIgnored, kFused, kDiverged };
+
+class PoseFilter {
+ public:
+  void configure(const LocalizerParams& params);
+
+  bool initialized() const { return ekf_.initialized(); }
+  const Ekf& ekf() const { return ekf_; }
+  const Ekf& shadow() const { return shadow_; }
+  Pose3d pose() const { return Pose3d(ekf_.state().pose()); }
+  Pose3d shadow_pose() const { return Pose3d(shadow_.state().pose()); }
+  double sigma_xy() const;  // [m] horizontal 1-sigma of the main filter
+  // Tracking continues from the prediction while the filter is tight and fuses registrations.
+  bool can_track() const;
+  // A start-up solution (re)starts the filter: it is not running or has stopped fusing.
+  bool needs_start() const { return !ekf_.initialized() || failed_frames_ > params_.max_failed_frames; }
+
+  void on_vehicle(double t, double wheel_speed, double yaw_rate);
+  // kDiverged: gnss_divergence_fixes fixes in a row far from the filter (the caller loses track).
+  GnssFusion on_gnss(double t, const Vec3d& enu, double h_acc, double v_acc);
+  void on_odometry(double t, double dt, const Mat4d& body_delta);
+  void predict_to(double t);
+
+  // Starts both filters at a confirmed start-up pose.
+  void start(double t, const Pose3d& pose, const VehicleMotion& vehicle);
+  // Tracking is lost (GNSS divergence or basin audit): everything starts over.
+  void lose_track();
+  // A frame that produced no registration to gate counts towards max_failed_frames.
+  void count_failed_frame() { ++failed_frames_; }
+
+  // Validity gate -> EKF (fixed-lag: a registration is fused w/2 frames later, at its own stamp
+  // through the EKF's history).
+  RegistrationFusion fuse(const FrameRegistration& reg, LocalizerCounters& counters);
+  // Stereo registration, gated causally, fused at the frame's stamp with a covariance no
+  // tighter than its depth noise allows; true when the EKF took it.
+  bool fuse_stereo(double t, const RegistrationResult& r, double depth_sigma);
+
+ private:
+  struct Pending {
+    std::uint32_t frame = 0;       // localizer frame index
+    std::uint64_t gate_index = 0;  // push index in the fixed-lag gate
+    double t = 0.0;
+    Mat4d pose = Mat4d::Identity();
+    Mat4d odom = Mat4d::Identity();  // odometry pose at that frame: carries a late restart to now
+    PoseCovariance covariance = PoseCovariance::Identity();
+    bool ok = false;
+  };
+  static constexpr std::size_t kPendingCapacity = config::kGateMaxWindow;
+  struct Now {                     // where a restart lands: this frame
+    double t = 0.0;
+    Mat4d odom_T_body = Mat4d::Identity();
+    VehicleMotion vehicle{};
+  };
+
+  enum class Which : std::uint8_t { kMain, kShadow };
+
+  bool fuse_gate_decision(const Pending& reg, const GateSample& sample, const Now& now,
+                          RegistrationFusion& out, LocalizerCounters& counters);
+  // EKF update; NIS-rejected reset_after_rejections times in a row -> restart at the registration.
+  bool fuse_into(Which which, const Pending& reg, const Now& now, LocalizerCounters& counters);
+  void restart(Ekf& ekf, double t, const Mat4d& pose, const VehicleMotion& vehicle) const;
+
+  LocalizerParams params_{};
+  Ekf ekf_{};
+  Ekf shadow_{};
+  FixedLagValidityGate fixed_lag_gate_{};
+  CausalValidityGate causal_gate_{};
+  CausalValidityGate stereo_gate_{};
+  Pending pending_[kPendingCapacity];
+  std::uint64_t gate_pushes_ = 0;
+  std::uint32_t failed_frames_ = 0;           // consecutive frames without a fused registration
+  std::uint32_t nis_rejections_ = 0;          // consecutive NIS rejections (main filter)
+  std::uint32_t nis_rejections_shadow_ = 0;
+  std::uint32_t gnss_divergent_fixes_ = 0;
+};
+
+}  // namespace v2xloc

@@ -1,0 +1,58 @@
+// The reference map the ego scan registers to: the fused infrastructure and agent clouds
+// (map_fusion.hpp) and, double-buffered, the registration target built from them (points, k-d
+// tree, normals). Registration reads the active target while the next one is built over several
+// periods, at most every map_refresh_period: infrastructure clouds arrive several times per
+// second and the static scene hardly changes between them.
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "v2xloc/algo/core/bounded_vector.hpp"
+#include "v2xloc/algo/core/config.hpp"
+#include "v2xloc/algo/localization/localizer_params.hpp"
+#include "v2xloc/algo/localization/localizer_types.hpp"
+#include "v2xloc/algo/localization/map_fusion.hpp"
+#include "v2xloc/algo/registration/icp.hpp"
+#include "v2xloc/algo/search/kdtree.hpp"
+
+namespace v2xloc {
+
+class ReferenceMap {
+ public:
+  void configure(const LocalizerParams& params);
+
+  MapInsertResult insert(const MapCloudInput& in);
+  // Expires old clouds and advances the target build; true when a rebuild finished this period.
+  bool refresh(double t);
+
+  bool ready() const { return ready_; }  // the active target has at least map_min_points
+  IcpTarget target() const;
+  std::span<const Vec3f> points() const { return targets_[active_].points.span(); }
+  const MapFusion& fusion() const { return fusion_; }
+
+ private:
+  struct Target {
+    FixedVector<Vec3f, config::kMaxMapPoints> points;
+    Vec3f normals[config::kMaxMapPoints];
+    KdTreeStorage<Vec3f, config::kMaxMapPoints> tree;
+  };
+  enum class BuildPhase : std::uint8_t { kIdle, kTree, kNormals };
+  static constexpr std::uint32_t kBuildSteps = 3;  // extract, tree, normals: one rebuild
+
+  // One build step; false: nothing (more) to do this period. finished: the new target is active.
+  bool build_step(double t, bool& finished);
+
+  LocalizerParams params_{};
+  MapFusion fusion_{};
+  Target targets_[2];
+  std::uint32_t active_ = 0;
+  BuildPhase phase_ = BuildPhase::kIdle;
+  std::size_t normals_done_ = 0;
+  std::uint64_t build_revision_ = 0;
+  std::uint64_t revision_ = ~0ull;
+  double built_t_ = -1e300;
+  bool ready_ = false;
+};
+
+}  // namespace v2xloc

@@ -1,0 +1,57 @@
+// The ego frame's clouds, ready for the stages after it: the LiDAR scan range-filtered and
+// deskewed (sensor frame, for the odometry), the same scan in the body frame downsampled (for
+// the registration to the map) with its subsample for the pose search, and the stereo cloud.
+// Owns the scan buffers; the voxel hash is scratch shared by both downsamplings.
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "v2xloc/algo/core/bounded_vector.hpp"
+#include "v2xloc/algo/core/config.hpp"
+#include "v2xloc/algo/localization/localizer_params.hpp"
+#include "v2xloc/algo/localization/localizer_types.hpp"
+#include "v2xloc/algo/registration/voxel_downsample.hpp"
+
+namespace v2xloc {
+
+class ScanPreparation {
+ public:
+  void configure(const LocalizerParams& params);
+
+  // Finite points within [min_range, max_range] (the rest counted in dropped), deskewed with the
+  // vehicle signals' motion over one frame; the stereo cloud is cleared.
+  void prepare(const EgoScanInput& in, const VehicleMotion& vehicle, std::uint32_t& dropped);
+  // Disparity -> body-frame points with depth sigmas, the noisy far ones dropped, downsampled.
+  void prepare_stereo(const StereoInput& stereo);
+  // The deskewed scan in the body frame, downsampled, and every k-th point of it for the search.
+  void downsample_for_registration(const Mat4d& body_T_lidar);
+
+  // The vehicle signals gave this frame's sensor motion (deskew and odometry prediction use it).
+  bool has_vehicle_motion() const { return have_vehicle_delta_; }
+  std::span<const Vec3f> deskewed() const { return {deskewed_, deskewed_count_}; }
+  std::span<const Vec3f> registration_scan() const { return down_.span(); }
+  std::span<const Vec3f> search_scan() const { return search_.span(); }
+  std::span<const Vec3f> stereo_cloud() const { return stereo_down_.span(); }
+  double stereo_mean_sigma() const { return stereo_mean_sigma_; }  // [m] depth sigma
+
+ private:
+  void filter(const EgoScanInput& in, std::uint32_t& dropped);
+
+  LocalizerParams params_{};
+  bool have_vehicle_delta_ = false;
+  FixedVector<Vec3f, config::kMaxScanPoints> filtered_;
+  FixedVector<float, config::kMaxScanPoints> times_;
+  Vec3f deskewed_[config::kMaxScanPoints];
+  std::size_t deskewed_count_ = 0;
+  FixedVector<Vec3f, config::kMaxScanPoints> body_;
+  FixedVector<Vec3f, config::kMaxDownsampledPoints> down_;
+  FixedVector<Vec3f, config::kMaxSearchPoints> search_;
+  VoxelDownsampleStorage<config::kVoxelHashSlots, config::kMaxDownsampledPoints> voxel_;
+  Vec3f stereo_points_[config::kMaxStereoPoints];
+  float stereo_sigma_[config::kMaxStereoPoints];
+  FixedVector<Vec3f, config::kMaxDownsampledPoints> stereo_down_;
+  double stereo_mean_sigma_ = 0.0;
+};
+
+}  // namespace v2xloc

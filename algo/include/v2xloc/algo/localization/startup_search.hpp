@@ -1,0 +1,116 @@
+// The start-up (and lost-track) search: where on the map is the vehicle, with only the GNSS fix
+// to go by. A GNSS-seeded exhaustive pose search (pose_search.hpp), optionally confirmed by the
+// paper's FPFH + RANSAC, refined by the tracking ICP and checked against the GNSS region, the
+// course over ground and the GNSS track the odometry implies. An accepted solution starts the
+// filter only when a second search within global_confirm_window frames agrees with it through
+// the odometry (the candidate). Owns all its state: the candidate, the track of recent
+// odometry / GNSS positions, the retry spacing and the FPFH + RANSAC workspace.
+// One entry point per frame (step) with everything it reads in a StartupFrame.
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "v2xloc/algo/core/bounded_vector.hpp"
+#include "v2xloc/algo/core/config.hpp"
+#include "v2xloc/algo/localization/localizer_params.hpp"
+#include "v2xloc/algo/localization/localizer_types.hpp"
+#include "v2xloc/algo/localization/stage_probe.hpp"
+#include "v2xloc/algo/registration/icp.hpp"
+#include "v2xloc/algo/registration/register_clouds.hpp"
+
+namespace v2xloc {
+
+// Everything one frame's search reads.
+struct StartupFrame {
+  std::uint32_t frame = 0;
+  double t = 0.0;                           // [s]
+  std::span<const Vec3f> scan{};            // registration scan (body frame, downsampled)
+  std::span<const Vec3f> search_scan{};     // its subsample for the pose search
+  IcpTarget map{};                          // the reference map as an ICP target
+  GnssFix gnss{};
+  bool course_known = false;                // GNSS course over ground at t ...
+  double course = 0.0;                      // ... [rad] ENU yaw
+  Vec3d sensor_in_body = Vec3d::Zero();     // LiDAR origin in the body frame (ray checks)
+  Pose3d odom_T_body = Pose3d::Identity();  // this frame's odometry pose
+  bool filter_needs_start = false;          // an accepted solution must be confirmed to start it
+  std::span<std::uint32_t> icp_hints{};     // ICP scratch, >= scan.size()
+  StageProbe probe{};
+};
+
+// The search's diagnostics (LocalizerFrameOutput::search_*).
+struct StartupSearchReport {
+  bool searched = false;
+  bool heading_used = false;
+  double best_tight = 0.0, runner_up_tight = 0.0;
+  double best_conflicts = -1.0, runner_up_conflicts = -1.0;
+  Pose3d best_pose = Pose3d::Identity();
+  Pose3d runner_up_pose = Pose3d::Identity();
+};
+
+enum class StartupStatus : std::uint8_t {
+  kNotDue,       // no GNSS yet, or within global_retry_frames of the last search
+  kRejected,     // searched; no solution, or one not (yet) trusted (reported, not fused)
+  kAccepted,     // a solution for the running filter (gated and fused like a tracking one)
+  kStartFilter,  // a confirmed solution: the filter starts at it, then it is gated and fused
+};
+
+struct StartupOutcome {
+  StartupStatus status = StartupStatus::kNotDue;
+  RegistrationResult registration{};
+  StartupSearchReport report{};
+};
+
+class StartupSearch {
+ public:
+  void configure(const LocalizerParams& params);
+
+  // Every valid frame, before step(): the track sample (odometry and GNSS position) and the
+  // retry spacing. A failed odometry breaks the track.
+  void on_frame(bool odometry_ok, const Pose3d& odom_T_body, const GnssFix& gnss);
+  StartupOutcome step(const StartupFrame& frame, LocalizerCounters& counters);
+
+  // Tracking was lost: drop the candidate, search at the next frame.
+  void on_track_lost();
+  // A pose found next to the tracked one (basin audit): a search must confirm it.
+  void nominate(std::uint32_t frame, const Pose3d& pose, const Pose3d& odom_T_body);
+  // The unconfirmed candidate carried to this frame by the odometry, when it is a better
+  // estimate than the GNSS fix.
+  bool candidate_pose(std::uint32_t frame, const Pose3d& odom_T_body, Pose3d& pose) const;
+
+ private:
+  struct Candidate {                 // an accepted but unconfirmed solution
+    bool valid = false;
+    std::uint32_t frame = 0;
+    Mat4d pose = Mat4d::Identity();  // world_T_body
+    Mat4d odom = Mat4d::Identity();  // odom_T_body at that frame
+    bool output = false;             // unambiguous: a better estimate than the GNSS fix
+  };
+  struct TrackSample {               // per frame: odometry and latest GNSS position (2-D)
+    double odom_x = 0.0, odom_y = 0.0, gnss_x = 0.0, gnss_y = 0.0;
+    bool gnss = false;
+  };
+  static constexpr std::size_t kTrackFrames = 32;
+  struct Search;                     // one search's intermediate results (startup_search.cpp)
+
+  double region_radius(const StartupFrame& f) const;
+  void exhaustive_search(const StartupFrame& f, Search& s, LocalizerCounters& counters) const;
+  void fpfh_ransac(const StartupFrame& f, Search& s);
+  StartupStatus accept(const StartupFrame& f, const Search& s, RegistrationResult& result,
+                       LocalizerCounters& counters);
+  bool confirm(std::uint32_t frame, const Mat4d& pose, const Mat4d& odom_T_body, bool output,
+               LocalizerCounters& counters);
+  // Mean horizontal distance between the GNSS fixes of the recent frames and the track a pose
+  // hypothesis of this frame implies through the odometry; false when too few fixes.
+  bool track_gnss_distance(const Mat4d& pose, const Mat4d& odom_T_body, double& mean_distance) const;
+
+  LocalizerParams params_{};
+  Candidate candidate_{};
+  TrackSample track_[kTrackFrames];
+  std::uint32_t track_count_ = 0;    // consecutive samples pushed (reset by odometry failures)
+  std::uint32_t frames_since_search_ = 0;
+  FixedVector<Vec3f, config::kMaxMapPoints> map_crop_;
+  RegistrationWorkspace workspace_;
+};
+
+}  // namespace v2xloc

@@ -1,0 +1,46 @@
+// Tracking: the registration scan to the map by ICP from the filter's prediction, the periodic
+// basin audit (basin_audit.hpp) and, with the LiDAR + stereo configuration, the stereo cloud by
+// ICP from the same prediction. It registers only; the caller fuses (pose_filter.hpp) and acts
+// on an audit's basin switch. One entry point per tracked frame (step).
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "v2xloc/algo/localization/basin_audit.hpp"
+#include "v2xloc/algo/localization/localizer_params.hpp"
+#include "v2xloc/algo/localization/localizer_types.hpp"
+#include "v2xloc/algo/localization/stage_probe.hpp"
+#include "v2xloc/algo/registration/icp.hpp"
+
+namespace v2xloc {
+
+struct TrackingFrame {
+  Pose3d predicted = Pose3d::Identity();  // the filter's pose at the frame time
+  std::span<const Vec3f> scan{};          // registration scan (body frame, downsampled)
+  std::span<const Vec3f> search_scan{};   // its subsample (audit)
+  std::span<const Vec3f> stereo_cloud{};  // body frame, downsampled; empty: no stereo
+  IcpTarget map{};
+  Vec3d sensor_in_body = Vec3d::Zero();
+  std::span<std::uint32_t> icp_hints{};   // ICP scratch, >= scan.size()
+  StageProbe probe{};
+};
+
+struct TrackingOutcome {
+  RegistrationResult registration{};  // not ok: failed, too rough, or a wrong basin (audit)
+  AuditOutcome audit{};
+  bool stereo_attempted = false;
+  RegistrationResult stereo{};
+};
+
+class TrackingRegistration {
+ public:
+  void configure(const LocalizerParams& params);
+  TrackingOutcome step(const TrackingFrame& frame, LocalizerCounters& counters);
+
+ private:
+  LocalizerParams params_{};
+  BasinAudit audit_{};
+};
+
+}  // namespace v2xloc

@@ -1,0 +1,197 @@
+#include "v2xloc/algo/localization/pose_filter.hpp"
+
+#include <cmath>
+
+#include "v2xloc/algo/core/rigid_motion.hpp"
+
+namespace v2xloc {
+
+void PoseFilter::configure(const LocalizerParams& params) {
+  params_ = params;
+  ekf_ = Ekf(params.ekf);
+  shadow_ = Ekf(params.ekf);
+  fixed_lag_gate_ = FixedLagValidityGate(params.gate);
+  causal_gate_ = CausalValidityGate(params.gate);
+  stereo_gate_ = CausalValidityGate(params.gate);
+  for (auto& p : pending_) p = {};
+  gate_pushes_ = 0;
+  failed_frames_ = 0;
+  nis_rejections_ = 0;
+  nis_rejections_shadow_ = 0;
+  gnss_divergent_fixes_ = 0;
+}
+
+double PoseFilter::sigma_xy() const {
+  const EkfCovariance& P = ekf_.covariance();
+  return std::sqrt(0.5 * (P(ekf_index::kPosX, ekf_index::kPosX) + P(ekf_index::kPosY, ekf_index::kPosY)));
+}
+
+bool PoseFilter::can_track() const {
+  const double sigma = ekf_.initialized() ? sigma_xy() : 1e9;
+  return ekf_.initialized() && sigma <= params_.tracking_max_sigma_xy &&
+         failed_frames_ <= params_.max_failed_frames;
+}
+
+void PoseFilter::on_vehicle(double t, double wheel_speed, double yaw_rate) {
+  if (!params_.use_vehicle_signals || !ekf_.initialized()) return;
+  ekf_.on_vehicle_signals(t, wheel_speed, yaw_rate);
+  if (params_.shadow_ungated_filter) shadow_.on_vehicle_signals(t, wheel_speed, yaw_rate);
+}
+
+GnssFusion PoseFilter::on_gnss(double t, const Vec3d& enu, double h_acc, double v_acc) {
+  if (ekf_.initialized()) {
+    const EkfState s = ekf_.state();
+    const double dx = s.pos_x - enu.x(), dy = s.pos_y - enu.y();
+    const double limit = params_.gnss_divergence_sigmas * h_acc > params_.gnss_divergence_distance
+                             ? params_.gnss_divergence_sigmas * h_acc
+                             : params_.gnss_divergence_distance;
+    gnss_divergent_fixes_ = dx * dx + dy * dy > limit * limit ? gnss_divergent_fixes_ + 1 : 0;
+    if (params_.gnss_divergence_fixes > 0 && gnss_divergent_fixes_ >= params_.gnss_divergence_fixes) {
+      return GnssFusion::kDiverged;
+    }
+  }
+  if (!params_.use_gnss || !ekf_.initialized()) return GnssFusion::kIgnored;
+  ekf_.on_gnss(t, enu, h_acc, v_acc);
+  if (params_.shadow_ungated_filter) shadow_.on_gnss(t, enu, h_acc, v_acc);
+  return GnssFusion::kFused;
+}
+
+void PoseFilter::on_odometry(double t, double dt, const Mat4d& body_delta) {
+  if (!params_.use_odometry || !ekf_.initialized()) return;
+  ekf_.on_odometry(t, dt, body_delta);
+  if (params_.shadow_ungated_filter) shadow_.on_odometry(t, dt, body_delta);
+}
+
+void PoseFilter::predict_to(double t) {
+  if (!ekf_.initialized()) return;
+  ekf_.predict_to(t);
+  if (params_.shadow_ungated_filter) shadow_.predict_to(t);
+}
+
+void PoseFilter::start(double t, const Pose3d& pose, const VehicleMotion& vehicle) {
+  restart(ekf_, t, pose.matrix(), vehicle);
+  if (params_.shadow_ungated_filter) restart(shadow_, t, pose.matrix(), vehicle);
+  failed_frames_ = 0;
+}
+
+void PoseFilter::lose_track() {
+  ekf_.reset();
+  if (params_.shadow_ungated_filter) shadow_.reset();
+  failed_frames_ = 0;
+  nis_rejections_ = 0;
+  nis_rejections_shadow_ = 0;
+  gnss_divergent_fixes_ = 0;
+}
+
+void PoseFilter::restart(Ekf& ekf, double t, const Mat4d& pose, const VehicleMotion& vehicle) const {
+  EkfState s;
+  s.pos_x = pose(0, 3);
+  s.pos_y = pose(1, 3);
+  s.pos_z = pose(2, 3);
+  s.yaw = yaw_of(pose.topLeftCorner<3, 3>());
+  s.speed = vehicle.speed;
+  s.yaw_rate = vehicle.yaw_rate;
+  EkfCovariance P = EkfCovariance::Zero();
+  const double* sigmas = params_.restart_sigmas;
+  for (int i = 0; i < kEkfStateSize; ++i) P(i, i) = sigmas[i] * sigmas[i];
+  ekf.initialize(t, s, P);
+  ekf.predict_to(t);
+}
+
+RegistrationFusion PoseFilter::fuse(const FrameRegistration& in, LocalizerCounters& counters) {
+  const RegistrationResult& result = in.result;
+  const Now now{in.t, in.odom_T_body.matrix(), in.vehicle};
+  Pending reg;
+  reg.frame = in.frame;
+  reg.t = in.t;
+  reg.pose = result.transform;
+  reg.odom = in.odom_T_body.matrix();
+  reg.ok = in.attempted_ok && result.ok();
+  if (reg.ok) {
+    reg.covariance = registration_covariance(result.information, result.inlier_rmse, result.transform,
+                                             params_.registration_covariance);
+    // The shadow filter takes every ok registration, before any gate.
+    if (params_.shadow_ungated_filter) fuse_into(Which::kShadow, reg, now, counters);
+  }
+  RegistrationFusion out;
+  out.fused = fuse_gate_decision(reg, GateSample{result.fitness, result.inlier_rmse, reg.ok}, now, out, counters);
+  if (out.fused) {
+    failed_frames_ = 0;
+  } else if (!reg.ok) {
+    ++failed_frames_;
+  }
+  if (!reg.ok || (params_.gate_mode != GateMode::kFixedLag && !out.fused)) {
+    ++counters.registrations_gate_rejected;
+  }
+  return out;
+}
+
+// The gate in use decides; the registration it accepted (this frame's, or fixed-lag w/2 frames
+// ago) goes to the main filter. True when the main filter took it.
+bool PoseFilter::fuse_gate_decision(const Pending& reg, const GateSample& sample, const Now& now,
+                                    RegistrationFusion& out, LocalizerCounters& counters) {
+  switch (params_.gate_mode) {
+    case GateMode::kOff:
+      return reg.ok && fuse_into(Which::kMain, reg, now, counters);
+    case GateMode::kCausal: {
+      const GateDecision d = causal_gate_.push(sample);
+      out.gate_decided = d.available;
+      out.gate_decided_frame = static_cast<std::uint32_t>(d.frame);
+      out.gate_decided_valid = d.valid;
+      return d.valid && reg.ok && fuse_into(Which::kMain, reg, now, counters);
+    }
+    case GateMode::kFixedLag: {
+      // The gate counts its own pushes (frames without a registration attempt are not pushed);
+      // the ring is indexed by that count and remembers the localizer frame.
+      Pending& slot = pending_[gate_pushes_ % kPendingCapacity];
+      slot = reg;
+      slot.gate_index = gate_pushes_++;
+      const GateDecision d = fixed_lag_gate_.push(sample);
+      if (!d.available) return false;
+      const Pending& late = pending_[d.frame % kPendingCapacity];
+      if (late.gate_index != d.frame) return false;
+      out.gate_decided = true;
+      out.gate_decided_frame = late.frame;
+      out.gate_decided_valid = d.valid;
+      return d.valid && late.ok && fuse_into(Which::kMain, late, now, counters);
+    }
+  }
+  return false;
+}
+
+// A registration the validity gate accepted but the filter's NIS gate keeps rejecting means the
+// filter, not the registration, is wrong (it drifted on odometry while over-confident): after
+// reset_after_rejections such frames in a row the filter restarts at the registration.
+bool PoseFilter::fuse_into(Which which, const Pending& reg, const Now& now, LocalizerCounters& counters) {
+  Ekf& ekf = which == Which::kMain ? ekf_ : shadow_;
+  std::uint32_t& rejections = which == Which::kMain ? nis_rejections_ : nis_rejections_shadow_;
+  if (!ekf.initialized()) return false;
+  const EkfFuseStatus status = ekf.on_registration(reg.t, reg.pose, reg.covariance);
+  if (status == EkfFuseStatus::kFused) {
+    rejections = 0;
+    if (which == Which::kMain) ++counters.registrations_fused;  // the published filter's count
+    return true;
+  }
+  if (status != EkfFuseStatus::kRejectedGate) return false;
+  if (++rejections < params_.reset_after_rejections) return false;
+  rejections = 0;
+  ++counters.filter_resets;
+  // A fixed-lag registration is w/2 frames old: restart at the current frame with its pose
+  // carried forward by the odometry (restarting at its own time stamp would leave the output
+  // behind by the distance driven since, ~3 m at 6 m/s).
+  restart(ekf, now.t, reg.pose * se3_inverse(reg.odom) * now.odom_T_body, now.vehicle);
+  return true;
+}
+
+bool PoseFilter::fuse_stereo(double t, const RegistrationResult& r, double depth_sigma) {
+  const GateDecision d = stereo_gate_.push(GateSample{r.fitness, r.inlier_rmse, r.ok()});
+  if (!d.valid || !r.ok()) return false;
+  const double sigma = r.inlier_rmse > depth_sigma ? r.inlier_rmse : depth_sigma;
+  RegistrationCovarianceParams cp = params_.registration_covariance;
+  cp.scale *= params_.stereo_covariance_scale;
+  const PoseCovariance cov = registration_covariance(r.information, sigma, r.transform, cp);
+  if (params_.shadow_ungated_filter) shadow_.on_registration(t, r.transform, cov);
+  return ekf_.on_registration(t, r.transform, cov) == EkfFuseStatus::kFused;
+}
+
+}  // namespace v2xloc

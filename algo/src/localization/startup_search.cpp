@@ -1,0 +1,236 @@
+#include "v2xloc/algo/localization/startup_search.hpp"
+
+#include <cmath>
+
+#include "v2xloc/algo/core/det_math.hpp"
+#include "v2xloc/algo/core/rigid_motion.hpp"
+#include "v2xloc/algo/registration/pose_search.hpp"
+
+namespace v2xloc {
+namespace {
+
+double horizontal_distance(const Mat4d& pose, const Vec3d& enu) {
+  const double dx = pose(0, 3) - enu.x(), dy = pose(1, 3) - enu.y();
+  return std::sqrt(dx * dx + dy * dy);
+}
+
+}  // namespace
+
+struct StartupSearch::Search {
+  double region = 0.0;        // [m] radius around the GNSS fix the solution must lie in
+  PoseSearchParams params{};  // the pose search's, for this frame's region and course
+  PoseSearchResult searched{};
+  RegistrationResult best{};  // the basin picked so far
+};
+
+void StartupSearch::configure(const LocalizerParams& params) {
+  params_ = params;
+  candidate_ = {};
+  track_count_ = 0;
+  frames_since_search_ = params.global_retry_frames;  // allow a search at the first frame
+}
+
+void StartupSearch::on_frame(bool odometry_ok, const Pose3d& odom_T_body, const GnssFix& gnss) {
+  ++frames_since_search_;
+  if (!odometry_ok) {
+    track_count_ = 0;  // the odometry track is broken: start a new one
+    return;
+  }
+  TrackSample& s = track_[track_count_ % kTrackFrames];
+  s.odom_x = odom_T_body(0, 3);
+  s.odom_y = odom_T_body(1, 3);
+  s.gnss = gnss.valid;
+  s.gnss_x = gnss.enu.x();
+  s.gnss_y = gnss.enu.y();
+  ++track_count_;
+}
+
+void StartupSearch::on_track_lost() {
+  candidate_.valid = false;
+  frames_since_search_ = params_.global_retry_frames;
+}
+
+void StartupSearch::nominate(std::uint32_t frame, const Pose3d& pose, const Pose3d& odom_T_body) {
+  candidate_.valid = true;
+  candidate_.output = true;  // found next to a tracked pose: a better estimate than GNSS
+  candidate_.frame = frame;
+  candidate_.pose = pose.matrix();
+  candidate_.odom = odom_T_body.matrix();
+}
+
+bool StartupSearch::candidate_pose(std::uint32_t frame, const Pose3d& odom_T_body, Pose3d& pose) const {
+  if (!candidate_.valid || !candidate_.output || frame - candidate_.frame > params_.global_confirm_window) {
+    return false;
+  }
+  pose = Pose3d(candidate_.pose * se3_inverse(candidate_.odom) * odom_T_body.matrix());
+  return true;
+}
+
+// FPFH + RANSAC against the map around the GNSS fix, ICP refinement, then two checks the
+// symmetric intersection needs: the solution must lie inside the GNSS uncertainty region and
+// explain enough of the scan.
+StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& counters) {
+  StartupOutcome out;
+  if (!f.gnss.valid || frames_since_search_ < params_.global_retry_frames) return out;
+  frames_since_search_ = 0;
+  f.probe(LocalizerStage::kGlobalSearch);
+  ++counters.global_searches;
+  Search s;
+  exhaustive_search(f, s, counters);
+  StartupSearchReport& r = out.report;
+  r.searched = true;
+  r.heading_used = f.course_known;
+  r.best_tight = s.searched.best_tight_fitness;
+  r.runner_up_tight = s.searched.runner_up_tight_fitness;
+  r.best_conflicts = s.searched.best_conflicts;
+  r.runner_up_conflicts = s.searched.runner_up_conflicts;
+  r.best_pose = Pose3d(s.searched.best.transform);
+  r.runner_up_pose = Pose3d(s.searched.runner_up.transform);
+  if (params_.use_fpfh_ransac) fpfh_ransac(f, s);
+  out.status = accept(f, s, out.registration, counters);
+  f.probe(LocalizerStage::kFusion);
+  return out;
+}
+
+double StartupSearch::region_radius(const StartupFrame& f) const {
+  double region = params_.global_gnss_gate_sigmas * (f.gnss.sigma * params_.ekf.gates.gnss_sigma_inflation + 1.0);
+  if (region < params_.global_min_region) region = params_.global_min_region;
+  return region;
+}
+
+// (1) Exhaustive, GNSS-seeded search over position and heading; an ambiguous result is decided
+// by the GNSS track when one pose explains it clearly better.
+void StartupSearch::exhaustive_search(const StartupFrame& f, Search& s, LocalizerCounters& counters) const {
+  s.region = region_radius(f);
+  PoseSearchParams& sp = s.params;
+  sp = params_.search;
+  sp.radius = s.region < sp.radius ? s.region : sp.radius;
+  sp.sensor_in_body = f.sensor_in_body;
+  if (f.course_known) {
+    sp.use_yaw_prior = true;
+    sp.yaw_prior = f.course;
+    sp.yaw_prior_tolerance = params_.heading_search_tolerance;
+    ++counters.heading_searches;
+  }
+  s.searched = search_pose(f.search_scan, f.map, f.gnss.enu, sp, f.icp_hints);
+  const PoseSearchResult& searched = s.searched;
+  s.best = searched.best;
+  const bool distinct = searched.best_tight_fitness > 0.0 &&
+                        searched.runner_up_tight_fitness < params_.global_max_ambiguity * searched.best_tight_fitness;
+  if (distinct) return;
+  s.best.status = RegistrationStatus::kDidNotConverge;
+  const Mat4d& odom = f.odom_T_body.matrix();
+  double d_best = 0.0, d_other = 0.0;
+  if (searched.best.ok() && searched.runner_up.ok() && track_gnss_distance(searched.best.transform, odom, d_best) &&
+      track_gnss_distance(searched.runner_up.transform, odom, d_other)) {
+    const double lo = d_best < d_other ? d_best : d_other, hi = d_best < d_other ? d_other : d_best;
+    if (lo < params_.track_distance_ratio * hi && hi - lo > params_.track_distance_margin) {
+      s.best = d_best < d_other ? searched.best : searched.runner_up;
+      ++counters.ambiguities_resolved;
+    }
+  }
+}
+
+// (2) The paper's FPFH + RANSAC against the map around the fix, with the same prior. It only
+// confirms the exhaustive search (same basin); alone it is not trusted in a canyon.
+void StartupSearch::fpfh_ransac(const StartupFrame& f, Search& s) {
+  map_crop_.clear();
+  const double r2 = params_.global_map_radius * params_.global_map_radius;
+  for (const Vec3f& p : f.map.points) {
+    const double dx = p.x() - f.gnss.enu.x(), dy = p.y() - f.gnss.enu.y();
+    if (dx * dx + dy * dy <= r2) map_crop_.push_back(p);
+  }
+  RegisterCloudsParams gp = params_.global;
+  gp.ransac.prior.center = Vec3d(f.gnss.enu.x(), f.gnss.enu.y(), s.searched.ground_z);
+  gp.ransac.prior.max_horizontal = s.region;
+  gp.ransac.prior.max_vertical = params_.global_max_vertical;
+  const RegisterCloudsResult coarse = register_clouds(f.scan, map_crop_.span(), gp, Mat4d::Identity(), workspace_);
+  if (!coarse.registration.ok()) return;
+  // On the search's points, so that its fitness compares with the search's candidates.
+  const RegistrationResult r = icp(f.search_scan, f.map, coarse.registration.transform, s.params.icp, f.icp_hints);
+  if (r.ok() && s.best.ok() && r.fitness > s.best.fitness &&
+      horizontal_distance(r.transform, s.best.transform.topRightCorner<3, 1>()) < s.params.distinct_distance) {
+    s.best = r;
+  }
+}
+
+// Final refinement with the tracking ICP, then the acceptance checks. An accepted solution
+// starts a filter that needs it only once a second search confirms it.
+StartupStatus StartupSearch::accept(const StartupFrame& f, const Search& s, RegistrationResult& result,
+                                    LocalizerCounters& counters) {
+  if (!s.best.ok()) {
+    result = s.best;
+    return StartupStatus::kRejected;
+  }
+  result = icp(f.scan, f.map, s.best.transform, params_.icp, f.icp_hints);
+  if (!result.ok()) return StartupStatus::kRejected;
+  const Mat4d& odom = f.odom_T_body.matrix();
+  double track_distance = 0.0;
+  const bool track_known = params_.use_gnss && track_gnss_distance(result.transform, odom, track_distance);
+  const bool heading_agrees =
+      f.course_known &&
+      std::abs(det::wrap_pi(yaw_of(result.transform.topLeftCorner<3, 3>()) - f.course)) <= params_.heading_search_tolerance;
+  if (result.fitness < params_.global_min_fitness || result.inlier_rmse > params_.max_inlier_rmse ||
+      (f.course_known && !heading_agrees) ||
+      (params_.use_gnss && horizontal_distance(result.transform, f.gnss.enu) > s.region) ||
+      (track_known && track_distance > params_.track_max_distance)) {
+    result.status = RegistrationStatus::kDidNotConverge;
+    return StartupStatus::kRejected;
+  }
+  ++counters.global_accepted;
+  if (!f.filter_needs_start) return StartupStatus::kAccepted;
+  // An unconfirmed candidate is reported (Reg. column) but neither gated nor fused.
+  // Output before confirmation when it is unlikely to be the mirror: the course says so, the
+  // GNSS track does, or the search over every heading left no other pose standing (the ray
+  // check removed the rest). Still flagged not localized until a second search confirms it.
+  const bool sole = !f.course_known && s.params.max_conflicts > 0.0 && s.searched.best.ok() &&
+                    s.searched.runner_up_tight_fitness <= 0.0;
+  if (!confirm(f.frame, result.transform, odom, track_known || heading_agrees || sole, counters)) {
+    return StartupStatus::kRejected;
+  }
+  return StartupStatus::kStartFilter;
+}
+
+bool StartupSearch::confirm(std::uint32_t frame, const Mat4d& pose, const Mat4d& odom_T_body, bool output,
+                            LocalizerCounters& counters) {
+  if (params_.global_confirm_window == 0) return true;
+  if (candidate_.valid && frame - candidate_.frame <= params_.global_confirm_window) {
+    const Mat4d predicted = candidate_.pose * se3_inverse(candidate_.odom) * odom_T_body;
+    const double dyaw = det::wrap_pi(yaw_of(pose.topLeftCorner<3, 3>()) - yaw_of(predicted.topLeftCorner<3, 3>()));
+    if (horizontal_distance(pose, predicted.topRightCorner<3, 1>()) <= params_.global_confirm_distance &&
+        std::abs(dyaw) <= params_.global_confirm_yaw) {
+      candidate_.valid = false;
+      ++counters.global_confirmed;
+      return true;
+    }
+    ++counters.global_inconsistent;
+  }
+  candidate_.valid = true;
+  candidate_.frame = frame;
+  candidate_.pose = pose;
+  candidate_.odom = odom_T_body;
+  candidate_.output = output;
+  return false;
+}
+
+bool StartupSearch::track_gnss_distance(const Mat4d& pose, const Mat4d& odom_T_body, double& mean_distance) const {
+  const std::uint32_t limit = params_.track_frames < kTrackFrames ? params_.track_frames
+                                                                  : static_cast<std::uint32_t>(kTrackFrames);
+  const std::uint32_t n = track_count_ < limit ? track_count_ : limit;
+  const Mat4d world_T_odom = pose * se3_inverse(odom_T_body);
+  double sum = 0.0;
+  std::uint32_t m = 0;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const TrackSample& s = track_[(track_count_ - 1 - i) % kTrackFrames];
+    if (!s.gnss) continue;
+    const double x = world_T_odom(0, 0) * s.odom_x + world_T_odom(0, 1) * s.odom_y + world_T_odom(0, 3);
+    const double y = world_T_odom(1, 0) * s.odom_x + world_T_odom(1, 1) * s.odom_y + world_T_odom(1, 3);
+    sum += std::sqrt((x - s.gnss_x) * (x - s.gnss_x) + (y - s.gnss_y) * (y - s.gnss_y));
+    ++m;
+  }
+  if (m < params_.track_min_fixes) return false;
+  mean_distance = sum / m;
+  return true;
+}
+
+}  // namespace v2xloc
