@@ -100,13 +100,84 @@ FpfhResult compute_fpfh(const KdTree<Vec3f>& tree, std::span<const Vec3f> normal
   return compute_fpfh(KdNeighborhoods(tree), normals, params, spfh_scratch, features);
 }
 
+namespace {
+
+// Pass 1: the SPFH of point i (its pairs with each neighbour, binned).
+void point_spfh(const KdNeighborhoods& neighborhoods, std::span<const Vec3f> normals, const FpfhParams& params,
+                std::size_t max_nn, std::size_t i, std::span<Neighbor> buffer, Feature33& spfh, FpfhResult& r) {
+  const std::span<const Vec3f> points = neighborhoods.tree().points();
+  spfh.setZero();
+  if (!is_finite_point(points[i])) {
+    ++r.non_finite_points;
+    return;
+  }
+  const KdQueryResult kr = neighborhoods.get(i, params.radius, max_nn, buffer);
+  r.search.add(kr);
+  if (kr.count <= 1) return;
+  const double increment = 100.0 / static_cast<double>(kr.count - 1);
+  double hist[kFpfhBins] = {};
+  const Vec3d p1 = points[i].cast<double>();
+  const Vec3d n1 = normals[i].cast<double>();
+  for (std::uint32_t k = 1; k < kr.count; ++k) {  // entry 0 is the point itself
+    const std::uint32_t j = buffer[k].index;
+    const PairComponents c = pair_components(p1, n1, points[j].cast<double>(), normals[j].cast<double>());
+    if (!std::isfinite(c.theta_y) || !std::isfinite(c.theta_x) || !std::isfinite(c.f1) || !std::isfinite(c.f2)) {
+      ++r.non_finite_pairs;
+      continue;
+    }
+    // Open3D's operation order for the alpha/phi bins so boundaries fall identically.
+    hist[theta_bin(c.theta_y, c.theta_x)] += increment;
+    hist[kBinsPerFeature + clamp_bin(11.0 * (c.f1 + 1.0) * 0.5)] += increment;
+    hist[2 * kBinsPerFeature + clamp_bin(11.0 * (c.f2 + 1.0) * 0.5)] += increment;
+  }
+  for (int b = 0; b < kFpfhBins; ++b) spfh[b] = static_cast<float>(hist[b]);
+}
+
+// Pass 2: FPFH of point i = own SPFH + normalised inverse-squared-distance weighted neighbour SPFHs.
+void point_fpfh(const KdNeighborhoods& neighborhoods, const FpfhParams& params, std::size_t max_nn,
+                std::size_t i, std::span<Neighbor> buffer, std::span<const Feature33> spfh_scratch,
+                Feature33& out, FpfhResult& r) {
+  out.setZero();
+  if (!is_finite_point(neighborhoods.tree().points()[i])) return;
+  const KdQueryResult kr = neighborhoods.get(i, params.radius, max_nn, buffer);
+  r.search.add(kr);
+  if (kr.count <= 1) {
+    ++r.isolated;
+    return;
+  }
+  double acc[kFpfhBins] = {};
+  for (std::uint32_t k = 1; k < kr.count; ++k) {
+    const double dist2 = buffer[k].squared_distance;
+    if (dist2 == 0.0) continue;
+    const double weight = 1.0 / dist2;  // one division, not 33 (<= 1 ulp from Open3D's s/d)
+    const Feature33& s = spfh_scratch[buffer[k].index];
+    // 33 independent accumulators (no loop-carried chain through a block sum: Open3D sums
+    // the block totals alongside; summing acc afterwards differs only in rounding).
+    // 32 + 1: a trip count that is a multiple of the vector width lets -O2 vectorise the loop
+    // (element-wise, so the bits are the same as the scalar loop).
+    for (int b = 0; b < 32; ++b) acc[b] += static_cast<double>(s[b]) * weight;
+    acc[32] += static_cast<double>(s[32]) * weight;
+  }
+  double block_sum[3] = {0.0, 0.0, 0.0};
+  for (int block = 0; block < 3; ++block) {
+    double sum = 0.0;
+    for (int b = 0; b < kBinsPerFeature; ++b) sum += acc[block * kBinsPerFeature + b];
+    block_sum[block] = sum != 0.0 ? 100.0 / sum : 0.0;
+  }
+  const Feature33& own = spfh_scratch[i];
+  for (int b = 0; b < kFpfhBins; ++b) {
+    out[b] = static_cast<float>(acc[b] * block_sum[b / kBinsPerFeature] + static_cast<double>(own[b]));
+  }
+}
+
+}  // namespace
+
 FpfhResult compute_fpfh(const KdNeighborhoods& neighborhoods, std::span<const Vec3f> normals,
                         const FpfhParams& params, std::span<Feature33> spfh_scratch,
                         std::span<Feature33> features) {
   FpfhResult r;
   const KdTree<Vec3f>& tree = neighborhoods.tree();
-  const std::span<const Vec3f> points = tree.points();
-  const std::size_t n = points.size();
+  const std::size_t n = tree.points().size();
   if (tree.empty()) {
     r.status = FpfhStatus::kEmptyTree;
     return r;
@@ -123,74 +194,9 @@ FpfhResult compute_fpfh(const KdNeighborhoods& neighborhoods, std::span<const Ve
   }
   Neighbor neighbors[config::kMaxNeighbors];
   const std::span<Neighbor> buffer(neighbors, max_nn);
-
-  // Pass 1: SPFH of every point.
+  for (std::size_t i = 0; i < n; ++i) point_spfh(neighborhoods, normals, params, max_nn, i, buffer, spfh_scratch[i], r);
   for (std::size_t i = 0; i < n; ++i) {
-    Feature33& spfh = spfh_scratch[i];
-    spfh.setZero();
-    if (!is_finite_point(points[i])) {
-      ++r.non_finite_points;
-      continue;
-    }
-    const KdQueryResult kr = neighborhoods.get(i, params.radius, max_nn, buffer);
-    r.search.add(kr);
-    if (kr.count <= 1) continue;
-    const double increment = 100.0 / static_cast<double>(kr.count - 1);
-    double hist[kFpfhBins] = {};
-    const Vec3d p1 = points[i].cast<double>();
-    const Vec3d n1 = normals[i].cast<double>();
-    for (std::uint32_t k = 1; k < kr.count; ++k) {  // entry 0 is the point itself
-      const std::uint32_t j = neighbors[k].index;
-      const PairComponents c =
-          pair_components(p1, n1, points[j].cast<double>(), normals[j].cast<double>());
-      if (!std::isfinite(c.theta_y) || !std::isfinite(c.theta_x) || !std::isfinite(c.f1) ||
-          !std::isfinite(c.f2)) {
-        ++r.non_finite_pairs;
-        continue;
-      }
-      // Open3D's operation order for the alpha/phi bins so boundaries fall identically.
-      hist[theta_bin(c.theta_y, c.theta_x)] += increment;
-      hist[kBinsPerFeature + clamp_bin(11.0 * (c.f1 + 1.0) * 0.5)] += increment;
-      hist[2 * kBinsPerFeature + clamp_bin(11.0 * (c.f2 + 1.0) * 0.5)] += increment;
-    }
-    for (int b = 0; b < kFpfhBins; ++b) spfh[b] = static_cast<float>(hist[b]);
-  }
-
-  // Pass 2: FPFH = own SPFH + normalised inverse-squared-distance weighted neighbour SPFHs.
-  for (std::size_t i = 0; i < n; ++i) {
-    Feature33& out = features[i];
-    out.setZero();
-    if (!is_finite_point(points[i])) continue;
-    const KdQueryResult kr = neighborhoods.get(i, params.radius, max_nn, buffer);
-    r.search.add(kr);
-    if (kr.count <= 1) {
-      ++r.isolated;
-      continue;
-    }
-    double acc[kFpfhBins] = {};
-    for (std::uint32_t k = 1; k < kr.count; ++k) {
-      const double dist2 = neighbors[k].squared_distance;
-      if (dist2 == 0.0) continue;
-      const double weight = 1.0 / dist2;  // one division, not 33 (<= 1 ulp from Open3D's s/d)
-      const Feature33& s = spfh_scratch[neighbors[k].index];
-      // 33 independent accumulators (no loop-carried chain through a block sum: Open3D sums
-      // the block totals alongside; summing acc afterwards differs only in rounding).
-      // 32 + 1: a trip count that is a multiple of the vector width lets -O2 vectorise the loop
-      // (element-wise, so the bits are the same as the scalar loop).
-      for (int b = 0; b < 32; ++b) acc[b] += static_cast<double>(s[b]) * weight;
-      acc[32] += static_cast<double>(s[32]) * weight;
-    }
-    double block_sum[3] = {0.0, 0.0, 0.0};
-    for (int block = 0; block < 3; ++block) {
-      double sum = 0.0;
-      for (int b = 0; b < kBinsPerFeature; ++b) sum += acc[block * kBinsPerFeature + b];
-      block_sum[block] = sum != 0.0 ? 100.0 / sum : 0.0;
-    }
-    const Feature33& own = spfh_scratch[i];
-    for (int b = 0; b < kFpfhBins; ++b) {
-      out[b] = static_cast<float>(acc[b] * block_sum[b / kBinsPerFeature] +
-                                  static_cast<double>(own[b]));
-    }
+    point_fpfh(neighborhoods, params, max_nn, i, buffer, spfh_scratch, features[i], r);
   }
   r.points = static_cast<std::uint32_t>(n);
   r.status = FpfhStatus::kOk;

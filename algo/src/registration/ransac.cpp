@@ -110,6 +110,115 @@ bool edge_lengths_similar(const Vec3d (&ps)[3], const Vec3d (&pt)[3], double sim
   return true;
 }
 
+// One drawn triple's hypothesis, or why there is none (counted in the result).
+enum class Draw : std::uint8_t { kHypothesis, kDegenerate, kEdgeLength, kDistance, kPrior };
+
+// Three distinct indices (rejection keeps the draw uniform over distinct triples), then the
+// cheap checks before a hypothesis is scored: valid points, similar edge lengths, a Kabsch fit
+// that brings the three pairs within the distance, the pose prior.
+Draw draw_hypothesis(const CorrespondenceSet& set, const RansacParams& params, std::uint32_t n, Pcg32& rng,
+                     Mat4d& t) {
+  std::uint32_t idx[3];
+  idx[0] = rng.uniform_below(n);
+  do { idx[1] = rng.uniform_below(n); } while (idx[1] == idx[0]);
+  do { idx[2] = rng.uniform_below(n); } while (idx[2] == idx[0] || idx[2] == idx[1]);
+  if (!set.valid(idx[0]) || !set.valid(idx[1]) || !set.valid(idx[2])) return Draw::kDegenerate;
+  Vec3d ps[3], pt[3];
+  for (int k = 0; k < 3; ++k) {
+    ps[k] = set.source(idx[k]);
+    pt[k] = set.target(idx[k]);
+  }
+  if (params.edge_length_similarity > 0.0 && !edge_lengths_similar(ps, pt, params.edge_length_similarity)) {
+    return Draw::kEdgeLength;
+  }
+  KabschAccumulator acc;
+  for (int k = 0; k < 3; ++k) acc.add(ps[k], pt[k]);
+  if (acc.solve(t) != RegistrationStatus::kOk) return Draw::kDegenerate;
+  if (params.distance_check_threshold >= 0.0) {
+    const double limit = params.distance_check_threshold > 0.0 ? params.distance_check_threshold
+                                                               : params.max_correspondence_distance;
+    bool close = true;
+    for (int k = 0; k < 3 && close; ++k) {
+      const Vec3d e = t.topLeftCorner<3, 3>() * ps[k] + t.topRightCorner<3, 1>() - pt[k];
+      close = e.norm() <= limit;
+    }
+    if (!close) return Draw::kDistance;
+  }
+  if (params.prior.enabled && !within_prior(t, params.prior)) return Draw::kPrior;
+  return Draw::kHypothesis;
+}
+
+void count_rejection(Draw d, RansacResult& out) {
+  switch (d) {
+    case Draw::kDegenerate: ++out.degenerate_samples; break;
+    case Draw::kEdgeLength: ++out.rejected_edge_length; break;
+    case Draw::kDistance: ++out.rejected_distance; break;
+    case Draw::kPrior: ++out.rejected_prior; break;
+    case Draw::kHypothesis: break;
+  }
+}
+
+// Refit on all inliers while that does not lose inliers (least squares over the consensus set).
+void refit_on_inliers(const CorrespondenceSet& set, double max_d2, std::uint32_t rounds, Score& best,
+                      Mat4d& best_transform) {
+  for (std::uint32_t round = 0; round < rounds; ++round) {
+    KabschAccumulator acc;
+    set.score(best_transform, max_d2, &acc);
+    Mat4d refit;
+    if (acc.solve(refit) != RegistrationStatus::kOk) break;
+    const Score s = set.score(refit, max_d2, nullptr);
+    if (s.inliers < best.inliers) break;
+    const bool grew = s.inliers > best.inliers;
+    best = s;
+    best_transform = refit;
+    if (!grew) break;
+  }
+}
+
+// The consensus search: the best-scoring hypothesis until the adaptive bound (Open3D's
+// confidence rule), the iteration cap or the validation cap stops it.
+struct Consensus {
+  Score best;
+  Mat4d transform = Mat4d::Identity();
+  bool found = false;
+  std::uint32_t iterations = 0;
+  std::uint32_t bound = 0;
+};
+
+Consensus search_consensus(const CorrespondenceSet& set, std::size_t usable, const RansacParams& params,
+                           RansacResult& out) {
+  const std::uint32_t max_iterations = params.criteria.max_iterations < config::kRansacMaxIterations
+                                           ? params.criteria.max_iterations
+                                           : config::kRansacMaxIterations;
+  const std::uint32_t max_validations = params.criteria.max_validations < config::kRansacMaxValidations
+                                            ? params.criteria.max_validations
+                                            : config::kRansacMaxValidations;
+  const double max_d2 = params.max_correspondence_distance * params.max_correspondence_distance;
+  const auto n = static_cast<std::uint32_t>(set.size());
+  Pcg32 rng(params.seed);
+  Consensus c;
+  c.bound = max_iterations;
+  std::uint32_t itr = 0;
+  for (; itr < max_iterations && itr < c.bound && out.validations < max_validations; ++itr) {
+    Mat4d t;
+    const Draw d = draw_hypothesis(set, params, n, rng, t);
+    if (d != Draw::kHypothesis) {
+      count_rejection(d, out);
+      continue;
+    }
+    ++out.validations;
+    const Score s = set.score(t, max_d2, nullptr);
+    if (!s.better_than(c.best)) continue;
+    c.best = s;
+    c.transform = t;
+    c.found = true;
+    const std::uint32_t b = adaptive_iteration_bound(c.best.fitness(usable), params.criteria.confidence, max_iterations);
+    if (b < c.bound) c.bound = b;
+  }
+  c.iterations = itr;
+  return c;
+}
+
 }  // namespace
 
 RansacResult ransac(std::span<const Vec3f> source, std::span<const Vec3f> target,
@@ -130,108 +239,24 @@ RansacResult ransac(std::span<const Vec3f> source, std::span<const Vec3f> target
     reg.status = RegistrationStatus::kNoCorrespondences;
     return out;
   }
-
-  const std::uint32_t max_iterations = params.criteria.max_iterations < config::kRansacMaxIterations
-                                           ? params.criteria.max_iterations
-                                           : config::kRansacMaxIterations;
-  const std::uint32_t max_validations =
-      params.criteria.max_validations < config::kRansacMaxValidations
-          ? params.criteria.max_validations
-          : config::kRansacMaxValidations;
-  const double max_d2 = params.max_correspondence_distance * params.max_correspondence_distance;
-  const auto n = static_cast<std::uint32_t>(set.size());
-
-  Pcg32 rng(params.seed);
-  Score best;
-  Mat4d best_transform = Mat4d::Identity();
-  bool have_best = false;
-  std::uint32_t bound = max_iterations;
-  std::uint32_t itr = 0;
-  for (; itr < max_iterations && itr < bound && out.validations < max_validations; ++itr) {
-    // Three distinct indices (rejection keeps the draw uniform over distinct triples).
-    std::uint32_t idx[3];
-    idx[0] = rng.uniform_below(n);
-    do { idx[1] = rng.uniform_below(n); } while (idx[1] == idx[0]);
-    do { idx[2] = rng.uniform_below(n); } while (idx[2] == idx[0] || idx[2] == idx[1]);
-    if (!set.valid(idx[0]) || !set.valid(idx[1]) || !set.valid(idx[2])) {
-      ++out.degenerate_samples;
-      continue;
-    }
-    Vec3d ps[3], pt[3];
-    for (int k = 0; k < 3; ++k) {
-      ps[k] = set.source(idx[k]);
-      pt[k] = set.target(idx[k]);
-    }
-    if (params.edge_length_similarity > 0.0 &&
-        !edge_lengths_similar(ps, pt, params.edge_length_similarity)) {
-      ++out.rejected_edge_length;
-      continue;
-    }
-    KabschAccumulator acc;
-    for (int k = 0; k < 3; ++k) acc.add(ps[k], pt[k]);
-    Mat4d t;
-    if (acc.solve(t) != RegistrationStatus::kOk) {
-      ++out.degenerate_samples;
-      continue;
-    }
-    if (params.distance_check_threshold >= 0.0) {
-      const double limit = params.distance_check_threshold > 0.0 ? params.distance_check_threshold
-                                                                 : params.max_correspondence_distance;
-      bool close = true;
-      for (int k = 0; k < 3 && close; ++k) {
-        const Vec3d e = t.topLeftCorner<3, 3>() * ps[k] + t.topRightCorner<3, 1>() - pt[k];
-        close = e.norm() <= limit;
-      }
-      if (!close) {
-        ++out.rejected_distance;
-        continue;
-      }
-    }
-    if (params.prior.enabled && !within_prior(t, params.prior)) {
-      ++out.rejected_prior;
-      continue;
-    }
-    ++out.validations;
-    const Score s = set.score(t, max_d2, nullptr);
-    if (s.better_than(best)) {
-      best = s;
-      best_transform = t;
-      have_best = true;
-      const std::uint32_t b =
-          adaptive_iteration_bound(best.fitness(usable), params.criteria.confidence, max_iterations);
-      if (b < bound) bound = b;
-    }
-  }
-  reg.iterations = itr;
-  out.adaptive_bound = bound;
-  if (!have_best || best.inliers < 3) {
+  Consensus c = search_consensus(set, usable, params, out);
+  reg.iterations = c.iterations;
+  out.adaptive_bound = c.bound;
+  if (!c.found || c.best.inliers < 3) {
     reg.status = RegistrationStatus::kDidNotConverge;
     return out;
   }
-  out.correspondence_fitness = best.fitness(usable);
-
-  // Refit on all inliers while that does not lose inliers (least squares over the consensus set).
-  for (std::uint32_t round = 0; round < params.refit_rounds; ++round) {
-    KabschAccumulator acc;
-    set.score(best_transform, max_d2, &acc);
-    Mat4d refit;
-    if (acc.solve(refit) != RegistrationStatus::kOk) break;
-    const Score s = set.score(refit, max_d2, nullptr);
-    if (s.inliers < best.inliers) break;
-    const bool grew = s.inliers > best.inliers;
-    best = s;
-    best_transform = refit;
-    if (!grew) break;
-  }
-  out.correspondence_inliers = best.inliers;
+  out.correspondence_fitness = c.best.fitness(usable);
+  const double max_d2 = params.max_correspondence_distance * params.max_correspondence_distance;
+  refit_on_inliers(set, max_d2, params.refit_rounds, c.best, c.transform);
+  out.correspondence_inliers = c.best.inliers;
 
   IcpTarget view;
   view.points = target;
   view.tree = &target_tree;
-  const std::uint32_t iterations = reg.iterations;
-  reg = evaluate_registration(source, view, best_transform, params.max_correspondence_distance);
-  reg.iterations = iterations;
-  reg.converged = itr >= bound;  // the confidence bound (not a cap) ended the search
+  reg = evaluate_registration(source, view, c.transform, params.max_correspondence_distance);
+  reg.iterations = c.iterations;
+  reg.converged = c.iterations >= c.bound;  // the confidence bound (not a cap) ended the search
   return out;
 }
 
