@@ -7,6 +7,7 @@
 
 #include "v2xloc/algo/localization/deskew.hpp"
 #include "v2xloc/algo/localization/ekf.hpp"
+#include "v2xloc/algo/localization/scan_ingest.hpp"
 #include "v2xloc/algo/registration/icp.hpp"
 #include "v2xloc/algo/registration/normals.hpp"
 #include "v2xloc/algo/registration/pose_search.hpp"
@@ -71,6 +72,7 @@ void Localizer::configure(const LocalizerParams& params, const GeodeticOrigin& o
   map_targets_[1].points.clear();
   map_active_ = 0;
   map_phase_ = MapBuildPhase::kIdle;
+  map_tree_started_ = false;
   map_normals_done_ = 0;
   map_build_revision_ = 0;
   map_revision_ = ~0ull;
@@ -181,31 +183,9 @@ const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
   return output_;
 }
 
-// Finite points within [min_range, max_range], deskewed with the odometry's constant-velocity
-// model (KISS-ICP: the previous frame's relative motion spread over the sweep).
+// The sweep read once (scan_ingest.hpp): finite returns within [min_range, max_range] merged
+// per registration voxel in the LiDAR frame, then deskewed with the vehicle signals' motion.
 void Localizer::prepare_scan(const EgoScanInput& in) {
-  scan_filtered_.clear();
-  scan_times_.clear();
-  const bool has_times = in.point_times.size() == in.points.size() && !in.points.empty();
-  const float min2 = params_.min_range * params_.min_range;
-  const float max2 = params_.max_range * params_.max_range;
-  std::uint32_t dropped = 0;
-  for (std::size_t i = 0; i < in.points.size(); ++i) {
-    const Vec3f& p = in.points[i];
-    const float r2 = p.squaredNorm();
-    if (!is_finite_point(p) || r2 < min2 || r2 > max2 || (has_times && !std::isfinite(in.point_times[i]))) {
-      ++dropped;
-      continue;
-    }
-    if (!scan_filtered_.push_back(p)) {
-      ++dropped;
-      continue;
-    }
-    if (has_times) scan_times_.push_back(in.point_times[i]);
-  }
-  counters_.scan_points_dropped += dropped;
-
-  scan_deskewed_count_ = scan_filtered_.size();
   // Sensor motion over one frame from the latest wheel speed and yaw rate (constant velocity).
   // Raw vehicle signals, not the EKF's or the odometry's estimates: the deskewed scan feeds both,
   // and a deskew driven by what it feeds is a feedback loop (measured: at Sim 3's turn an
@@ -217,20 +197,14 @@ void Localizer::prepare_scan(const EgoScanInput& in) {
     xi(5) = last_yaw_rate_ * params_.frame_period;
     vehicle_delta_lidar_ = se3_inverse(in.body_T_lidar) * se3_exp(xi) * in.body_T_lidar;
   }
-  const bool deskew_now = params_.deskew && has_times && have_vehicle_delta_;
-  if (deskew_now) {
-    const Mat4d& delta = vehicle_delta_lidar_;
-    DeskewParams dp;
-    dp.reference_time = 0.0;
-    dp.delta_duration = params_.frame_period;
-    const DeskewResult r = deskew(scan_filtered_.span(), scan_times_.span(), delta, dp,
-                                  std::span<Vec3f>(scan_deskewed_, config::kMaxScanPoints));
-    if (r.status == DeskewStatus::kOk) {
-      scan_deskewed_count_ = r.points_out;
-      return;
-    }
-  }
-  for (std::size_t i = 0; i < scan_filtered_.size(); ++i) scan_deskewed_[i] = scan_filtered_[i];
+  ScanIngestParams ip;
+  ip.min_range = params_.min_range;
+  ip.max_range = params_.max_range;
+  ip.voxel = params_.registration_voxel;
+  ip.frame_period = params_.frame_period;
+  const bool deskew_now = params_.deskew && have_vehicle_delta_;
+  const ScanIngestResult r = ingest_.run(in.points, in.point_times, deskew_now ? &vehicle_delta_lidar_ : nullptr, ip);
+  counters_.scan_points_dropped += r.non_finite_dropped + r.range_dropped + r.capacity_dropped;
 }
 
 IcpTarget Localizer::map_target() const {
@@ -239,7 +213,7 @@ IcpTarget Localizer::map_target() const {
 }
 
 void Localizer::run_odometry(const EgoScanInput& in) {
-  const std::span<const Vec3f> scan(scan_deskewed_, scan_deskewed_count_);
+  const std::span<const Vec3f> scan = ingest_.points();
   // Prediction from the vehicle signals over the actual frame gap (a dropped scan doubles it).
   Mat4d predicted = Mat4d::Identity();
   const bool predict = have_vehicle_delta_ && have_frame_ && in.t - last_frame_t_ < params_.odometry_prediction_max_gap;
@@ -250,7 +224,7 @@ void Localizer::run_odometry(const EgoScanInput& in) {
     xi(5) = last_yaw_rate_ * dt;
     predicted = se3_inverse(in.body_T_lidar) * se3_exp(xi) * in.body_T_lidar;
   }
-  const OdometryResult r = odometry_.register_frame(scan, predict ? &predicted : nullptr);
+  const OdometryResult r = odometry_.register_voxelized_frame(scan, predict ? &predicted : nullptr);
   const bool ok = r.status == OdometryStatus::kOk || r.status == OdometryStatus::kFirstFrame;
   if (!ok) ++counters_.odometry_failures;
   const Mat4d lidar_T_body = se3_inverse(in.body_T_lidar);
@@ -289,12 +263,22 @@ bool Localizer::map_build_step(double t) {
       map_build_revision_ = map_.revision();
       map_built_t_ = t;
       map_phase_ = MapBuildPhase::kTree;
-      return true;
-    case MapBuildPhase::kTree:
-      next.tree.build(next.points.span());
+      map_tree_started_ = false;
+      map_tree_result_ = {};
+      return map_ready_ ? false : true;  // extraction is this period's map work
+    case MapBuildPhase::kTree: {
+      if (!map_tree_started_) {
+        next.tree.begin_build(next.points.span());
+        map_tree_started_ = true;
+      }
+      const std::size_t quota = map_ready_ && params_.map_tree_work_per_period > 0 ? params_.map_tree_work_per_period
+                                                                                  : ~std::size_t{0};
+      if (!next.tree.tree.build_step(quota, map_tree_result_)) return false;  // more next period
+      map_tree_started_ = false;
       map_normals_done_ = 0;
       map_phase_ = MapBuildPhase::kNormals;
       return true;
+    }
     case MapBuildPhase::kNormals: {
       NormalParams np;
       np.radius = params_.map_normal_radius;
@@ -322,13 +306,19 @@ void Localizer::register_scan(double t) {
     ++failed_frames_;
     return;
   }
-  // Source: the deskewed scan in the body frame, downsampled.
+  // Source: the ingested scan (already one point per registration voxel) in the body frame.
   probe_(LocalizerStage::kDownsample);
-  scan_body_.clear();
-  for (std::size_t i = 0; i < scan_deskewed_count_; ++i) {
-    scan_body_.push_back(transform_point(body_T_lidar_, scan_deskewed_[i]));
+  scan_down_.clear();
+  for (const Vec3f& p : ingest_.points()) scan_down_.push_back(transform_point(body_T_lidar_, p));
+  // The tracking ICP's points: an even subsample of at most tracking_points (the ICP's cost
+  // is one nearest-neighbour query per point and iteration).
+  tracking_scan_.clear();
+  {
+    const std::size_t n = scan_down_.size();
+    const std::size_t want = params_.tracking_points > 0 ? params_.tracking_points : n;
+    const std::size_t stride = n > want ? (n + want - 1) / want : 1;
+    for (std::size_t i = 0; i < n; i += stride) tracking_scan_.push_back(scan_down_[i]);
   }
-  voxel_.run(scan_body_.span(), params_.registration_voxel, scan_down_);
   search_scan_.clear();
   {
     const std::size_t want = params_.search_points < config::kMaxSearchPoints ? params_.search_points
@@ -350,7 +340,7 @@ void Localizer::register_scan(double t) {
     output_.mode = LocalizationMode::kTracking;
     probe_(LocalizerStage::kTracking);
     ++counters_.tracking_registrations;
-    result = icp(scan_down_.span(), target, ekf_.state().pose(), params_.icp,
+    result = icp(tracking_scan_.span(), target, ekf_.state().pose(), params_.icp,
                  std::span<std::uint32_t>(icp_hints_, config::kMaxDownsampledPoints));
     if (result.ok() && result.inlier_rmse > params_.max_inlier_rmse) {
       result.status = RegistrationStatus::kDidNotConverge;  // counted as a failed frame

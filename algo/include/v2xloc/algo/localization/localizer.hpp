@@ -29,6 +29,7 @@
 #include "v2xloc/algo/localization/localizer_params.hpp"
 #include "v2xloc/algo/localization/stereo_cloud.hpp"
 #include "v2xloc/algo/localization/odometry.hpp"
+#include "v2xloc/algo/localization/scan_ingest.hpp"
 #include "v2xloc/algo/localization/stage_probe.hpp"
 #include "v2xloc/algo/localization/trajectory_backfill.hpp"
 #include "v2xloc/algo/registration/register_clouds.hpp"
@@ -296,18 +297,17 @@ class Localizer {
   std::uint32_t map_active_ = 0;
   MapBuildPhase map_phase_ = MapBuildPhase::kIdle;
   std::size_t map_normals_done_ = 0;
+  bool map_tree_started_ = false;
+  KdBuildResult map_tree_result_{};
   std::uint64_t map_build_revision_ = 0;
   std::uint64_t map_revision_ = ~0ull;
   double map_built_t_ = -1e300;
   bool map_ready_ = false;
 
   // Scan buffers.
-  FixedVector<Vec3f, config::kMaxScanPoints> scan_filtered_;
-  FixedVector<float, config::kMaxScanPoints> scan_times_;
-  Vec3f scan_deskewed_[config::kMaxScanPoints];
-  std::size_t scan_deskewed_count_ = 0;
-  FixedVector<Vec3f, config::kMaxScanPoints> scan_body_;
-  FixedVector<Vec3f, config::kMaxDownsampledPoints> scan_down_;
+  ScanIngest ingest_{};                                          // voxelised, deskewed sweep
+  FixedVector<Vec3f, config::kMaxDownsampledPoints> scan_down_;  // ... in the body frame
+  FixedVector<Vec3f, config::kMaxDownsampledPoints> tracking_scan_;  // tracking ICP's subsample
   // Each scan point's map match of the last ICP iteration seeds its next search (same matches,
   // fewer k-d tree nodes).
   std::uint32_t icp_hints_[config::kMaxDownsampledPoints];
