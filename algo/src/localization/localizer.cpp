@@ -98,7 +98,7 @@ void Localizer::run_odometry(const EgoScanInput& in) {
     xi(5) = vehicle_.yaw_rate * dt;
     predicted = se3_inverse(body_T_lidar) * se3_exp(xi) * body_T_lidar;
   }
-  const OdometryResult r = odometry_.register_frame(scan_.deskewed(), predict ? &predicted : nullptr);
+  const OdometryResult r = odometry_.register_voxelized_frame(scan_.deskewed(), predict ? &predicted : nullptr);
   const bool ok = r.status == OdometryStatus::kOk || r.status == OdometryStatus::kFirstFrame;
   if (!ok) ++counters_.odometry_failures;
   const Mat4d lidar_T_body = se3_inverse(body_T_lidar);
@@ -142,7 +142,7 @@ void Localizer::register_frame(double t, const Mat4d& body_T_lidar) {
 
 RegistrationResult Localizer::track(double t, const Mat4d& body_T_lidar) {
   probe_(LocalizerStage::kTracking);
-  const TrackingFrame frame{filter_.pose(),       scan_.registration_scan(),
+  const TrackingFrame frame{filter_.pose(),       scan_.registration_scan(), scan_.tracking_scan(),
                             scan_.search_scan(),  scan_.stereo_cloud(),
                             map_.target(),        body_T_lidar.topRightCorner<3, 1>(),
                             icp_hints(),          probe_};

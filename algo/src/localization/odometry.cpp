@@ -1,6 +1,6 @@
 #include "v2xloc/algo/localization/odometry.hpp"
 
-#include "v2xloc/algo/registration/normals.hpp"
+#include "v2xloc/algo/core/symmetric_eigen.hpp"
 
 #include <cmath>
 
@@ -83,28 +83,30 @@ std::uint32_t LidarOdometry::insert_voxel(const std::int32_t key[3]) {
   return static_cast<std::uint32_t>(num_voxels_ - 1);
 }
 
+// The nearest map point among the 2 x 2 x 2 voxels around p (its own and, per axis, the
+// neighbour on the side p lies in): exact for every point within half a voxel of p, which
+// covers the tracking threshold tau; 8 voxel lookups instead of KISS-ICP's 27.
 bool LidarOdometry::nearest(const Vec3d& p, double max_d2, Vec3d& q, double& d2) const {
   std::int32_t key[3];
   if (!voxel_key(p, key)) return false;
+  std::int32_t side[3];
+  for (int a = 0; a < 3; ++a) side[a] = p(a) / params_.voxel_size - key[a] < 0.5 ? -1 : 1;
   bool found = false;
   d2 = max_d2;
   const Vec3f* pts = map_[active_];
-  for (int dx = -1; dx <= 1; ++dx) {
-    for (int dy = -1; dy <= 1; ++dy) {
-      for (int dz = -1; dz <= 1; ++dz) {
-        const std::int32_t k[3] = {key[0] + dx, key[1] + dy, key[2] + dz};
-        const std::uint32_t v = find_voxel(k);
-        if (v == kNone) continue;
-        const Voxel& vx = voxels_[active_][v];
-        for (std::uint32_t i = 0; i < vx.count; ++i) {
-          const Vec3d m = pts[vx.begin + i].cast<double>();
-          const double d = (m - p).squaredNorm();
-          if (d < d2) {
-            d2 = d;
-            q = m;
-            found = true;
-          }
-        }
+  for (int corner = 0; corner < 8; ++corner) {
+    const std::int32_t k[3] = {key[0] + ((corner & 1) ? side[0] : 0), key[1] + ((corner & 2) ? side[1] : 0),
+                               key[2] + ((corner & 4) ? side[2] : 0)};
+    const std::uint32_t v = find_voxel(k);
+    if (v == kNone) continue;
+    const Voxel& vx = voxels_[active_][v];
+    for (std::uint32_t i = 0; i < vx.count; ++i) {
+      const Vec3d m = pts[vx.begin + i].cast<double>();
+      const double d = (m - p).squaredNorm();
+      if (d < d2) {
+        d2 = d;
+        q = m;
+        found = true;
       }
     }
   }
@@ -132,77 +134,168 @@ OdometryResult LidarOdometry::register_frame(std::span<const Vec3f> scan, const 
   }
   // Double voxelisation (KISS-ICP III-B): 0.5 v for the map, 1.5 v for registration.
   frame_fine_.clear();
-  frame_coarse_.clear();
   const VoxelDownsampleResult fine = downsample_.run(
       in_range_.span(), static_cast<float>(0.5 * params_.voxel_size), frame_fine_);
-  const VoxelDownsampleResult coarse = downsample_.run(
-      frame_fine_.span(), static_cast<float>(1.5 * params_.voxel_size), frame_coarse_);
-  r.points_dropped_capacity += fine.output_overflow + fine.hash_overflow + fine.range_overflow +
-                               coarse.output_overflow + coarse.hash_overflow +
-                               coarse.range_overflow;
-  r.source_points = static_cast<std::uint32_t>(frame_coarse_.size());
+  r.points_dropped_capacity += fine.output_overflow + fine.hash_overflow + fine.range_overflow;
+  return register_fine(predicted_delta, r);
+}
 
+OdometryResult LidarOdometry::register_voxelized_frame(std::span<const Vec3f> fine, const Mat4d* predicted_delta) {
+  OdometryResult r;
+  frame_fine_.clear();
+  const double min2 = params_.min_range * params_.min_range;
+  const double max2 = params_.max_range * params_.max_range;
+  for (const Vec3f& p : fine) {
+    const double d2 = p.cast<double>().squaredNorm();
+    if (!(d2 >= min2 && d2 <= max2)) {
+      ++r.points_dropped_range;
+      continue;
+    }
+    if (!frame_fine_.push_back(p)) ++r.points_dropped_capacity;
+  }
+  return register_fine(predicted_delta, r);
+}
+
+OdometryResult LidarOdometry::register_fine(const Mat4d* predicted_delta, OdometryResult& r) {
+  build_coarse_frame(r);
+  r.source_points = static_cast<std::uint32_t>(frame_coarse_.size());
   const bool use_given = predicted_delta != nullptr && predicted_delta->allFinite();
   const Mat4d prediction = pose_ * (use_given ? *predicted_delta : delta_);
   if (frame_coarse_.empty()) {
     r.status = OdometryStatus::kEmptyScan;
     pose_ = prediction;
-    r.pose = pose_;
-    r.delta = delta_;
-    r.map_points = static_cast<std::uint32_t>(map_points_);
-    r.map_voxels = static_cast<std::uint32_t>(num_voxels_);
-    return r;
+    return finish_frame(r);
   }
   if (first_frame_) {
     first_frame_ = false;
     update_map(pose_, r);
     r.status = OdometryStatus::kFirstFrame;
-    r.pose = pose_;
-    r.map_points = static_cast<std::uint32_t>(map_points_);
-    r.map_voxels = static_cast<std::uint32_t>(num_voxels_);
-    return r;
+    return finish_frame(r);
   }
+  update_threshold(r);
+  Mat4d T = align(prediction, r);
+  T.topLeftCorner<3, 3>() = orthonormalize(T.topLeftCorner<3, 3>());
+  if (r.status == OdometryStatus::kNoCorrespondences) T = prediction;
+  last_deviation_ = se3_inverse(prediction) * T;
+  delta_ = se3_inverse(pose_) * T;
+  pose_ = T;
+  update_map(pose_, r);
+  return finish_frame(r);
+}
 
-  // Adaptive threshold from the last model deviation (eqs. 4-6).
-  {
-    const Vec3d w = so3_log(last_deviation_.topLeftCorner<3, 3>());
-    const double theta = std::sqrt(w.squaredNorm());
-    const double dev = 2.0 * params_.max_range * det::sin(0.5 * theta) +
-                       std::sqrt(last_deviation_.topRightCorner<3, 1>().squaredNorm());
-    if (dev > params_.min_motion) {  // KISS-ICP samples only deviations above min_motion
-      deviation_sse_ += dev * dev;
-      ++deviation_samples_;
+OdometryResult LidarOdometry::finish_frame(OdometryResult& r) const {
+  r.pose = pose_;
+  r.delta = delta_;
+  r.map_points = static_cast<std::uint32_t>(map_points_);
+  r.map_voxels = static_cast<std::uint32_t>(num_voxels_);
+  return r;
+}
+
+// Adaptive threshold from the last model deviation (eqs. 4-6).
+void LidarOdometry::update_threshold(OdometryResult& r) {
+  const Vec3d w = so3_log(last_deviation_.topLeftCorner<3, 3>());
+  const double theta = std::sqrt(w.squaredNorm());
+  const double dev = 2.0 * params_.max_range * det::sin(0.5 * theta) +
+                     std::sqrt(last_deviation_.topRightCorner<3, 1>().squaredNorm());
+  if (dev > params_.min_motion) {  // KISS-ICP samples only deviations above min_motion
+    deviation_sse_ += dev * dev;
+    ++deviation_samples_;
+  }
+  r.sigma = model_sigma();
+  r.threshold = 3.0 * r.sigma;
+}
+
+// The 1.5 v registration points: centroids of the fine points per coarse voxel (in order of
+// first occurrence), each with a source normal for the point-to-plane residual: the PCA of the
+// fine points in the 2 x 2 x 2 coarse voxels around it (a ~3 v box, like a 1.5 v radius), from
+// moments summed while voxelising: no search structure, no neighbour queries.
+void LidarOdometry::build_coarse_frame(OdometryResult& r) {
+  frame_coarse_.clear();
+  const double cv = 1.5 * params_.voxel_size;
+  std::size_t voxels = 0;
+  for (const Vec3f& pf : frame_fine_) {
+    const Vec3d p = pf.cast<double>();
+    std::int32_t key[3];
+    bool ok = true;
+    for (int a = 0; a < 3; ++a) {
+      const double k = std::floor(p(a) / cv);
+      ok = ok && k > -1073741824.0 && k < 1073741824.0;
+      key[a] = ok ? static_cast<std::int32_t>(k) : 0;
     }
-  }
-  const double sigma = model_sigma();
-  const double tau = 3.0 * sigma;
-  const double kappa = sigma / 3.0;
-  r.sigma = sigma;
-  r.threshold = tau;
-
-  // Source normals for the point-to-plane residual: PCA over the fine frame, each coarse point
-  // takes the normal of its nearest fine point.
-  if (params_.point_to_plane) {
-    fine_tree_.build(frame_fine_.span());
-    NormalParams np;
-    np.radius = static_cast<float>(params_.normal_radius);
-    np.orient_to_viewpoint = false;  // the residual is squared: the sign does not matter
-    // Only the fine points some coarse point takes its normal from (about one in three) need
-    // one: computed on first use, each exactly as the whole-frame pass would.
-    for (std::size_t i = 0; i < frame_fine_.size(); ++i) fine_has_normal_[i] = 0;
-    const std::span<Vec3f> fine_normals(fine_normals_, frame_fine_.size());
-    for (std::size_t i = 0; i < frame_coarse_.size(); ++i) {
-      Neighbor nb{0, 0.0f};
-      const KdQueryResult q = fine_tree_.tree.nearest(frame_coarse_[i], nb);
-      if (q.count > 0 && fine_has_normal_[nb.index] == 0) {
-        estimate_normals_range(fine_tree_.tree, np, nb.index, 1, fine_normals);
-        fine_has_normal_[nb.index] = 1;
+    std::uint32_t v = ok ? find_coarse(key) : kNone;
+    if (ok && v == kNone && voxels < kMaxCoarse) {
+      const ProbeResult probe = linear_probe(spatial_hash(key), kCoarseSlots, kMaxProbes,
+                                             [&](std::size_t slot) { return coarse_slots_[slot] == 0; });
+      if (probe.stopped) {
+        v = static_cast<std::uint32_t>(voxels++);
+        coarse_[v] = CoarseVoxel{};
+        for (int a = 0; a < 3; ++a) coarse_[v].key[a] = key[a];
+        coarse_[v].slot = static_cast<std::uint32_t>(probe.slot);
+        coarse_slots_[probe.slot] = v + 1;
       }
-      coarse_normals_[i] = q.count > 0 ? fine_normals_[nb.index] : Vec3f::Zero();
     }
+    if (v == kNone) {
+      ++r.points_dropped_capacity;
+      continue;
+    }
+    CoarseVoxel& c = coarse_[v];
+    ++c.count;
+    c.sum += p;
+    c.outer += p * p.transpose();
   }
+  for (std::size_t v = 0; v < voxels; ++v) {
+    const CoarseVoxel& c = coarse_[v];
+    const Vec3d mean = c.sum / static_cast<double>(c.count);
+    frame_coarse_.push_back(mean.cast<float>());
+    coarse_normals_[v] = params_.point_to_plane ? coarse_normal(mean, c.key, cv) : Vec3f::Zero();
+  }
+  for (std::size_t v = 0; v < voxels; ++v) coarse_slots_[coarse_[v].slot] = 0;
+}
 
-  // Gauss-Newton with a Geman-McClure kernel, left-multiplied twist (rho, omega).
+std::uint32_t LidarOdometry::find_coarse(const std::int32_t key[3]) const {
+  std::uint32_t found = kNone;
+  linear_probe(spatial_hash(key), kCoarseSlots, kMaxProbes, [&](std::size_t slot) {
+    const std::uint32_t v = coarse_slots_[slot];
+    if (v == 0) return true;
+    const CoarseVoxel& c = coarse_[v - 1];
+    if (c.key[0] == key[0] && c.key[1] == key[1] && c.key[2] == key[2]) {
+      found = v - 1;
+      return true;
+    }
+    return false;
+  });
+  return found;
+}
+
+Vec3f LidarOdometry::coarse_normal(const Vec3d& mean, const std::int32_t key[3], double cv) const {
+  std::int32_t side[3];
+  for (int a = 0; a < 3; ++a) side[a] = mean(a) / cv - key[a] < 0.5 ? -1 : 1;
+  Vec3d sum = Vec3d::Zero();
+  Mat3d outer = Mat3d::Zero();
+  std::uint32_t n = 0;
+  for (int corner = 0; corner < 8; ++corner) {
+    const std::int32_t k[3] = {key[0] + ((corner & 1) ? side[0] : 0), key[1] + ((corner & 2) ? side[1] : 0),
+                               key[2] + ((corner & 4) ? side[2] : 0)};
+    const std::uint32_t v = find_coarse(k);
+    if (v == kNone) continue;
+    sum += coarse_[v].sum;
+    outer += coarse_[v].outer;
+    n += coarse_[v].count;
+  }
+  if (n < params_.normal_min_points) return Vec3f::Zero();  // no plane to speak of: not used
+  const Vec3d centroid = sum / static_cast<double>(n);
+  const Mat3d cov = outer / static_cast<double>(n) - centroid * centroid.transpose();
+  Vec3d lambda;
+  Mat3d vectors;
+  symmetric_eigen3(cov, lambda, vectors);
+  return vectors.col(0).cast<float>();
+}
+
+// Gauss-Newton with a Geman-McClure kernel, left-multiplied twist (rho, omega).
+Mat4d LidarOdometry::align(const Mat4d& prediction, OdometryResult& r) const {
+  const double tau = r.threshold;
+  const double kappa = r.sigma / 3.0;
+  const double k2 = kappa * kappa;
   Mat4d T = prediction;
   r.status = OdometryStatus::kOk;
   for (std::uint32_t it = 0; it < params_.max_iterations; ++it) {
@@ -217,21 +310,22 @@ OdometryResult LidarOdometry::register_frame(std::span<const Vec3f> scan, const 
       double d2;
       if (!nearest(p, tau * tau, q, d2)) continue;
       const Vec3d res = p - q;
-      const double k2 = kappa * kappa;
-      Eigen::Matrix<double, 3, 6> J;
-      J.leftCols<3>() = Mat3d::Identity();
-      J.rightCols<3>() = -skew(p);
       if (params_.point_to_plane) {
         const Vec3d n = R * coarse_normals_[i].cast<double>();
         if (n.squaredNorm() < 0.5) continue;  // no normal (isolated point)
         const double e = n.dot(res);
         const double denom = k2 + e * e;
         const double w = k2 / (denom * denom) * k2;
-        const Eigen::Matrix<double, 1, 6> Jn = n.transpose() * J;
-        H += w * (Jn.transpose() * Jn);
-        b += w * (Jn.transpose() * e);
+        Vec6d jn;
+        jn.head<3>() = n;
+        jn.tail<3>() = p.cross(n);  // n^T [I | -[p]x]
+        H += (w * jn) * jn.transpose();
+        b += (w * e) * jn;
         sse += e * e;
       } else {
+        Eigen::Matrix<double, 3, 6> J;
+        J.leftCols<3>() = Mat3d::Identity();
+        J.rightCols<3>() = -skew(p);
         const double denom = k2 + d2;
         const double w = k2 / (denom * denom) * k2;  // normalised so w(0) = 1
         H += w * (J.transpose() * J);
@@ -263,18 +357,7 @@ OdometryResult LidarOdometry::register_frame(std::span<const Vec3f> scan, const 
       break;
     }
   }
-  T.topLeftCorner<3, 3>() = orthonormalize(T.topLeftCorner<3, 3>());
-  if (r.status == OdometryStatus::kNoCorrespondences) T = prediction;
-
-  last_deviation_ = se3_inverse(prediction) * T;
-  delta_ = se3_inverse(pose_) * T;
-  pose_ = T;
-  update_map(pose_, r);
-  r.pose = pose_;
-  r.delta = delta_;
-  r.map_points = static_cast<std::uint32_t>(map_points_);
-  r.map_voxels = static_cast<std::uint32_t>(num_voxels_);
-  return r;
+  return T;
 }
 
 void LidarOdometry::update_map(const Mat4d& pose, OdometryResult& r) {

@@ -11,6 +11,7 @@ void ReferenceMap::configure(const LocalizerParams& params) {
   targets_[1].points.clear();
   active_ = 0;
   phase_ = BuildPhase::kIdle;
+  tree_started_ = false;
   normals_done_ = 0;
   build_revision_ = 0;
   revision_ = ~0ull;
@@ -48,12 +49,22 @@ bool ReferenceMap::build_step(double t, bool& finished) {
       build_revision_ = fusion_.revision();
       built_t_ = t;
       phase_ = BuildPhase::kTree;
+      tree_started_ = false;
+      tree_result_ = {};
       return true;
-    case BuildPhase::kTree:
-      next.tree.build(next.points.span());
+    case BuildPhase::kTree: {
+      if (!tree_started_) {
+        next.tree.begin_build(next.points.span());
+        tree_started_ = true;
+      }
+      const std::size_t quota = ready_ && params_.map_tree_work_per_period > 0 ? params_.map_tree_work_per_period
+                                                                              : ~std::size_t{0};
+      if (!next.tree.tree.build_step(quota, tree_result_)) return false;  // more next period
+      tree_started_ = false;
       normals_done_ = 0;
       phase_ = BuildPhase::kNormals;
       return true;
+    }
     case BuildPhase::kNormals: {
       NormalParams np;
       np.radius = params_.map_normal_radius;

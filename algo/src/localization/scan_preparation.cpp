@@ -5,6 +5,7 @@
 #include "v2xloc/algo/core/finite.hpp"
 #include "v2xloc/algo/core/rigid_motion.hpp"
 #include "v2xloc/algo/localization/deskew.hpp"
+#include "v2xloc/algo/localization/scan_ingest.hpp"
 
 namespace v2xloc {
 namespace {
@@ -22,55 +23,30 @@ void ScanPreparation::configure(const LocalizerParams& params) {
   stereo_down_.clear();
 }
 
-void ScanPreparation::filter(const EgoScanInput& in, std::uint32_t& dropped) {
-  filtered_.clear();
-  times_.clear();
-  const bool has_times = in.point_times.size() == in.points.size() && !in.points.empty();
-  const float min2 = params_.min_range * params_.min_range;
-  const float max2 = params_.max_range * params_.max_range;
-  for (std::size_t i = 0; i < in.points.size(); ++i) {
-    const Vec3f& p = in.points[i];
-    const float r2 = p.squaredNorm();
-    if (!is_finite_point(p) || r2 < min2 || r2 > max2 || (has_times && !std::isfinite(in.point_times[i]))) {
-      ++dropped;
-      continue;
-    }
-    if (!filtered_.push_back(p)) {
-      ++dropped;
-      continue;
-    }
-    if (has_times) times_.push_back(in.point_times[i]);
-  }
-}
-
-// Deskewed with the constant-velocity sensor motion of the latest wheel speed and yaw rate
-// (KISS-ICP's model). Raw vehicle signals, not the EKF's or the odometry's estimates: the
-// deskewed scan feeds both, and a deskew driven by what it feeds is a feedback loop.
+// The sweep read once (scan_ingest.hpp): finite returns within [min_range, max_range] merged
+// per registration voxel in the LiDAR frame, then deskewed with the constant-velocity sensor
+// motion of the latest wheel speed and yaw rate (KISS-ICP's model). Raw vehicle signals, not the
+// EKF's or the odometry's estimates: the deskewed scan feeds both, and a deskew driven by what
+// it feeds is a feedback loop.
 void ScanPreparation::prepare(const EgoScanInput& in, const VehicleMotion& vehicle, std::uint32_t& dropped) {
   stereo_down_.clear();
-  std::uint32_t filtered_out = 0;
-  filter(in, filtered_out);
-  dropped += filtered_out;
-  const bool has_times = in.point_times.size() == in.points.size() && !in.points.empty();
-  deskewed_count_ = filtered_.size();
   have_vehicle_delta_ = vehicle.valid && params_.use_vehicle_signals;
-  if (params_.deskew && has_times && have_vehicle_delta_) {
+  Mat4d delta = Mat4d::Identity();
+  if (have_vehicle_delta_) {
     Vec6d xi = Vec6d::Zero();
     xi(0) = vehicle.speed * params_.frame_period;
     xi(5) = vehicle.yaw_rate * params_.frame_period;
     const Mat4d& body_T_lidar = in.body_T_lidar.matrix();
-    const Mat4d delta = se3_inverse(body_T_lidar) * se3_exp(xi) * body_T_lidar;
-    DeskewParams dp;
-    dp.reference_time = 0.0;
-    dp.delta_duration = params_.frame_period;
-    const DeskewResult r = deskew(filtered_.span(), times_.span(), delta, dp,
-                                  std::span<Vec3f>(deskewed_, config::kMaxScanPoints));
-    if (r.status == DeskewStatus::kOk) {
-      deskewed_count_ = r.points_out;
-      return;
-    }
+    delta = se3_inverse(body_T_lidar) * se3_exp(xi) * body_T_lidar;
   }
-  for (std::size_t i = 0; i < filtered_.size(); ++i) deskewed_[i] = filtered_[i];
+  ScanIngestParams ip;
+  ip.min_range = params_.min_range;
+  ip.max_range = params_.max_range;
+  ip.voxel = params_.registration_voxel;
+  ip.frame_period = params_.frame_period;
+  const bool deskew_now = params_.deskew && have_vehicle_delta_;
+  const ScanIngestResult r = ingest_.run(in.points, in.point_times, deskew_now ? &delta : nullptr, ip);
+  dropped += r.non_finite_dropped + r.range_dropped + r.capacity_dropped;
 }
 
 void ScanPreparation::prepare_stereo(const StereoInput& stereo) {
@@ -87,16 +63,26 @@ void ScanPreparation::prepare_stereo(const StereoInput& stereo) {
   voxel_.run(std::span<const Vec3f>(stereo_points_, r.points_out), params_.stereo_voxel, stereo_down_);
 }
 
+// The ingested scan is already one point per registration voxel: moved to the body frame, with
+// two even subsamples, the tracking ICP's (<= tracking_points) and the pose search's.
 void ScanPreparation::downsample_for_registration(const Mat4d& body_T_lidar) {
-  body_.clear();
-  for (std::size_t i = 0; i < deskewed_count_; ++i) body_.push_back(transform_point(body_T_lidar, deskewed_[i]));
-  voxel_.run(body_.span(), params_.registration_voxel, down_);
+  down_.clear();
+  for (const Vec3f& p : ingest_.points()) down_.push_back(transform_point(body_T_lidar, p));
+  subsample(down_.span(), params_.tracking_points, tracking_);
   search_.clear();
   const std::size_t want = params_.search_points < config::kMaxSearchPoints ? params_.search_points
                                                                              : config::kMaxSearchPoints;
   const std::size_t n = down_.size();
   const std::size_t stride = want > 0 && n > want ? (n + want - 1) / want : 1;
   for (std::size_t i = 0; i < n; i += stride) search_.push_back(down_[i]);
+}
+
+void ScanPreparation::subsample(std::span<const Vec3f> in, std::size_t want, BoundedVector<Vec3f>& out) {
+  out.clear();
+  const std::size_t n = in.size();
+  if (want == 0) want = n;
+  const std::size_t stride = n > want ? (n + want - 1) / want : 1;
+  for (std::size_t i = 0; i < n; i += stride) out.push_back(in[i]);
 }
 
 }  // namespace v2xloc

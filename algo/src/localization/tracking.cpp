@@ -11,7 +11,7 @@ TrackingOutcome TrackingRegistration::step(const TrackingFrame& f, LocalizerCoun
   TrackingOutcome out;
   ++counters.tracking_registrations;
   RegistrationResult& result = out.registration;
-  result = icp(f.scan, f.map, f.predicted.matrix(), params_.icp, f.icp_hints);
+  result = icp(f.tracking_scan, f.map, f.predicted.matrix(), params_.icp, f.icp_hints);
   if (result.ok() && result.inlier_rmse > params_.max_inlier_rmse) {
     result.status = RegistrationStatus::kDidNotConverge;  // counted as a failed frame
   }

@@ -182,6 +182,38 @@ std::uint32_t count_nonfinite(std::span<const Vec3f> cloud) {
   return n;
 }
 
+// The Gauss-Newton (point-to-plane) or Kabsch (point-to-point) step from one pass; false (and
+// result.status set) when the system is degenerate.
+bool update_transform(const Pass& pass, bool plane, const IcpParams& params, Mat4d& transform,
+                      RegistrationResult& result) {
+  Mat4d next = transform;
+  if (plane) {
+    if (!(preconditioned_eigen_ratio(pass.h) > params.min_eigenvalue_ratio)) {
+      result.status = RegistrationStatus::kDegenerate;
+      return false;
+    }
+    const Vec6d delta = pass.h.ldlt().solve(-pass.b);
+    Mat4d update = Mat4d::Identity();
+    update.topLeftCorner<3, 3>() = so3_exp_closed_form(delta.head<3>());
+    update.topRightCorner<3, 1>() = delta.tail<3>();
+    next = update * transform;
+    orthonormalize_rows(next);
+  } else {
+    KabschParams kp;
+    kp.min_singular_ratio = params.min_eigenvalue_ratio;
+    if (pass.kabsch.solve(next, kp) != RegistrationStatus::kOk) {
+      result.status = RegistrationStatus::kDegenerate;
+      return false;
+    }
+  }
+  if (!next.allFinite()) {
+    result.status = RegistrationStatus::kDegenerate;
+    return false;
+  }
+  transform = next;
+  return true;
+}
+
 }  // namespace
 
 RegistrationResult evaluate_registration(std::span<const Vec3f> source, const IcpTarget& target,
@@ -206,78 +238,77 @@ RegistrationResult evaluate_registration(std::span<const Vec3f> source, const Ic
 
 RegistrationResult icp(std::span<const Vec3f> source, const IcpTarget& target, const Mat4d& initial,
                        const IcpParams& params, std::span<std::uint32_t> neighbor_scratch) {
-  RegistrationResult result;
+  IcpRun run;
+  icp_begin(run, source, target, initial, params, neighbor_scratch);
+  while (!icp_continue(run, source, target, params, ~std::uint32_t{0}, neighbor_scratch)) {
+  }
+  return run.result;
+}
+
+void icp_begin(IcpRun& run, std::span<const Vec3f> source, const IcpTarget& target, const Mat4d& initial,
+               const IcpParams& params, std::span<std::uint32_t> neighbor_scratch) {
+  run = IcpRun{};
+  RegistrationResult& result = run.result;
   result.transform = initial;
+  run.transform = initial;
+  run.finished = true;
   const bool plane = params.method == IcpMethod::kPointToPlane;
   if (!target_valid(target, plane) || !(params.max_correspondence_distance > 0.0) ||
       !initial.allFinite() || !(params.kernel.scale > 0.0)) {
     result.status = RegistrationStatus::kInvalidInput;
-    return result;
+    return;
   }
   result.nonfinite_dropped = count_nonfinite(source);
   if (source.size() - result.nonfinite_dropped < 3 || target.tree->size() < 3) {
     result.status = RegistrationStatus::kNotEnoughPoints;
-    return result;
+    return;
   }
+  if (neighbor_scratch.size() >= source.size()) {
+    for (std::size_t k = 0; k < source.size(); ++k) neighbor_scratch[k] = KdTree<Vec3f>::kNoHint;
+  }
+  run.finished = false;
+}
+
+// One nearest-neighbour pass plus the update it implies: the body of the ICP loop.
+bool icp_continue(IcpRun& run, std::span<const Vec3f> source, const IcpTarget& target,
+                  const IcpParams& params, std::uint32_t max_passes,
+                  std::span<std::uint32_t> neighbor_scratch) {
+  RegistrationResult& result = run.result;
+  const bool plane = params.method == IcpMethod::kPointToPlane;
   const std::uint32_t max_iterations =
       params.criteria.max_iterations < config::kIcpMaxIterations ? params.criteria.max_iterations
                                                                  : config::kIcpMaxIterations;
   const PassMode mode = plane ? PassMode::kPointToPlane : PassMode::kPointToPoint;
-
-  if (neighbor_scratch.size() >= source.size()) {
-    for (std::size_t k = 0; k < source.size(); ++k) neighbor_scratch[k] = KdTree<Vec3f>::kNoHint;
-  }
-  Mat4d transform = initial;
-  double prev_fitness = 0.0, prev_rmse = 0.0;
-  for (std::uint32_t k = 0;; ++k) {
+  for (std::uint32_t passes = 0; !run.finished && passes < max_passes; ++passes) {
+    const std::uint32_t k = run.passes++;
     Pass pass;
-    run_pass(source, target, transform, params.max_correspondence_distance, params.kernel, mode, pass,
+    run_pass(source, target, run.transform, params.max_correspondence_distance, params.kernel, mode, pass,
              neighbor_scratch);
     result.search_truncated += pass.search_truncated;
-    result.transform = transform;
+    result.transform = run.transform;
     fill_from_pass(pass, result);
     result.iterations = k;
+    run.finished = true;  // unless the loop goes on below
     if (pass.inliers == 0) {
       result.status = RegistrationStatus::kNoCorrespondences;
-      return result;
+      return true;
     }
-    if (k > 0 && std::abs(prev_fitness - pass.fitness()) < params.criteria.relative_fitness &&
-        std::abs(prev_rmse - pass.rmse()) < params.criteria.relative_rmse) {
+    if (k > 0 && std::abs(run.prev_fitness - pass.fitness()) < params.criteria.relative_fitness &&
+        std::abs(run.prev_rmse - pass.rmse()) < params.criteria.relative_rmse) {
       result.converged = true;
-      break;
+      result.status = RegistrationStatus::kOk;
+      return true;
     }
-    if (k == max_iterations) break;
-    prev_fitness = pass.fitness();
-    prev_rmse = pass.rmse();
-
-    Mat4d next = transform;
-    if (plane) {
-      if (!(preconditioned_eigen_ratio(pass.h) > params.min_eigenvalue_ratio)) {
-        result.status = RegistrationStatus::kDegenerate;
-        return result;
-      }
-      const Vec6d delta = pass.h.ldlt().solve(-pass.b);
-      Mat4d update = Mat4d::Identity();
-      update.topLeftCorner<3, 3>() = so3_exp_closed_form(delta.head<3>());
-      update.topRightCorner<3, 1>() = delta.tail<3>();
-      next = update * transform;
-      orthonormalize_rows(next);
-    } else {
-      KabschParams kp;
-      kp.min_singular_ratio = params.min_eigenvalue_ratio;
-      if (pass.kabsch.solve(next, kp) != RegistrationStatus::kOk) {
-        result.status = RegistrationStatus::kDegenerate;
-        return result;
-      }
+    if (k == max_iterations) {
+      result.status = RegistrationStatus::kOk;
+      return true;
     }
-    if (!next.allFinite()) {
-      result.status = RegistrationStatus::kDegenerate;
-      return result;
-    }
-    transform = next;
+    run.prev_fitness = pass.fitness();
+    run.prev_rmse = pass.rmse();
+    if (!update_transform(pass, plane, params, run.transform, result)) return true;
+    run.finished = false;
   }
-  result.status = RegistrationStatus::kOk;
-  return result;
+  return run.finished;
 }
 
 }  // namespace v2xloc

@@ -9,10 +9,9 @@
 namespace v2xloc {
 namespace {
 
-struct Candidate {
-  double score = -1.0;
-  double x = 0.0, y = 0.0, yaw = 0.0;
-};
+using Candidate = PoseSearchCandidate;
+
+PoseSearch g_search;  // search_pose()'s job: ~40 kB, static
 
 bool same_basin(const Candidate& a, const Candidate& b, const PoseSearchParams& params) {
   const double dx = a.x - b.x, dy = a.y - b.y;
@@ -99,7 +98,7 @@ bool road_height_near(std::span<const Vec3f> map, const Vec3d& center, double ra
 }
 
 double ray_conflict_ratio(std::span<const Vec3f> scan_body, const IcpTarget& map, const Mat4d& pose,
-                          double ground_z, const PoseSearchParams& params) {
+                          double ground_z, const PoseSearchParams& params, std::uint32_t* samples) {
   if (map.tree == nullptr || !(params.conflict_step > 0.0) || params.conflict_rays == 0) return -1.0;
   const Vec3d& s = params.sensor_in_body;
   const double min_range2 = params.conflict_min_range * params.conflict_min_range;
@@ -131,6 +130,7 @@ double ray_conflict_ratio(std::span<const Vec3f> scan_body, const IcpTarget& map
       if (along >= free) break;
       const Vec3d q = origin + along * dir;
       if (q.z() < floor_z) continue;
+      if (samples != nullptr) ++*samples;
       Neighbor nb{0, 0.0f};
       if (map.tree->nearest_within(q.cast<float>(), r2, hint, nb).count > 0) {
         ++conflicts;
@@ -144,127 +144,218 @@ double ray_conflict_ratio(std::span<const Vec3f> scan_body, const IcpTarget& map
 PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& map,
                              const Vec3d& center, const PoseSearchParams& params,
                              std::span<std::uint32_t> neighbor_scratch) {
-  PoseSearchResult out;
-  out.best.status = RegistrationStatus::kNotEnoughPoints;
+  (void)neighbor_scratch;  // the job keeps its own hints (same results)
+  g_search.start(scan_body, map, center, params);
+  while (!g_search.step(map, ~std::uint64_t{0})) {
+  }
+  return g_search.result();
+}
+
+void PoseSearch::start(std::span<const Vec3f> scan_body, const IcpTarget& map, const Vec3d& center,
+                       const PoseSearchParams& params) {
+  params_ = params;
+  center_ = center;
+  result_ = PoseSearchResult{};
+  result_.best.status = RegistrationStatus::kNotEnoughPoints;
+  work_ = 0;
+  phase_ = Phase::kDone;
   if (map.tree == nullptr || map.points.empty() || scan_body.empty() || !(params.step > 0.0) ||
       params.yaw_steps == 0) {
-    out.best.status = RegistrationStatus::kInvalidInput;
-    return out;
+    result_.best.status = RegistrationStatus::kInvalidInput;
+    return;
+  }
+  scan_count_ = 0;
+  for (const Vec3f& p : scan_body) {
+    if (scan_count_ == config::kMaxSearchPoints) {
+      ++result_.scan_points_dropped;  // callers pass <= kMaxSearchPoints (documented)
+      continue;
+    }
+    scan_[scan_count_++] = p;
   }
   // Fixed subsample of above-ground points (every k-th), in body coordinates.
-  constexpr std::uint32_t kMaxScore = 512;
-  Vec3f score_pts[kMaxScore];
   std::uint32_t above = 0;
-  for (const Vec3f& p : scan_body) above += p.z() > params.min_height ? 1u : 0u;
-  const std::uint32_t want = params.score_points < kMaxScore ? params.score_points : kMaxScore;
-  if (above < 16) return out;
+  for (const Vec3f& p : scan()) above += p.z() > params.min_height ? 1u : 0u;
+  const std::uint32_t want = params.score_points < kMaxScorePoints ? params.score_points : kMaxScorePoints;
+  if (above < 16) return;
   const std::uint32_t stride = above > want ? above / want : 1u;
-  std::uint32_t n = 0, seen = 0;
-  for (const Vec3f& p : scan_body) {
+  score_count_ = 0;
+  std::uint32_t seen = 0;
+  for (const Vec3f& p : scan()) {
     if (!(p.z() > params.min_height)) continue;
-    if (seen++ % stride == 0 && n < want) score_pts[n++] = p;
+    if (seen++ % stride == 0 && score_count_ < want) score_pts_[score_count_++] = p;
   }
-
   // Not around the fix's altitude: a canyon fix can be far off vertically (TUNING.md).
-  road_height_near(map.points, center, params.radius + params.ground_margin, out.ground_z);
-  Candidate top[kPoseSearchRefine];
-  const double d2max = params.score_distance * params.score_distance;
-  // A hit needs the nearest map point within score_distance: a bounded search answers exactly
-  // that without exploring the tree beyond it (the unbounded nearest of a point in free space
-  // visits most of the tree).
-  const float d2max_f = static_cast<float>(d2max);
-  const int cells = static_cast<int>(std::floor(params.radius / params.step));
-  for (int iy = -cells; iy <= cells; ++iy) {
-    for (int ix = -cells; ix <= cells; ++ix) {
-      const double ox = ix * params.step, oy = iy * params.step;
-      if (ox * ox + oy * oy > params.radius * params.radius) continue;
-      for (std::uint32_t k = 0; k < params.yaw_steps; ++k) {
-        const double yaw = 2.0 * det::kPi * k / params.yaw_steps;
-        if (params.use_yaw_prior && std::abs(det::wrap_pi(yaw - params.yaw_prior)) > params.yaw_prior_tolerance) continue;
-        if (out.hypotheses >= params.max_hypotheses) break;
-        ++out.hypotheses;
+  road_height_near(map.points, center, params.radius + params.ground_margin, result_.ground_z);
+  for (Candidate& c : top_) c = Candidate{};
+  cells_ = static_cast<int>(std::floor(params.radius / params.step));
+  iy_ = -cells_;
+  ix_ = -cells_;
+  yaw_index_ = 0;
+  candidate_ = 0;
+  refining_fine_ = false;
+  best_fitness_ = 0.0;
+  phase_ = Phase::kScore;
+}
+
+bool PoseSearch::step(const IcpTarget& map, std::uint64_t budget) {
+  const std::uint64_t stop = budget > ~std::uint64_t{0} - work_ ? ~std::uint64_t{0} : work_ + budget;
+  if (phase_ != Phase::kDone && (map.tree == nullptr || map.points.empty())) {
+    result_.best.status = RegistrationStatus::kInvalidInput;  // the map went away mid-search
+    phase_ = Phase::kDone;
+  }
+  while (phase_ != Phase::kDone && work_ < stop) {
+    switch (phase_) {
+      case Phase::kScore: score_hypotheses(map, stop); break;
+      case Phase::kRefine: refine_candidate(map, stop); break;
+      case Phase::kSelect: select_candidate(map); break;
+      case Phase::kDone: break;
+    }
+  }
+  return phase_ == Phase::kDone;
+}
+
+// Hypotheses in grid order (rows, columns, yaws), each costing score_count_ bounded queries.
+void PoseSearch::score_hypotheses(const IcpTarget& map, std::uint64_t stop) {
+  const double d2max = params_.score_distance * params_.score_distance;
+  // A hit needs a map point within score_distance: any_within answers exactly that and stops at
+  // the first one (the unbounded nearest of a point in free space visits most of the tree).
+  float d2max_f = static_cast<float>(d2max);
+  if (static_cast<double>(d2max_f) > d2max) d2max_f = std::nextafter(d2max_f, 0.0f);
+  const double r2 = params_.radius * params_.radius;
+  for (; iy_ <= cells_; ++iy_, ix_ = -cells_) {
+    for (; ix_ <= cells_; ++ix_, yaw_index_ = 0) {
+      const double ox = ix_ * params_.step, oy = iy_ * params_.step;
+      if (ox * ox + oy * oy > r2) continue;
+      for (; yaw_index_ < params_.yaw_steps; ++yaw_index_) {
+        if (work_ >= stop) return;
+        const double yaw = 2.0 * det::kPi * yaw_index_ / params_.yaw_steps;
+        if (params_.use_yaw_prior && std::abs(det::wrap_pi(yaw - params_.yaw_prior)) > params_.yaw_prior_tolerance) continue;
+        if (result_.hypotheses >= params_.max_hypotheses) break;
+        ++result_.hypotheses;
+        work_ += score_count_;
         const double c = det::cos(yaw), s = det::sin(yaw);
-        const double x = center.x() + ox, y = center.y() + oy;
+        const double x = center_.x() + ox, y = center_.y() + oy;
         std::uint32_t hits = 0;
-        for (std::uint32_t i = 0; i < n; ++i) {
-          const Vec3f& p = score_pts[i];
-          const Vec3f q(static_cast<float>(c * p.x() - s * p.y() + x),
-                        static_cast<float>(s * p.x() + c * p.y() + y),
-                        static_cast<float>(p.z() + out.ground_z));
-          Neighbor nb{0, 0.0f};
-          if (map.tree->nearest_within(q, d2max_f, KdTree<Vec3f>::kNoHint, nb).count > 0 &&
-              nb.squared_distance <= d2max) {
-            ++hits;
-          }
+        for (std::uint32_t i = 0; i < score_count_; ++i) {
+          const Vec3f& p = score_pts_[i];
+          const Vec3f q(static_cast<float>(c * p.x() - s * p.y() + x), static_cast<float>(s * p.x() + c * p.y() + y),
+                        static_cast<float>(p.z() + result_.ground_z));
+          hits += map.tree->any_within(q, d2max_f) ? 1u : 0u;
         }
-        const double score = static_cast<double>(hits) / n;
-        keep_distinct_best(top, Candidate{score, x, y, yaw}, params);
+        keep_distinct_best(top_, Candidate{static_cast<double>(hits) / score_count_, x, y, yaw}, params_);
       }
     }
   }
-  // Refine the best hypotheses (coarse then fine ICP). Aliased poses along a straight canyon
-  // reach similar fitness at a coarse threshold but not the fine RMSE of the true pose.
-  RegistrationResult refined[kPoseSearchRefine];
-  double best_fitness = 0.0;
-  for (std::uint32_t i = 0; i < kPoseSearchRefine; ++i) {
-    const Candidate& cand = top[i];
-    refined[i].status = RegistrationStatus::kDidNotConverge;
-    if (cand.score < 0.0) continue;
-    const RegistrationResult coarse =
-        icp(scan_body, map, pose_of(cand.x, cand.y, out.ground_z, cand.yaw), params.icp, neighbor_scratch);
-    if (!coarse.ok()) continue;
-    refined[i] = icp(scan_body, map, coarse.transform, params.fine_icp, neighbor_scratch);
-    if (refined[i].ok() && params.use_yaw_prior &&
-        std::abs(det::wrap_pi(yaw_of(refined[i].transform.topLeftCorner<3, 3>()) - params.yaw_prior)) >
-            params.yaw_prior_tolerance) {
-      refined[i].status = RegistrationStatus::kDidNotConverge;  // slid out of the prior
-    }
-    if (refined[i].ok() && refined[i].fitness > best_fitness) best_fitness = refined[i].fitness;
+  phase_ = Phase::kRefine;
+  candidate_ = 0;
+  refining_fine_ = false;
+  run_started_ = false;
+}
+
+// Refine the best hypotheses (coarse then fine ICP). Aliased poses along a straight canyon
+// reach similar fitness at a coarse threshold but not the fine RMSE of the true pose.
+void PoseSearch::refine_candidate(const IcpTarget& map, std::uint64_t stop) {
+  const std::uint32_t count = refine_count();
+  if (candidate_ >= count) {
+    phase_ = Phase::kSelect;
+    candidate_ = 0;
+    best_tight_ = -1.0;
+    winner_ = kPoseSearchRefine;
+    return;
   }
-  // The winner: the highest fitness at a tight threshold (an aliased pose explains the scan at
-  // 1 m but not at 0.3 m; inlier RMSE at a loose threshold does not separate them), among the
-  // poses whose rays do not cross the map's surfaces (max_conflicts).
-  double tight[kPoseSearchRefine];
-  double conflicts[kPoseSearchRefine];
-  double best_tight = -1.0;
-  std::uint32_t winner = kPoseSearchRefine;
-  for (std::uint32_t i = 0; i < kPoseSearchRefine; ++i) {
-    const RegistrationResult& r = refined[i];
-    tight[i] = -1.0;
-    conflicts[i] = -1.0;
-    if (!r.ok() || r.fitness < best_fitness - 0.1) continue;
-    if (params.max_conflicts > 0.0) {
-      conflicts[i] = ray_conflict_ratio(scan_body, map, r.transform, out.ground_z, params);
-      if (conflicts[i] > params.max_conflicts) {
-        ++out.conflict_rejected;
-        continue;
-      }
+  const Candidate& cand = top_[candidate_];
+  RegistrationResult& refined = refined_[candidate_];
+  if (cand.score < 0.0) {
+    refined.status = RegistrationStatus::kDidNotConverge;
+    ++candidate_;
+    return;
+  }
+  const IcpParams& icp_params = refining_fine_ ? params_.fine_icp : params_.icp;
+  if (!run_started_) {
+    const Mat4d initial = refining_fine_ ? coarse_.transform : pose_of(cand.x, cand.y, result_.ground_z, cand.yaw);
+    icp_begin(run_, scan(), map, initial, icp_params, hints());
+    run_started_ = true;
+  }
+  const std::uint64_t left = stop > work_ ? stop - work_ : 0;
+  const std::uint64_t passes = scan_count_ > 0 ? (left + scan_count_ - 1) / scan_count_ : 1;
+  const std::uint32_t before = run_.passes;
+  const bool finished =
+      icp_continue(run_, scan(), map, icp_params, passes > 1000 ? 1000u : static_cast<std::uint32_t>(passes), hints());
+  work_ += static_cast<std::uint64_t>(run_.passes - before) * scan_count_;
+  if (!finished) return;
+  run_started_ = false;
+  if (!refining_fine_) {
+    coarse_ = run_.result;
+    if (coarse_.ok()) {
+      refining_fine_ = true;
+      return;
     }
-    tight[i] = evaluate_registration(scan_body, map, r.transform, params.select_distance).fitness;
-    if (tight[i] > best_tight) {
-      best_tight = tight[i];
-      winner = i;
+    refined.status = RegistrationStatus::kDidNotConverge;
+    ++candidate_;
+    return;
+  }
+  refining_fine_ = false;
+  refined = run_.result;
+  if (refined.ok() && params_.use_yaw_prior &&
+      std::abs(det::wrap_pi(yaw_of(refined.transform.topLeftCorner<3, 3>()) - params_.yaw_prior)) >
+          params_.yaw_prior_tolerance) {
+    refined.status = RegistrationStatus::kDidNotConverge;  // slid out of the prior
+  }
+  if (refined.ok() && refined.fitness > best_fitness_) best_fitness_ = refined.fitness;
+  ++candidate_;
+}
+
+// The winner: the highest fitness at a tight threshold (an aliased pose explains the scan at
+// 1 m but not at 0.3 m; inlier RMSE at a loose threshold does not separate them), among the
+// poses whose rays do not cross the map's surfaces (max_conflicts). One candidate per call.
+void PoseSearch::select_candidate(const IcpTarget& map) {
+  const std::uint32_t count = refine_count();
+  if (candidate_ >= count) {
+    finish();
+    return;
+  }
+  const std::uint32_t i = candidate_++;
+  const RegistrationResult& r = refined_[i];
+  tight_[i] = -1.0;
+  conflicts_[i] = -1.0;
+  if (!r.ok() || r.fitness < best_fitness_ - 0.1) return;
+  if (params_.max_conflicts > 0.0) {
+    std::uint32_t samples = 0;
+    conflicts_[i] = ray_conflict_ratio(scan(), map, r.transform, result_.ground_z, params_, &samples);
+    work_ += samples;
+    if (conflicts_[i] > params_.max_conflicts) {
+      ++result_.conflict_rejected;
+      return;
     }
   }
-  if (winner == kPoseSearchRefine) return out;
-  out.best = refined[winner];
-  out.best_score = top[winner].score;
-  out.best_tight_fitness = best_tight;
+  tight_[i] = evaluate_registration(scan(), map, r.transform, params_.select_distance).fitness;
+  work_ += scan_count_;
+  if (tight_[i] > best_tight_) {
+    best_tight_ = tight_[i];
+    winner_ = i;
+  }
+}
+
+void PoseSearch::finish() {
+  phase_ = Phase::kDone;
+  if (winner_ == kPoseSearchRefine) return;
+  result_.best = refined_[winner_];
+  result_.best_score = top_[winner_].score;
+  result_.best_tight_fitness = best_tight_;
   // Runner-up: the best candidate that is a different pose (not the same basin).
-  for (std::uint32_t i = 0; i < kPoseSearchRefine; ++i) {
-    if (i == winner || tight[i] < 0.0) continue;
-    const Mat4d d = se3_inverse(refined[winner].transform) * refined[i].transform;
+  for (std::uint32_t i = 0; i < refine_count(); ++i) {
+    if (i == winner_ || tight_[i] < 0.0) continue;
+    const Mat4d d = se3_inverse(refined_[winner_].transform) * refined_[i].transform;
     const double dist = std::sqrt(d(0, 3) * d(0, 3) + d(1, 3) * d(1, 3));
     const double dyaw = std::abs(det::wrap_pi(yaw_of(d.topLeftCorner<3, 3>())));
-    if (dist < params.distinct_distance && dyaw < params.distinct_yaw) continue;
-    if (tight[i] > out.runner_up_tight_fitness) {
-      out.runner_up_tight_fitness = tight[i];
-      out.runner_up = refined[i];
-      out.runner_up_conflicts = conflicts[i];
+    if (dist < params_.distinct_distance && dyaw < params_.distinct_yaw) continue;
+    if (tight_[i] > result_.runner_up_tight_fitness) {
+      result_.runner_up_tight_fitness = tight_[i];
+      result_.runner_up = refined_[i];
+      result_.runner_up_conflicts = conflicts_[i];
     }
   }
-  out.best_conflicts = conflicts[winner];
-  return out;
+  result_.best_conflicts = conflicts_[winner_];
 }
 
 }  // namespace v2xloc

@@ -170,13 +170,6 @@ void traverse(const KdNode* nodes, const float* q, std::size_t max_visits, Prune
   }
 }
 
-struct BuildTask {
-  std::uint32_t node;
-  std::uint32_t begin;
-  std::uint32_t end;
-  std::uint32_t depth;
-};
-
 // Build step 1: the finite points' indices in input order; drops counted in `result`.
 template <class P>
 std::size_t index_finite_points(std::span<const P> points, std::span<std::uint32_t> index_storage,
@@ -199,7 +192,7 @@ std::size_t index_finite_points(std::span<const P> points, std::span<std::uint32
 // Build step 2: the split axis of a node, the largest extent of its points (largest variance in
 // high dimension); `extent` is the largest extent (0: all points identical).
 template <class P>
-int choose_split_axis(std::span<const P> points, const std::uint32_t* idx, const BuildTask& t,
+int choose_split_axis(std::span<const P> points, const std::uint32_t* idx, const KdBuildTask& t,
                       float& extent) {
   constexpr int kDim = P::RowsAtCompileTime;
   const std::uint32_t count = t.end - t.begin;
@@ -249,7 +242,7 @@ int choose_split_axis(std::span<const P> points, const std::uint32_t* idx, const
 // coordinates before it. Returns the left child's largest coordinate along the axis (equal
 // values may sit on both sides of the median).
 template <class P>
-float partition_at_median(std::span<const P> points, std::uint32_t* idx, const BuildTask& t,
+float partition_at_median(std::span<const P> points, std::uint32_t* idx, const KdBuildTask& t,
                           std::uint32_t mid, int axis) {
   std::nth_element(idx + t.begin, idx + mid, idx + t.end,
                    [&points, axis](std::uint32_t a, std::uint32_t b) {
@@ -269,6 +262,15 @@ float partition_at_median(std::span<const P> points, std::uint32_t* idx, const B
 template <class P>
 KdBuildResult KdTree<P>::build(std::span<const P> points, std::span<std::uint32_t> index_storage,
                                std::span<KdNode> node_storage, const KdBuildParams& params) {
+  KdBuildResult result = begin_build(points, index_storage, node_storage, params);
+  while (!build_step(~std::size_t{0}, result)) {
+  }
+  return result;
+}
+
+template <class P>
+KdBuildResult KdTree<P>::begin_build(std::span<const P> points, std::span<std::uint32_t> index_storage,
+                                     std::span<KdNode> node_storage, const KdBuildParams& params) {
   KdBuildResult result;
   points_ = points;
   projections_ = nullptr;
@@ -277,7 +279,11 @@ KdBuildResult KdTree<P>::build(std::span<const P> points, std::span<std::uint32_
   num_nodes_ = 0;
   num_indexed_ = 0;
   max_node_visits_ = params.max_node_visits;
-  const std::size_t leaf_size = params.leaf_size > 0 ? params.leaf_size : 1;
+  build_ = {};
+  build_.leaf_size = params.leaf_size > 0 ? params.leaf_size : 1;
+  build_.node_capacity = node_storage.size();
+  build_.index = index_storage.data();
+  build_.nodes = node_storage.data();
 
   const std::size_t n = index_finite_points(points, index_storage, result);
   result.points_indexed = static_cast<std::uint32_t>(n);
@@ -289,25 +295,34 @@ KdBuildResult KdTree<P>::build(std::span<const P> points, std::span<std::uint32_
     result.status = KdBuildStatus::kNodeStorageTooSmall;
     return result;
   }
-
-  std::uint32_t* idx = index_storage.data();
-  KdNode* nodes = node_storage.data();
-  std::size_t used = 1;
+  build_.points_indexed = n;
+  build_.used = 1;
+  build_.active = true;
   // Depth-first with an explicit stack (the bare-metal stack is small): <= depth + 1 entries.
-  BuildTask stack[config::kKdMaxDepth + 2];
-  std::size_t top = 0;
-  stack[top++] = {0, 0, static_cast<std::uint32_t>(n), 1};
-  while (top > 0) {
-    const BuildTask t = stack[--top];
+  build_.stack[build_.top++] = {0, 0, static_cast<std::uint32_t>(n), 1};
+  return result;
+}
+
+// Splits nodes (depth first, the order build() uses, so the tree is the same) until the points
+// touched exceed work_budget; returns true when the tree is complete and queryable.
+template <class P>
+bool KdTree<P>::build_step(std::size_t work_budget, KdBuildResult& result) {
+  std::size_t work = 0;
+  std::uint32_t* idx = build_.index;
+  KdNode* nodes = build_.nodes;
+  while (build_.top > 0) {
+    if (work >= work_budget) return false;
+    const KdBuildTask t = build_.stack[--build_.top];
     KdNode& node = nodes[t.node];
     result.depth = std::max(result.depth, t.depth);
     const std::uint32_t count = t.end - t.begin;
-    if (count <= leaf_size || t.depth >= config::kKdMaxDepth) {
+    work += count;
+    if (count <= build_.leaf_size || t.depth >= config::kKdMaxDepth) {
       node = {0.0f, 0.0f, t.begin, t.end, KdNode::kLeaf};
       continue;
     }
     float extent = 0.0f;
-    const int axis = choose_split_axis(points, idx, t, extent);
+    const int axis = choose_split_axis(points_, idx, t, extent);
     if (extent <= 0.0f) {  // all points identical: nothing to split
       node = {0.0f, 0.0f, t.begin, t.end, KdNode::kLeaf};
       continue;
@@ -315,25 +330,29 @@ KdBuildResult KdTree<P>::build(std::span<const P> points, std::span<std::uint32_
     const std::uint32_t mid = t.begin + count / 2;
     // Children's extents along the axis: right starts at the selected element, left ends at
     // the largest coordinate below it.
-    const float left_max = partition_at_median(points, idx, t, mid, axis);
-    if (used + 2 > node_storage.size()) {
+    const float left_max = partition_at_median(points_, idx, t, mid, axis);
+    if (build_.used + 2 > build_.node_capacity) {
       result.status = KdBuildStatus::kNodeStorageTooSmall;
-      result.nodes = static_cast<std::uint32_t>(used);
-      return result;
+      result.nodes = static_cast<std::uint32_t>(build_.used);
+      build_.top = 0;
+      build_.active = false;
+      return true;
     }
-    const auto left = static_cast<std::uint32_t>(used);
-    const auto right = static_cast<std::uint32_t>(used + 1);
-    used += 2;
-    node = {left_max, points[idx[mid]][axis], left, right, static_cast<std::uint32_t>(axis)};
-    stack[top++] = {right, mid, t.end, t.depth + 1};
-    stack[top++] = {left, t.begin, mid, t.depth + 1};
+    const auto left = static_cast<std::uint32_t>(build_.used);
+    const auto right = static_cast<std::uint32_t>(build_.used + 1);
+    build_.used += 2;
+    node = {left_max, points_[idx[mid]][axis], left, right, static_cast<std::uint32_t>(axis)};
+    build_.stack[build_.top++] = {right, mid, t.end, t.depth + 1};
+    build_.stack[build_.top++] = {left, t.begin, mid, t.depth + 1};
   }
-  num_nodes_ = used;
-  num_indexed_ = n;
-  result.nodes = static_cast<std::uint32_t>(used);
+  if (!build_.active) return true;  // nothing indexed, begin_build failed, or already done
+  build_.active = false;
+  num_nodes_ = build_.used;
+  num_indexed_ = build_.points_indexed;
+  result.nodes = static_cast<std::uint32_t>(build_.used);
   result.status = result.capacity_dropped > 0 ? KdBuildStatus::kIndexStorageTooSmall
                                               : KdBuildStatus::kOk;
-  return result;
+  return true;
 }
 
 template <class P>
@@ -516,6 +535,24 @@ KdQueryResult KdTree<P>::has_closer(const P& query, const float* qp, const Neigh
   traverse<kDim>(nodes_, q, max_node_visits_, prune, leaf, r);
   r.count = found ? 1u : 0u;
   return r;
+}
+
+template <class P>
+bool KdTree<P>::any_within(const P& query, float max_squared_distance) const {
+  if (num_nodes_ == 0 || !is_finite_point(query) || !(max_squared_distance >= 0.0f)) return false;
+  const float* q = query.data();
+  bool found = false;
+  KdQueryResult r;
+  // The traversal nearest_within makes with the same bound, up to the first point inside it.
+  const auto prune = [&]() { return found ? -1.0f : max_squared_distance; };
+  const auto leaf = [&](const KdNode& node) {
+    for (std::uint32_t s = node.first; s < node.second && !found; ++s) {
+      const std::uint32_t i = indices_[s];
+      found = squared_distance_bounded<kDim>(q, points_[i].data(), max_squared_distance) <= max_squared_distance;
+    }
+  };
+  traverse<kDim>(nodes_, q, max_node_visits_, prune, leaf, r);
+  return found;
 }
 
 template <class P>

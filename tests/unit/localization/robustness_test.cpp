@@ -153,6 +153,69 @@ TEST(PoseSearchRobustness, MirrorIsMeasuredAsRunnerUpAndExcludedByHeadingPrior) 
   EXPECT_LT(std::hypot(dh(0, 3), dh(1, 3)), 0.05);
 }
 
+// The start-up search and the basin audit run as a job over several periods: stepped with a
+// small query budget it reaches exactly search_pose()'s result, and no step overruns its budget
+// by more than one indivisible unit (a hypothesis, an ICP pass, one candidate's ray check).
+TEST(PoseSearchRobustness, SteppedSearchEqualsOneCallAndKeepsItsBudget) {
+  std::mt19937_64 rng(7);
+  static CourtyardTarget map;
+  map.points = courtyard(rng);
+  ASSERT_EQ(map.tree.build(map.points).status, KdBuildStatus::kOk);
+  map.normals.assign(map.points.size(), Vec3f::Zero());
+  NormalParams np;
+  np.radius = 0.8f;
+  estimate_normals(map.tree.tree, np, std::span<Vec3f>(map.normals));
+  const IcpTarget target{map.points, map.normals, &map.tree.tree};
+  Mat4d truth = Mat4d::Identity();
+  truth.topLeftCorner<3, 3>() = rot_z(0.3);
+  truth(0, 3) = 0.5;
+  const Mat4d inv = se3_inverse(truth);
+  std::vector<Vec3f> scan;
+  int k = 0;
+  for (const Vec3f& p : courtyard(rng)) {
+    if (k++ % 4 != 0) continue;
+    scan.push_back((inv.topLeftCorner<3, 3>() * p.cast<double>() + inv.topRightCorner<3, 1>()).cast<float>());
+  }
+  PoseSearchParams sp;
+  sp.radius = 4.0;
+  sp.step = 1.0;
+  sp.yaw_steps = 24;
+  sp.score_points = 128;
+  sp.icp.max_correspondence_distance = 1.0;
+  sp.fine_icp = sp.icp;
+  sp.fine_icp.max_correspondence_distance = 0.3;
+  sp.max_conflicts = 0.5;
+  sp.sensor_in_body = Vec3d(0.0, 0.0, 1.0);
+  const Vec3d gnss(1.5, 0.5, 0.0);
+  const PoseSearchResult once = search_pose(scan, target, gnss, sp);
+  ASSERT_TRUE(once.best.ok());
+
+  static PoseSearch job;
+  job.start(scan, target, gnss, sp);
+  const std::uint64_t budget = 3000;
+  // Largest indivisible unit: a hypothesis (score points), an ICP pass (scan points) or one
+  // candidate's rays (<= rays x steps) plus its fitness pass.
+  const std::uint64_t unit = kPoseSearchMaxConflictRays * kPoseSearchMaxRaySteps + scan.size();
+  int steps = 0;
+  for (;;) {
+    const std::uint64_t before = job.work();
+    const bool done = job.step(target, budget);
+    EXPECT_LE(job.work() - before, budget + unit);
+    ++steps;
+    if (done) break;
+    ASSERT_LT(steps, 100000);
+  }
+  EXPECT_GT(steps, 10);
+  const PoseSearchResult& stepped = job.result();
+  EXPECT_EQ(stepped.hypotheses, once.hypotheses);
+  EXPECT_EQ(stepped.best.status, once.best.status);
+  EXPECT_TRUE(stepped.best.transform == once.best.transform);
+  EXPECT_EQ(stepped.best_tight_fitness, once.best_tight_fitness);
+  EXPECT_EQ(stepped.runner_up_tight_fitness, once.runner_up_tight_fitness);
+  EXPECT_EQ(stepped.best_conflicts, once.best_conflicts);
+  EXPECT_EQ(stepped.conflict_rejected, once.conflict_rejected);
+}
+
 TEST(PoseSearchRobustness, RoadHeightIgnoresTheFixAltitudeAndSaysWhenTheMapIsAbsent) {
   std::mt19937_64 rng(9);
   std::vector<Vec3f> map = courtyard(rng);

@@ -113,6 +113,42 @@ TEST_P(IcpConvergence, RecoversSmallOffsetOnUrbanScene) {
 INSTANTIATE_TEST_SUITE_P(Methods, IcpConvergence,
                          ::testing::Values(IcpMethod::kPointToPoint, IcpMethod::kPointToPlane));
 
+// A search spread over several periods runs its ICPs a few passes at a time: the sliced run
+// must end with exactly icp()'s result, and count its passes.
+TEST(Icp, SlicedRunIsBitIdenticalToOneCall) {
+  const Mat4d truth = rotation_zyx(0.03, 0.01, -0.01, Vec3d(0.25, -0.15, 0.05));
+  const testing::CloudPair pair = testing::make_urban_pair(5, 6, truth, small_scene());
+  const TargetMap map(downsample(pair.target));
+  const std::vector<Vec3f> source = downsample(pair.source);
+  for (const IcpMethod method : {IcpMethod::kPointToPlane, IcpMethod::kPointToPoint}) {
+    IcpParams params;
+    params.method = method;
+    params.max_correspondence_distance = 0.5;
+    params.criteria.max_iterations = 40;
+    std::vector<std::uint32_t> hints_a(source.size()), hints_b(source.size());
+    const RegistrationResult whole = icp(source, map.view(), Mat4d::Identity(), params, hints_a);
+    IcpRun run;
+    icp_begin(run, source, map.view(), Mat4d::Identity(), params, hints_b);
+    int calls = 0;
+    while (!icp_continue(run, source, map.view(), params, 2, hints_b)) ASSERT_LT(++calls, 100);
+    EXPECT_GT(calls, 1);
+    EXPECT_EQ(run.passes, whole.iterations + 1) << "one pass per update plus the final evaluation";
+    EXPECT_EQ(run.result.status, whole.status);
+    EXPECT_EQ(run.result.iterations, whole.iterations);
+    EXPECT_EQ(run.result.inliers, whole.inliers);
+    EXPECT_EQ(run.result.fitness, whole.fitness);
+    EXPECT_EQ(run.result.inlier_rmse, whole.inlier_rmse);
+    EXPECT_TRUE(run.result.transform == whole.transform);
+    EXPECT_EQ(hints_a, hints_b);
+  }
+  // Bad input finishes in icp_begin with icp()'s status.
+  IcpRun bad;
+  icp_begin(bad, source, IcpTarget{}, Mat4d::Identity(), IcpParams{});
+  EXPECT_TRUE(bad.finished);
+  EXPECT_EQ(bad.result.status, RegistrationStatus::kInvalidInput);
+  EXPECT_TRUE(icp_continue(bad, source, IcpTarget{}, IcpParams{}, 5));
+}
+
 TEST(Icp, RobustKernelDownWeightsOutliers) {
   const Mat4d truth = rotation_zyx(0.01, 0.0, 0.0, Vec3d(0.08, 0.05, 0.0));
   testing::UrbanSceneOptions o;

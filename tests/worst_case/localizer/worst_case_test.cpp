@@ -145,7 +145,7 @@ TEST(WorstCase, AdversarialPeriods) {
   Drive d("setup");
   d.warm_up(3);
 
-  {  // More points than the scan capacity: the excess is dropped and counted.
+  {  // A full-size sweep is read whole (ingest keeps voxels, not returns) ...
     d.set_name("max_capacity_scan");
     Period p;
     const std::vector<Vec3f> base = d.canyon_scan();
@@ -154,9 +154,20 @@ TEST(WorstCase, AdversarialPeriods) {
       const float jitter = 0.001f * static_cast<float>(i / base.size());
       p.scan.push_back(base[i % base.size()] + Vec3f(jitter, 0.0f, 0.0f));
     }
+    d.run(std::move(p), true);
+    d.run(Period{}, false);
+  }
+  {  // ... and more occupied voxels than the ingest holds: the excess is dropped and counted.
+    d.set_name("voxel_capacity_scan");
+    Period p;
+    const int side = 40;  // 64000 occupied 0.5 m voxels > kMaxDownsampledPoints
+    for (int i = 0; i < side; ++i)
+      for (int j = 0; j < side; ++j)
+        for (int k = 0; k < side; ++k) p.scan.emplace_back(4.25f + 0.5f * i, -9.75f + 0.5f * j, -1.75f + 0.5f * k);
     const std::uint32_t dropped_before = g_localizer.counters().scan_points_dropped;
     d.run(std::move(p), true);
-    EXPECT_GE(g_localizer.counters().scan_points_dropped - dropped_before, 1000u);
+    EXPECT_GE(g_localizer.counters().scan_points_dropped - dropped_before,
+              static_cast<std::uint32_t>(side * side * side - config::kMaxDownsampledPoints));
     d.run(Period{}, false);
   }
   {

@@ -27,7 +27,10 @@ struct LocalizerParams {
   double frame_period = 0.1;          // [s] LiDAR sweep period: deskew span and vehicle-signal delta
   float min_range = 3.0f;             // [m] returns closer than this are the ego body: dropped
   float max_range = 80.0f;            // [m] returns farther than this are sparse and noisy: dropped
-  float registration_voxel = 0.5f;    // [m] voxel of the ego scan registered to the map
+  float registration_voxel = 0.5f;    // [m] ingest voxel (LiDAR frame): odometry's 0.5 v frame and the registration scan
+  // [points] the tracking ICP registers an even subsample of at most this many scan points
+  // (one nearest-neighbour query each per iteration; 0: all)
+  std::uint32_t tracking_points = 3000;
   double odometry_prediction_max_gap = 1.0;  // [s] frame gap up to which the signals predict odometry
 
   // ---- Reference map ----
@@ -38,7 +41,10 @@ struct LocalizerParams {
   // [points/period] a map rebuild runs beside the registration, one step per period (extract,
   // k-d tree, then this many normals); registration keeps the previous map meanwhile. The first
   // map is built at once (nothing to register against).
-  std::uint32_t map_normals_per_period = 32768;
+  std::uint32_t map_normals_per_period = 4096;
+  // [point visits/period] the next map's k-d tree is built this much per period (a build
+  // visits ~N log2(N / leaf) points; 0: at once)
+  std::uint32_t map_tree_work_per_period = 250000;
 
   // ---- Odometry ----
   OdometryParams odometry{};          // KISS-ICP-style LiDAR odometry (odometry.hpp)

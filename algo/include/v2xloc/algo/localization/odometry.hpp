@@ -43,7 +43,9 @@ struct OdometryParams {
   std::uint32_t max_iterations = 50;   // clamped to config::kOdometryMaxIterations
   double convergence = 1e-4;    // stop when |d xi| (m, rad) < this
   bool point_to_plane = true;   // residual along the source normal (see the header comment)
-  double normal_radius = 1.5;   // [m] PCA neighbourhood over the 0.5 v frame (source normals)
+  // [points] fine points a source normal's PCA needs (over the 2x2x2 coarse voxels around the
+  // point, ~3 v wide); fewer: the point has no normal and is not registered.
+  std::uint32_t normal_min_points = 5;
 };
 
 enum class OdometryStatus : std::uint8_t {
@@ -85,6 +87,9 @@ class LidarOdometry {
   // the last frame from other sensors (wheel speed + gyro); replaces the constant-velocity
   // prediction, which lags a whole frame at a turn's onset.
   OdometryResult register_frame(std::span<const Vec3f> scan, const Mat4d* predicted_delta = nullptr);
+  // The same for a scan already voxelised at 0.5 v in the sensor frame (the localizer's ingest
+  // does it once for odometry and registration): skips the range filter's copy and the fine pass.
+  OdometryResult register_voxelized_frame(std::span<const Vec3f> fine, const Mat4d* predicted_delta = nullptr);
 
   const Mat4d& pose() const { return pose_; }
   const Mat4d& last_delta() const { return delta_; }
@@ -108,6 +113,13 @@ class LidarOdometry {
   std::uint32_t find_voxel(const std::int32_t key[3]) const;  // index or kNone
   std::uint32_t insert_voxel(const std::int32_t key[3]);      // index or kNone (full)
   bool nearest(const Vec3d& p, double max_d2, Vec3d& q, double& d2) const;
+  OdometryResult register_fine(const Mat4d* predicted_delta, OdometryResult& r);
+  OdometryResult finish_frame(OdometryResult& r) const;
+  void update_threshold(OdometryResult& r);
+  void build_coarse_frame(OdometryResult& r);
+  std::uint32_t find_coarse(const std::int32_t key[3]) const;
+  Vec3f coarse_normal(const Vec3d& mean, const std::int32_t key[3], double cv) const;
+  Mat4d align(const Mat4d& prediction, OdometryResult& r) const;
   void update_map(const Mat4d& pose, OdometryResult& r);
   void rebuild_index();
   double model_sigma() const;
@@ -135,9 +147,19 @@ class LidarOdometry {
   FixedVector<Vec3f, config::kMaxDownsampledPoints> frame_fine_;
   FixedVector<Vec3f, config::kMaxDownsampledPoints> frame_coarse_;
   std::uint32_t fine_voxel_[config::kMaxDownsampledPoints];
-  KdTreeStorage<Vec3f, config::kMaxDownsampledPoints> fine_tree_;
-  Vec3f fine_normals_[config::kMaxDownsampledPoints];
-  std::uint8_t fine_has_normal_[config::kMaxDownsampledPoints];  // computed this frame
+  // 1.5 v voxels of this frame with the moments of their fine points (source normals).
+  struct CoarseVoxel {
+    std::int32_t key[3] = {0, 0, 0};
+    std::uint32_t count = 0;
+    std::uint32_t slot = 0;
+    Vec3d sum = Vec3d::Zero();
+    Mat3d outer = Mat3d::Zero();
+  };
+  static constexpr std::size_t kMaxCoarse = config::kMaxDownsampledPoints;
+  static constexpr std::size_t kCoarseSlots = 2 * config::kMaxDownsampledPoints;
+  static_assert((kCoarseSlots & (kCoarseSlots - 1)) == 0, "hash slots must be a power of two");
+  CoarseVoxel coarse_[kMaxCoarse];
+  std::uint32_t coarse_slots_[kCoarseSlots] = {};  // coarse voxel index + 1, 0 = empty
   Vec3f coarse_normals_[config::kMaxDownsampledPoints];
 };
 

@@ -49,6 +49,8 @@ class ReferenceMap {
   std::uint32_t active_ = 0;
   BuildPhase phase_ = BuildPhase::kIdle;
   std::size_t normals_done_ = 0;
+  bool tree_started_ = false;        // the next target's tree is being built in slices
+  KdBuildResult tree_result_{};
   std::uint64_t build_revision_ = 0;
   std::uint64_t revision_ = ~0ull;
   double built_t_ = -1e300;

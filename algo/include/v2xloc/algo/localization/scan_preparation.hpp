@@ -1,7 +1,7 @@
-// The ego frame's clouds, ready for the stages after it: the LiDAR scan range-filtered and
-// deskewed (sensor frame, for the odometry), the same scan in the body frame downsampled (for
-// the registration to the map) with its subsample for the pose search, and the stereo cloud.
-// Owns the scan buffers; the voxel hash is scratch shared by both downsamplings.
+// The ego frame's clouds, ready for the stages after it: the LiDAR sweep read once into
+// registration voxels and deskewed (sensor frame, for the odometry: scan_ingest.hpp), the same
+// points in the body frame (the registration to the map) with the tracking ICP's and the pose
+// search's subsamples, and the stereo cloud. Owns the scan buffers.
 #pragma once
 
 #include <cstdint>
@@ -11,6 +11,7 @@
 #include "v2xloc/algo/core/config.hpp"
 #include "v2xloc/algo/localization/localizer_params.hpp"
 #include "v2xloc/algo/localization/localizer_types.hpp"
+#include "v2xloc/algo/localization/scan_ingest.hpp"
 #include "v2xloc/algo/registration/voxel_downsample.hpp"
 
 namespace v2xloc {
@@ -29,23 +30,22 @@ class ScanPreparation {
 
   // The vehicle signals gave this frame's sensor motion (deskew and odometry prediction use it).
   bool has_vehicle_motion() const { return have_vehicle_delta_; }
-  std::span<const Vec3f> deskewed() const { return {deskewed_, deskewed_count_}; }
+  // The voxelised, deskewed sweep in the LiDAR frame (the odometry's 0.5 v frame).
+  std::span<const Vec3f> deskewed() const { return ingest_.points(); }
   std::span<const Vec3f> registration_scan() const { return down_.span(); }
+  std::span<const Vec3f> tracking_scan() const { return tracking_.span(); }
   std::span<const Vec3f> search_scan() const { return search_.span(); }
   std::span<const Vec3f> stereo_cloud() const { return stereo_down_.span(); }
   double stereo_mean_sigma() const { return stereo_mean_sigma_; }  // [m] depth sigma
 
  private:
-  void filter(const EgoScanInput& in, std::uint32_t& dropped);
+  static void subsample(std::span<const Vec3f> in, std::size_t want, BoundedVector<Vec3f>& out);
 
   LocalizerParams params_{};
   bool have_vehicle_delta_ = false;
-  FixedVector<Vec3f, config::kMaxScanPoints> filtered_;
-  FixedVector<float, config::kMaxScanPoints> times_;
-  Vec3f deskewed_[config::kMaxScanPoints];
-  std::size_t deskewed_count_ = 0;
-  FixedVector<Vec3f, config::kMaxScanPoints> body_;
+  ScanIngest ingest_{};
   FixedVector<Vec3f, config::kMaxDownsampledPoints> down_;
+  FixedVector<Vec3f, config::kMaxDownsampledPoints> tracking_;
   FixedVector<Vec3f, config::kMaxSearchPoints> search_;
   VoxelDownsampleStorage<config::kVoxelHashSlots, config::kMaxDownsampledPoints> voxel_;
   Vec3f stereo_points_[config::kMaxStereoPoints];

@@ -18,6 +18,7 @@ namespace v2xloc {
 struct TrackingFrame {
   Pose3d predicted = Pose3d::Identity();  // the filter's pose at the frame time
   std::span<const Vec3f> scan{};          // registration scan (body frame, downsampled)
+  std::span<const Vec3f> tracking_scan{}; // its even subsample the tracking ICP registers
   std::span<const Vec3f> search_scan{};   // its subsample (audit)
   std::span<const Vec3f> stereo_cloud{};  // body frame, downsampled; empty: no stereo
   IcpTarget map{};

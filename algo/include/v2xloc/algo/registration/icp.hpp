@@ -76,6 +76,24 @@ RegistrationResult icp(std::span<const Vec3f> source, const IcpTarget& target,
                        const Mat4d& initial, const IcpParams& params,
                        std::span<std::uint32_t> neighbor_scratch = {});
 
+// The same ICP in slices (a search spread over several periods): icp_begin checks the inputs,
+// each icp_continue runs at most max_passes nearest-neighbour passes over the source and returns
+// true once finished; run.result is then what icp() returns (bit-identical). source, target,
+// params and neighbor_scratch must be the same in every call of one run.
+struct IcpRun {
+  RegistrationResult result{};
+  Mat4d transform = Mat4d::Identity();
+  double prev_fitness = 0.0;
+  double prev_rmse = 0.0;
+  std::uint32_t passes = 0;   // nearest-neighbour passes so far (work: passes * source size)
+  bool finished = true;
+};
+void icp_begin(IcpRun& run, std::span<const Vec3f> source, const IcpTarget& target, const Mat4d& initial,
+               const IcpParams& params, std::span<std::uint32_t> neighbor_scratch = {});
+bool icp_continue(IcpRun& run, std::span<const Vec3f> source, const IcpTarget& target,
+                  const IcpParams& params, std::uint32_t max_passes,
+                  std::span<std::uint32_t> neighbor_scratch = {});
+
 // Open3D's evaluate_registration: fitness, inlier RMSE, inliers and the information matrix of
 // `transform` without iterating (status kOk, kNoCorrespondences, kNotEnoughPoints or
 // kInvalidInput).

@@ -15,9 +15,14 @@
 
 #include "v2xloc/algo/registration/icp.hpp"
 #include "v2xloc/algo/registration/registration_result.hpp"
+#include "v2xloc/algo/core/config.hpp"
 #include "v2xloc/algo/core/types.hpp"
 
 namespace v2xloc {
+
+inline constexpr std::uint32_t kPoseSearchRefine = 10;  // hypotheses refined by ICP (at most)
+inline constexpr std::uint32_t kPoseSearchMaxConflictRays = 512;
+inline constexpr std::uint32_t kPoseSearchMaxRaySteps = 256;  // per ray (128 m at 0.5 m)
 
 struct PoseSearchParams {
   double radius = 20.0;            // [m] search disc around the GNSS fix
@@ -56,6 +61,7 @@ struct PoseSearchParams {
   bool use_yaw_prior = false;
   double yaw_prior = 0.0;            // [rad]
   double yaw_prior_tolerance = 1.05; // [rad] (60 deg)
+  std::uint32_t refine_candidates = 10;  // best distinct hypotheses refined (<= kPoseSearchRefine)
 };
 
 struct PoseSearchResult {
@@ -69,15 +75,14 @@ struct PoseSearchResult {
   double best_conflicts = -1.0;          // ray conflict ratio of best / runner-up (-1: not computed)
   double runner_up_conflicts = -1.0;
   std::uint32_t conflict_rejected = 0;   // refined poses dropped for their ray conflicts
+  std::uint32_t scan_points_dropped = 0; // beyond config::kMaxSearchPoints (not searched)
 };
 
-inline constexpr std::uint32_t kPoseSearchRefine = 10;  // hypotheses refined by ICP
-inline constexpr std::uint32_t kPoseSearchMaxConflictRays = 512;
-inline constexpr std::uint32_t kPoseSearchMaxRaySteps = 256;  // per ray (128 m at 0.5 m)
 
 // The ray conflict ratio above for one pose (world_T_body); -1 when no ray qualifies.
+// samples (optional): incremented by the bounded queries made (work accounting).
 double ray_conflict_ratio(std::span<const Vec3f> scan_body, const IcpTarget& map, const Mat4d& pose,
-                          double ground_z, const PoseSearchParams& params);
+                          double ground_z, const PoseSearchParams& params, std::uint32_t* samples = nullptr);
 
 // Height of the road surface near `center`: the most populated 0.2 m height bin (within +-40 m
 // of center.z) of the map points within `radius` horizontally. False when fewer than min_points
@@ -90,6 +95,66 @@ bool road_height(std::span<const Vec3f> map, const Vec3d& center, double radius,
 // (moved by whole bins from center.z). search_pose uses this one.
 bool road_height_near(std::span<const Vec3f> map, const Vec3d& center, double radius, double& height,
                       std::uint32_t min_points = 1);
+
+struct PoseSearchCandidate {
+  double score = -1.0;
+  double x = 0.0, y = 0.0, yaw = 0.0;
+};
+
+// The search as a job spread over several periods (start-up, basin audit): start() copies the
+// scan (<= config::kMaxSearchPoints points) and takes the road height; each step() runs until
+// `budget` nearest-neighbour queries are spent (scored hypothesis points, ICP passes, ray
+// samples, fitness passes; a hypothesis, an ICP pass or a candidate's ray check is never split,
+// so a step overruns by at most one of them) and returns true when result() is final. Run to
+// completion it is exactly search_pose(). The map may be swapped between steps (a rebuilt
+// map of the same scene): ICP hints are only seeds, results stay exact for the map given.
+class PoseSearch {
+ public:
+  void start(std::span<const Vec3f> scan_body, const IcpTarget& map, const Vec3d& center,
+             const PoseSearchParams& params);
+  bool step(const IcpTarget& map, std::uint64_t budget);
+  bool done() const { return phase_ == Phase::kDone; }
+  const PoseSearchResult& result() const { return result_; }
+  std::uint64_t work() const { return work_; }  // queries so far
+  std::span<const Vec3f> scan() const { return {scan_, scan_count_}; }
+
+ private:
+  enum class Phase : std::uint8_t { kScore, kRefine, kSelect, kDone };
+  static constexpr std::uint32_t kMaxScorePoints = 512;
+  void score_hypotheses(const IcpTarget& map, std::uint64_t stop);
+  void refine_candidate(const IcpTarget& map, std::uint64_t stop);
+  void select_candidate(const IcpTarget& map);
+  void finish();
+  std::uint32_t refine_count() const {
+    return params_.refine_candidates < kPoseSearchRefine ? params_.refine_candidates : kPoseSearchRefine;
+  }
+  std::span<std::uint32_t> hints() { return {hints_, scan_count_}; }
+
+  PoseSearchParams params_{};
+  Vec3d center_ = Vec3d::Zero();
+  PoseSearchResult result_{};
+  Phase phase_ = Phase::kDone;
+  std::uint64_t work_ = 0;
+  Vec3f scan_[config::kMaxSearchPoints];
+  std::uint32_t hints_[config::kMaxSearchPoints];
+  std::size_t scan_count_ = 0;
+  Vec3f score_pts_[kMaxScorePoints];
+  std::uint32_t score_count_ = 0;
+  int cells_ = 0, iy_ = 0, ix_ = 0;               // scoring cursor: grid row, column ...
+  std::uint32_t yaw_index_ = 0;                   // ... and heading
+  PoseSearchCandidate top_[kPoseSearchRefine];
+  RegistrationResult refined_[kPoseSearchRefine];
+  RegistrationResult coarse_{};
+  IcpRun run_{};
+  bool run_started_ = false;
+  bool refining_fine_ = false;
+  std::uint32_t candidate_ = 0;                   // refinement / selection cursor
+  double best_fitness_ = 0.0;
+  double tight_[kPoseSearchRefine] = {};
+  double conflicts_[kPoseSearchRefine] = {};
+  double best_tight_ = -1.0;
+  std::uint32_t winner_ = kPoseSearchRefine;
+};
 
 // Work: hypotheses * score_points bounded nearest queries, then 2 * kPoseSearchRefine ICPs over
 // scan_body (callers bound its size: the localizer passes <= config::kMaxSearchPoints points).

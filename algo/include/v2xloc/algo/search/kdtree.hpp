@@ -91,6 +91,14 @@ struct KdQueryCounters {
   }
 };
 
+// A node still to be split during a build (depth first).
+struct KdBuildTask {
+  std::uint32_t node;
+  std::uint32_t begin;
+  std::uint32_t end;
+  std::uint32_t depth;
+};
+
 // Upper bound on the nodes a tree over n points needs: every leaf of a split node holds at least
 // floor((leaf_size + 1) / 2) points, so leaves <= n / that, nodes = 2 * leaves - 1.
 constexpr std::size_t kd_max_nodes(std::size_t n, std::size_t leaf_size = config::kKdLeafSize) {
@@ -112,6 +120,14 @@ class KdTree {
   KdBuildResult build(std::span<const P> points, std::span<std::uint32_t> index_storage,
                       std::span<KdNode> node_storage, const KdBuildParams& params = {});
 
+  // The same build spread over several calls (a map rebuilt beside the registration, a bounded
+  // amount per period): begin_build indexes the points (O(N)); each build_step splits nodes
+  // until the points it touched exceed work_budget, and returns true once the tree is complete.
+  // The tree answers no query (empty()) until then; the result is bit-identical to build().
+  KdBuildResult begin_build(std::span<const P> points, std::span<std::uint32_t> index_storage,
+                            std::span<KdNode> node_storage, const KdBuildParams& params = {});
+  bool build_step(std::size_t work_budget, KdBuildResult& result);
+
   KdQueryResult knn(const P& query, std::size_t k, std::span<Neighbor> out) const;
   KdQueryResult radius(const P& query, float radius, std::span<Neighbor> out) const;
   KdQueryResult hybrid(const P& query, float radius, std::size_t max_nn,
@@ -127,6 +143,9 @@ class KdTree {
   KdQueryResult nearest_within(const P& query, float max_squared_distance, std::uint32_t hint,
                                Neighbor& out) const;
   static constexpr std::uint32_t kNoHint = 0xFFFFFFFFu;
+  // Whether some point lies within squared distance max_squared_distance (inclusive): exactly
+  // nearest_within(...).count > 0, but it stops at the first such point (hypothesis scoring).
+  bool any_within(const P& query, float max_squared_distance) const;
   // found = some indexed point n has (d2(query, n), n.index) < (bound.squared_distance,
   // bound.index). count = 1 when found.
   KdQueryResult has_closer(const P& query, const Neighbor& bound, bool& found) const;
@@ -174,7 +193,20 @@ class KdTree {
   // True when the projections prove squared_distance(query, point i) > bound.
   bool projection_rejects(const float* query_projection, std::uint32_t i, float bound) const;
 
+  struct BuildState {
+    KdBuildTask stack[config::kKdMaxDepth + 2];
+    std::size_t top = 0;
+    std::size_t used = 0;
+    std::size_t leaf_size = 1;
+    std::size_t node_capacity = 0;
+    std::size_t points_indexed = 0;
+    std::uint32_t* index = nullptr;
+    KdNode* nodes = nullptr;
+    bool active = false;
+  };
+
   std::span<const P> points_{};
+  BuildState build_{};
   const std::uint32_t* indices_ = nullptr;
   const KdNode* nodes_ = nullptr;
   std::size_t num_nodes_ = 0;
@@ -207,6 +239,14 @@ struct KdTreeStorage {
     params.max_node_visits = max_node_visits;
     return tree.build(points, std::span<std::uint32_t>(indices, N),
                       std::span<KdNode>(nodes, kd_max_nodes(N, LeafSize)), params);
+  }
+  KdBuildResult begin_build(std::span<const P> points,
+                            std::size_t max_node_visits = config::kKdMaxNodeVisits) {
+    KdBuildParams params;
+    params.leaf_size = LeafSize;
+    params.max_node_visits = max_node_visits;
+    return tree.begin_build(points, std::span<std::uint32_t>(indices, N),
+                            std::span<KdNode>(nodes, kd_max_nodes(N, LeafSize)), params);
   }
 };
 

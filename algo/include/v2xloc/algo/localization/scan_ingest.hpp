@@ -1,0 +1,64 @@
+// Scan ingest: the raw sweep is read once and never stored. Each finite return within
+// [min_range, max_range] is accumulated into its voxel (LiDAR frame, cubes of `voxel` metres
+// keyed from the sensor origin): position sum and firing-time sum. The voxel centroids, in order
+// of first occurrence, are then deskewed at their mean firing time (deskew.hpp). Odometry (its
+// 0.5 v frame) and the registration to the map (in the body frame) both start from these points:
+// one pass over the ~64k returns instead of three, and a capacity set by the voxels a scene
+// holds, not by the sensor's return count (the EMBEDDED profile cannot hold a raw 64-beam sweep).
+// Returns beyond the voxel capacity are dropped and counted, never silently.
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "v2xloc/algo/core/config.hpp"
+#include "v2xloc/algo/core/types.hpp"
+
+namespace v2xloc {
+
+struct ScanIngestParams {
+  float min_range = 3.0f;         // [m] closer returns are the ego body
+  float max_range = 80.0f;        // [m] farther returns are sparse and noisy
+  float voxel = 0.5f;             // [m] voxel edge
+  double frame_period = 0.1;      // [s] span of the motion `delta` given to run()
+};
+
+struct ScanIngestResult {
+  std::uint32_t input_points = 0;
+  std::uint32_t non_finite_dropped = 0;   // NaN/Inf coordinate (or time, when times are given)
+  std::uint32_t range_dropped = 0;        // outside [min_range, max_range]
+  std::uint32_t capacity_dropped = 0;     // voxel table full or hash probes exhausted
+  std::uint32_t voxels = 0;               // points out
+  bool deskewed = false;
+};
+
+class ScanIngest {
+ public:
+  // times: per-point firing time [s] since the frame stamp (same size as points, or empty);
+  // delta_lidar: the sensor's motion over frame_period (nullptr: no deskew).
+  ScanIngestResult run(std::span<const Vec3f> points, std::span<const float> times,
+                       const Mat4d* delta_lidar, const ScanIngestParams& params);
+  // Voxel centroids of the last run, LiDAR frame, deskewed when the result says so.
+  std::span<const Vec3f> points() const { return {points_, count_}; }
+
+ private:
+  static constexpr std::size_t kMaxVoxels = config::kMaxDownsampledPoints;
+  static constexpr std::size_t kSlots = 2 * kMaxVoxels;
+  static_assert((kSlots & (kSlots - 1)) == 0, "hash slots must be a power of two");
+  struct Accumulator {
+    std::int32_t key[3];
+    std::uint32_t count;
+    std::uint32_t slot;
+    double sum[3];
+    double time_sum;
+  };
+  Accumulator* find_or_add(const std::int32_t key[3]);
+
+  Accumulator voxels_[kMaxVoxels];
+  std::uint32_t slots_[kSlots] = {};  // voxel index + 1, 0 = empty
+  Vec3f points_[kMaxVoxels];
+  float times_[kMaxVoxels];
+  std::size_t count_ = 0;
+};
+
+}  // namespace v2xloc

@@ -1,0 +1,93 @@
+#include "v2xloc/algo/localization/scan_ingest.hpp"
+
+#include <cmath>
+
+#include "v2xloc/algo/core/finite.hpp"
+#include "v2xloc/algo/core/spatial_hash.hpp"
+#include "v2xloc/algo/localization/deskew.hpp"
+
+namespace v2xloc {
+
+ScanIngest::Accumulator* ScanIngest::find_or_add(const std::int32_t key[3]) {
+  Accumulator* found = nullptr;
+  linear_probe(spatial_hash(key), kSlots, static_cast<std::uint32_t>(config::kVoxelMaxProbes), [&](std::size_t slot) {
+    const std::uint32_t v = slots_[slot];
+    if (v == 0) {
+      if (count_ == kMaxVoxels) return true;  // full: counted by the caller
+      Accumulator& a = voxels_[count_];
+      a = Accumulator{{key[0], key[1], key[2]}, 0, static_cast<std::uint32_t>(slot), {0.0, 0.0, 0.0}, 0.0};
+      slots_[slot] = static_cast<std::uint32_t>(++count_);
+      found = &a;
+      return true;
+    }
+    Accumulator& a = voxels_[v - 1];
+    if (a.key[0] == key[0] && a.key[1] == key[1] && a.key[2] == key[2]) {
+      found = &a;
+      return true;
+    }
+    return false;
+  });
+  return found;
+}
+
+ScanIngestResult ScanIngest::run(std::span<const Vec3f> points, std::span<const float> times,
+                                 const Mat4d* delta_lidar, const ScanIngestParams& params) {
+  ScanIngestResult r;
+  r.input_points = static_cast<std::uint32_t>(points.size());
+  count_ = 0;
+  if (!(params.voxel > 0.0f) || !std::isfinite(params.voxel)) return r;
+  const bool has_times = times.size() == points.size() && !points.empty();
+  const float min2 = params.min_range * params.min_range;
+  const float max2 = params.max_range * params.max_range;
+  const float inv = 1.0f / params.voxel;  // keys stay within +-max_range / voxel: no overflow
+  Accumulator* last = nullptr;  // consecutive returns usually share a voxel: skip the lookup
+  std::int32_t last_key[3] = {0, 0, 0};
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Vec3f& p = points[i];
+    if (!is_finite_point(p) || (has_times && !std::isfinite(times[i]))) {
+      ++r.non_finite_dropped;
+      continue;
+    }
+    const float r2 = p.squaredNorm();
+    if (r2 < min2 || r2 > max2) {
+      ++r.range_dropped;
+      continue;
+    }
+    const std::int32_t key[3] = {static_cast<std::int32_t>(std::floor(p.x() * inv)),
+                                 static_cast<std::int32_t>(std::floor(p.y() * inv)),
+                                 static_cast<std::int32_t>(std::floor(p.z() * inv))};
+    Accumulator* a = last;
+    if (a == nullptr || key[0] != last_key[0] || key[1] != last_key[1] || key[2] != last_key[2]) {
+      a = find_or_add(key);
+      if (a == nullptr) {
+        ++r.capacity_dropped;
+        continue;
+      }
+      last = a;
+      for (int k = 0; k < 3; ++k) last_key[k] = key[k];
+    }
+    ++a->count;
+    for (int k = 0; k < 3; ++k) a->sum[k] += p[k];
+    a->time_sum += has_times ? times[i] : 0.0f;
+  }
+  for (std::size_t v = 0; v < count_; ++v) {
+    const Accumulator& a = voxels_[v];
+    const double n = static_cast<double>(a.count);
+    points_[v] = Vec3f(static_cast<float>(a.sum[0] / n), static_cast<float>(a.sum[1] / n),
+                       static_cast<float>(a.sum[2] / n));
+    times_[v] = static_cast<float>(a.time_sum / n);
+    slots_[a.slot] = 0;  // leave the table empty for the next scan
+  }
+  r.voxels = static_cast<std::uint32_t>(count_);
+  if (has_times && delta_lidar != nullptr && count_ > 0) {
+    DeskewParams dp;
+    dp.reference_time = 0.0;
+    dp.delta_duration = params.frame_period;
+    const std::span<Vec3f> out(points_, count_);
+    const DeskewResult d = deskew(out, std::span<const float>(times_, count_), *delta_lidar, dp, out);
+    r.deskewed = d.status == DeskewStatus::kOk;
+  }
+  return r;
+}
+
+}  // namespace v2xloc
