@@ -14,6 +14,4 @@ namespace v2xloc {
 using Pose3d = Eigen::Transform<double, 3, Eigen::Isometry>;
 using PoseCovariance = Eigen::Matrix<double, 4, 4>;  // (x, y, z, yaw), ekf.hpp's order
 
-inline Pose3d pose_from_matrix(const Mat4d& m) { return Pose3d(m); }
-
 }  // namespace v2xloc
