@@ -149,21 +149,30 @@ std::size_t FirmwareApp::drain_link(hal::DatagramLink& link, bool ego_link) {
       channel = DatagramChannel::kEgo;  // legacy single socket
     }
     if (!decoder_.on_datagram(bytes, now, disciplined(now), channel)) continue;
-    // Input order: every CAN frame sent before this cloud's last fragment goes first.
+    // Input order: every CAN frame sent before this cloud's last fragment goes first; the clock
+    // is read again after them (the emulated clock moves with the CAN link).
     drain_can();
-    const DecodedCloud decoded = decoder_.decode_completed();
+    const DecodedCloud decoded = decoder_.decode_completed(disciplined(hal_.clock.monotonic_ns()));
     if (decoded.kind == CloudKind::kEgoScan || decoded.kind == CloudKind::kEgoRejected) {
-      // Period boundary: shares waiting for their signature check are verified now (at most
-      // kMaxSignatureVerificationsPerPeriod) and reach map fusion before this scan.
-      for (std::size_t k = 0; k < kMaxSignatureVerificationsPerPeriod; ++k) {
-        const DecodedCloud share = decoder_.next_verified_share();
-        if (share.kind == CloudKind::kNone) break;
-        apply_cloud(share);
-      }
+      close_period(ego_link);
     }
     apply_cloud(decoded);
   }
   return n;
+}
+
+void FirmwareApp::close_period(bool ego_link) {
+  // Shares already received on the V2X endpoint belong to this period whichever socket was read
+  // first (two sockets have no common order): the input order is then a function of the
+  // datagrams, not of the read timing.
+  if (ego_link) drain_link(hal_.clouds, false);
+  // Period boundary: shares waiting for their signature check are verified now (at most
+  // kMaxSignatureVerificationsPerPeriod) and reach map fusion before this scan.
+  for (std::size_t k = 0; k < kMaxSignatureVerificationsPerPeriod; ++k) {
+    const DecodedCloud share = decoder_.next_verified_share();
+    if (share.kind == CloudKind::kNone) break;
+    apply_cloud(share);
+  }
 }
 
 void FirmwareApp::send(const hal::CanFrame& frame) {

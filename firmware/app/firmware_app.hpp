@@ -84,6 +84,7 @@ class FirmwareApp {
   void apply_cloud(const DecodedCloud& decoded);
   std::size_t drain_datagrams();
   std::size_t drain_link(hal::DatagramLink& link, bool ego_link);
+  void close_period(bool ego_link);
   std::size_t poll_pps();
   void maybe_heartbeat();
   void publish_pose(const LocalizerFrameOutput& out, std::uint32_t frame_index, bool gnss_used);
