@@ -228,10 +228,41 @@ protocol::Heartbeat FirmwareApp::heartbeat_now() const {
   return hb;
 }
 
+protocol::TrustRejections FirmwareApp::trust_rejections_now() const {
+  const trust::VerifierCounters& v = decoder_.verifier().counters();
+  protocol::TrustRejections t;
+  t.unknown_signer = saturate_u8(v.unknown_signer);
+  t.bad_signature = saturate_u8(v.bad_signature);
+  t.too_old = saturate_u8(v.too_old);
+  t.future = saturate_u8(v.future);
+  t.replay = saturate_u8(v.replay);
+  t.queue_overflow = saturate_u8(decoder_.counters().shares_queue_dropped);
+  return t;
+}
+
+protocol::InputGuards FirmwareApp::input_guards_now() const {
+  const auto saturate = [](std::uint64_t v) {
+    return static_cast<std::uint16_t>(v > protocol::kInputGuardsMax ? protocol::kInputGuardsMax : v);
+  };
+  const DecoderCounters& d = decoder_.counters();
+  protocol::InputGuards g;
+  g.can_crc_rejected = saturate(d.can_rejected);  // DLC / CRC / range; counter repeats separately
+  g.can_counter_rejected = saturate(d.can_repeated);
+  g.ego_time_rejected = saturate(d.ego_time_rejected);
+  g.missing_signature = saturate(decoder_.verifier().counters().missing_signature);
+  return g;
+}
+
 void FirmwareApp::maybe_heartbeat() {
   const std::int64_t now = hal_.clock.monotonic_ns();
   if (now < next_heartbeat_ns_) return;
   send(protocol::pack(heartbeat_now()));
+  protocol::TrustRejections trust = trust_rejections_now();
+  trust.counter = heartbeat_counter_;
+  send(protocol::pack(trust));
+  protocol::InputGuards guards = input_guards_now();
+  guards.counter = heartbeat_counter_;
+  send(protocol::pack(guards));
   heartbeat_counter_ = static_cast<std::uint8_t>((heartbeat_counter_ + 1) % protocol::kCounterModulo);
   ++counters_.heartbeats;
   // Simulated time may jump several periods: one heartbeat, then the next period boundary.

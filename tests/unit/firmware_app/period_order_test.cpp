@@ -50,7 +50,11 @@ class ScriptedLink final : public hal::DatagramLink {
 // A CAN bus fed by the test (the SimTimeCanBus on top turns sim-time frames into clock steps).
 class ScriptedCan final : public hal::CanBus {
  public:
-  hal::Status send(const hal::CanFrame&) override { return hal::Status::kOk; }
+  hal::Status send(const hal::CanFrame& f) override {
+    sent.push_back(f);
+    return hal::Status::kOk;
+  }
+  std::vector<hal::CanFrame> sent;
   hal::Status receive(hal::CanRxFrame& out) override {
     if (gate != nullptr && gate->reads < after_reads) return hal::Status::kWouldBlock;
     if (queue.empty()) return hal::Status::kWouldBlock;
@@ -165,6 +169,56 @@ TEST(FirmwarePeriodOrder, ShareFreshnessIsJudgedByThePeriodBoundaryClock) {
   EXPECT_EQ(o.calls, "me");
   EXPECT_EQ(o.accepted, 1u);
   EXPECT_EQ(o.future, 0u);
+}
+
+// What was refused reaches the vehicle bus: with the heartbeat, 0x301 (trust layer, per reason)
+// and 0x302 (input guards) carry the counts.
+TEST(FirmwareSecurityDiagnostics, HeartbeatIsFollowedByTheRefusalCounts) {
+  hal::SimClock clock(0, kEpoch);
+  ScriptedCan can;
+  SimTimeCanBus sim_can(can, clock);
+  ScriptedLink v2x, ego;
+  // An unsigned share, a vehicle frame with a broken CRC, the same vehicle frame twice (its
+  // rolling counter does not advance), an ego scan dated 10 s ahead, then 1.1 s of time.
+  for (const auto& d : cloud(protocol::CloudMessageType::kMapShare, kInfraSenderBase, 0)) v2x.queue.push_back(d);
+  protocol::VehicleMotion vm;
+  vm.speed_valid = vm.yaw_rate_valid = true;
+  hal::CanFrame good = protocol::pack(vm), bad = good;
+  bad.data[0] ^= 0x01;
+  can.queue = {make_sim_time_frame(50'000'000), bad, good, good};
+  for (const auto& d : cloud(protocol::CloudMessageType::kEgoScan, kEgoSenderId, 10'000'000'000)) ego.queue.push_back(d);
+
+  auto decoder = std::make_unique<InputDecoder>(kEpoch);
+  RecordingPort port;
+  FirmwareApp app(FirmwareHal{sim_can, v2x, clock, nullptr, nullptr, &ego}, *decoder, port);
+  ASSERT_EQ(app.start(), hal::Status::kOk);
+  for (int k = 0; k < 10 && app.counters().frames_published == 0; ++k) app.poll_once();
+  ASSERT_EQ(app.counters().frames_published, 1u);
+  can.queue.push_back(make_sim_time_frame(1'100'000'000));
+  app.poll_once();
+  ASSERT_EQ(app.counters().heartbeats, 1u);
+
+  int found = 0;
+  for (std::size_t i = 0; i < can.sent.size(); ++i) {
+    if (can.sent[i].id == protocol::kTrustRejectionsId) {
+      ASSERT_GT(i, 0u);
+      EXPECT_EQ(can.sent[i - 1].id, protocol::kHeartbeatId) << "sent right after the heartbeat";
+      protocol::TrustRejections t;
+      ASSERT_EQ(protocol::unpack(can.sent[i], t), protocol::DecodeStatus::kOk);
+      EXPECT_EQ(t.unknown_signer + t.bad_signature + t.too_old + t.future + t.replay + t.queue_overflow, 0);
+      ++found;
+    }
+    if (can.sent[i].id == protocol::kInputGuardsId) {
+      protocol::InputGuards g;
+      ASSERT_EQ(protocol::unpack(can.sent[i], g), protocol::DecodeStatus::kOk);
+      EXPECT_EQ(g.can_crc_rejected, 1u);
+      EXPECT_EQ(g.can_counter_rejected, 1u);
+      EXPECT_EQ(g.ego_time_rejected, 1u);
+      EXPECT_EQ(g.missing_signature, 1u);
+      ++found;
+    }
+  }
+  EXPECT_EQ(found, 2);
 }
 
 TEST(SharePeriodSchedule, KeepsTheNewestCapacityAndReleasesAtMostPerPeriodOldestFirst) {
