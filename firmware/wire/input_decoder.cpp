@@ -186,6 +186,46 @@ void InputDecoder::begin_verification_period(std::int64_t local_time_ns) {
   }
 }
 
+// A completed map share: trust checks that need no clock, then the verification queue.
+DecodedCloud InputDecoder::queue_share(const protocol::ReassembledCloud& cloud, const Mat4d& pose, double t) {
+  DecodedCloud out;
+  const auto kind = [&out](CloudKind k) {
+    out.kind = k;
+    return out;
+  };
+  const protocol::CloudFrameInfo& info = cloud.info;
+  const std::uint32_t n = cloud.point_count;
+  // Trust before fusion: a signature over the whole cloud's wire bytes by a provisioned signer,
+  // not a replay. Freshness (judged at the period boundary) and the ECDSA check wait in the
+  // queue for the period's budget. Role and source id come from the trust list, not the header.
+  if (cloud.slot >= kReassemblySlots || cloud.fragment_count > kMaxCloudFragments) {
+    ++counters_.clouds_rejected;
+    return kind(CloudKind::kRejected);
+  }
+  const std::span<const trust::Digest> fragments(&fragment_digests_[cloud.slot * kMaxCloudFragments],
+                                                 cloud.fragment_count);
+  trust::VerificationJob job;
+  const trust::ShareVerifyResult verdict = verifier_.admit(info, trust::cloud_digest(cloud, fragments), job);
+  if (verdict.verdict != trust::ShareVerdict::kAccepted) {
+    ++counters_.shares_untrusted;
+    return kind(CloudKind::kRejected);
+  }
+  const ShareSchedule::Admission admission = schedule_.admit();  // full: the oldest gives way
+  if (admission.dropped_oldest) ++counters_.shares_queue_dropped;
+  const std::size_t at = admission.slot;
+  QueuedShare& q = queue_[at];
+  q.job = job;
+  q.t = t;
+  q.world_T_sensor = pose;
+  q.point_count = n;
+  q.judged = false;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    queue_points_[at][i] = Vec3f(cloud.xyz[3u * i], cloud.xyz[3u * i + 1], cloud.xyz[3u * i + 2]);
+  }
+  ++counters_.shares_queued;
+  return kind(CloudKind::kMapQueued);
+}
+
 DecodedCloud InputDecoder::decode_completed() {
   DecodedCloud out;
   const auto kind = [&out](CloudKind k) {
@@ -204,37 +244,7 @@ DecodedCloud InputDecoder::decode_completed() {
   }
   const double t = localizer_time_s(static_cast<std::int64_t>(info.timestamp_ns), epoch_ns_);
 
-  if (info.type == protocol::CloudMessageType::kMapShare) {
-    // Trust before fusion: a signature over the whole cloud's wire bytes by a provisioned signer,
-    // fresh by the local clock now, not a replay. The ECDSA check itself waits in the queue for
-    // the period's budget. Role and source id come from the trust list, not the header.
-    if (cloud.slot >= kReassemblySlots || cloud.fragment_count > kMaxCloudFragments) {
-      ++counters_.clouds_rejected;
-      return kind(CloudKind::kRejected);
-    }
-    const std::span<const trust::Digest> fragments(&fragment_digests_[cloud.slot * kMaxCloudFragments],
-                                                   cloud.fragment_count);
-    trust::VerificationJob job;
-    const trust::ShareVerifyResult verdict = verifier_.admit(info, trust::cloud_digest(cloud, fragments), job);
-    if (verdict.verdict != trust::ShareVerdict::kAccepted) {
-      ++counters_.shares_untrusted;
-      return kind(CloudKind::kRejected);
-    }
-    const ShareSchedule::Admission admission = schedule_.admit();  // full: the oldest gives way
-    if (admission.dropped_oldest) ++counters_.shares_queue_dropped;
-    const std::size_t at = admission.slot;
-    QueuedShare& q = queue_[at];
-    q.job = job;
-    q.t = t;
-    q.world_T_sensor = pose;
-    q.point_count = n;
-    q.judged = false;
-    for (std::uint32_t i = 0; i < n; ++i) {
-      queue_points_[at][i] = Vec3f(cloud.xyz[3u * i], cloud.xyz[3u * i + 1], cloud.xyz[3u * i + 2]);
-    }
-    ++counters_.shares_queued;
-    return kind(CloudKind::kMapQueued);
-  }
+  if (info.type == protocol::CloudMessageType::kMapShare) return queue_share(cloud, pose, t);
   if (info.type != protocol::CloudMessageType::kEgoScan || info.sender_id != kEgoSenderId) {
     ++counters_.clouds_rejected;
     return kind(CloudKind::kRejected);

@@ -150,6 +150,7 @@ class InputDecoder {
   // The fix closed by the time/DOP frame, from the stored position, status and velocity frames.
   GnssInput assemble_gnss_fix(double t) const;
   bool pose_to_matrix(const protocol::SensorPose& pose, Mat4d& out) const;
+  DecodedCloud queue_share(const protocol::ReassembledCloud& cloud, const Mat4d& pose, double t);
   // Rolling counters of the frames that carry one (0x120, 0x131, 0x133): a repeat is dropped.
   bool counter_ok(protocol::RollingCounterMonitor& monitor, std::uint8_t counter);
 
