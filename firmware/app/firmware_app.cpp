@@ -149,21 +149,30 @@ std::size_t FirmwareApp::drain_link(hal::DatagramLink& link, bool ego_link) {
       channel = DatagramChannel::kEgo;  // legacy single socket
     }
     if (!decoder_.on_datagram(bytes, now, disciplined(now), channel)) continue;
-    // Input order: every CAN frame sent before this cloud's last fragment goes first.
+    // Input order: every CAN frame sent before this cloud's last fragment goes first; the clock
+    // is read again after them (the emulated clock moves with the CAN link).
     drain_can();
-    const DecodedCloud decoded = decoder_.decode_completed();
+    const DecodedCloud decoded = decoder_.decode_completed(disciplined(hal_.clock.monotonic_ns()));
     if (decoded.kind == CloudKind::kEgoScan || decoded.kind == CloudKind::kEgoRejected) {
-      // Period boundary: shares waiting for their signature check are verified now (at most
-      // kMaxSignatureVerificationsPerPeriod) and reach map fusion before this scan.
-      for (std::size_t k = 0; k < kMaxSignatureVerificationsPerPeriod; ++k) {
-        const DecodedCloud share = decoder_.next_verified_share();
-        if (share.kind == CloudKind::kNone) break;
-        apply_cloud(share);
-      }
+      close_period(ego_link);
     }
     apply_cloud(decoded);
   }
   return n;
+}
+
+void FirmwareApp::close_period(bool ego_link) {
+  // Shares already received on the V2X endpoint belong to this period whichever socket was read
+  // first (two sockets have no common order): the input order is then a function of the
+  // datagrams, not of the read timing.
+  if (ego_link) drain_link(hal_.clouds, false);
+  // Period boundary: shares waiting for their signature check are verified now (at most
+  // kMaxSignatureVerificationsPerPeriod) and reach map fusion before this scan.
+  for (std::size_t k = 0; k < kMaxSignatureVerificationsPerPeriod; ++k) {
+    const DecodedCloud share = decoder_.next_verified_share();
+    if (share.kind == CloudKind::kNone) break;
+    apply_cloud(share);
+  }
 }
 
 void FirmwareApp::send(const hal::CanFrame& frame) {
@@ -219,10 +228,41 @@ protocol::Heartbeat FirmwareApp::heartbeat_now() const {
   return hb;
 }
 
+protocol::TrustRejections FirmwareApp::trust_rejections_now() const {
+  const trust::VerifierCounters& v = decoder_.verifier().counters();
+  protocol::TrustRejections t;
+  t.unknown_signer = saturate_u8(v.unknown_signer);
+  t.bad_signature = saturate_u8(v.bad_signature);
+  t.too_old = saturate_u8(v.too_old);
+  t.future = saturate_u8(v.future);
+  t.replay = saturate_u8(v.replay);
+  t.queue_overflow = saturate_u8(decoder_.counters().shares_queue_dropped);
+  return t;
+}
+
+protocol::InputGuards FirmwareApp::input_guards_now() const {
+  const auto saturate = [](std::uint64_t v) {
+    return static_cast<std::uint16_t>(v > protocol::kInputGuardsMax ? protocol::kInputGuardsMax : v);
+  };
+  const DecoderCounters& d = decoder_.counters();
+  protocol::InputGuards g;
+  g.can_crc_rejected = saturate(d.can_rejected);  // DLC / CRC / range; counter repeats separately
+  g.can_counter_rejected = saturate(d.can_repeated);
+  g.ego_time_rejected = saturate(d.ego_time_rejected);
+  g.missing_signature = saturate(decoder_.verifier().counters().missing_signature);
+  return g;
+}
+
 void FirmwareApp::maybe_heartbeat() {
   const std::int64_t now = hal_.clock.monotonic_ns();
   if (now < next_heartbeat_ns_) return;
   send(protocol::pack(heartbeat_now()));
+  protocol::TrustRejections trust = trust_rejections_now();
+  trust.counter = heartbeat_counter_;
+  send(protocol::pack(trust));
+  protocol::InputGuards guards = input_guards_now();
+  guards.counter = heartbeat_counter_;
+  send(protocol::pack(guards));
   heartbeat_counter_ = static_cast<std::uint8_t>((heartbeat_counter_ + 1) % protocol::kCounterModulo);
   ++counters_.heartbeats;
   // Simulated time may jump several periods: one heartbeat, then the next period boundary.

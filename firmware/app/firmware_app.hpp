@@ -77,6 +77,9 @@ class FirmwareApp {
   const InputDecoder& decoder() const { return decoder_; }
   const LocalizerFrameOutput* latest_output() const { return has_output_ ? &latest_ : nullptr; }
   protocol::Heartbeat heartbeat_now() const;
+  // The security diagnostics frames' contents (0x301, 0x302), sent with every heartbeat.
+  protocol::TrustRejections trust_rejections_now() const;
+  protocol::InputGuards input_guards_now() const;
 
  private:
   std::size_t drain_can();
@@ -84,6 +87,7 @@ class FirmwareApp {
   void apply_cloud(const DecodedCloud& decoded);
   std::size_t drain_datagrams();
   std::size_t drain_link(hal::DatagramLink& link, bool ego_link);
+  void close_period(bool ego_link);
   std::size_t poll_pps();
   void maybe_heartbeat();
   void publish_pose(const LocalizerFrameOutput& out, std::uint32_t frame_index, bool gnss_used);

@@ -54,6 +54,14 @@ constexpr Signal kErrorFlags{4, 4, false, 1.0, 0.0, 0.0, 15.0};
 constexpr Signal kUptime{8, 24, false, 0.1, 0.0, 0.0, 1677721.5};
 constexpr Signal kCanRxErrors{32, 8, false, 1.0, 0.0, 0.0, 255.0};
 constexpr Signal kUdpDropped{40, 8, false, 1.0, 0.0, 0.0, 255.0};
+// Security diagnostics (0x301 counts of 8 bits from bit 0, 0x302 counts of 12 bits from bit 0).
+constexpr Signal kTrustCount[6] = {{0, 8, false, 1.0, 0.0, 0.0, 255.0},  {8, 8, false, 1.0, 0.0, 0.0, 255.0},
+                                   {16, 8, false, 1.0, 0.0, 0.0, 255.0}, {24, 8, false, 1.0, 0.0, 0.0, 255.0},
+                                   {32, 8, false, 1.0, 0.0, 0.0, 255.0}, {40, 8, false, 1.0, 0.0, 0.0, 255.0}};
+constexpr Signal kGuardCount[4] = {{0, 12, false, 1.0, 0.0, 0.0, 4095.0},
+                                   {12, 12, false, 1.0, 0.0, 0.0, 4095.0},
+                                   {24, 12, false, 1.0, 0.0, 0.0, 4095.0},
+                                   {36, 12, false, 1.0, 0.0, 0.0, 4095.0}};
 // Diagnostics (0x210..0x214).
 constexpr Signal kRegX{0, 24, true, 0.001, 0.0, -8388.608, 8388.607};
 constexpr Signal kRegY{24, 24, true, 0.001, 0.0, -8388.608, 8388.607};
@@ -112,6 +120,16 @@ constexpr NamedCanSignal kSignalTable[] = {
     V2XLOC_SIGNAL(kHeartbeatId, "Uptime", kUptime),
     V2XLOC_SIGNAL(kHeartbeatId, "CanRxErrors", kCanRxErrors),
     V2XLOC_SIGNAL(kHeartbeatId, "UdpDropped", kUdpDropped),
+    V2XLOC_SIGNAL(kTrustRejectionsId, "UnknownSigner", kTrustCount[0]),
+    V2XLOC_SIGNAL(kTrustRejectionsId, "BadSignature", kTrustCount[1]),
+    V2XLOC_SIGNAL(kTrustRejectionsId, "TooOld", kTrustCount[2]),
+    V2XLOC_SIGNAL(kTrustRejectionsId, "Future", kTrustCount[3]),
+    V2XLOC_SIGNAL(kTrustRejectionsId, "Replay", kTrustCount[4]),
+    V2XLOC_SIGNAL(kTrustRejectionsId, "QueueOverflow", kTrustCount[5]),
+    V2XLOC_SIGNAL(kInputGuardsId, "CanCrcRejected", kGuardCount[0]),
+    V2XLOC_SIGNAL(kInputGuardsId, "CanCounterRejected", kGuardCount[1]),
+    V2XLOC_SIGNAL(kInputGuardsId, "EgoTimeRejected", kGuardCount[2]),
+    V2XLOC_SIGNAL(kInputGuardsId, "MissingSignature", kGuardCount[3]),
     V2XLOC_SIGNAL(kRegistrationPositionId, "RegX", kRegX),
     V2XLOC_SIGNAL(kRegistrationPositionId, "RegY", kRegY),
     V2XLOC_SIGNAL(kRegistrationQualityId, "RegZ", kRegZ),
@@ -469,6 +487,43 @@ DecodeStatus unpack(const CanFrame& f, Heartbeat& m) {
   m.udp_dropped = static_cast<std::uint8_t>(get_bits_le(f.data, kUdpDropped.start, 8));
   m.counter = static_cast<std::uint8_t>(get_bits_le(f.data, kCounterBit48, 4));
   return range_status(oor);
+}
+
+// ---- Security diagnostics ---------------------------------------------------------------------
+CanFrame pack(const TrustRejections& m, PackStats* stats) {
+  CanFrame f = start_frame(kTrustRejectionsId);
+  const std::uint8_t counts[6] = {m.unknown_signer, m.bad_signature, m.too_old, m.future, m.replay, m.queue_overflow};
+  for (int k = 0; k < 6; ++k) encode(f.data, kTrustCount[k], static_cast<double>(counts[k]), stats);
+  put_counter(f.data, kCounterBit48, m.counter);
+  seal(f);
+  return f;
+}
+
+DecodeStatus unpack(const CanFrame& f, TrustRejections& m) {
+  const DecodeStatus s = check(f, kTrustRejectionsId, true);
+  if (s != DecodeStatus::kOk) return s;
+  std::uint8_t* counts[6] = {&m.unknown_signer, &m.bad_signature, &m.too_old, &m.future, &m.replay, &m.queue_overflow};
+  for (int k = 0; k < 6; ++k) *counts[k] = static_cast<std::uint8_t>(get_bits_le(f.data, kTrustCount[k].start, 8));
+  m.counter = static_cast<std::uint8_t>(get_bits_le(f.data, kCounterBit48, 4));
+  return DecodeStatus::kOk;
+}
+
+CanFrame pack(const InputGuards& m, PackStats* stats) {
+  CanFrame f = start_frame(kInputGuardsId);
+  const std::uint16_t counts[4] = {m.can_crc_rejected, m.can_counter_rejected, m.ego_time_rejected, m.missing_signature};
+  for (int k = 0; k < 4; ++k) encode(f.data, kGuardCount[k], static_cast<double>(counts[k]), stats);
+  put_counter(f.data, kCounterBit48, m.counter);
+  seal(f);
+  return f;
+}
+
+DecodeStatus unpack(const CanFrame& f, InputGuards& m) {
+  const DecodeStatus s = check(f, kInputGuardsId, true);
+  if (s != DecodeStatus::kOk) return s;
+  std::uint16_t* counts[4] = {&m.can_crc_rejected, &m.can_counter_rejected, &m.ego_time_rejected, &m.missing_signature};
+  for (int k = 0; k < 4; ++k) *counts[k] = static_cast<std::uint16_t>(get_bits_le(f.data, kGuardCount[k].start, 12));
+  m.counter = static_cast<std::uint8_t>(get_bits_le(f.data, kCounterBit48, 4));
+  return DecodeStatus::kOk;
 }
 
 // ---- Diagnostics ------------------------------------------------------------------------------

@@ -30,6 +30,9 @@ inline constexpr std::uint32_t kGateDecisionId = 0x212;
 inline constexpr std::uint32_t kOdometryPositionId = 0x213;
 inline constexpr std::uint32_t kOdometryAttitudeId = 0x214;
 inline constexpr std::uint32_t kHeartbeatId = 0x300;
+// Security diagnostics, 1 Hz after the heartbeat: what the trust layer and the input guards refused.
+inline constexpr std::uint32_t kTrustRejectionsId = 0x301;
+inline constexpr std::uint32_t kInputGuardsId = 0x302;
 
 inline constexpr std::uint8_t kCounterModulo = 16;  // 4-bit rolling counters
 
@@ -204,6 +207,29 @@ struct Heartbeat {
   std::uint8_t counter = 0;
 };
 
+// ---- Security diagnostics (0x301, 0x302; 1 Hz, after the heartbeat) ----------------------------
+// Saturating counts since start-up of what the firmware refused. 0x301: V2X map shares refused by
+// the trust layer, per reason; 0x302: CAN frames refused by CRC/DLC/range or by their rolling
+// counter, ego scans refused by the time guard, map shares that arrived unsigned.
+struct TrustRejections {
+  std::uint8_t unknown_signer = 0;   // [0, 255] each
+  std::uint8_t bad_signature = 0;
+  std::uint8_t too_old = 0;
+  std::uint8_t future = 0;
+  std::uint8_t replay = 0;
+  std::uint8_t queue_overflow = 0;   // admitted shares dropped from the full verification queue
+  std::uint8_t counter = 0;
+};
+
+struct InputGuards {
+  std::uint16_t can_crc_rejected = 0;      // [0, 4095] each: DLC / CRC / range failures
+  std::uint16_t can_counter_rejected = 0;  // rolling counter repeated (stale or replayed frame)
+  std::uint16_t ego_time_rejected = 0;     // ego scans dated implausibly against the local clock
+  std::uint16_t missing_signature = 0;     // map shares without a signature
+  std::uint8_t counter = 0;
+};
+inline constexpr std::uint16_t kInputGuardsMax = 4095;
+
 // The codec's scaled-signal table (the constants pack/unpack use), by message id and DBC signal
 // name. Flags, rolling counters and CRC bytes sit at fixed bits; tests/unit/can_protocol checks
 // this table, and every frame the codec packs, against tools/dbc/v2xloc.dbc.
@@ -230,6 +256,8 @@ CanFrame pack(const PosePosition& m, PackStats* stats = nullptr);
 CanFrame pack(const PoseAttitude& m, PackStats* stats = nullptr);
 CanFrame pack(const PoseSigma& m, PackStats* stats = nullptr);
 CanFrame pack(const Heartbeat& m, PackStats* stats = nullptr);
+CanFrame pack(const TrustRejections& m, PackStats* stats = nullptr);
+CanFrame pack(const InputGuards& m, PackStats* stats = nullptr);
 // Diagnostics: a saturated signal also sets the frame's clamped flag (where the frame has one).
 CanFrame pack(const RegistrationPosition& m, PackStats* stats = nullptr);
 CanFrame pack(const RegistrationQuality& m, PackStats* stats = nullptr);
@@ -248,6 +276,8 @@ DecodeStatus unpack(const CanFrame& f, PosePosition& m);
 DecodeStatus unpack(const CanFrame& f, PoseAttitude& m);
 DecodeStatus unpack(const CanFrame& f, PoseSigma& m);
 DecodeStatus unpack(const CanFrame& f, Heartbeat& m);
+DecodeStatus unpack(const CanFrame& f, TrustRejections& m);
+DecodeStatus unpack(const CanFrame& f, InputGuards& m);
 DecodeStatus unpack(const CanFrame& f, RegistrationPosition& m);
 DecodeStatus unpack(const CanFrame& f, RegistrationQuality& m);
 DecodeStatus unpack(const CanFrame& f, GateDecision& m);

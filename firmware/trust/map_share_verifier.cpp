@@ -90,7 +90,7 @@ ShareVerifyResult MapShareVerifier::reject(ShareVerdict v, const TrustedSigner* 
 }
 
 ShareVerifyResult MapShareVerifier::admit(const protocol::CloudFrameInfo& info, const Digest& digest,
-                                          std::int64_t local_time_ns, VerificationJob& job) {
+                                          VerificationJob& job) {
   Pending* pending = nullptr;
   for (Pending& p : pending_) {
     if (p.used && p.sig.sender_id == info.sender_id && p.sig.sensor_id == info.sensor_id &&
@@ -106,13 +106,10 @@ ShareVerifyResult MapShareVerifier::admit(const protocol::CloudFrameInfo& info, 
   const TrustedSigner* signer = list_.find(sig.signer);
   if (signer == nullptr) return reject(ShareVerdict::kUnknownSigner);
   if (signer->sender_id != info.sender_id) return reject(ShareVerdict::kSenderMismatch, signer);
-  // Time: unsigned wire values compared in signed 128-bit-safe form (both are Unix ns < 2^63).
+  // Unsigned wire times compared in signed form (both are Unix ns < 2^63; larger: refused).
   const auto gen = static_cast<std::int64_t>(sig.generation_time_ns & 0x7FFFFFFFFFFFFFFFull);
-  if (sig.generation_time_ns > 0x7FFFFFFFFFFFFFFFull || gen > local_time_ns + config_.max_future_ns) {
-    return reject(ShareVerdict::kFuture, signer);
-  }
-  if (gen < local_time_ns - config_.max_age_ns) return reject(ShareVerdict::kTooOld, signer);
   const auto stamp = static_cast<std::int64_t>(info.timestamp_ns & 0x7FFFFFFFFFFFFFFFull);
+  if (sig.generation_time_ns > 0x7FFFFFFFFFFFFFFFull) return reject(ShareVerdict::kFuture, signer);
   if (info.timestamp_ns > 0x7FFFFFFFFFFFFFFFull || stamp > gen + config_.max_future_ns ||
       stamp < gen - config_.max_stamp_skew_ns) {
     return reject(ShareVerdict::kStampSkew, signer);
@@ -124,6 +121,16 @@ ShareVerifyResult MapShareVerifier::admit(const protocol::CloudFrameInfo& info, 
   job.sig = sig;
   job.signer_index = index;
   job.to_verify = signed_digest(sig, digest);
+  return ShareVerifyResult{ShareVerdict::kAccepted, signer};
+}
+
+ShareVerifyResult MapShareVerifier::check_time(const VerificationJob& job, std::int64_t local_time_ns) {
+  const TrustedSigner* signer = job.signer_index < list_.count ? &list_.signers[job.signer_index] : nullptr;
+  const auto gen = static_cast<std::int64_t>(job.sig.generation_time_ns & 0x7FFFFFFFFFFFFFFFull);
+  if (job.sig.generation_time_ns > 0x7FFFFFFFFFFFFFFFull || gen > local_time_ns + config_.max_future_ns) {
+    return reject(ShareVerdict::kFuture, signer);
+  }
+  if (gen < local_time_ns - config_.max_age_ns) return reject(ShareVerdict::kTooOld, signer);
   return ShareVerifyResult{ShareVerdict::kAccepted, signer};
 }
 
@@ -145,8 +152,10 @@ ShareVerifyResult MapShareVerifier::complete(const VerificationJob& job) {
 ShareVerifyResult MapShareVerifier::verify(const protocol::CloudFrameInfo& info, const Digest& digest,
                                            std::int64_t local_time_ns) {
   VerificationJob job;
-  const ShareVerifyResult admitted = admit(info, digest, local_time_ns, job);
+  const ShareVerifyResult admitted = admit(info, digest, job);
   if (admitted.verdict != ShareVerdict::kAccepted) return admitted;
+  const ShareVerifyResult fresh = check_time(job, local_time_ns);
+  if (fresh.verdict != ShareVerdict::kAccepted) return fresh;
   return complete(job);
 }
 

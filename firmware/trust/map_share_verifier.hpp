@@ -13,12 +13,14 @@
 // most one cloud per sensor per instant; a duplicated or re-sent cloud is a replay).
 //
 // Checks run cheapest first; the ECDSA verification (the only expensive step) runs last, so
-// garbage, unknown signers, stale and replayed shares cost no crypto. Two steps, so the caller can
-// spread the ECDSA work over periods: admit() runs every cheap check when the cloud completes
-// (freshness judged by the local clock AT COMPLETION against the signed generation time, so a
-// share verified a period later is judged as fairly as one verified at once) and returns a
-// VerificationJob; complete() runs the replay check again and the ECDSA verification. verify()
-// does both at once. Allocation-free.
+// garbage, unknown signers, stale and replayed shares cost no crypto. Three steps, so the caller can
+// spread the ECDSA work over periods: admit() runs the checks that need no clock when the cloud
+// completes (signature present, signer, sender id, stamp vs generation time, replay) and returns a
+// VerificationJob; check_time() judges the generation time against the local clock of the period
+// boundary that first follows the completion (a deterministic instant: the clock of the ego scan
+// that closes the period, whichever socket a datagram happened to be read from first), so a share
+// verified a period later is judged as fairly as one verified at once; complete() runs the replay
+// check again and the ECDSA verification. verify() does all three at once. Allocation-free.
 #pragma once
 
 #include <array>
@@ -96,11 +98,11 @@ class MapShareVerifier {
 
   // A datagram carrying the signature magic, received at monotonic now_ns.
   protocol::SignatureParseStatus on_signature_datagram(std::span<const std::uint8_t> datagram, std::int64_t now_ns);
-  // A completed map share whose cloud digest (cloud_digest.hpp, over the wire bytes) is `digest`;
-  // local_time_ns = the firmware's disciplined clock when it completed. kAccepted here means
-  // "admitted": `job` is ready for complete().
-  ShareVerifyResult admit(const protocol::CloudFrameInfo& info, const Digest& digest, std::int64_t local_time_ns,
-                          VerificationJob& job);
+  // A completed map share whose cloud digest (cloud_digest.hpp, over the wire bytes) is `digest`.
+  // kAccepted here means "admitted": `job` is ready for check_time() and complete().
+  ShareVerifyResult admit(const protocol::CloudFrameInfo& info, const Digest& digest, VerificationJob& job);
+  // Generation time against the local (disciplined) clock: kTooOld, kFuture or kAccepted.
+  ShareVerifyResult check_time(const VerificationJob& job, std::int64_t local_time_ns);
   // Replay check (again: an earlier job may have advanced the signer) and the ECDSA verification.
   ShareVerifyResult complete(const VerificationJob& job);
   ShareVerifyResult verify(const protocol::CloudFrameInfo& info, const Digest& digest, std::int64_t local_time_ns);

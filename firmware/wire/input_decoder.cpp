@@ -169,6 +169,63 @@ bool InputDecoder::pose_to_matrix(const protocol::SensorPose& pose, Mat4d& out) 
   return true;
 }
 
+DecodedCloud InputDecoder::decode_completed(std::int64_t local_time_ns) {
+  completed_local_time_ns_ = local_time_ns;
+  return decode_completed();
+}
+
+void InputDecoder::begin_verification_period(std::int64_t local_time_ns) {
+  schedule_.begin_period();
+  period_time_ns_ = local_time_ns;
+  for (std::size_t i = 0; i < schedule_.waiting(); ++i) {
+    QueuedShare& q = queue_[schedule_.waiting_slot(i)];
+    if (!q.judged) {
+      q.judged = true;
+      q.judge_time_ns = local_time_ns;
+    }
+  }
+}
+
+// A completed map share: trust checks that need no clock, then the verification queue.
+DecodedCloud InputDecoder::queue_share(const protocol::ReassembledCloud& cloud, const Mat4d& pose, double t) {
+  DecodedCloud out;
+  const auto kind = [&out](CloudKind k) {
+    out.kind = k;
+    return out;
+  };
+  const protocol::CloudFrameInfo& info = cloud.info;
+  const std::uint32_t n = cloud.point_count;
+  // Trust before fusion: a signature over the whole cloud's wire bytes by a provisioned signer,
+  // not a replay. Freshness (judged at the period boundary) and the ECDSA check wait in the
+  // queue for the period's budget. Role and source id come from the trust list, not the header.
+  if (cloud.slot >= kReassemblySlots || cloud.fragment_count > kMaxCloudFragments) {
+    ++counters_.clouds_rejected;
+    return kind(CloudKind::kRejected);
+  }
+  const std::span<const trust::Digest> fragments(&fragment_digests_[cloud.slot * kMaxCloudFragments],
+                                                 cloud.fragment_count);
+  trust::VerificationJob job;
+  const trust::ShareVerifyResult verdict = verifier_.admit(info, trust::cloud_digest(cloud, fragments), job);
+  if (verdict.verdict != trust::ShareVerdict::kAccepted) {
+    ++counters_.shares_untrusted;
+    return kind(CloudKind::kRejected);
+  }
+  const ShareSchedule::Admission admission = schedule_.admit();  // full: the oldest gives way
+  if (admission.dropped_oldest) ++counters_.shares_queue_dropped;
+  const std::size_t at = admission.slot;
+  QueuedShare& q = queue_[at];
+  q.job = job;
+  q.t = t;
+  q.world_T_sensor = pose;
+  q.point_count = n;
+  q.judged = false;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    queue_points_[at][i] = Vec3f(cloud.xyz[3u * i], cloud.xyz[3u * i + 1], cloud.xyz[3u * i + 2]);
+  }
+  ++counters_.shares_queued;
+  return kind(CloudKind::kMapQueued);
+}
+
 DecodedCloud InputDecoder::decode_completed() {
   DecodedCloud out;
   const auto kind = [&out](CloudKind k) {
@@ -187,50 +244,16 @@ DecodedCloud InputDecoder::decode_completed() {
   }
   const double t = localizer_time_s(static_cast<std::int64_t>(info.timestamp_ns), epoch_ns_);
 
-  if (info.type == protocol::CloudMessageType::kMapShare) {
-    // Trust before fusion: a signature over the whole cloud's wire bytes by a provisioned signer,
-    // fresh by the local clock now, not a replay. The ECDSA check itself waits in the queue for
-    // the period's budget. Role and source id come from the trust list, not the header.
-    if (cloud.slot >= kReassemblySlots || cloud.fragment_count > kMaxCloudFragments) {
-      ++counters_.clouds_rejected;
-      return kind(CloudKind::kRejected);
-    }
-    const std::span<const trust::Digest> fragments(&fragment_digests_[cloud.slot * kMaxCloudFragments],
-                                                   cloud.fragment_count);
-    trust::VerificationJob job;
-    const trust::ShareVerifyResult verdict =
-        verifier_.admit(info, trust::cloud_digest(cloud, fragments), completed_local_time_ns_, job);
-    if (verdict.verdict != trust::ShareVerdict::kAccepted) {
-      ++counters_.shares_untrusted;
-      return kind(CloudKind::kRejected);
-    }
-    if (queue_count_ == kShareVerifyQueueCapacity) {  // full: the oldest waiting share gives way
-      queue_head_ = (queue_head_ + 1) % kShareVerifyQueueCapacity;
-      --queue_count_;
-      ++counters_.shares_queue_dropped;
-    }
-    const std::size_t at = (queue_head_ + queue_count_) % kShareVerifyQueueCapacity;
-    QueuedShare& q = queue_[at];
-    q.job = job;
-    q.t = t;
-    q.world_T_sensor = pose;
-    q.point_count = n;
-    for (std::uint32_t i = 0; i < n; ++i) {
-      queue_points_[at][i] = Vec3f(cloud.xyz[3u * i], cloud.xyz[3u * i + 1], cloud.xyz[3u * i + 2]);
-    }
-    ++queue_count_;
-    ++counters_.shares_queued;
-    return kind(CloudKind::kMapQueued);
+  if (info.type == protocol::CloudMessageType::kMapShare) return queue_share(cloud, pose, t);
+  if (info.type != protocol::CloudMessageType::kEgoScan || info.sender_id != kEgoSenderId) {
+    ++counters_.clouds_rejected;
+    return kind(CloudKind::kRejected);
   }
   for (std::uint32_t i = 0; i < n; ++i) {
     points_[i] = Vec3f(cloud.xyz[3u * i], cloud.xyz[3u * i + 1], cloud.xyz[3u * i + 2]);
   }
   const std::span<const Vec3f> points(points_.data(), n);
   begin_verification_period();  // an ego scan (used or refused) is the period boundary
-  if (info.type != protocol::CloudMessageType::kEgoScan || info.sender_id != kEgoSenderId) {
-    ++counters_.clouds_rejected;
-    return kind(CloudKind::kRejected);
-  }
   // Plausible time: near the local clock and newer than the last accepted scan. A refused scan is
   // counted and leaves no trace, so it cannot freeze the scans after it.
   const std::int64_t stamp = static_cast<std::int64_t>(info.timestamp_ns & 0x7FFFFFFFFFFFFFFFull);
@@ -260,11 +283,19 @@ DecodedCloud InputDecoder::decode_completed() {
 
 DecodedCloud InputDecoder::next_verified_share() {
   DecodedCloud out;
-  if (queue_count_ == 0 || verifications_this_period_ >= kMaxSignatureVerificationsPerPeriod) return out;
-  const std::size_t at = queue_head_;
-  queue_head_ = (queue_head_ + 1) % kShareVerifyQueueCapacity;
-  --queue_count_;
-  ++verifications_this_period_;
+  std::size_t at = 0;
+  for (std::size_t k = 0; k < kShareVerifyQueueCapacity; ++k) {  // skips shares refused for their time
+    if (!schedule_.release(at)) return out;
+    QueuedShare& q = queue_[at];
+    if (!q.judged) {  // completed after this period's boundary was opened: judged by that boundary
+      q.judged = true;
+      q.judge_time_ns = period_time_ns_;
+    }
+    if (verifier_.check_time(q.job, q.judge_time_ns).verdict == trust::ShareVerdict::kAccepted) break;
+    ++counters_.shares_untrusted;
+    schedule_.refund();  // no ECDSA was spent on it
+    if (k + 1 == kShareVerifyQueueCapacity) return out;
+  }
   ++counters_.signature_verifications;
   const QueuedShare& q = queue_[at];
   const trust::ShareVerifyResult verdict = verifier_.complete(q.job);

@@ -17,6 +17,7 @@
 #include "firmware/protocol/can_messages.hpp"
 #include "firmware/protocol/pointcloud_udp.hpp"
 #include "firmware/trust/map_share_verifier.hpp"
+#include "firmware/wire/share_schedule.hpp"
 #include "v2xloc/algo/core/config.hpp"
 #include "v2xloc/algo/localization/localizer.hpp"
 
@@ -26,18 +27,6 @@ inline constexpr std::size_t kReassemblySlots = 4;                 // clouds in 
 inline constexpr std::size_t kMaxCloudPoints = config::kMaxScanPoints;
 inline constexpr std::size_t kMaxCloudFragments = 2048;            // >= 131072 / 143 points
 using CloudReassembler = protocol::StaticPointCloudReassembler<kReassemblySlots, kMaxCloudPoints, kMaxCloudFragments>;
-
-// Signature checks per period (one ego scan = one 10 Hz period of 100 M instructions on the
-// A53-class target). Measured (callgrind, host, 16 000-point share, tools/bench/share_cost.cpp):
-// ECDSA P-256 verify 11.9 M instructions; hashing the share's wire bytes (6.3 M) is paid fragment
-// by fragment as they arrive, not here. 2 verifies = 23.7 M, a quarter of the period; with six
-// sources sending at once the period's trust work is 6 x 6.3 + 2 x 11.9 = 62 M (all six verified
-// at once: 109 M, over budget), the other four follow in the next two periods.
-inline constexpr std::size_t kMaxSignatureVerificationsPerPeriod = 2;
-// Completed, admitted shares waiting for their ECDSA verification. 4 = two periods of backlog at
-// kMaxSignatureVerificationsPerPeriod; overflow drops the OLDEST waiting share (counted: a fresher
-// share from the same sources is worth more to map fusion).
-inline constexpr std::size_t kShareVerifyQueueCapacity = 4;
 
 enum class CanInputKind : std::uint8_t {
   kVehicle,       // decoded a VehicleInput
@@ -127,17 +116,24 @@ class InputDecoder {
   // The cloud the last datagram completed, as a localizer input (kNone when there is none; a
   // cloud is returned once). A map share is returned only when the verifier accepted it; its
   // source id and agent flag come from the provisioned trust list, not from the header.
-  // A map share that passes the cheap checks is queued (kMapQueued); an ego scan (kEgoScan or
-  // kEgoRejected) opens a new verification period.
+  // A map share that passes the checks that need no clock is queued (kMapQueued); an ego scan
+  // (kEgoScan or kEgoRejected) opens a new verification period at the local time of its completion.
   DecodedCloud decode_completed();
+  // The same, with the local (disciplined) clock read again after the caller drained the CAN
+  // frames received before the cloud's last fragment (the emulated clock moves with them).
+  DecodedCloud decode_completed(std::int64_t local_time_ns);
   // Period boundary work: the next queued share, verified (kMapCloud or kRejected), oldest first;
   // kNone when the queue is empty or this period already ran kMaxSignatureVerificationsPerPeriod
-  // verifications. Callers drain it when an ego scan completes, before applying the scan, so
-  // verified shares reach map fusion before the scan. Points stay valid until the next call of
-  // decode_completed() or next_verified_share().
+  // verifications. Each share's generation time is judged against the local clock of the first
+  // period boundary after it completed (a share refused for its time costs no verification and
+  // is not returned: counted). Callers drain it when an ego scan completes, before applying the
+  // scan, so verified shares reach map fusion before the scan. Points stay valid until the next
+  // call of decode_completed() or next_verified_share().
   DecodedCloud next_verified_share();
-  void begin_verification_period() { verifications_this_period_ = 0; }
-  std::size_t shares_waiting() const { return queue_count_; }
+  // Opens a verification period at local_time_ns (decode_completed() does this for ego scans).
+  void begin_verification_period(std::int64_t local_time_ns);
+  void begin_verification_period() { begin_verification_period(completed_local_time_ns_); }
+  std::size_t shares_waiting() const { return schedule_.waiting(); }
   std::size_t expire(std::int64_t now_ns) {
     verifier_.expire(now_ns);
     return reassembler_.expire(now_ns);
@@ -154,6 +150,7 @@ class InputDecoder {
   // The fix closed by the time/DOP frame, from the stored position, status and velocity frames.
   GnssInput assemble_gnss_fix(double t) const;
   bool pose_to_matrix(const protocol::SensorPose& pose, Mat4d& out) const;
+  DecodedCloud queue_share(const protocol::ReassembledCloud& cloud, const Mat4d& pose, double t);
   // Rolling counters of the frames that carry one (0x120, 0x131, 0x133): a repeat is dropped.
   bool counter_ok(protocol::RollingCounterMonitor& monitor, std::uint8_t counter);
 
@@ -174,12 +171,13 @@ class InputDecoder {
     double t = 0.0;
     Mat4d world_T_sensor = Mat4d::Identity();
     std::uint32_t point_count = 0;
+    bool judged = false;             // judge_time_ns is set
+    std::int64_t judge_time_ns = 0;  // local clock of the first period boundary after completion
   };
   std::array<QueuedShare, kShareVerifyQueueCapacity> queue_{};
   std::array<std::array<Vec3f, kMaxCloudPoints>, kShareVerifyQueueCapacity> queue_points_{};
-  std::size_t queue_head_ = 0;
-  std::size_t queue_count_ = 0;
-  std::size_t verifications_this_period_ = 0;
+  ShareSchedule schedule_{};
+  std::int64_t period_time_ns_ = 0;  // local clock of the latest period boundary
   protocol::RollingCounterMonitor vehicle_counter_{}, gnss_status_counter_{}, gnss_velocity_counter_{};
 
   protocol::GnssPosition gnss_position_{};

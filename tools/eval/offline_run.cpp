@@ -13,6 +13,7 @@
 #endif
 
 #include "firmware/wire/input_decoder.hpp"
+#include "firmware/wire/share_schedule.hpp"
 #include "firmware/wire/wire_conventions.hpp"
 #include "firmware/protocol/can_messages.hpp"
 #include "host_sim/cloud_io/point_cloud.hpp"
@@ -125,7 +126,14 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
   auto decoder = std::make_unique<firmware::InputDecoder>(0);
   bool has_gnss = false;
   Eigen::Vector3d gnss_body = Eigen::Vector3d::Zero();
-  cloud_io::PointCloud cloud, scan;
+  // Map clouds waiting for their period (the firmware's verification schedule), by schedule slot.
+  struct WaitingCloud {
+    const sim::MapCloudInfo* info = nullptr;
+    cloud_io::PointCloud cloud;
+  };
+  firmware::ShareSchedule schedule;
+  std::vector<WaitingCloud> waiting(firmware::ShareSchedule::kCapacity);
+  cloud_io::PointCloud scan;
   std::vector<Vec3f> scan_points;
   std::vector<float> scan_times;
   sim::Image16 disparity;
@@ -166,10 +174,19 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
     stages.mark(LocalizerStage::kIdle);
     rec.has_gnss = has_gnss;
     rec.gnss_body = gnss_body;
-    // 2. Map clouds up to t.
+    // 2. Map clouds up to t, on the firmware's share schedule (firmware/wire/share_schedule.hpp):
+    //    queued as they arrive, at most kMaxSignatureVerificationsPerPeriod reach the map per period.
     for (; next_cloud < clouds.size() && clouds[next_cloud].stamp <= t + 1e-9; ++next_cloud) {
-      const sim::MapCloudInfo& info = clouds[next_cloud];
-      if (!reader.load_map_cloud(info, cloud, error)) return false;
+      const firmware::ShareSchedule::Admission admission = schedule.admit();
+      if (admission.dropped_oldest) ++stats.map_clouds_dropped;
+      waiting[admission.slot].info = &clouds[next_cloud];
+      if (!reader.load_map_cloud(clouds[next_cloud], waiting[admission.slot].cloud, error)) return false;
+    }
+    schedule.begin_period();
+    std::size_t slot = 0;
+    for (std::size_t k = 0; k < firmware::kMaxSignatureVerificationsPerPeriod && schedule.release(slot); ++k) {
+      const sim::MapCloudInfo& info = *waiting[slot].info;
+      const cloud_io::PointCloud& cloud = waiting[slot].cloud;
       MapCloudInput in;
       if (!source_id_of(info, in.source_id, error)) return false;
       in.is_agent = info.kind == "agent";

@@ -1,6 +1,8 @@
 // Runs the localizer over a recording in process, in the canonical event order (per frame: CAN
 // frames up to the frame stamp, then map clouds up to it, then the ego scan), and keeps one
-// record per frame for the evaluation.
+// record per frame for the evaluation. Map clouds reach the localizer on the firmware's share
+// schedule (at most two per period, a queue of four), so both paths build the same map in the
+// same periods; they differ by the firmware's 4 mm quantization.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -52,6 +54,7 @@ struct RunStats {
   std::size_t can_decode_errors = 0;
   std::size_t map_clouds = 0;
   std::size_t map_clouds_rejected = 0;
+  std::size_t map_clouds_dropped = 0;    // waited beyond the share queue (the firmware's schedule)
   std::vector<StageMs> period_stage_ms;  // one per frame when RunOptions::timing
 };
 

@@ -281,6 +281,44 @@ inline std::vector<MessageBinding> message_bindings() {
                       {"CanRxErrors", m.can_rx_errors}, {"UdpDropped", m.udp_dropped}, {"Counter", m.counter}};
                  return st;
                }});
+  b.push_back({kTrustRejectionsId,
+               [](const Values& v, PackStats* s) {
+                 TrustRejections m;
+                 m.unknown_signer = as<std::uint8_t>(v, "UnknownSigner");
+                 m.bad_signature = as<std::uint8_t>(v, "BadSignature");
+                 m.too_old = as<std::uint8_t>(v, "TooOld");
+                 m.future = as<std::uint8_t>(v, "Future");
+                 m.replay = as<std::uint8_t>(v, "Replay");
+                 m.queue_overflow = as<std::uint8_t>(v, "QueueOverflow");
+                 m.counter = as<std::uint8_t>(v, "Counter");
+                 return pack(m, s);
+               },
+               [](const CanFrame& f, Values& v) {
+                 TrustRejections m;
+                 const auto st = unpack(f, m);
+                 v = {{"UnknownSigner", m.unknown_signer}, {"BadSignature", m.bad_signature}, {"TooOld", m.too_old},
+                      {"Future", m.future}, {"Replay", m.replay}, {"QueueOverflow", m.queue_overflow},
+                      {"Counter", m.counter}};
+                 return st;
+               }});
+  b.push_back({kInputGuardsId,
+               [](const Values& v, PackStats* s) {
+                 InputGuards m;
+                 m.can_crc_rejected = as<std::uint16_t>(v, "CanCrcRejected");
+                 m.can_counter_rejected = as<std::uint16_t>(v, "CanCounterRejected");
+                 m.ego_time_rejected = as<std::uint16_t>(v, "EgoTimeRejected");
+                 m.missing_signature = as<std::uint16_t>(v, "MissingSignature");
+                 m.counter = as<std::uint8_t>(v, "Counter");
+                 return pack(m, s);
+               },
+               [](const CanFrame& f, Values& v) {
+                 InputGuards m;
+                 const auto st = unpack(f, m);
+                 v = {{"CanCrcRejected", m.can_crc_rejected}, {"CanCounterRejected", m.can_counter_rejected},
+                      {"EgoTimeRejected", m.ego_time_rejected}, {"MissingSignature", m.missing_signature},
+                      {"Counter", m.counter}};
+                 return st;
+               }});
   return b;
 }
 

@@ -118,9 +118,13 @@ TEST(MapShareVerifier, EveryRejectionIsCountedByReason) {
   // A provisioned agent key claiming an infrastructure sender id.
   v.on_signature_datagram(f.signed_datagram(f.agent_priv, f.agent_pub, gen), 0);
   expect(ShareVerdict::kSenderMismatch, c.sender_mismatch);
-  // Too old / from the future by the local clock.
+  // Too old / from the future by the local clock (the old cloud stamped as old as its signature:
+  // the stamp-skew check runs first and needs no clock).
+  const std::uint64_t stamp = f.cloud.info.timestamp_ns;
+  f.cloud.info.timestamp_ns = static_cast<std::uint64_t>(kNow - 1'500'000'000);
   v.on_signature_datagram(f.signed_datagram(f.infra_priv, f.infra_pub, kNow - 1'500'000'000), 0);
   expect(ShareVerdict::kTooOld, c.too_old);
+  f.cloud.info.timestamp_ns = stamp;
   v.on_signature_datagram(f.signed_datagram(f.infra_priv, f.infra_pub, kNow + 41'000'000), 0);
   expect(ShareVerdict::kFuture, c.future);
   v.on_signature_datagram(f.signed_datagram(f.infra_priv, f.infra_pub, kNow + 39'000'000), 0);
@@ -147,8 +151,8 @@ TEST(MapShareVerifier, EveryRejectionIsCountedByReason) {
   EXPECT_EQ(c.accepted, 1u);
 }
 
-// admit() then complete(), as the decoder's queue does: freshness is judged at admission, so a job
-// completed later still passes; two jobs of one signer completed newest first leave the older one
+// admit(), check_time() then complete(), as the decoder's queue does: freshness is judged once, at
+// the first period boundary, so a job completed later still passes; two jobs of one signer completed newest first leave the older one
 // a replay (the replay check runs again at completion); the digest binds the wire bytes.
 TEST(MapShareVerifier, AdmittedJobsAreCompletedLaterAndRecheckedForReplay) {
   Fixture f;
@@ -158,11 +162,18 @@ TEST(MapShareVerifier, AdmittedJobsAreCompletedLaterAndRecheckedForReplay) {
   VerificationJob older, newer;
   f.cloud.info.frame_seq = 7;
   v.on_signature_datagram(f.signed_datagram(f.infra_priv, f.infra_pub, kNow - 2'000'000), 0);
-  ASSERT_EQ(v.admit(f.cloud.info, f.digest(), kNow, older).verdict, ShareVerdict::kAccepted);
+  ASSERT_EQ(v.admit(f.cloud.info, f.digest(), older).verdict, ShareVerdict::kAccepted);
   f.cloud.info.frame_seq = 8;
   v.on_signature_datagram(f.signed_datagram(f.infra_priv, f.infra_pub, kNow - 1'000'000), 0);
-  ASSERT_EQ(v.admit(f.cloud.info, f.digest(), kNow, newer).verdict, ShareVerdict::kAccepted);
+  ASSERT_EQ(v.admit(f.cloud.info, f.digest(), newer).verdict, ShareVerdict::kAccepted);
   EXPECT_EQ(v.counters().accepted, 0u) << "admission runs no ECDSA";
+  EXPECT_EQ(v.check_time(older, kNow).verdict, ShareVerdict::kAccepted);
+  EXPECT_EQ(v.check_time(newer, kNow + 100'000'000).verdict, ShareVerdict::kAccepted);
+  // The same jobs judged at a clock 1.1 s later, or 50 ms earlier than their generation: refused.
+  EXPECT_EQ(v.check_time(older, kNow + 1'100'000'000).verdict, ShareVerdict::kTooOld);
+  EXPECT_EQ(v.check_time(newer, kNow - 1'000'000 - 50'000'000).verdict, ShareVerdict::kFuture);
+  EXPECT_EQ(v.counters().too_old, 1u);
+  EXPECT_EQ(v.counters().future, 1u);
   EXPECT_EQ(v.complete(newer).verdict, ShareVerdict::kAccepted);
   EXPECT_EQ(v.complete(older).verdict, ShareVerdict::kReplay);
   EXPECT_EQ(v.counters().accepted, 1u);

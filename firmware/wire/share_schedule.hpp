@@ -1,0 +1,78 @@
+// When a map share reaches map fusion: the firmware checks at most
+// kMaxSignatureVerificationsPerPeriod signatures per 10 Hz period and keeps at most
+// kShareVerifyQueueCapacity shares waiting (full: the oldest gives way). The in-process evaluator
+// has no signatures to check but hands its clouds to the localizer on the same schedule, so both
+// build the same map in the same periods. This class is that schedule and nothing else: a ring of
+// slot indices; each user keeps its own payload per slot. Allocation-free, bounded.
+#pragma once
+
+#include <cstddef>
+
+namespace v2xloc::firmware {
+
+// Signature checks per period (one ego scan = one 10 Hz period of 100 M instructions on the
+// A53-class target). Measured (callgrind, host, 16 000-point share, tools/bench/share_cost.cpp):
+// ECDSA P-256 verify 11.9 M instructions; hashing the share's wire bytes (6.3 M) is paid fragment
+// by fragment as they arrive, not here. 2 verifies = 23.7 M, a quarter of the period; with six
+// sources sending at once the period's trust work is 6 x 6.3 + 2 x 11.9 = 62 M (all six verified
+// at once: 109 M, over budget), the other four follow in the next two periods.
+inline constexpr std::size_t kMaxSignatureVerificationsPerPeriod = 2;
+// Completed, admitted shares waiting for their ECDSA verification. 4 = two periods of backlog at
+// kMaxSignatureVerificationsPerPeriod; overflow drops the OLDEST waiting share (counted: a fresher
+// share from the same sources is worth more to map fusion).
+inline constexpr std::size_t kShareVerifyQueueCapacity = 4;
+
+template <std::size_t Capacity, std::size_t PerPeriod>
+class SharePeriodSchedule {
+  static_assert(Capacity > 0 && PerPeriod > 0);
+
+ public:
+  static constexpr std::size_t kCapacity = Capacity;
+  static constexpr std::size_t kPerPeriod = PerPeriod;
+
+  struct Admission {
+    std::size_t slot = 0;         // where the caller stores the share's payload
+    bool dropped_oldest = false;  // the queue was full: the oldest waiting share was dropped
+  };
+
+  // A share arrived: the slot to fill (it is released after every share admitted before it).
+  Admission admit() {
+    Admission a;
+    if (count_ == Capacity) {
+      head_ = (head_ + 1) % Capacity;
+      --count_;
+      a.dropped_oldest = true;
+    }
+    a.slot = (head_ + count_) % Capacity;
+    ++count_;
+    return a;
+  }
+  // A period boundary (an ego scan): the per-period budget starts again.
+  void begin_period() { released_ = 0; }
+  // The oldest waiting share, if this period's budget allows one more; false otherwise.
+  bool release(std::size_t& slot) {
+    if (count_ == 0 || released_ >= PerPeriod) return false;
+    slot = head_;
+    head_ = (head_ + 1) % Capacity;
+    --count_;
+    ++released_;
+    return true;
+  }
+  // The released share needed no budget after all (refused by a cheap check before its
+  // signature was verified): the period may release one more.
+  void refund() {
+    if (released_ > 0) --released_;
+  }
+  std::size_t waiting() const { return count_; }
+  // i-th waiting share (0 = oldest), i < waiting().
+  std::size_t waiting_slot(std::size_t i) const { return (head_ + i) % Capacity; }
+
+ private:
+  std::size_t head_ = 0;
+  std::size_t count_ = 0;
+  std::size_t released_ = 0;
+};
+
+using ShareSchedule = SharePeriodSchedule<kShareVerifyQueueCapacity, kMaxSignatureVerificationsPerPeriod>;
+
+}  // namespace v2xloc::firmware

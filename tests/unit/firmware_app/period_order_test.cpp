@@ -1,0 +1,257 @@
+// The firmware's input order does not depend on socket read timing: a map share received on the
+// V2X endpoint before an ego scan reaches map fusion before that scan even when the ego endpoint
+// happened to be read first, and its freshness is judged by the clock of the period boundary, not
+// by how far the emulated clock had moved when its datagrams were read. Also the share schedule
+// shared by the firmware and the in-process evaluator.
+#include <gtest/gtest.h>
+
+#include <deque>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "firmware/app/emulated_wiring.hpp"
+#include "firmware/app/firmware_app.hpp"
+#include "firmware/wire/share_schedule.hpp"
+#include "firmware/wire/wire_conventions.hpp"
+#include "share_signing.hpp"
+
+namespace v2xloc::firmware {
+namespace {
+
+constexpr std::int64_t kEpoch = 1'700'000'000'000'000'000;
+
+using Datagram = std::vector<std::uint8_t>;
+
+// A datagram endpoint fed by the test. `gate` (optional) holds this link's datagrams back until
+// another link has been read `after_reads` times: the V2X share that "arrives" while the firmware
+// is busy reading the ego socket.
+class ScriptedLink final : public hal::DatagramLink {
+ public:
+  hal::Status send(std::span<const std::uint8_t>) override { return hal::Status::kOk; }
+  hal::Status send_to(const hal::Ipv4Endpoint&, std::span<const std::uint8_t>) override { return hal::Status::kOk; }
+  hal::Status receive(std::span<std::uint8_t> buffer, hal::DatagramInfo& info) override {
+    ++reads;
+    if (gate != nullptr && gate->reads < after_reads) return hal::Status::kWouldBlock;
+    if (queue.empty()) return hal::Status::kWouldBlock;
+    const Datagram d = queue.front();
+    queue.pop_front();
+    if (d.size() > buffer.size()) return hal::Status::kBufferTooSmall;
+    std::copy(d.begin(), d.end(), buffer.begin());
+    info.size = d.size();
+    return hal::Status::kOk;
+  }
+  std::deque<Datagram> queue;
+  const ScriptedLink* gate = nullptr;
+  int after_reads = 0;
+  int reads = 0;
+};
+
+// A CAN bus fed by the test (the SimTimeCanBus on top turns sim-time frames into clock steps).
+class ScriptedCan final : public hal::CanBus {
+ public:
+  hal::Status send(const hal::CanFrame& f) override {
+    sent.push_back(f);
+    return hal::Status::kOk;
+  }
+  std::vector<hal::CanFrame> sent;
+  hal::Status receive(hal::CanRxFrame& out) override {
+    if (gate != nullptr && gate->reads < after_reads) return hal::Status::kWouldBlock;
+    if (queue.empty()) return hal::Status::kWouldBlock;
+    out = hal::CanRxFrame{};
+    out.frame = queue.front();
+    queue.pop_front();
+    return hal::Status::kOk;
+  }
+  hal::Status set_filters(std::span<const hal::CanFilter>) override { return hal::Status::kOk; }
+  hal::Status accept_all() override { return hal::Status::kOk; }
+  hal::Status set_error_mask(std::uint32_t) override { return hal::Status::kOk; }
+  hal::CanCounters counters() const override { return {}; }
+  std::deque<hal::CanFrame> queue;
+  const ScriptedLink* gate = nullptr;
+  int after_reads = 0;
+};
+
+// Records the order of the localizer calls.
+class RecordingPort final : public LocalizerPort {
+ public:
+  void on_vehicle(const VehicleInput&) override { calls += "v"; }
+  void on_gnss(const GnssInput&) override { calls += "g"; }
+  MapInsertResult on_map_cloud(const MapCloudInput&) override {
+    calls += "m";
+    return MapInsertResult{};
+  }
+  const LocalizerFrameOutput& on_ego_scan(const EgoScanInput&) override {
+    calls += "e";
+    return output_;
+  }
+  std::string calls;
+
+ private:
+  LocalizerFrameOutput output_{};
+};
+
+std::vector<Datagram> cloud(protocol::CloudMessageType type, std::uint32_t sender, std::int64_t t_ns) {
+  std::vector<float> xyz;
+  for (int i = 0; i < 600; ++i) xyz.insert(xyz.end(), {0.01f * i, 5.0f - 0.01f * i, 1.0f});
+  protocol::CloudFrameInfo info;
+  info.type = type;
+  info.sender_id = sender;
+  info.timestamp_ns = static_cast<std::uint64_t>(kEpoch + t_ns);
+  info.scale_m = kCloudScaleM;
+  protocol::PointCloudFragmenter f;
+  EXPECT_EQ(f.begin(info, protocol::CloudPointsView{xyz, {}, {}}, 600), protocol::CloudStatus::kOk);
+  std::vector<Datagram> out;
+  Datagram buf(600);
+  std::size_t n = 0;
+  while (f.next(buf, n) == protocol::CloudStatus::kOk) out.emplace_back(buf.begin(), buf.begin() + static_cast<long>(n));
+  return out;
+}
+
+// One period at kT: a signed share and an ego scan, both stamped kT, and the sim-time frame that
+// moves the emulated clock to kT. The CAN frame becomes readable once the ego endpoint was read
+// (the replayer sends it just before the scan); the share's datagrams once the ego endpoint was
+// read `share_after_ego_reads` times. Returns the localizer calls ("m" map, "e" ego scan).
+struct PeriodOutcome {
+  std::string calls;
+  std::uint64_t accepted = 0, future = 0, published = 0;
+  std::int64_t clock_ns = 0;
+};
+
+PeriodOutcome run_one_period(int share_after_ego_reads) {
+  constexpr std::int64_t kT = 100'000'000;
+  hal::SimClock clock(0, kEpoch);
+  ScriptedCan can;
+  SimTimeCanBus sim_can(can, clock);
+  ScriptedLink v2x, ego;
+  const auto share = cloud(protocol::CloudMessageType::kMapShare, kInfraSenderBase, kT);
+  v2x.queue.push_back(test::sign_share(share, kInfraSenderBase, static_cast<std::uint64_t>(kEpoch + kT)));
+  for (const auto& d : share) v2x.queue.push_back(d);
+  v2x.gate = &ego;
+  v2x.after_reads = share_after_ego_reads;
+  for (const auto& d : cloud(protocol::CloudMessageType::kEgoScan, kEgoSenderId, kT)) ego.queue.push_back(d);
+  can.queue.push_back(make_sim_time_frame(kT));
+  can.gate = &ego;
+  can.after_reads = 1;
+
+  auto decoder = std::make_unique<InputDecoder>(kEpoch);
+  trust::TrustList list;
+  test::add_signer(list, kInfraSenderBase, trust::SignerRole::kInfrastructure);
+  decoder->provision_trust(list);
+  RecordingPort port;
+  FirmwareApp app(FirmwareHal{sim_can, v2x, clock, nullptr, nullptr, &ego}, *decoder, port);
+  EXPECT_EQ(app.start(), hal::Status::kOk);
+  for (int k = 0; k < 10 && app.counters().frames_published == 0; ++k) app.poll_once();
+  PeriodOutcome out;
+  out.calls = port.calls;
+  out.accepted = app.decoder().verifier().counters().accepted;
+  out.future = app.decoder().verifier().counters().future;
+  out.published = app.counters().frames_published;
+  out.clock_ns = clock.monotonic_ns();
+  return out;
+}
+
+// The share becomes readable only while the firmware reads the scan (it looked at the V2X socket
+// too early): it still reaches map fusion before the scan of its period.
+TEST(FirmwarePeriodOrder, ShareReadAfterTheScanStartedIsFusedBeforeTheScan) {
+  const PeriodOutcome o = run_one_period(2);
+  EXPECT_EQ(o.published, 1u);
+  EXPECT_EQ(o.calls, "me");
+  EXPECT_EQ(o.accepted, 1u);
+  EXPECT_EQ(o.clock_ns, 100'000'000);
+}
+
+// The share completes while the emulated clock still reads 0 (its sim-time frame not read yet),
+// 100 ms before its generation time: judged by the boundary's clock, it is fresh, as offline.
+TEST(FirmwarePeriodOrder, ShareFreshnessIsJudgedByThePeriodBoundaryClock) {
+  const PeriodOutcome o = run_one_period(0);
+  EXPECT_EQ(o.published, 1u);
+  EXPECT_EQ(o.calls, "me");
+  EXPECT_EQ(o.accepted, 1u);
+  EXPECT_EQ(o.future, 0u);
+}
+
+// What was refused reaches the vehicle bus: with the heartbeat, 0x301 (trust layer, per reason)
+// and 0x302 (input guards) carry the counts.
+TEST(FirmwareSecurityDiagnostics, HeartbeatIsFollowedByTheRefusalCounts) {
+  hal::SimClock clock(0, kEpoch);
+  ScriptedCan can;
+  SimTimeCanBus sim_can(can, clock);
+  ScriptedLink v2x, ego;
+  // An unsigned share, a vehicle frame with a broken CRC, the same vehicle frame twice (its
+  // rolling counter does not advance), an ego scan dated 10 s ahead, then 1.1 s of time.
+  for (const auto& d : cloud(protocol::CloudMessageType::kMapShare, kInfraSenderBase, 0)) v2x.queue.push_back(d);
+  protocol::VehicleMotion vm;
+  vm.speed_valid = vm.yaw_rate_valid = true;
+  hal::CanFrame good = protocol::pack(vm), bad = good;
+  bad.data[0] ^= 0x01;
+  can.queue = {make_sim_time_frame(50'000'000), bad, good, good};
+  for (const auto& d : cloud(protocol::CloudMessageType::kEgoScan, kEgoSenderId, 10'000'000'000)) ego.queue.push_back(d);
+
+  auto decoder = std::make_unique<InputDecoder>(kEpoch);
+  RecordingPort port;
+  FirmwareApp app(FirmwareHal{sim_can, v2x, clock, nullptr, nullptr, &ego}, *decoder, port);
+  ASSERT_EQ(app.start(), hal::Status::kOk);
+  for (int k = 0; k < 10 && app.counters().frames_published == 0; ++k) app.poll_once();
+  ASSERT_EQ(app.counters().frames_published, 1u);
+  can.queue.push_back(make_sim_time_frame(1'100'000'000));
+  app.poll_once();
+  ASSERT_EQ(app.counters().heartbeats, 1u);
+
+  int found = 0;
+  for (std::size_t i = 0; i < can.sent.size(); ++i) {
+    if (can.sent[i].id == protocol::kTrustRejectionsId) {
+      ASSERT_GT(i, 0u);
+      EXPECT_EQ(can.sent[i - 1].id, protocol::kHeartbeatId) << "sent right after the heartbeat";
+      protocol::TrustRejections t;
+      ASSERT_EQ(protocol::unpack(can.sent[i], t), protocol::DecodeStatus::kOk);
+      EXPECT_EQ(t.unknown_signer + t.bad_signature + t.too_old + t.future + t.replay + t.queue_overflow, 0);
+      ++found;
+    }
+    if (can.sent[i].id == protocol::kInputGuardsId) {
+      protocol::InputGuards g;
+      ASSERT_EQ(protocol::unpack(can.sent[i], g), protocol::DecodeStatus::kOk);
+      EXPECT_EQ(g.can_crc_rejected, 1u);
+      EXPECT_EQ(g.can_counter_rejected, 1u);
+      EXPECT_EQ(g.ego_time_rejected, 1u);
+      EXPECT_EQ(g.missing_signature, 1u);
+      ++found;
+    }
+  }
+  EXPECT_EQ(found, 2);
+}
+
+TEST(SharePeriodSchedule, KeepsTheNewestCapacityAndReleasesAtMostPerPeriodOldestFirst) {
+  SharePeriodSchedule<4, 2> s;
+  std::vector<std::size_t> slot_of(6);
+  int dropped = 0;
+  for (int k = 0; k < 6; ++k) {
+    const auto a = s.admit();
+    slot_of[static_cast<std::size_t>(k)] = a.slot;
+    dropped += a.dropped_oldest ? 1 : 0;
+  }
+  EXPECT_EQ(dropped, 2);
+  EXPECT_EQ(s.waiting(), 4u);
+  std::size_t slot = 99;
+  s.begin_period();
+  ASSERT_TRUE(s.release(slot));
+  EXPECT_EQ(slot, slot_of[2]);  // shares 0 and 1 gave way
+  ASSERT_TRUE(s.release(slot));
+  EXPECT_EQ(slot, slot_of[3]);
+  EXPECT_FALSE(s.release(slot)) << "budget of the period spent";
+  s.refund();  // the last one needed no verification after all
+  ASSERT_TRUE(s.release(slot));
+  EXPECT_EQ(slot, slot_of[4]);
+  EXPECT_FALSE(s.release(slot));
+  s.begin_period();
+  ASSERT_TRUE(s.release(slot));
+  EXPECT_EQ(slot, slot_of[5]);
+  EXPECT_FALSE(s.release(slot)) << "empty";
+  EXPECT_EQ(s.waiting(), 0u);
+  // The constants the firmware and the evaluator share.
+  static_assert(ShareSchedule::kCapacity == kShareVerifyQueueCapacity);
+  static_assert(ShareSchedule::kPerPeriod == kMaxSignatureVerificationsPerPeriod);
+}
+
+}  // namespace
+}  // namespace v2xloc::firmware
