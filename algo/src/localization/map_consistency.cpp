@@ -131,7 +131,7 @@ Vec3d MapConsistencyCheck::refine(const Vec3d& start, std::uint32_t& iterations)
 // Reference points in the candidate's occupied cells when displaced by `offset`.
 std::uint32_t MapConsistencyCheck::occupied_hits(const Vec3d& offset) const {
   std::uint32_t hits = 0;
-  for (const Vec3f& q : search_) hits += planes_.occupancy(q.cast<double>() + offset) != 0 ? 1u : 0u;
+  for (const Vec3f& q : search_) hits += planes_.occupied(q.cast<double>() + offset) ? 1u : 0u;
   return hits;
 }
 

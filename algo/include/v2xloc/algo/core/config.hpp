@@ -88,9 +88,9 @@ inline constexpr std::size_t kMapCheckCellSlots = kEmbeddedProfile ? 2048 : 3276
 inline constexpr std::size_t kMapCheckMaxExamined = 4096;
 inline constexpr std::size_t kMapCheckMaxPoints = 512;
 inline constexpr std::uint32_t kMapCheckMaxIterations = 10;
-// Far search: grid steps per side (x MapFusionParams::search_step 1 m = +-4 m) and points scored.
-inline constexpr std::uint32_t kMapCheckSearchSteps = 4;
-inline constexpr std::size_t kMapCheckSearchPoints = 256;
+// Far search: grid steps per side (x MapFusionParams::search_step 1 m = +-3 m) and points scored.
+inline constexpr std::uint32_t kMapCheckSearchSteps = 3;
+inline constexpr std::size_t kMapCheckSearchPoints = 128;
 
 // ---- Geodesy --------------------------------------------------------------------------------
 // Bowring's ECEF->geodetic iteration converges to 1e-14 rad in 2-3 steps for |h| < 1e5 m.
