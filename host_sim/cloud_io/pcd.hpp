@@ -52,9 +52,8 @@ bool write_quantised_pcd(const std::string& path, const PointCloud& cloud, const
 // written, or 0 unless the stream is valid, ends exactly at the end of `in` and fits `out`.
 bool zlib_compress(std::span<const std::uint8_t> in, std::vector<std::uint8_t>& out);
 std::size_t zlib_decompress(std::span<const std::uint8_t> in, std::span<std::uint8_t> out);
-// `in` holds values of `width` bytes; out[k * n + i] = byte k of value i (and back). Same sizes.
+// `in` holds n values of `width` bytes; out[k * n + i] = byte k of value i. Same sizes.
 void shuffle_bytes(std::span<const std::uint8_t> in, std::size_t width, std::span<std::uint8_t> out);
-void unshuffle_bytes(std::span<const std::uint8_t> in, std::size_t width, std::span<std::uint8_t> out);
 
 // LZF blocks as PCL's binary_compressed stores them, through the system liblzf. Returns the number
 // of bytes written to `out`, or 0 on corrupt input / output overflow / empty input.

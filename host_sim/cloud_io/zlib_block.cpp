@@ -38,10 +38,4 @@ void shuffle_bytes(std::span<const std::uint8_t> in, std::size_t width, std::spa
     for (std::size_t k = 0; k < width; ++k) out[k * n + i] = in[i * width + k];
 }
 
-void unshuffle_bytes(std::span<const std::uint8_t> in, std::size_t width, std::span<std::uint8_t> out) {
-  const std::size_t n = width == 0 ? 0 : in.size() / width;
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t k = 0; k < width; ++k) out[i * width + k] = in[k * n + i];
-}
-
 }  // namespace v2xloc::cloud_io
