@@ -1,7 +1,7 @@
 // v2xloc-firmware: the ECU application on Linux. Chooses the HAL backends (real: SocketCAN, UDP,
 // libgpiod, hidapi; --emulated: CAN over UDP on loopback, SimClock driven by the replayer,
 // scripted PPS), builds the static objects, prints their memory, and runs the poll loop.
-// Options (also as key=value lines in --config FILE): see usage() and firmware/README.md. main()
+// Options (also as key=value lines in --config FILE; CLI11): --help and firmware/README.md. main()
 // reads as its steps: options, origin, static objects, backends, loop, exit report.
 #include <poll.h>
 #include <sys/socket.h>
@@ -10,9 +10,13 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <cmath>
 #include <fstream>
-#include <map>
+#include <limits>
 #include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
 
 #include "firmware/app/alloc_counter.hpp"
 #include "firmware/app/emulated_wiring.hpp"
@@ -44,42 +48,6 @@ InputDecoder g_decoder;
 
 volatile std::sig_atomic_t g_stop = 0;
 void on_signal(int) { g_stop = 1; }
-
-int usage() {
-  std::fprintf(stderr,
-               "usage: v2xloc-firmware [--config FILE] [--emulated] [options]\n"
-               "  common:   --cloud-port N (UDP V2X map shares, default 47200; 0 = ephemeral)  --cloud-bind A.B.C.D\n"
-               "            --ego-port N (UDP ego scans, default 47201; 0 = ephemeral)  --ego-bind A.B.C.D\n"
-               "            --trust-list FILE (provisioned V2X signers; without it every map share is refused)\n"
-               "            --origin LAT,LON,ALT (required: the local ENU origin of the map and the poses)\n"
-               "            --epoch-ns N (Unix ns of localizer t = 0)\n"
-               "            --max-frames N (exit after N published frames)  --rcvbuf BYTES (default 33554432)\n"
-               "  real:     --can-iface can0 [--can-bring-up 1]  --pps-chip gpiochip0 --pps-line N\n"
-               "            --led-chip gpiochip0 --led-line N\n"
-               "  emulated: --can-port N (firmware's CAN-over-UDP port, 0 = ephemeral)  --can-peer-port N\n"
-               "            --pps 0|1 (scripted PPS, default 1)\n"
-               "Prints 'v2xloc-firmware: ready can=PORT cloud=PORT ego=PORT' once the sockets are bound.\n");
-  return 2;
-}
-
-bool load_config(const std::string& path, std::map<std::string, std::string>& kv) {
-  std::ifstream in(path);
-  if (!in) return false;
-  std::string line;
-  while (std::getline(in, line)) {
-    const auto hash = line.find('#');
-    if (hash != std::string::npos) line.resize(hash);
-    const auto eq = line.find('=');
-    if (eq == std::string::npos) continue;
-    auto trim = [](std::string s) {
-      const auto b = s.find_first_not_of(" \t\r");
-      const auto e = s.find_last_not_of(" \t\r");
-      return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
-    };
-    kv[trim(line.substr(0, eq))] = trim(line.substr(eq + 1));
-  }
-  return true;
-}
 
 void print_memory() {
   std::printf("v2xloc-firmware: localizer: %s\n", kSelectedLocalizerName);
@@ -144,58 +112,88 @@ void print_counters(const FirmwareApp& app) {
               (unsigned long long)r.over_capacity);
 }
 
-// ---- Options: command line and --config FILE, as key -> value. ----
+// ---- Options: command line, or `key=value` lines in --config FILE (the command line wins). ----
 struct Options {
-  std::map<std::string, std::string> kv;
   bool emulated = false;
-
-  bool has(const char* key) const { return kv.count(key) != 0; }
-  std::string get(const char* key, const char* fallback) const { return has(key) ? kv.at(key) : std::string(fallback); }
-  long long get_ll(const char* key, long long fallback) const {
-    return has(key) ? std::strtoll(kv.at(key).c_str(), nullptr, 0) : fallback;
-  }
+  std::string config;
+  int cloud_port = 47200, ego_port = 47201;
+  std::string cloud_bind, ego_bind;  // empty: 127.0.0.1 emulated, 0.0.0.0 real
+  std::string trust_list;
+  std::vector<double> origin;        // LAT,LON,ALT
+  long long epoch_ns = 0;
+  long long max_frames = 0;          // 0: no limit
+  int rcvbuf = 32 << 20;
+  // Real backends.
+  std::string can_iface = "can0";
+  int can_bring_up = 0;
+  std::string pps_chip = "gpiochip0", led_chip = "gpiochip0";
+  int pps_line = -1, led_line = -1;  // -1: not used
+  // Emulated backends.
+  int can_port = 47100, can_peer_port = 47101;
+  int pps = 1;
 };
 
-// Returns 0 when the options are complete, else the exit code (usage or unreadable config).
-int parse_options(int argc, char** argv, Options& options) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--emulated") {
-      options.emulated = true;
-      continue;
-    }
-    if (a == "-h" || a == "--help" || a.rfind("--", 0) != 0) return usage();
-    std::string key = a.substr(2), value;
-    const auto eq = key.find('=');
-    if (eq != std::string::npos) {
-      value = key.substr(eq + 1);
-      key.resize(eq);
-    } else if (i + 1 < argc) {
-      value = argv[++i];
-    } else {
-      return usage();
-    }
-    if (key != "config") {
-      options.kv[key] = value;
-    } else if (!load_config(value, options.kv)) {
-      std::fprintf(stderr, "v2xloc-firmware: cannot read config %s\n", value.c_str());
-      return 2;
-    }
-  }
-  if (options.has("emulated") && options.kv["emulated"] != "0") options.emulated = true;
-  return 0;
-}
+// A dotted IPv4 address the UDP backend accepts.
+const CLI::Validator kIpv4 = CLI::Validator(
+    [](std::string& text) {
+      std::uint32_t address = 0;
+      return hal::parse_ipv4(text.c_str(), address) ? std::string() : "want an IPv4 address A.B.C.D, got '" + text + "'";
+    },
+    "A.B.C.D");
 
-// The geodetic origin of the local ENU frame: option or config key `origin`, no built-in default
-// (a pose against a guessed origin would be silently wrong).
-bool read_origin(const Options& options, GeodeticOrigin& origin) {
-  double lat = 0.0, lon = 0.0, alt = 0.0;
-  if (!options.has("origin") || std::sscanf(options.kv.at("origin").c_str(), "%lf,%lf,%lf", &lat, &lon, &alt) != 3) {
-    std::fprintf(stderr, "v2xloc-firmware: --origin LAT,LON,ALT is required\n");
-    return false;
+// Returns -1 when the options are complete, else the exit code (0 for --help; 2 for a usage error,
+// an unreadable or unknown config entry, or a missing / bad --origin, with the message).
+int parse_options(int argc, char** argv, Options& o) {
+  CLI::App app{"The v2xloc ECU application: real backends (SocketCAN, UDP, libgpiod) or, with --emulated, CAN over\n"
+               "UDP on loopback and a clock driven by the replayer. Prints 'v2xloc-firmware: ready can=PORT\n"
+               "cloud=PORT ego=PORT' once the sockets are bound; every counter at exit (SIGINT/SIGTERM).",
+               "v2xloc-firmware"};
+  // A later value replaces an earlier one (the replayer's arguments, then the caller's extras).
+  app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+  app.set_config("--config", "", "key=value lines (e.g. origin=48.1374,11.5755,520); the command line wins")
+      ->check(CLI::ExistingFile)
+      ->type_name("FILE");
+  app.allow_config_extras(false);
+  const CLI::Range port(0, 65535);
+  app.add_flag("--emulated", o.emulated, "emulated backends for the host replay");
+  app.add_option("--origin", o.origin, "required: the local ENU origin of the map and the poses")
+      ->delimiter(',')
+      ->expected(3)
+      ->type_name("LAT,LON,ALT");
+  app.add_option("--cloud-port", o.cloud_port, "UDP port of the V2X map shares (0 = ephemeral)")->capture_default_str()->check(port);
+  app.add_option("--cloud-bind", o.cloud_bind, "address of the map-share socket")->check(kIpv4);
+  app.add_option("--ego-port", o.ego_port, "UDP port of the ego scans (0 = ephemeral)")->capture_default_str()->check(port);
+  app.add_option("--ego-bind", o.ego_bind, "address of the ego-scan socket")->check(kIpv4);
+  app.add_option("--trust-list", o.trust_list, "provisioned V2X signers; without it every map share is refused")
+      ->type_name("FILE");
+  app.add_option("--epoch-ns", o.epoch_ns, "Unix ns of localizer t = 0")->capture_default_str()
+      ->check(CLI::Range(0LL, std::numeric_limits<long long>::max()));
+  app.add_option("--max-frames", o.max_frames, "exit after N published frames (0: no limit)")->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--rcvbuf", o.rcvbuf, "socket receive buffer, bytes")->capture_default_str()->check(CLI::Range(4096, 1 << 30));
+  app.add_option("--can-iface", o.can_iface, "real: SocketCAN interface")->capture_default_str();
+  app.add_option("--can-bring-up", o.can_bring_up, "real: set the interface up (needs privileges)")->capture_default_str()
+      ->check(CLI::Range(0, 1));
+  app.add_option("--pps-chip", o.pps_chip, "real: GPIO chip of the PPS line")->capture_default_str();
+  app.add_option("--pps-line", o.pps_line, "real: PPS input line (absent: no PPS)")->check(CLI::Range(0, 65535));
+  app.add_option("--led-chip", o.led_chip, "real: GPIO chip of the status LED")->capture_default_str();
+  app.add_option("--led-line", o.led_line, "real: status LED line (absent: no LED)")->check(CLI::Range(0, 65535));
+  app.add_option("--can-port", o.can_port, "emulated: the firmware's CAN-over-UDP port (0 = ephemeral)")->capture_default_str()
+      ->check(port);
+  app.add_option("--can-peer-port", o.can_peer_port, "emulated: where CAN replies go")->capture_default_str()->check(port);
+  app.add_option("--pps", o.pps, "emulated: scripted PPS edges")->capture_default_str()->check(CLI::Range(0, 1));
+  try {
+    app.parse(argc, argv);
+    // No built-in default: a pose against a guessed origin would be silently wrong.
+    if (o.origin.size() != 3) throw CLI::ValidationError("--origin", "LAT,LON,ALT is required (three numbers)");
+    if (!(std::abs(o.origin[0]) <= 90.0 && std::abs(o.origin[1]) <= 180.0 && std::abs(o.origin[2]) <= 1e5))
+      throw CLI::ValidationError("--origin", "latitude within +-90, longitude within +-180, altitude within +-100 km");
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
   }
-  origin = make_geodetic_origin(lat, lon, alt);
-  return true;
+  if (o.cloud_bind.empty()) o.cloud_bind = o.emulated ? "127.0.0.1" : "0.0.0.0";
+  if (o.ego_bind.empty()) o.ego_bind = o.emulated ? "127.0.0.1" : "0.0.0.0";
+  return -1;
 }
 
 // ---- Backends: what main() hands the application, and what the exit report reads. ----
@@ -218,31 +216,25 @@ struct Backends {
 bool open_cloud_link(const Options& options, Backends& b) {
   static hal::UdpLink cloud_link;
   hal::UdpOptions o;
-  if (!hal::parse_ipv4(options.get("cloud-bind", options.emulated ? "127.0.0.1" : "0.0.0.0").c_str(), o.bind.address)) {
-    usage();
-    return false;
-  }
-  o.bind.port = static_cast<std::uint16_t>(options.get_ll("cloud-port", 47200));
+  hal::parse_ipv4(options.cloud_bind.c_str(), o.bind.address);  // checked by parse_options
+  o.bind.port = static_cast<std::uint16_t>(options.cloud_port);
   if (cloud_link.open(o) != hal::Status::kOk) {
     std::fprintf(stderr, "v2xloc-firmware: cloud UDP: %s\n", cloud_link.last_error());
     return false;
   }
-  force_receive_buffer(cloud_link.fd(), static_cast<int>(options.get_ll("rcvbuf", 32 << 20)));
+  force_receive_buffer(cloud_link.fd(), options.rcvbuf);
   b.cloud_link = &cloud_link;
   b.poll_fds[0] = cloud_link.fd();
   // Ego sensors on their own endpoint: the V2X socket never carries an ego scan.
   static hal::UdpLink ego_link;
   hal::UdpOptions e;
-  if (!hal::parse_ipv4(options.get("ego-bind", options.emulated ? "127.0.0.1" : "0.0.0.0").c_str(), e.bind.address)) {
-    usage();
-    return false;
-  }
-  e.bind.port = static_cast<std::uint16_t>(options.get_ll("ego-port", 47201));
+  hal::parse_ipv4(options.ego_bind.c_str(), e.bind.address);  // checked by parse_options
+  e.bind.port = static_cast<std::uint16_t>(options.ego_port);
   if (ego_link.open(e) != hal::Status::kOk) {
     std::fprintf(stderr, "v2xloc-firmware: ego UDP: %s\n", ego_link.last_error());
     return false;
   }
-  force_receive_buffer(ego_link.fd(), static_cast<int>(options.get_ll("rcvbuf", 32 << 20)));
+  force_receive_buffer(ego_link.fd(), options.rcvbuf);
   b.ego_link = &ego_link;
   b.poll_fds[3] = ego_link.fd();
   return true;
@@ -250,11 +242,11 @@ bool open_cloud_link(const Options& options, Backends& b) {
 
 // The provisioned trust list (--trust-list FILE), read at start-up (heap allowed here).
 bool provision_trust(const Options& options) {
-  if (!options.has("trust-list")) {
+  if (options.trust_list.empty()) {
     std::printf("v2xloc-firmware: no trust list: every V2X map share will be refused\n");
     return true;
   }
-  const std::string path = options.kv.at("trust-list");
+  const std::string& path = options.trust_list;
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     std::fprintf(stderr, "v2xloc-firmware: cannot read trust list %s\n", path.c_str());
@@ -281,9 +273,9 @@ bool open_emulated_backends(const Options& options, std::int64_t epoch_ns, Backe
   static hal::ScriptedGpioLine pps(sim_clock);
   static CountingLedLine led;
   hal::UdpOptions o;
-  o.bind.port = static_cast<std::uint16_t>(options.get_ll("can-port", 47100));
+  o.bind.port = static_cast<std::uint16_t>(options.can_port);
   o.has_peer = true;
-  o.peer = hal::Ipv4Endpoint{0x7F000001u, static_cast<std::uint16_t>(options.get_ll("can-peer-port", 47101))};
+  o.peer = hal::Ipv4Endpoint{0x7F000001u, static_cast<std::uint16_t>(options.can_peer_port)};
   o.receive_buffer_bytes = 1 << 20;
   if (can_link.open(o) != hal::Status::kOk) {
     std::fprintf(stderr, "v2xloc-firmware: emulated CAN UDP: %s\n", can_link.last_error());
@@ -294,7 +286,7 @@ bool open_emulated_backends(const Options& options, std::int64_t epoch_ns, Backe
   b.can_link = &can_link;
   b.can = &sim_time_can;
   b.clock = &sim_clock;
-  if (options.get_ll("pps", 1) != 0) {
+  if (options.pps != 0) {
     script_pps_edges(pps, epoch_ns, 3600LL * 1'000'000'000);  // one hour of edges, at start-up
     b.pps = &pps;
   }
@@ -323,10 +315,10 @@ bool open_real_backends(const Options& options, Backends& b) {
   static hal::LinuxClock linux_clock;
   static hal::SocketCanBus socketcan;
   static hal::GpiodLine pps, led;
-  static const std::string iface = options.get("can-iface", "can0");
+  static const std::string iface = options.can_iface;
   hal::SocketCanOptions o;
   o.interface = iface.c_str();
-  o.bring_up = options.get_ll("can-bring-up", 0) != 0;
+  o.bring_up = options.can_bring_up != 0;
   if (socketcan.open(o) != hal::Status::kOk) {
     std::fprintf(stderr, "v2xloc-firmware: SocketCAN %s: %s\n", iface.c_str(), socketcan.last_error());
     return false;
@@ -334,16 +326,16 @@ bool open_real_backends(const Options& options, Backends& b) {
   b.can = &socketcan;
   b.clock = &linux_clock;
   b.poll_fds[1] = socketcan.fd();
-  if (options.has("pps-line")) {
-    if (!open_gpio_line(pps, options.get("pps-chip", "gpiochip0"), options.get_ll("pps-line", 0),
+  if (options.pps_line >= 0) {
+    if (!open_gpio_line(pps, options.pps_chip, options.pps_line,
                         hal::GpiodLineOptions::Mode::kEdgeInput, "PPS")) {
       return false;
     }
     b.pps = &pps;
     b.poll_fds[2] = pps.event_fd();
   }
-  if (options.has("led-line")) {
-    if (!open_gpio_line(led, options.get("led-chip", "gpiochip0"), options.get_ll("led-line", 0),
+  if (options.led_line >= 0) {
+    if (!open_gpio_line(led, options.led_chip, options.led_line,
                         hal::GpiodLineOptions::Mode::kOutput, "LED")) {
       return false;
     }
@@ -385,10 +377,9 @@ void print_exit_report(const FirmwareApp& app, const Backends& b) {
 
 int main(int argc, char** argv) {
   Options options;
-  if (const int exit_code = parse_options(argc, argv, options); exit_code != 0) return exit_code;
-  GeodeticOrigin origin;
-  if (!read_origin(options, origin)) return usage();
-  const std::int64_t epoch_ns = options.get_ll("epoch-ns", 0);
+  if (const int exit_code = parse_options(argc, argv, options); exit_code >= 0) return exit_code;
+  const GeodeticOrigin origin = make_geodetic_origin(options.origin[0], options.origin[1], options.origin[2]);
+  const std::int64_t epoch_ns = options.epoch_ns;
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
 
   print_memory();
@@ -412,7 +403,7 @@ int main(int argc, char** argv) {
               b.ego_link->local_endpoint().port,
               options.emulated ? "emulated" : "real");
 
-  run_loop(app, b, options.get_ll("max-frames", 0));
+  run_loop(app, b, options.max_frames);
   print_exit_report(app, b);
   return 0;
 }

@@ -3,6 +3,9 @@
 // v2xloc-sim generate --all --out DIR [--seed N] [--duration S] [--quick] [--no-stereo]
 // --all writes DIR/sim<k>_<perm>/ for all 12 combinations (one after the other; tools/run-demo.sh
 // runs one process per recording instead, on every core).
+// v2xloc-sim export-pcd RECORDING_DIR --out DIR [--encoding binary_compressed|binary|ascii]
+// writes standard float32 PCD copies of a recording's clouds (format 2 stores them quantised).
+#include "host_sim/recording/pcd_export.hpp"
 #include "host_sim/recording/recorder.hpp"
 
 #include <CLI/CLI.hpp>
@@ -21,22 +24,43 @@ using namespace v2xloc::sim;
 
 // On a terminal one line is redrawn in place; in a log (stderr not a terminal, e.g. several
 // generators in parallel) a line per quarter, so interleaved output stays readable.
-std::function<void(int, int)> progress_printer(const std::string& tag, const std::string& name) {
+std::function<void(int, int)> progress_printer(const std::string& tag, const std::string& name,
+                                              const std::string& unit = "frames") {
   const bool tty = isatty(STDERR_FILENO) != 0;
   auto last = std::make_shared<int>(-1);
-  return [tty, tag, name, last](int done, int total) {
+  return [tty, tag, name, unit, last](int done, int total) {
     const int pct = 100 * done / total;
     const int step = tty ? 5 : 25;
     if (pct / step == *last / step && done != total) return;
     *last = pct;
     if (tty) {
-      std::fprintf(stderr, "\r%s %-22s %3d%% (%d/%d frames)", tag.c_str(), name.c_str(), pct, done, total);
+      std::fprintf(stderr, "\r%s %-22s %3d%% (%d/%d %s)", tag.c_str(), name.c_str(), pct, done, total, unit.c_str());
       if (done == total) std::fputc('\n', stderr);
     } else {
-      std::fprintf(stderr, "%s %-22s %3d%% (%d/%d frames)\n", tag.c_str(), name.c_str(), pct, done, total);
+      std::fprintf(stderr, "%s %-22s %3d%% (%d/%d %s)\n", tag.c_str(), name.c_str(), pct, done, total, unit.c_str());
     }
     std::fflush(stderr);
   };
+}
+
+int run_export(const std::string& dir, const std::string& out, const std::string& encoding_name) {
+  RecordingReader reader;
+  std::string error;
+  if (!reader.open(dir, error)) {
+    std::fprintf(stderr, "v2xloc-sim export-pcd: %s\n", error.c_str());
+    return 1;
+  }
+  const v2xloc::cloud_io::PcdEncoding encoding = encoding_name == "ascii"  ? v2xloc::cloud_io::PcdEncoding::kAscii
+                                                 : encoding_name == "binary" ? v2xloc::cloud_io::PcdEncoding::kBinary
+                                                                             : v2xloc::cloud_io::PcdEncoding::kBinaryCompressed;
+  PcdExportSummary summary;
+  if (!export_recording_pcd(reader, out, encoding, summary, error, progress_printer("[export]", dir, "clouds"))) {
+    std::fprintf(stderr, "\nv2xloc-sim export-pcd: %s\n", error.c_str());
+    return 1;
+  }
+  std::printf("exported %d clouds (%.1f MB, PCD %s) to %s\n", summary.clouds, static_cast<double>(summary.bytes) / 1e6,
+              encoding_name.c_str(), out.c_str());
+  return 0;
 }
 
 }  // namespace
@@ -66,13 +90,22 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   generate->add_flag("--quick", base.quick, "CI configuration: few beams / azimuth steps, coarse stereo");
   generate->add_flag("--no-stereo", no_stereo, "no disparity maps");
+  CLI::App* export_pcd = app.add_subcommand(
+      "export-pcd", "standard PCD copies of a recording's clouds (float32 x y z intensity t) for PCL / Open3D");
+  std::string export_in, export_out, encoding_name = "binary_compressed";
+  export_pcd->add_option("RECORDING_DIR", export_in, "recording folder (format 1 or 2)")->required();
+  export_pcd->add_option("--out", export_out, "output folder: ego_lidar/, infra/, agents/ as in the recording")
+      ->required();
+  export_pcd->add_option("--encoding", encoding_name, "PCD DATA kind (binary_compressed: LZF, as PCL writes it)")
+      ->check(CLI::IsMember({"binary_compressed", "binary", "ascii"}));
   try {
     app.parse(argc, argv);
-    if (!all && (scenario < 0 || perm_name.empty()))
+    if (generate->parsed() && !all && (scenario < 0 || perm_name.empty()))
       throw CLI::ValidationError("generate", "needs --scenario and --perm, or --all");
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;  // usage errors keep exit code 2
   }
+  if (export_pcd->parsed()) return run_export(export_in, export_out, encoding_name);
   base.stereo = !no_stereo;
 
   std::vector<RecorderConfig> jobs;

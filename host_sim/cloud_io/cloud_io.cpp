@@ -112,19 +112,20 @@ bool write_file_bytes(const std::string& path, std::span<const std::uint8_t> byt
 bool read_cloud(const std::string& path, PointCloud& out, std::string& error,
                 const ReadOptions& options, ReadStats* stats) {
   const std::string ext = extension_of(path);
-  if (ext == "pcd") return read_pcd(path, out, error, options, stats);
+  if (ext == "pcd" || ext == "pcdz") return read_pcd(path, out, error, options, stats);
   if (ext == "ply") return read_ply(path, out, error, options, stats);
   if (ext == "bin") return read_kitti_bin(path, out, error, options, stats);
-  error = "unknown point cloud extension in '" + path + "' (expected .pcd, .ply or .bin)";
+  error = "unknown point cloud extension in '" + path + "' (expected .pcd, .pcdz, .ply or .bin)";
   return false;
 }
 
 bool write_cloud(const std::string& path, const PointCloud& cloud, std::string& error) {
   const std::string ext = extension_of(path);
   if (ext == "pcd") return write_pcd(path, cloud, PcdEncoding::kBinary, error);
+  if (ext == "pcdz") return write_quantised_pcd(path, cloud, Quantisation{}, error);
   if (ext == "ply") return write_ply(path, cloud, error);
   if (ext == "bin") return write_kitti_bin(path, cloud, error);
-  error = "unknown point cloud extension in '" + path + "' (expected .pcd, .ply or .bin)";
+  error = "unknown point cloud extension in '" + path + "' (expected .pcd, .pcdz, .ply or .bin)";
   return false;
 }
 

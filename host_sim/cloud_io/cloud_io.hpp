@@ -1,5 +1,5 @@
-// Point cloud I/O for host code: PCD, PLY and KITTI .bin, chosen by file extension
-// (.pcd, .ply, .bin; case-insensitive). Link v2xloc_cloud_io, include "host_sim/cloud_io/cloud_io.hpp".
+// Point cloud I/O for host code: PCD, quantised PCD, PLY and KITTI .bin, chosen by file extension
+// (.pcd, .pcdz, .ply, .bin; case-insensitive). Link v2xloc_cloud_io, include "host_sim/cloud_io/cloud_io.hpp".
 #pragma once
 
 #include "host_sim/cloud_io/kitti_bin.hpp"
@@ -13,7 +13,8 @@ namespace v2xloc::cloud_io {
 
 bool read_cloud(const std::string& path, PointCloud& out, std::string& error,
                 const ReadOptions& options = {}, ReadStats* stats = nullptr);
-// .pcd is written as binary (PCL's default for recordings); use write_pcd for ascii.
+// .pcd is written as binary (PCL's default for recordings; write_pcd for ascii), .pcdz quantised
+// with the default steps (1 mm, 1/255, 1 ns).
 bool write_cloud(const std::string& path, const PointCloud& cloud, std::string& error);
 
 // Whole-file helpers (bounded by max_bytes; false with a message on failure).

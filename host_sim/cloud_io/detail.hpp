@@ -75,6 +75,16 @@ inline void append_text(std::vector<std::uint8_t>& out, std::string_view text) {
   out.insert(out.end(), text.begin(), text.end());
 }
 
+// The shortest text that reads back to the same value (to_chars; 32 characters suffice).
+template <typename T>
+  requires std::is_floating_point_v<T>
+void append_float(std::vector<std::uint8_t>& out, T v) {
+  char buf[32];
+  const auto [end, ec] = std::to_chars(buf, buf + sizeof(buf), v);
+  (void)ec;
+  out.insert(out.end(), buf, end);
+}
+
 // Next '\n'-terminated line starting at pos (without "\r\n"); false at the end of the buffer.
 inline bool next_line(std::span<const std::uint8_t> bytes, std::size_t& pos, std::string_view& line) {
   if (pos >= bytes.size()) return false;

@@ -1,20 +1,22 @@
 // PCD reader. Header semantics follow PCL's pcd_io (v0.7): FIELDS/SIZE/TYPE/COUNT describe one
 // point; binary data is array-of-structs with `stride` bytes per point; binary_compressed is
 // <u32 compressed size><u32 raw size><LZF bytes> whose raw bytes are struct-of-arrays (all values
-// of field 0, then field 1, ...).
+// of field 0, then field 1, ...). binary_shuffled_zlib (ours, pcd.hpp) is that layout with each
+// field's block in byte planes, zlib-compressed, and a SCALE line applied to the stored integers.
 #include "host_sim/cloud_io/cloud_io.hpp"
 #include "host_sim/cloud_io/detail.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 namespace v2xloc::cloud_io {
 namespace {
 
 using detail::Scalar;
 
-enum class DataKind { kAscii, kBinary, kBinaryCompressed };
+enum class DataKind { kAscii, kBinary, kBinaryCompressed, kShuffledZlib };
 enum Role : int { kX, kY, kZ, kIntensity, kTime, kNx, kNy, kNz, kRoleCount };
 
 struct Field {
@@ -25,6 +27,7 @@ struct Field {
   Scalar scalar = Scalar::kF32;
   std::size_t byte_offset = 0;   // within one point (binary) / per-field block start (compressed)
   std::size_t token_index = 0;   // first value's column in an ascii line
+  double scale = 1.0;            // SCALE (binary_shuffled_zlib only): value = stored x scale
 };
 
 struct Header {
@@ -46,6 +49,7 @@ struct Header {
 constexpr std::size_t kMaxFieldCount = 1 << 16;   // COUNT of one field
 constexpr std::size_t kMaxStride = 1 << 20;       // bytes per point
 constexpr std::uint64_t kMaxLzfExpansion = 88;    // a 3-byte back reference yields <= 264 bytes
+constexpr std::uint64_t kMaxZlibExpansion = 1032;  // deflate's limit (zlib FAQ: 1032:1)
 
 int role_of(const std::string& name) {
   if (name == "x") return kX;
@@ -89,6 +93,7 @@ bool parse_header(std::span<const std::uint8_t> bytes, Header& h, std::string& e
   std::vector<std::size_t> sizes;
   std::vector<std::size_t> counts;
   std::vector<char> types;
+  std::vector<double> scales;
   bool has_data = false;
   std::size_t pos = 0;
   std::size_t line_no = 0;
@@ -110,6 +115,11 @@ bool parse_header(std::span<const std::uint8_t> bytes, Header& h, std::string& e
       for (std::size_t i = 1; i < tokens.size(); ++i) {
         if (tokens[i].size() != 1) { error = "bad TYPE" + where; return false; }
         types.push_back(tokens[i][0]);
+      }
+    } else if (key == "scale") {
+      if (!parse_list(tokens, scales) ||
+          !std::all_of(scales.begin(), scales.end(), [](double v) { return std::isfinite(v) && v > 0.0; })) {
+        error = "SCALE needs finite positive numbers" + where; return false;
       }
     } else if (key == "width") {
       if (tokens.size() != 2 || !detail::parse_number(tokens[1], h.width)) {
@@ -145,6 +155,7 @@ bool parse_header(std::span<const std::uint8_t> bytes, Header& h, std::string& e
       if (kind == "ascii") h.kind = DataKind::kAscii;
       else if (kind == "binary") h.kind = DataKind::kBinary;
       else if (kind == "binary_compressed") h.kind = DataKind::kBinaryCompressed;
+      else if (kind == "binary_shuffled_zlib") h.kind = DataKind::kShuffledZlib;
       else { error = "unknown DATA type" + where; return false; }
       has_data = true;
     }
@@ -158,6 +169,11 @@ bool parse_header(std::span<const std::uint8_t> bytes, Header& h, std::string& e
   }
   if (counts.empty()) counts.assign(names.size(), 1);
   if (counts.size() != names.size()) { error = "FIELDS and COUNT disagree in length"; return false; }
+  // PCL ignores unknown keywords: a SCALE in a standard file would be read unscaled elsewhere.
+  if (!scales.empty() && h.kind != DataKind::kShuffledZlib) {
+    error = "SCALE is only defined for DATA binary_shuffled_zlib"; return false;
+  }
+  if (!scales.empty() && scales.size() != names.size()) { error = "FIELDS and SCALE disagree in length"; return false; }
 
   h.fields.resize(names.size());
   for (std::size_t i = 0; i < names.size(); ++i) {
@@ -166,6 +182,7 @@ bool parse_header(std::span<const std::uint8_t> bytes, Header& h, std::string& e
     f.size = sizes[i];
     f.type = types[i];
     f.count = counts[i];
+    if (!scales.empty()) f.scale = scales[i];
     if (!scalar_of(f.type, f.size, f.scalar)) {
       error = "unsupported TYPE/SIZE '" + std::string(1, f.type) + std::to_string(f.size) +
               "' for field '" + f.name + "'";
@@ -333,6 +350,46 @@ bool read_compressed(std::span<const std::uint8_t> bytes, const Header& h, Point
   return true;
 }
 
+bool read_shuffled_zlib(std::span<const std::uint8_t> bytes, const Header& h, PointCloud& out,
+                        std::string& error) {
+  std::uint64_t need = 0;
+  if (!checked_data_size(h, need, error)) return false;
+  const std::size_t have = bytes.size() - h.data_offset;
+  if (have < 8) { error = "truncated: binary_shuffled_zlib sizes missing"; return false; }
+  const std::uint8_t* base = bytes.data() + h.data_offset;
+  const std::uint32_t compressed = detail::load<std::uint32_t>(base);
+  const std::uint32_t raw = detail::load<std::uint32_t>(base + 4);
+  if (compressed > have - 8) {
+    error = "truncated: compressed block of " + std::to_string(compressed) + " bytes, file has " +
+            std::to_string(have - 8);
+    return false;
+  }
+  if (raw != need) {
+    error = "binary_shuffled_zlib raw size " + std::to_string(raw) + " != POINTS x record size " +
+            std::to_string(need);
+    return false;
+  }
+  if (raw > std::uint64_t{compressed} * kMaxZlibExpansion + 64) {
+    error = "binary_shuffled_zlib raw size impossible for its compressed size (lying header)";
+    return false;
+  }
+  // Not value-initialised: zlib writes every byte (checked), and zeroing 1 MB per scan showed.
+  const std::unique_ptr<std::uint8_t[]> planes(new std::uint8_t[raw]);
+  if (raw > 0 && zlib_decompress({base + 8, compressed}, {planes.get(), raw}) != raw) {
+    error = "corrupt zlib data in binary_shuffled_zlib block"; return false;
+  }
+  // Value e of field f: byte k at (block start) + k * (values in the block) + e.
+  fill_cloud(h, static_cast<std::size_t>(h.points), [&](std::size_t i, int fi) {
+    const Field& f = h.fields[static_cast<std::size_t>(fi)];
+    const std::uint8_t* block = planes.get() + h.points * f.byte_offset;
+    const std::size_t values = h.points * f.count;
+    std::uint8_t value[8];
+    for (std::size_t k = 0; k < f.size; ++k) value[k] = block[k * values + i * f.count];
+    return f.scale * detail::load_scalar(f.scalar, value);
+  }, out);
+  return true;
+}
+
 }  // namespace
 
 bool parse_pcd(std::span<const std::uint8_t> bytes, PointCloud& out, std::string& error,
@@ -358,6 +415,7 @@ bool parse_pcd(std::span<const std::uint8_t> bytes, PointCloud& out, std::string
     case DataKind::kAscii: ok = read_ascii(bytes, h, out, error); break;
     case DataKind::kBinary: ok = read_binary(bytes, h, out, error); break;
     case DataKind::kBinaryCompressed: ok = read_compressed(bytes, h, out, error); break;
+    case DataKind::kShuffledZlib: ok = read_shuffled_zlib(bytes, h, out, error); break;
   }
   if (!ok) {
     out.clear();

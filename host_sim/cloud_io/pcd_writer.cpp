@@ -9,13 +9,7 @@
 namespace v2xloc::cloud_io {
 namespace {
 
-void append_float(std::vector<std::uint8_t>& out, float v) {
-  char buf[32];
-  const auto [end, ec] = std::to_chars(buf, buf + sizeof(buf), v);
-  (void)ec;  // 32 characters always suffice for a float
-  out.insert(out.end(), buf, end);
-}
-
+using detail::append_float;
 
 std::vector<std::string> field_names(const PointCloud& c) {
   std::vector<std::string> names = {"x", "y", "z"};

@@ -36,6 +36,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
+const cloud_io::Quantisation kCloudQuantisation{};
+constexpr const char* kCloudFields =
+    "x y z int32 x 0.001 m, intensity uint8 x 1/255, t uint32 x 1 ns (PCD header + SCALE, DATA binary_shuffled_zlib;"
+    " v2xloc-sim export-pcd writes float32 PCD)";
+
 // Stream ids for derive_seed (each sensor/frame gets its own noise stream).
 enum Stream : std::uint64_t { kEgoLidar = 1, kStereo = 2, kInfra = 3, kAgentLidar = 4, kAgentPose = 5, kVehicle = 7 /* 6: GNSS, gnss_drive.cpp */ };
 
@@ -116,9 +121,11 @@ struct Session {
   const Scenario& scenario() const { return sim.scenario; }
   World& world() { return sim.iw.world; }
 
+  // Quantised (1 mm, intensity 1/255, 1 ns; pcd.hpp): the range noise (2 cm) is 20 steps, the
+  // intensity noise (0.02) 5 steps, and a recording takes a quarter of float32 binary_compressed.
   void write_cloud(const std::string& rel, const LidarScan& s) {
     const cloud_io::PointCloud c = to_cloud(s);
-    if (!cloud_io::write_pcd((root / rel).string(), c, cloud_io::PcdEncoding::kBinaryCompressed, err)) errors.push_back(err);
+    if (!cloud_io::write_quantised_pcd((root / rel).string(), c, kCloudQuantisation, err)) errors.push_back(err);
   }
   bool failed(std::string& error) const {
     if (errors.empty()) return false;
@@ -190,7 +197,7 @@ void record_ego_frame(Session& s, int i, double t, FrameProducts& out) {
   Rng rng(derive_seed(s.cfg.seed, {kEgoLidar, static_cast<std::uint64_t>(i)}));
   render_lidar_sweep(s.world(), s.ego_cfg, [&](double tt) { return sc.ego.body_to_enu(tt); }, t, s.sim.ego_body, rng, s.scan);
   out.points_per_scan.push_back(static_cast<double>(s.scan.points.size()));
-  s.write_cloud(frame_file("ego_lidar", i, "pcd"), s.scan);
+  s.write_cloud(frame_file("ego_lidar", i, "pcdz"), s.scan);
   out.ground_truth.push_back({t, sc.ego.body_to_enu(t)});
 
   if (s.cfg.stereo) {
@@ -208,7 +215,7 @@ void record_infra_clouds(Session& s, int i, double t, FrameProducts& out) {
     Rng irng(derive_seed(s.cfg.seed, {kInfra, k, static_cast<std::uint64_t>(i)}));
     const Eigen::Isometry3d pose = s.sites[k].sensor_to_enu;
     render_lidar_sweep(s.world(), icfg, [&](double) { return pose; }, t, -1, irng, s.scan);
-    const std::string rel = "infra/" + s.sites[k].name + frame_file("", i, "pcd");
+    const std::string rel = "infra/" + s.sites[k].name + frame_file("", i, "pcdz");
     s.write_cloud(rel, s.scan);
     Json e = Json::object();
     e["sensor"] = s.sites[k].name;
@@ -238,7 +245,7 @@ void record_agent_clouds(Session& s, int i, double t, AgentPoseError& pose_error
       p.p = (sensor_at_stamp_inv * (at_fire * p.p.cast<double>())).cast<float>();
     }
     const std::string name = "agent_" + std::to_string(a);
-    const std::string rel = "agents/" + name + frame_file("", i, "pcd");
+    const std::string rel = "agents/" + name + frame_file("", i, "pcdz");
     s.write_cloud(rel, s.scan);
     // Reported pose = truth + bias + noise (the agent's own localization error).
     PlanarPose rep = traj.pose(t);
@@ -441,8 +448,8 @@ void summarize_scans(const std::vector<double>& pts_per_scan, RecordingSummary& 
 
 Json manifest_files(const Session& s, const RecordingSummary& summary) {
   Json files = Json::object();
-  files["ego_scan_pattern"] = "ego_lidar/%06d.pcd";
-  files["ego_scan_fields"] = "x y z intensity t (float32, PCD binary_compressed); sensor frame at each point's firing time; t = seconds since the frame stamp";
+  files["ego_scan_pattern"] = "ego_lidar/%06d.pcdz";
+  files["ego_scan_fields"] = std::string(kCloudFields) + "; sensor frame at each point's firing time; t = seconds since the frame stamp";
   if (s.cfg.stereo) files["disparity_pattern"] = "stereo/%06d.png";
   files["frame_stamp"] = "frame index / frame_rate_hz";
   files["ground_truth"] = "ground_truth.tum";
@@ -532,7 +539,8 @@ Json build_manifest(const Session& s, const FrameProducts& products, const Recor
   const Scenario& sc = s.scenario();
   Json m = Json::object();
   m["format"] = "v2xloc-recording";
-  m["format_version"] = 1;
+  // 2: clouds quantised (.pcdz, units.cloud_quantisation); 1: float32 PCD binary_compressed.
+  m["format_version"] = 2;
   Json scj = Json::object();
   scj["id"] = sc.id;
   scj["name"] = sc.name;
@@ -557,11 +565,17 @@ Json build_manifest(const Session& s, const FrameProducts& products, const Recor
   units["pose"] = "[x, y, z, qx, qy, qz, qw], child frame in parent frame";
   units["intensity"] = "[0, 1], reflectivity * cos(incidence) + noise";
   units["disparity"] = "uint16 PNG, disparity_px = value / 256, 0 = invalid";
+  Json quantisation = Json::object();
+  quantisation["xyz_step_m"] = kCloudQuantisation.xyz_step_m;
+  quantisation["intensity_step"] = kCloudQuantisation.intensity_step;
+  quantisation["time_step_s"] = kCloudQuantisation.time_step_s;
+  quantisation["note"] = "stored integer x step; each .pcdz file's SCALE line carries the same steps";
+  units["cloud_quantisation"] = quantisation;
   m["units"] = units;
   m["files"] = manifest_files(s, summary);
   m["sensors"] = manifest_sensors(s);
   Json mc = Json::object();
-  mc["fields"] = "x y z intensity t (float32, PCD binary_compressed), sensor frame at stamp_s";
+  mc["fields"] = std::string(kCloudFields) + ", sensor frame at stamp_s";
   mc["pose_note"] = "sensor_pose_enu is what the sender reports (agents: with their localization error); true_sensor_pose_enu is the truth";
   mc["clouds"] = products.map_clouds;
   m["map_clouds"] = mc;

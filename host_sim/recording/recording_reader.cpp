@@ -204,6 +204,11 @@ bool RecordingReader::parse_manifest(const std::string& text, std::string& error
   std::string format;
   if (!top.string("format", format)) return false;
   if (format != "v2xloc-recording") return top.fail("format", "not a v2xloc recording");
+  // 1: float32 PCD clouds; 2: quantised .pcdz clouds. Each cloud file names its own encoding, so
+  // both read through read_pcd; a newer version may change more than that and is refused.
+  std::int64_t version = 1;
+  if (top.find("format_version") && !top.integer("format_version", 1, 2, version)) return false;
+  format_version_ = static_cast<int>(version);
   const Json *scenario = nullptr, *geo = nullptr, *files = nullptr;
   std::int64_t count = 0, id = 0;
   if (!top.object("scenario", scenario) || !Fields(*scenario, "scenario.", error).integer("id", 0, 1'000'000, id) ||

@@ -50,6 +50,8 @@ class RecordingReader {
   static constexpr int kMaxFrames = 864'000;
 
   const std::string& dir() const { return dir_; }
+  // Manifest format_version (1 when absent): 1 float32 PCD clouds, 2 quantised .pcdz clouds.
+  int format_version() const { return format_version_; }
   int scenario() const { return scenario_; }
   const std::string& permutation() const { return permutation_; }
   int frame_count() const { return frame_count_; }
@@ -107,6 +109,7 @@ class RecordingReader {
   bool resolve(const std::string& rel, std::string& path, std::string& error) const;
 
   std::string dir_, real_dir_;
+  int format_version_ = 1;
   int scenario_ = 0;
   std::string permutation_;
   int frame_count_ = 0;

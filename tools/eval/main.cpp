@@ -1,8 +1,10 @@
 // v2xloc-eval RECORDING_DIR... [--json] [--plots DIR] [--estimates DIR] [--trace DIR] [--frames N]
-//   [--gate fixed-lag|causal|off] [--no-gnss-gate] [--no-odometry] [--no-gnss-heading] [--quiet]
-//   [--timing] [--callgrind-dumps]
+//   [--gate fixed-lag|causal|off] [--no-gnss-gate] [--no-odometry] [--no-vehicle] [--no-gnss-heading]
+//   [--stereo] [--quiet] [--timing] [--callgrind-dumps] [--firmware PATH [--faults SPEC]]
 // Runs the localizer offline over each recording and prints the paper's Table 1 (unaligned and
 // aligned) with the paper's numbers beside ours; --json prints one JSON object instead.
+#include <CLI/CLI.hpp>
+
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -20,20 +22,6 @@
 namespace {
 
 v2xloc::Localizer g_localizer;  // hundreds of MB of static buffers: never on the stack
-
-int usage() {
-  std::fprintf(stderr,
-               "usage: v2xloc-eval RECORDING_DIR... [--json] [--plots DIR] [--estimates DIR] [--trace DIR]\n"
-               "                   [--frames N] [--gate fixed-lag|causal|off] [--no-gnss-gate]\n"
-               "                   [--no-odometry] [--no-vehicle] [--no-gnss-heading] [--stereo] [--quiet]\n"
-               "                   [--timing] (host ms per period and stage: table and JSON \"timing\")\n"
-               "                   [--callgrind-dumps] (under callgrind: a stats dump per stage of each period;\n"
-               "                   tools/timing/frame_instructions.py)\n"
-               "                   [--firmware PATH_TO_v2xloc-firmware [--faults SPEC]]  (replay through the firmware over\n"
-               "                   emulated CAN/UDP instead of the in-process localizer; localizer options\n"
-               "                   other than --frames do not apply)\n");
-  return 2;
-}
 
 bool write_estimates(const std::string& dir, const std::string& name,
                      const std::vector<v2xloc::eval::FrameRecord>& records, std::string& error) {
@@ -100,59 +88,80 @@ bool write_trace(const std::string& path, const std::vector<v2xloc::eval::FrameR
   return true;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+// Everything the command line sets; parse_args returns -1 to run, else the exit code (0 for --help,
+// 2 for a usage error, with CLI11's message).
+struct EvalArgs {
   std::vector<std::string> dirs;
   bool json = false;
   std::string plots_dir, estimates_dir, trace_dir;
+  std::string firmware_path;              // --firmware: table from the firmware's CAN output
   v2xloc::sim::replay::FaultSpec faults;  // --faults SPEC (with --firmware)
-  std::string firmware_path;  // --firmware: table from the firmware's CAN output (tools/eval/firmware_run.hpp)
   v2xloc::eval::RunOptions options;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&](const char* what) -> const char* {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "missing value for %s\n", what);
-        std::exit(usage());
-      }
-      return argv[++i];
-    };
-    if (a == "--json") json = true;
-    else if (a == "--plots") plots_dir = next("--plots");
-    else if (a == "--estimates") estimates_dir = next("--estimates");
-    else if (a == "--trace") trace_dir = next("--trace");
-    else if (a == "--firmware") firmware_path = next("--firmware");
-    else if (a == "--faults") {
-      std::string ferr;
-      if (!v2xloc::sim::replay::parse_fault_spec(next("--faults"), faults, ferr)) {
-        std::fprintf(stderr, "v2xloc-eval: --faults: %s\n", ferr.c_str());
-        return 2;
-      }
-    }
-    else if (a == "--frames") options.max_frames = std::atoi(next("--frames"));
-    else if (a == "--quiet") options.quiet = true;
-    else if (a == "--timing") options.timing = true;
-    else if (a == "--callgrind-dumps") options.callgrind_dumps = true;
-    else if (a == "--no-gnss-gate") options.params.ekf.gates.gnss_gate_enabled = false;
-    else if (a == "--no-odometry") options.params.use_odometry = false;
-    else if (a == "--no-vehicle") options.params.use_vehicle_signals = false;
-    else if (a == "--no-gnss-heading") options.params.use_gnss_heading = false;
-    else if (a == "--stereo") options.params.use_stereo = true;
-    else if (a == "--gate") {
-      const std::string g = next("--gate");
-      if (g == "fixed-lag") options.params.gate_mode = v2xloc::GateMode::kFixedLag;
-      else if (g == "causal") options.params.gate_mode = v2xloc::GateMode::kCausal;
-      else if (g == "off") options.params.gate_mode = v2xloc::GateMode::kOff;
-      else return usage();
-    } else if (a == "-h" || a == "--help") return usage();
-    else if (!a.empty() && a[0] == '-') {
-      std::fprintf(stderr, "unknown option %s\n", a.c_str());
-      return usage();
-    } else dirs.push_back(a);
+};
+
+int parse_args(int argc, char** argv, EvalArgs& a) {
+  CLI::App app{"Runs the localizer over recordings and prints the paper's Table 1 (unaligned and aligned) with\n"
+               "the paper's numbers beside ours; --json prints one JSON object instead.",
+               "v2xloc-eval"};
+  v2xloc::LocalizerParams& params = a.options.params;
+  app.add_option("RECORDING_DIR", a.dirs, "recording folders (v2xloc-sim generate)")->required()->type_name("DIR");
+  app.add_flag("--json", a.json, "one JSON object on stdout instead of the tables (implies --quiet)");
+  app.add_option("--plots", a.plots_dir, "write plot data and draw the plots (matplotlib) into DIR")->type_name("DIR");
+  app.add_option("--estimates", a.estimates_dir, "write the fused trajectories (TUM) into DIR")->type_name("DIR");
+  app.add_option("--trace", a.trace_dir, "write a per-frame trace per recording into DIR")->type_name("DIR");
+  app.add_option("--frames", a.options.max_frames, "evaluate the first N frames only")
+      ->type_name("N")
+      ->check(CLI::Range(1, v2xloc::sim::RecordingReader::kMaxFrames));
+  std::string gate;
+  app.add_option("--gate", gate, "validity gate: fixed-lag (default), causal or off")
+      ->type_name("MODE")
+      ->check(CLI::IsMember({"fixed-lag", "causal", "off"}));
+  app.add_flag("--no-gnss-gate", [&params](std::int64_t) { params.ekf.gates.gnss_gate_enabled = false; },
+               "ablation: fuse every GNSS fix (no chi-square gate)");
+  app.add_flag("--no-odometry", [&params](std::int64_t) { params.use_odometry = false; }, "ablation: no LiDAR odometry");
+  app.add_flag("--no-vehicle", [&params](std::int64_t) { params.use_vehicle_signals = false; },
+               "ablation: no wheel speed / yaw rate");
+  app.add_flag("--no-gnss-heading", [&params](std::int64_t) { params.use_gnss_heading = false; },
+               "ablation: no course over ground from the GNSS Doppler velocity");
+  app.add_flag("--stereo", params.use_stereo, "also register the stereo clouds (recordings with disparity maps)");
+  app.add_flag("--quiet", a.options.quiet, "no per-frame progress on stderr");
+  app.add_flag("--timing", a.options.timing, "host ms per 100 ms period and stage (table and JSON \"timing\")");
+  app.add_flag("--callgrind-dumps", a.options.callgrind_dumps,
+               "under callgrind: a stats dump per stage of each period (tools/timing/frame_instructions.py)");
+  auto* firmware = app.add_option("--firmware", a.firmware_path,
+                                  "replay through this v2xloc-firmware over emulated CAN/UDP instead of the in-process "
+                                  "localizer (localizer options other than --frames do not apply)")
+                      ->type_name("PATH");
+  std::string fault_text;
+  app.add_option("--faults", fault_text, "fault injection on the replay, e.g. loss=0.3,reorder=0.2 (host_sim/replay)")
+      ->type_name("SPEC")
+      ->needs(firmware);
+  try {
+    app.parse(argc, argv);
+    std::string error;
+    if (!fault_text.empty() && !v2xloc::sim::replay::parse_fault_spec(fault_text, a.faults, error))
+      throw CLI::ValidationError("--faults", error);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
   }
-  if (dirs.empty()) return usage();
-  if (json) options.quiet = true;
+  if (gate == "fixed-lag") params.gate_mode = v2xloc::GateMode::kFixedLag;
+  if (gate == "causal") params.gate_mode = v2xloc::GateMode::kCausal;
+  if (gate == "off") params.gate_mode = v2xloc::GateMode::kOff;
+  if (a.json) a.options.quiet = true;
+  return -1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  EvalArgs args;
+  if (const int rc = parse_args(argc, argv, args); rc >= 0) return rc;
+  const std::vector<std::string>& dirs = args.dirs;
+  const bool json = args.json;
+  const std::string &plots_dir = args.plots_dir, &estimates_dir = args.estimates_dir, &trace_dir = args.trace_dir;
+  const std::string& firmware_path = args.firmware_path;
+  const v2xloc::sim::replay::FaultSpec& faults = args.faults;
+  const v2xloc::eval::RunOptions& options = args.options;
 
   std::vector<v2xloc::eval::RowReport> rows;
   for (const std::string& dir : dirs) {

@@ -1,5 +1,8 @@
 #include "tools/eval/report.hpp"
 
+#include <nlohmann/json.hpp>
+
+#include <cmath>
 #include <cstdio>
 
 #include "tools/eval/paper_table.hpp"
@@ -17,30 +20,32 @@ std::string cell(double ours, double paper) {
   return buf;
 }
 
-std::string number(double v) {
-  if (v < 0.0) return "null";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.4f", v);
-  return buf;
+using Json = nlohmann::json;
+
+// Rounded to `decimals` as the report always printed them; a negative value (n/a) is null.
+Json number(double v, int decimals = 4) {
+  if (v < 0.0 || !std::isfinite(v)) return nullptr;
+  const double scale = std::pow(10.0, decimals);
+  return std::round(v * scale) / scale;
 }
 
-std::string columns_json(const ColumnErrors& c) {
-  return "{\"slam\":" + number(c.slam) + ",\"gps\":" + number(c.gps) + ",\"reg\":" + number(c.reg) +
-         ",\"reg_valid\":" + number(c.reg_valid) + ",\"fused\":" + number(c.fused) +
-         ",\"fused_valid\":" + number(c.fused_valid) + ",\"fused_ungated\":" + number(c.fused_ungated) + ",\"fused_lag\":" + number(c.fused_lag) + ",\"gps_3d\":" + number(c.gps_3d) + "}";
+Json columns_json(const ColumnErrors& c) {
+  return {{"slam", number(c.slam)},
+          {"gps", number(c.gps)},
+          {"reg", number(c.reg)},
+          {"reg_valid", number(c.reg_valid)},
+          {"fused", number(c.fused)},
+          {"fused_valid", number(c.fused_valid)},
+          {"fused_ungated", number(c.fused_ungated)},
+          {"fused_lag", number(c.fused_lag)},
+          {"gps_3d", number(c.gps_3d)}};
 }
 
-std::string stages_json(const StageMs& ms) {
-  std::string out = "{";
-  bool first = true;
-  for (std::size_t s = 1; s < ms.size(); ++s) {  // kIdle is never charged
-    if (!first) out += ",";
-    first = false;
-    char buf[96];
-    std::snprintf(buf, sizeof buf, "\"%s\":%.3f", stage_name(static_cast<LocalizerStage>(s)), ms[s]);
-    out += buf;
-  }
-  return out + "}";
+Json stages_json(const StageMs& ms) {
+  Json out = Json::object();
+  for (std::size_t s = 1; s < ms.size(); ++s)  // kIdle is never charged
+    out[stage_name(static_cast<LocalizerStage>(s))] = number(ms[s], 3);
+  return out;
 }
 
 std::string stages_text(const StageMs& ms) {
@@ -118,33 +123,29 @@ std::string format_table(const std::vector<RowReport>& rows, bool aligned) {
 }
 
 std::string format_json(const std::vector<RowReport>& rows) {
-  std::string out = "{\"rows\":[";
-  for (std::size_t i = 0; i < rows.size(); ++i) {
-    const RowReport& r = rows[i];
-    if (i) out += ",";
-    char head[256];
-    std::snprintf(head, sizeof head,
-                  "{\"sim\":%d,\"perm\":\"%s\",\"frames\":%d,\"valid_frames\":%d,\"reg_ok_frames\":%d,"
-                  "\"fused_max\":%s,\"localizer_ms_per_frame\":%s,\"localizer_max_frame_ms\":%s,",
-                  r.sim, r.permutation.c_str(), r.metrics.frames, r.metrics.valid_frames,
-                  r.metrics.reg_ok_frames, number(r.metrics.fused_max).c_str(),
-                  number(r.metrics.frames ? 1e3 * r.stats.seconds / r.metrics.frames : 0.0).c_str(),
-                  number(r.stats.max_frame_ms).c_str());
-    out += head;
+  Json out_rows = Json::array();
+  for (const RowReport& r : rows) {
+    Json row = {{"sim", r.sim},
+                {"perm", r.permutation},
+                {"frames", r.metrics.frames},
+                {"valid_frames", r.metrics.valid_frames},
+                {"reg_ok_frames", r.metrics.reg_ok_frames},
+                {"fused_max", number(r.metrics.fused_max)},
+                {"localizer_ms_per_frame", number(r.metrics.frames ? 1e3 * r.stats.seconds / r.metrics.frames : 0.0)},
+                {"localizer_max_frame_ms", number(r.stats.max_frame_ms)}};
     if (!r.stats.period_stage_ms.empty()) {
       const TimingSummary t = summarize_timing(r.stats.period_stage_ms);
-      char buf[256];
-      std::snprintf(buf, sizeof buf, "\"timing\":{\"frame_ms\":{\"median\":%.3f,\"p99\":%.3f,\"max\":%.3f},\"worst_frame\":%d,",
-                    t.median_ms, t.p99_ms, t.max_ms, t.worst_frame);
-      out += buf;
-      out += "\"stages_ms\":" + stages_json(t.worst_stages_ms) +
-             ",\"stages_median_ms\":" + stages_json(t.median_stages_ms) + "},";
+      row["timing"] = {{"frame_ms", {{"median", number(t.median_ms, 3)}, {"p99", number(t.p99_ms, 3)}, {"max", number(t.max_ms, 3)}}},
+                       {"worst_frame", t.worst_frame},
+                       {"stages_ms", stages_json(t.worst_stages_ms)},
+                       {"stages_median_ms", stages_json(t.median_stages_ms)}};
     }
-    out += "\"unaligned\":" + columns_json(r.metrics.unaligned) +
-           ",\"aligned\":" + columns_json(r.metrics.aligned) + "}";
+    row["unaligned"] = columns_json(r.metrics.unaligned);
+    row["aligned"] = columns_json(r.metrics.aligned);
+    out_rows.push_back(std::move(row));
   }
-  out += "]}";
-  return out;
+  // nlohmann writes object keys sorted; every reader (tests, scripts) looks them up by name.
+  return Json{{"rows", std::move(out_rows)}}.dump();
 }
 
 }  // namespace v2xloc::eval

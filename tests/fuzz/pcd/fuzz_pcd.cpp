@@ -1,4 +1,4 @@
-// PCD (ascii, binary, binary_compressed through liblzf) from arbitrary bytes.
+// PCD (ascii, binary, binary_compressed through liblzf, binary_shuffled_zlib) from arbitrary bytes.
 #include "tests/fuzz/cloud_check.hpp"
 
 namespace {

@@ -44,6 +44,13 @@ TEST(Robustness, EveryTruncationOfEveryFormat) {
     ASSERT_TRUE(encode_pcd(cloud, enc, bytes, error));
     check_every_truncation(bytes, parse_pcd, cloud.size());
   }
+  {
+    SCOPED_TRACE("binary_shuffled_zlib");
+    PointCloud q = test::make_cloud(12, false, true, false);
+    for (std::size_t i = 0; i < q.size(); ++i) q.intensity.push_back(static_cast<float>(i) / 12.0f);
+    ASSERT_TRUE(encode_quantised_pcd(q, {}, bytes, error)) << error;
+    check_every_truncation(bytes, parse_pcd, q.size());
+  }
   ASSERT_TRUE(encode_ply(cloud, bytes, error));
   check_every_truncation(bytes, parse_ply, cloud.size());
   // KITTI: only whole records are valid; a partial record is an error.
@@ -169,17 +176,21 @@ TEST(Robustness, PaddingAndUnknownFieldsAreSkipped) {
 TEST(Robustness, RandomHeaderGarbageAndByteFlips) {
   std::mt19937 rng(1234);
   const PointCloud cloud = test::make_cloud(8, true, false, true);
-  std::vector<std::uint8_t> pristine[4];
+  std::vector<std::uint8_t> pristine[5];
   std::string error;
   ASSERT_TRUE(encode_pcd(cloud, PcdEncoding::kAscii, pristine[0], error));
   ASSERT_TRUE(encode_pcd(cloud, PcdEncoding::kBinary, pristine[1], error));
   ASSERT_TRUE(encode_pcd(cloud, PcdEncoding::kBinaryCompressed, pristine[2], error));
   ASSERT_TRUE(encode_ply(cloud, pristine[3], error));
-  const char alphabet[] = "0123456789 -.\nFIELDSxyzWIDTHPOINTSDATAbinary_compressedasciielementvertex";
+  PointCloud quantisable = cloud;
+  quantisable.normals.clear();
+  quantisable.intensity.assign(cloud.size(), 0.25f);
+  ASSERT_TRUE(encode_quantised_pcd(quantisable, {}, pristine[4], error)) << error;
+  const char alphabet[] = "0123456789 -.\nFIELDSxyzWIDTHPOINTSDATAbinary_compressedasciielementvertexSCALE_shuffled_zlib";
   PointCloud c;
   std::size_t accepted = 0;
   for (int iter = 0; iter < 3000; ++iter) {
-    std::vector<std::uint8_t> b = pristine[iter % 4];
+    std::vector<std::uint8_t> b = pristine[iter % 5];
     const int edits = 1 + static_cast<int>(rng() % 4);
     for (int e = 0; e < edits; ++e) {
       // Mostly the header (first ~250 bytes), sometimes anywhere.
@@ -191,7 +202,7 @@ TEST(Robustness, RandomHeaderGarbageAndByteFlips) {
         default: b.erase(b.begin() + static_cast<std::ptrdiff_t>(at)); break;
       }
     }
-    const bool ok = (iter % 4 == 3) ? parse_ply(b, c, error) : parse_pcd(b, c, error);
+    const bool ok = (iter % 5 == 3) ? parse_ply(b, c, error) : parse_pcd(b, c, error);
     if (ok) {
       ++accepted;
       ASSERT_TRUE(c.consistent());

@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 
 #include <unistd.h>
@@ -144,6 +146,48 @@ TEST_F(HostileRecording, SymlinkOutOfTheRecordingIsRefused) {
   EXPECT_FALSE(reader_.ego_scan(0, c, err));
   EXPECT_NE(err.find("resolves outside the recording"), std::string::npos) << err;
   fs::remove_all(outside);
+}
+
+// Format 1 (float32 .pcd, as in this fixture; also when format_version is absent) and format 2
+// (quantised .pcdz) both read; a version this reader does not know is refused by name.
+TEST_F(HostileRecording, FormatVersionOneAndTwoReadOthersAreRefused) {
+  ASSERT_EQ(open_error(), "");
+  EXPECT_EQ(reader_.format_version(), 1);
+  m_["format_version"] = 1;
+  ASSERT_EQ(open_error(), "");
+  for (const Json& v : {Json(0), Json(3), Json("2"), Json(2.5), Json(nullptr)}) {
+    m_["format_version"] = v;
+    expect_refused("format_version");
+  }
+  cloud_io::PointCloud cloud;
+  cloud.points = {{1.0f, 2.0f, 3.0f}, {-4.0f, 5.5f, 6.25f}};
+  cloud.intensity = {0.5f, 1.0f};
+  cloud.time = {0.0f, 0.0999f};
+  std::string err;
+  for (const char* f : {"ego_lidar/000000.pcdz", "ego_lidar/000001.pcdz", "infra/000000.pcdz"})
+    ASSERT_TRUE(cloud_io::write_quantised_pcd((dir_ / f).string(), cloud, cloud_io::Quantisation{}, err)) << err;
+  m_["format_version"] = 2;
+  m_["files"]["ego_scan_pattern"] = "ego_lidar/%06d.pcdz";
+  m_["map_clouds"]["clouds"][0]["file"] = "infra/000000.pcdz";
+  ASSERT_EQ(open_error(), "");
+  EXPECT_EQ(reader_.format_version(), 2);
+  cloud_io::PointCloud c;
+  ASSERT_TRUE(reader_.ego_scan(1, c, err)) << err;
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_NEAR(c.points[1].z(), 6.25f, 5e-4f);
+  EXPECT_NEAR(c.time[1], 0.0999f, 1e-9f);
+  ASSERT_TRUE(reader_.load_map_cloud(reader_.map_clouds().at(0), c, err)) << err;
+  // A damaged quantised cloud is refused with the file's name, not read as garbage.
+  std::string bytes;
+  {
+    std::ifstream in(dir_ / "ego_lidar/000000.pcdz", std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  bytes[bytes.size() - 3] = static_cast<char>(bytes[bytes.size() - 3] ^ 0x5a);
+  write("ego_lidar/000000.pcdz", bytes);
+  EXPECT_FALSE(reader_.ego_scan(0, c, err));
+  EXPECT_NE(err.find("000000.pcdz"), std::string::npos) << err;
+  EXPECT_TRUE(c.empty());
 }
 
 TEST_F(HostileRecording, FrameCountMustBeAnIntegerInRange) {

@@ -1,3 +1,4 @@
+#include "host_sim/recording/pcd_export.hpp"
 #include "host_sim/recording/recorder.hpp"
 #include "host_sim/recording/recording_reader.hpp"
 #include "host_sim/cloud_io/pcd.hpp"
@@ -107,7 +108,7 @@ TEST_F(HostSimRecording, TopViewHasTitleLegendAndScaleBar) {
 
 TEST_F(HostSimRecording, DifferentSeedGivesDifferentNoise) {
   ASSERT_TRUE(ok_) << error_;
-  EXPECT_NE(slurp(fs::path(dir_a_) / "ego_lidar/000000.pcd"), slurp(fs::path(dir_c_) / "ego_lidar/000000.pcd"));
+  EXPECT_NE(slurp(fs::path(dir_a_) / "ego_lidar/000000.pcdz"), slurp(fs::path(dir_c_) / "ego_lidar/000000.pcdz"));
   EXPECT_NE(slurp(fs::path(dir_a_) / "stereo/000000.png"), slurp(fs::path(dir_c_) / "stereo/000000.png"));
 }
 
@@ -119,6 +120,7 @@ TEST_F(HostSimRecording, ReaderIteratesFramesCloudsAndTruth) {
   EXPECT_EQ(r.frame_count(), 10);
   EXPECT_EQ(r.scenario(), 3);
   EXPECT_EQ(r.permutation(), "4_infra_2_agent");
+  EXPECT_EQ(r.format_version(), 2);  // quantised .pcdz clouds
   ASSERT_EQ(r.ground_truth().size(), 10u);
   EXPECT_EQ(r.ground_truth_100hz().size(), 100u);
   for (int i = 0; i < r.frame_count(); ++i) {
@@ -157,6 +159,37 @@ TEST_F(HostSimRecording, ReaderIteratesFramesCloudsAndTruth) {
   }
   // Ground truth interpolation agrees with the frame truth.
   EXPECT_TRUE(r.ground_truth_at(0.5).isApprox(r.ground_truth()[5].pose, 1e-6));
+}
+
+// export-pcd: every cloud as a standard float32 PCD (what PCL writes) with the values the reader
+// returns from the quantised files, at the manifest's paths.
+TEST_F(HostSimRecording, ExportWritesStandardPcdWithTheReadersValues) {
+  ASSERT_TRUE(ok_) << error_;
+  RecordingReader r;
+  std::string err;
+  ASSERT_TRUE(r.open(dir_a_, err)) << err;
+  const std::string out = tmp_dir("export");
+  PcdExportSummary summary;
+  ASSERT_TRUE(export_recording_pcd(r, out, cloud_io::PcdEncoding::kBinaryCompressed, summary, err)) << err;
+  EXPECT_EQ(summary.clouds, r.frame_count() + static_cast<int>(r.map_clouds().size()));
+  const std::vector<char> head = slurp(fs::path(out) / "ego_lidar/000003.pcd");
+  const std::string header(head.begin(), head.begin() + std::min<std::size_t>(head.size(), 400));
+  EXPECT_NE(header.find("TYPE F F F F F\n"), std::string::npos) << header;
+  EXPECT_NE(header.find("DATA binary_compressed\n"), std::string::npos) << header;
+  EXPECT_EQ(header.find("SCALE"), std::string::npos) << header;
+  cloud_io::PointCloud expected, exported;
+  ASSERT_TRUE(r.ego_scan(3, expected, err)) << err;
+  ASSERT_TRUE(cloud_io::read_pcd((fs::path(out) / "ego_lidar/000003.pcd").string(), exported, err)) << err;
+  EXPECT_EQ(exported.points, expected.points);
+  EXPECT_EQ(exported.intensity, expected.intensity);
+  EXPECT_EQ(exported.time, expected.time);
+  const MapCloudInfo& last = r.map_clouds().back();
+  fs::path map_pcd = fs::path(out) / last.file;
+  map_pcd.replace_extension(".pcd");
+  ASSERT_TRUE(r.load_map_cloud(last, expected, err)) << err;
+  ASSERT_TRUE(cloud_io::read_pcd(map_pcd.string(), exported, err)) << err;
+  EXPECT_EQ(exported.points, expected.points);
+  fs::remove_all(out);
 }
 
 TEST_F(HostSimRecording, EgoScanGeometryMatchesTheWorldViaGroundTruth) {
