@@ -9,7 +9,7 @@ PKGS=(cmake ninja-build g++ pkg-config libeigen3-dev googletest libgtest-dev lib
       g++-aarch64-linux-gnu qemu-user gcc-arm-none-eabi libstdc++-arm-none-eabi-newlib
       binutils-arm-none-eabi valgrind nodejs npm zlib1g-dev ca-certificates
       libmbedtls-dev nlohmann-json3-dev liblzf-dev libcli11-dev libpng-dev
-      clang ccache libfuzzer-14-dev libclang-rt-14-dev llvm-14 zlib1g-dev)
+      clang ccache libfuzzer-14-dev libclang-rt-14-dev llvm-14)
 ARM64_PKGS=(libgpiod-dev:arm64 libhidapi-dev:arm64 libsocketcan-dev:arm64 libmbedtls-dev:arm64 libpng-dev:arm64 liblzf-dev:arm64 zlib1g-dev:arm64)
 missing=()
 for p in "${PKGS[@]}" "${ARM64_PKGS[@]}"; do
