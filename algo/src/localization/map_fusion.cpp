@@ -14,14 +14,11 @@ MapFusion::MapFusion(const MapFusionParams& params) : params_(params) {}
 
 void MapFusion::clear() {
   for (MapSourceInfo& s : sources_) s = MapSourceInfo{};
-  for (std::size_t& f : first_point_) f = 0;
-  quorum_.clear();
   num_points_ = 0;
   ++revision_;
 }
 
 void MapFusion::remove_source_points(std::size_t slot) {
-  const std::size_t removed = sources_[slot].points;
   std::size_t n = 0;  // stable compaction keeps the other sources' order (determinism)
   for (std::size_t i = 0; i < num_points_; ++i) {
     if (point_source_[i] == slot) continue;
@@ -31,23 +28,16 @@ void MapFusion::remove_source_points(std::size_t slot) {
   }
   num_points_ = n;
   sources_[slot].points = 0;
-  for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
-    if (s != slot && first_point_[s] > first_point_[slot]) first_point_[s] -= removed;  // blocks after it
-  }
 }
 
-void MapFusion::release_slot(std::size_t slot) {
-  remove_source_points(slot);
-  sources_[slot] = MapSourceInfo{};
-  quorum_.forget(slot);
-}
-
-bool MapFusion::cell_key(const Vec3f& p, double cell, std::int32_t key[3]) const {
+bool MapFusion::cell_key(const Vec3f& p, double cell, std::int32_t level,
+                         std::int32_t key[3]) const {
   for (int i = 0; i < 3; ++i) {
     const double k = std::floor(static_cast<double>(p(i)) / cell);
     if (!(k > -268435456.0 && k < 268435456.0)) return false;
     key[i] = static_cast<std::int32_t>(k);
   }
+  key[2] = key[2] * 4 + level;  // two grids share the table: level in the low bits of z
   return true;
 }
 
@@ -76,13 +66,13 @@ bool MapFusion::occupied(const std::int32_t key[3]) const {
   return found;
 }
 
-bool MapFusion::occupied_around(const Vec3f& p, double cell) const {
+bool MapFusion::occupied_around(const Vec3f& p, double cell, std::int32_t level) const {
   std::int32_t key[3];
-  if (!cell_key(p, cell, key)) return false;
+  if (!cell_key(p, cell, level, key)) return false;
   for (int dx = -1; dx <= 1; ++dx)
     for (int dy = -1; dy <= 1; ++dy)
       for (int dz = -1; dz <= 1; ++dz) {
-        const std::int32_t k[3] = {key[0] + dx, key[1] + dy, key[2] + dz};
+        const std::int32_t k[3] = {key[0] + dx, key[1] + dy, key[2] + 4 * dz};
         if (occupied(k)) return true;
       }
   return false;
@@ -96,67 +86,115 @@ void MapFusion::new_cell_generation() {
   }
 }
 
-std::uint32_t MapFusion::drop_covered_by_trusted() {
+double MapFusion::consistency(std::size_t slot, std::uint32_t& overlap_points, double& best_probe) {
+  overlap_points = 0;
+  best_probe = 0.0;
+  new_cell_generation();
+  // Fine cells of size inlier_distance / 2: a candidate with another source's point in its 27
+  // neighbour cells has one within ~0.87 * inlier_distance * ... (<= 1.5 cells per axis).
+  // The reference is the surveyed infrastructure only: agents never vouch for each other.
+  const double fine = 0.5 * params_.inlier_distance;
+  for (std::size_t i = 0; i < num_points_; ++i) {
+    if (point_source_[i] == slot || !sources_[point_source_[i]].trusted) continue;
+    std::int32_t key[3];
+    if (cell_key(points_[i], fine, 0, key)) mark(key);
+    if (cell_key(points_[i], params_.overlap_cell, 1, key)) mark(key);
+  }
+  std::uint32_t inliers = 0;
+  for (const Vec3f& p : candidate_) {
+    if (!occupied_around(p, params_.overlap_cell, 1)) continue;  // outside the others' region
+    ++overlap_points;
+    if (occupied_around(p, fine, 0)) ++inliers;
+  }
+  if (overlap_points == 0) return 1.0;
+  // Shift probes over an even subsample of the overlap points (the same points for every probe).
+  const float d = static_cast<float>(params_.probe_step);
+  const Vec3f probes[] = {{d, 0, 0},  {-d, 0, 0}, {0, d, 0},      {0, -d, 0},      {d, d, 0},  {d, -d, 0},
+                          {-d, d, 0}, {-d, -d, 0}, {2 * d, 0, 0}, {-2 * d, 0, 0}, {0, 2 * d, 0}, {0, -2 * d, 0}};
+  const std::uint32_t stride =
+      params_.max_probe_points > 0 ? (overlap_points + params_.max_probe_points - 1) / params_.max_probe_points : 1;
+  for (const Vec3f& o : probes) {
+    std::uint32_t seen = 0, counted = 0, hits = 0;
+    for (const Vec3f& p : candidate_) {
+      if (!occupied_around(p, params_.overlap_cell, 1)) continue;
+      if (seen++ % stride != 0) continue;
+      ++counted;
+      if (occupied_around(p + o, fine, 0)) ++hits;
+    }
+    if (counted > 0) {
+      const double f = static_cast<double>(hits) / counted;
+      if (f > best_probe) best_probe = f;
+    }
+  }
+  return static_cast<double>(inliers) / overlap_points;
+}
+
+std::uint32_t MapFusion::drop_covered_by_trusted(std::size_t slot) {
   new_cell_generation();
   bool any = false;
-  for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
-    if (!sources_[s].active || !sources_[s].trusted || !sources_[s].fused) continue;
+  for (std::size_t i = 0; i < num_points_; ++i) {
+    const std::size_t src = point_source_[i];
+    if (src == slot || !sources_[src].trusted) continue;
     std::int32_t key[3];
-    for (const Vec3f& p : source_points(s)) {
-      if (cell_key(p, params_.agent_fill_cell, key)) any = mark(key) || any;
-    }
+    if (cell_key(points_[i], params_.agent_fill_cell, 2, key)) any = mark(key) || any;
   }
   if (!any) return 0;
   std::size_t kept = 0;
   for (std::size_t k = 0; k < candidate_.size(); ++k) {
-    if (!occupied_around(candidate_[k], params_.agent_fill_cell)) candidate_[kept++] = candidate_[k];
+    if (!occupied_around(candidate_[k], params_.agent_fill_cell, 2)) candidate_[kept++] = candidate_[k];
   }
   const auto dropped = static_cast<std::uint32_t>(candidate_.size() - kept);
   candidate_.resize(kept);
   return dropped;
 }
 
-// Same id, else a free slot of the role's quota, else the role's oldest source if older than
-// this cloud (displace); kMaxMapSources when none (status set).
-std::size_t MapFusion::find_slot(std::uint32_t source_id, double timestamp, bool trusted, MapInsertResult& r,
-                                 bool& displace) {
-  displace = false;
+MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
+                                  const Mat4d& world_T_sensor, std::span<const Vec3f> points,
+                                  bool trusted) {
+  MapInsertResult r;
+  r.input_points = static_cast<std::uint32_t>(points.size());
+  if (!std::isfinite(timestamp) || !world_T_sensor.allFinite()) return r;
+
+  // Source slot: same id, else a free slot, else the oldest if older than this cloud.
   std::size_t slot = config::kMaxMapSources;
   for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
     if (sources_[s].active && sources_[s].id == source_id) slot = s;
   }
-  if (slot < config::kMaxMapSources) {
-    if (timestamp > sources_[slot].timestamp) return slot;
+  const bool known = slot < config::kMaxMapSources;
+  if (known && !(timestamp > sources_[slot].timestamp)) {
     r.status = MapInsertStatus::kStale;
     ++counters_.stale;
-    return config::kMaxMapSources;
+    return r;
   }
-  std::uint32_t same_role = 0;
-  for (const MapSourceInfo& s : sources_) same_role += (s.active && s.trusted == trusted) ? 1u : 0u;
-  const bool at_cap = same_role >= (trusted ? params_.max_trusted_sources : params_.max_agent_sources);
-  for (std::size_t s = 0; s < config::kMaxMapSources && slot == config::kMaxMapSources && !at_cap; ++s) {
-    if (!sources_[s].active) slot = s;
-  }
-  if (slot == config::kMaxMapSources) {
+  bool displace = false;
+  if (!known) {
+    // Per-role cap: at the cap, a new source may only displace the oldest source of its own role.
+    std::uint32_t same_role = 0;
+    for (const MapSourceInfo& s : sources_) same_role += (s.active && s.trusted == trusted) ? 1u : 0u;
+    const bool at_cap = same_role >= (trusted ? params_.max_trusted_sources : params_.max_agent_sources);
     std::size_t oldest = config::kMaxMapSources;
-    for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
-      if (!sources_[s].active || sources_[s].trusted != trusted) continue;
-      if (oldest == config::kMaxMapSources || sources_[s].timestamp < sources_[oldest].timestamp) oldest = s;
+    for (std::size_t s = 0; s < config::kMaxMapSources && slot == config::kMaxMapSources && !at_cap; ++s) {
+      if (!sources_[s].active) slot = s;
     }
-    if (oldest < config::kMaxMapSources && sources_[oldest].timestamp < timestamp) {
-      slot = oldest;
-      displace = true;
+    if (slot == config::kMaxMapSources) {
+      for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
+        if (!sources_[s].active || sources_[s].trusted != trusted) continue;
+        if (oldest == config::kMaxMapSources || sources_[s].timestamp < sources_[oldest].timestamp)
+          oldest = s;
+      }
+      if (oldest < config::kMaxMapSources && sources_[oldest].timestamp < timestamp) {
+        slot = oldest;
+        displace = true;
+      }
+    }
+    if (slot == config::kMaxMapSources) {
+      r.status = MapInsertStatus::kNoSourceSlot;
+      ++counters_.no_source_slot;
+      return r;
     }
   }
-  if (slot == config::kMaxMapSources) {
-    r.status = MapInsertStatus::kNoSourceSlot;
-    ++counters_.no_source_slot;
-  }
-  return slot;
-}
 
-// Into the global frame (double math), non-finite points dropped, then downsampled.
-void MapFusion::stage_cloud(const Mat4d& world_T_sensor, std::span<const Vec3f> points, MapInsertResult& r) {
+  // Into the global frame (double math), non-finite points dropped, then downsampled.
   staging_.clear();
   const Mat3d R = world_T_sensor.topLeftCorner<3, 3>();
   const Vec3d t = world_T_sensor.topRightCorner<3, 1>();
@@ -168,74 +206,42 @@ void MapFusion::stage_cloud(const Mat4d& world_T_sensor, std::span<const Vec3f> 
     if (!staging_.push_back((R * p.cast<double>() + t).cast<float>())) ++r.capacity_dropped;
   }
   candidate_.clear();
-  const VoxelDownsampleResult ds = downsample_.run(staging_.span(), static_cast<float>(params_.voxel_size), candidate_);
+  const VoxelDownsampleResult ds =
+      downsample_.run(staging_.span(), static_cast<float>(params_.voxel_size), candidate_);
   r.capacity_dropped += ds.output_overflow + ds.hash_overflow + ds.range_overflow;
   counters_.non_finite_dropped += r.non_finite_dropped;
-}
 
-// Keeps the check with the most matched points as the result's report, and counts its verdict.
-void MapFusion::fold_check(const MapCheckResult& c, MapInsertResult& r) const {
-  if (c.verdict == MapCheckVerdict::kAgree) ++r.agreeing;
-  else if (c.verdict == MapCheckVerdict::kDisagree) ++r.disagreeing;
-  else ++r.uncheckable;
-  if (r.agreeing + r.disagreeing + r.uncheckable == 1 || c.matched_points > r.check.matched_points) r.check = c;
-}
-
-// The candidate against every other stored unit, pair by pair (the quorum needs each verdict).
-void MapFusion::check_infrastructure(std::size_t slot, MapInsertResult& r) {
-  counters_.check_cells_dropped += check_.set_candidate(candidate_.span(), params_);
-  for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
-    if (s == slot || !sources_[s].active || !sources_[s].trusted) continue;
-    const std::span<const Vec3f> range[1] = {source_points(s)};
-    const MapCheckResult c = check_.check(range, params_.max_offset_infra);
-    quorum_.record(slot, s, c.verdict);
-    fold_check(c, r);
+  if (params_.check_consistency && !candidate_.empty()) {
+    // Agents against the infrastructure: low fitness, or a better fit shifted, is a wrong pose;
+    // too little overlap to tell is held back (an agent whose cloud cannot be checked adds
+    // nothing the map can trust). Infrastructure units against each other where they overlap:
+    // their absolute fitness is low even for exact poses (different faces of the buildings), so
+    // only the shift test applies, and without overlap a surveyed unit is accepted.
+    r.consistency_fitness =
+        consistency(known ? slot : config::kMaxMapSources, r.overlap_points, r.best_probe_fitness);
+    const bool checkable = r.overlap_points >= params_.min_overlap_points;
+    const double margin = trusted ? params_.infra_probe_margin : params_.probe_margin;
+    const bool shifted = checkable && r.best_probe_fitness > r.consistency_fitness + margin;
+    if (!trusted && !checkable) {
+      r.status = MapInsertStatus::kHeldBack;
+      ++counters_.held_back;
+      return r;
+    }
+    if (shifted || (!trusted && r.consistency_fitness < params_.min_fitness)) {
+      r.status = MapInsertStatus::kRejectedInconsistent;
+      ++counters_.rejected_inconsistent;
+      return r;
+    }
+    if (!checkable) r.consistency_fitness = 1.0;
   }
-}
 
-// The candidate agent against the fused infrastructure as one reference (agents never vouch for
-// each other). Sets the status when the agent is not to be stored.
-void MapFusion::check_agent(MapInsertResult& r) {
-  std::span<const Vec3f> ranges[config::kMaxMapSources];
-  std::size_t n = 0;
-  for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
-    if (sources_[s].active && sources_[s].trusted && sources_[s].fused) ranges[n++] = source_points(s);
+  if (!trusted && params_.agent_fill_cell > 0.0) {
+    r.covered_dropped = drop_covered_by_trusted(known ? slot : config::kMaxMapSources);
+    counters_.agent_points_covered += r.covered_dropped;
   }
-  if (n > 0) {
-    counters_.check_cells_dropped += check_.set_candidate(candidate_.span(), params_);
-    fold_check(check_.check(std::span<const std::span<const Vec3f>>(ranges, n), params_.max_offset_agent), r);
-  } else {
-    ++r.uncheckable;  // no fused infrastructure: nothing to check against
-  }
-  if (r.agreeing == 1) return;
-  r.status = r.disagreeing == 1 ? MapInsertStatus::kRejectedInconsistent : MapInsertStatus::kHeldBack;
-}
 
-// Fused iff the quorum says so, for every stored unit; returns the standing of `slot`.
-QuorumStanding MapFusion::arbitrate(std::size_t slot) {
-  bool stored[InfraQuorum::kSlots] = {};
-  for (std::size_t s = 0; s < config::kMaxMapSources; ++s) stored[s] = sources_[s].active && sources_[s].trusted;
-  QuorumStanding own;
-  for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
-    if (!stored[s]) continue;
-    const QuorumStanding q = quorum_.standing(s, stored);
-    if (s == slot) own = q;
-    const bool fused = q.fused();
-    if (fused == sources_[s].fused) continue;
-    sources_[s].fused = fused;
-    ++revision_;
-    if (s == slot) continue;
-    if (fused) ++counters_.quorum_promoted;
-    else ++counters_.quorum_demoted;
-  }
-  return own;
-}
-
-// The candidate replaces the slot's points (appended: each source's points stay contiguous).
-void MapFusion::store(std::size_t slot, bool replaced, std::uint32_t source_id, double timestamp,
-                      const Mat4d& world_T_sensor, bool trusted, MapInsertResult& r) {
-  if (replaced) remove_source_points(slot);
-  first_point_[slot] = num_points_;
+  if (known || displace) remove_source_points(slot);
+  if (displace) ++counters_.sources_evicted_slot;
   std::uint32_t stored = 0;
   for (const Vec3f& p : candidate_) {
     if (num_points_ == config::kMaxMapPoints) {
@@ -255,54 +261,11 @@ void MapFusion::store(std::size_t slot, bool replaced, std::uint32_t source_id, 
   info.points = stored;
   info.active = true;
   info.trusted = trusted;
-  info.fused = !trusted;  // agents are stored only when they agree; units by arbitrate()
   r.stored_points = stored;
-  ++revision_;
-}
-
-MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp, const Mat4d& world_T_sensor,
-                                  std::span<const Vec3f> points, bool trusted) {
-  MapInsertResult r;
-  r.input_points = static_cast<std::uint32_t>(points.size());
-  if (!std::isfinite(timestamp) || !world_T_sensor.allFinite()) return r;
-  bool displace = false;
-  const std::size_t slot = find_slot(source_id, timestamp, trusted, r, displace);
-  if (slot == config::kMaxMapSources) return r;
-  const bool known = sources_[slot].active && !displace;
-  stage_cloud(world_T_sensor, points, r);
-  const bool check = params_.check_consistency && !candidate_.empty();
-  if (!trusted && check) {
-    check_agent(r);
-    if (r.status != MapInsertStatus::kInvalidInput) {  // not stored: the slot keeps its cloud
-      if (r.status == MapInsertStatus::kHeldBack) ++counters_.held_back;
-      else ++counters_.rejected_inconsistent;
-      return r;
-    }
-  }
-  if (!trusted && params_.agent_fill_cell > 0.0) {
-    r.covered_dropped = drop_covered_by_trusted();
-    counters_.agent_points_covered += r.covered_dropped;
-  }
-  if (displace) {
-    release_slot(slot);
-    ++counters_.sources_evicted_slot;
-  }
-  if (!known) quorum_.forget(slot);
-  if (trusted && check) check_infrastructure(slot, r);
-  store(slot, known, source_id, timestamp, world_T_sensor, trusted, r);
   r.status = known ? MapInsertStatus::kReplaced : MapInsertStatus::kInserted;
-  if (trusted) {
-    const QuorumStanding q = check ? arbitrate(slot) : QuorumStanding{};
-    if (!check) sources_[slot].fused = true;
-    if (check && !q.fused()) {
-      r.status = q.disagree > q.agree + q.upheld ? MapInsertStatus::kRejectedInconsistent : MapInsertStatus::kHeldBack;
-      if (r.status == MapInsertStatus::kHeldBack) ++counters_.held_back;
-      else ++counters_.rejected_inconsistent;
-      return r;
-    }
-  }
   if (known) ++counters_.replaced;
   else ++counters_.inserted;
+  ++revision_;
   return r;
 }
 
@@ -310,13 +273,13 @@ std::uint32_t MapFusion::expire(double now) {
   std::uint32_t evicted = 0;
   for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
     if (!sources_[s].active || !(now - sources_[s].timestamp > params_.max_age)) continue;
-    release_slot(s);
+    remove_source_points(s);
+    sources_[s] = MapSourceInfo{};
     ++evicted;
   }
   if (evicted > 0) {
     counters_.sources_evicted_age += evicted;
     ++revision_;
-    if (params_.check_consistency) arbitrate(config::kMaxMapSources);  // the remaining units decide
   }
   return evicted;
 }
@@ -324,18 +287,8 @@ std::uint32_t MapFusion::expire(double now) {
 MapExtractResult MapFusion::extract(BoundedVector<Vec3f>& out) {
   MapExtractResult r;
   out.clear();
-  // Only fused sources; the stored points are used directly when every source is fused.
-  std::span<const Vec3f> fused(points_, num_points_);
-  bool all_fused = true;
-  for (const MapSourceInfo& s : sources_) all_fused = all_fused && (!s.active || s.fused);
-  if (!all_fused) {
-    staging_.clear();
-    for (std::size_t i = 0; i < num_points_; ++i) {
-      if (sources_[point_source_[i]].fused) staging_.push_back(points_[i]);
-    }
-    fused = staging_.span();
-  }
-  const VoxelDownsampleResult ds = downsample_.run(fused, static_cast<float>(params_.voxel_size), out);
+  const VoxelDownsampleResult ds = downsample_.run(
+      std::span<const Vec3f>(points_, num_points_), static_cast<float>(params_.voxel_size), out);
   r.points = static_cast<std::uint32_t>(out.size());
   r.capacity_dropped = ds.output_overflow + ds.hash_overflow + ds.range_overflow;
   return r;

@@ -80,17 +80,6 @@ inline constexpr std::size_t kOdometryMaxPointsPerVoxel = 20;
 inline constexpr std::uint32_t kOdometryMaxIterations = 50;
 // Map fusion: voxel hash slots for merging / consistency checks (power of two, >= 2x points).
 inline constexpr std::size_t kMapFusionHashSlots = kEmbeddedProfile ? 16384 : 262144;
-// Map fusion consistency check (map_consistency.hpp): plane cells of the candidate cloud (hash
-// slots, power of two; a 16k-point infrastructure cloud fills ~3k 1 m cells), reference points
-// examined and matched per check (even strides: bounded work whatever the cloud sizes), the
-// translation ICP's iterations (converges in 3-10 from a 0.25 m offset).
-inline constexpr std::size_t kMapCheckCellSlots = kEmbeddedProfile ? 2048 : 32768;
-inline constexpr std::size_t kMapCheckMaxExamined = 4096;
-inline constexpr std::size_t kMapCheckMaxPoints = 512;
-inline constexpr std::uint32_t kMapCheckMaxIterations = 10;
-// Far search: grid steps per side (x MapFusionParams::search_step 1 m = +-3 m) and points scored.
-inline constexpr std::uint32_t kMapCheckSearchSteps = 3;
-inline constexpr std::size_t kMapCheckSearchPoints = 128;
 
 // ---- Geodesy --------------------------------------------------------------------------------
 // Bowring's ECEF->geodetic iteration converges to 1e-14 rad in 2-3 steps for |h| < 1e5 m.

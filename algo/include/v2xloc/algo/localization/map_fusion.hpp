@@ -7,14 +7,14 @@
 //   - expire(t) evicts sources older than max_age (a parked agent's old view must not persist);
 //   - at most config::kMaxMapSources sources; a new source takes a free slot or evicts the oldest
 //     source if that one is older than the new cloud, otherwise it is refused (counted);
-//   - consistency before trust (map_consistency.hpp, map_quorum.hpp): infrastructure units are
-//     checked against each other where they overlap and fused by quorum; every unit's latest
-//     cloud is stored, fused or not, so that it keeps its vote. Agents are checked against the
-//     fused infrastructure and stored only when they agree. A cloud nobody can check is held back.
+//   - consistency hook: before a cloud is accepted, its overlap with the other sources is measured
+//     (fraction of its points with another source's point nearby, over the points in the region
+//     the others cover); a source below min_fitness with enough overlap is rejected and counted
+//     (a mis-calibrated, spoofed or malicious sender).
 // extract() merges all sources on one voxel grid (centroids, deterministic order) for FPFH /
 // registration; normals come from the shared normals stage (normals.hpp) over the extracted
 // points: it needs the k-d tree the ICP target builds anyway, so the map does not duplicate it.
-// Storage lives in the object (static storage only): ~12 MB host, ~1 MB EMBEDDED.
+// Storage lives in the object (static storage only): ~9 MB host, ~0.8 MB EMBEDDED.
 #pragma once
 
 #include <cstddef>
@@ -24,21 +24,53 @@
 #include "v2xloc/algo/core/bounded_vector.hpp"
 #include "v2xloc/algo/core/config.hpp"
 #include "v2xloc/algo/core/types.hpp"
-#include "v2xloc/algo/localization/map_consistency.hpp"
-#include "v2xloc/algo/localization/map_fusion_params.hpp"
-#include "v2xloc/algo/localization/map_quorum.hpp"
 #include "v2xloc/algo/registration/voxel_downsample.hpp"
 
 namespace v2xloc {
+
+struct MapFusionParams {
+  double voxel_size = 0.2;          // [m] map resolution (registration voxel size)
+  double max_age = 2.0;             // [s] sources older than this are evicted by expire()
+  bool check_consistency = true;
+  double inlier_distance = 0.3;     // [m] "another source's point nearby" (~1.5 voxels)
+  double overlap_cell = 2.0;        // [m] cells that define the region the other sources cover
+  std::uint32_t min_overlap_points = 50;  // fewer overlapping points: no verdict, accepted
+  // Inlier ratio over the overlap region below which a cloud is rejected. A consistent source
+  // scores > 0.95 (test: 0.99); a 1.5 m / 5 deg pose error still scores ~0.5 on planar scenes
+  // (points slide along walls and ground), so the bar sits between.
+  double min_fitness = 0.7;
+  // Agents fill gaps only: an agent's points within ~agent_fill_cell of a trusted (surveyed
+  // infrastructure) point are dropped. Agents place their clouds by their own localization
+  // (cm bias, tenths of a degree); where the infrastructure already sees a surface, the agent's
+  // copy only blurs and biases it. 0 keeps every agent point.
+  double agent_fill_cell = 0.5;  // [m]
+  // Shift probe: the cloud is also scored displaced by +-probe_step (and +-2 probe_step on each
+  // horizontal axis); if it fits the others better anywhere but where its sender put it, by more
+  // than probe_margin, its pose is wrong (a rogue or mis-calibrated source) and it is rejected.
+  // A consistent cloud peaks at zero offset (test scene: 1.000 there, 0.967 at the best probe);
+  // shifted 0.25 m it scores 0.966 where the probe that undoes the shift scores 1.000, so the
+  // margin must sit below that 0.034 gap.
+  double probe_step = 0.25;      // [m]
+  double probe_margin = 0.02;    // fitness difference, agents
+  // Infrastructure units are checked against each other, in arrival order: a rogue unit that
+  // arrives first becomes part of the reference, and a tight margin then rejects the genuine
+  // units instead (measured: 0.25 m rogue, margin 0.02 -> fused error 4.1 m). 0.1 still rejects a
+  // 3 m shift and never inverted in the runs; a quorum over overlapping units is the real fix.
+  double infra_probe_margin = 0.1;  // fitness difference, infrastructure
+  std::uint32_t max_probe_points = 2048;  // overlap points scored per probe (even stride)
+  // Sources per role: invented agent ids cannot evict surveyed infrastructure, nor the reverse.
+  std::uint32_t max_trusted_sources = config::kMaxMapSources / 2;
+  std::uint32_t max_agent_sources = config::kMaxMapSources / 2;
+};
 
 enum class MapInsertStatus : std::uint8_t {
   kInserted,            // new source
   kReplaced,            // newer cloud of a known source
   kStale,               // not newer than the stored cloud
   kNoSourceSlot,        // kMaxMapSources newer sources present
-  kRejectedInconsistent,  // disagrees with the fused infrastructure (agent) or the quorum (infra)
+  kRejectedInconsistent,
   kInvalidInput,        // non-finite pose or time
-  kHeldBack,            // nothing could check it, or a disagreement nothing arbitrates: not fused
+  kHeldBack,            // agent cloud with too little overlap with infrastructure to be checked
 };
 
 struct MapInsertResult {
@@ -47,13 +79,10 @@ struct MapInsertResult {
   std::uint32_t non_finite_dropped = 0;
   std::uint32_t stored_points = 0;      // after downsampling
   std::uint32_t capacity_dropped = 0;   // staging, downsampling or map capacity exceeded
+  std::uint32_t overlap_points = 0;     // consistency check: points in the others' region
   std::uint32_t covered_dropped = 0;    // agent points where the infrastructure already sees
-  // Consistency: pairwise verdicts (an agent has one, against the fused infrastructure), and the
-  // check with the most matched points (its offset is the candidate's estimated displacement).
-  std::uint32_t agreeing = 0;
-  std::uint32_t disagreeing = 0;
-  std::uint32_t uncheckable = 0;
-  MapCheckResult check;
+  double consistency_fitness = 1.0;     // inliers / overlap_points (1 when no verdict)
+  double best_probe_fitness = 0.0;      // best fitness of the shifted probes (shift check)
 };
 
 struct MapSourceInfo {
@@ -63,7 +92,6 @@ struct MapSourceInfo {
   std::uint32_t points = 0;
   bool active = false;
   bool trusted = false;                 // surveyed infrastructure
-  bool fused = false;                   // part of the extracted map (infrastructure: by quorum)
 };
 
 struct MapFusionCounters {
@@ -71,11 +99,8 @@ struct MapFusionCounters {
   std::uint64_t replaced = 0;
   std::uint64_t stale = 0;
   std::uint64_t no_source_slot = 0;
-  std::uint64_t rejected_inconsistent = 0;  // clouds that disagree (offset or inliers), see status
-  std::uint64_t held_back = 0;              // clouds not fused: uncheckable or unarbitrated
-  std::uint64_t quorum_demoted = 0;         // stored units no longer fused after another's cloud
-  std::uint64_t quorum_promoted = 0;        // stored units fused after another's cloud
-  std::uint64_t check_cells_dropped = 0;    // candidate plane cells beyond the table (not checked)
+  std::uint64_t rejected_inconsistent = 0;  // low fitness or fits better shifted
+  std::uint64_t held_back = 0;              // agent clouds that could not be checked
   std::uint64_t sources_evicted_age = 0;
   std::uint64_t sources_evicted_slot = 0;   // oldest source displaced by a new one
   std::uint64_t points_dropped_capacity = 0;
@@ -100,17 +125,19 @@ class MapFusion {
   }
   void clear();
 
-  // points in the sensor frame; world_T_sensor maps them into the global frame. trusted: a
-  // surveyed infrastructure unit (voted on by the quorum), else an agent (checked against the
-  // fused infrastructure).
+  // points in the sensor frame; world_T_sensor maps them into the global frame. A trusted source
+  // (surveyed infrastructure) skips the consistency check: sensors at different corners see
+  // different faces of the same buildings, so their mutual overlap score is low (0.2-0.4
+  // measured for exact poses) and would reject good clouds; the check is for self-localized
+  // agents.
   MapInsertResult insert(std::uint32_t source_id, double timestamp, const Mat4d& world_T_sensor,
                          std::span<const Vec3f> points, bool trusted = false);
   // Evicts sources with now - timestamp > max_age; returns how many.
   std::uint32_t expire(double now);
-  // Merged map of the fused sources on the voxel grid into `out` (cleared first).
+  // Merged map on the voxel grid into `out` (cleared first).
   MapExtractResult extract(BoundedVector<Vec3f>& out);
 
-  std::size_t point_count() const { return num_points_; }  // stored, fused or not
+  std::size_t point_count() const { return num_points_; }
   std::uint64_t revision() const { return revision_; }  // changes whenever the map changes
   std::span<const MapSourceInfo> sources() const { return {sources_, config::kMaxMapSources}; }
   const MapFusionCounters& counters() const { return counters_; }
@@ -125,36 +152,23 @@ class MapFusion {
   static_assert((kSlots & (kSlots - 1)) == 0, "hash slots must be a power of two");
   static_assert(config::kMaxMapSources <= 255, "source slot stored in a byte");
 
-  // insert() steps, in order.
-  std::size_t find_slot(std::uint32_t source_id, double timestamp, bool trusted, MapInsertResult& r,
-                        bool& displace);
-  void stage_cloud(const Mat4d& world_T_sensor, std::span<const Vec3f> points, MapInsertResult& r);
-  void check_infrastructure(std::size_t slot, MapInsertResult& r);
-  void check_agent(MapInsertResult& r);
-  void store(std::size_t slot, bool replaced, std::uint32_t source_id, double timestamp,
-             const Mat4d& world_T_sensor, bool trusted, MapInsertResult& r);
-  // Re-decides which infrastructure units are fused; returns the standing of `slot`.
-  QuorumStanding arbitrate(std::size_t slot);
-
   void remove_source_points(std::size_t slot);
-  void release_slot(std::size_t slot);
-  std::span<const Vec3f> source_points(std::size_t slot) const {
-    return {points_ + first_point_[slot], sources_[slot].points};
-  }
-  void fold_check(const MapCheckResult& c, MapInsertResult& r) const;
-  bool cell_key(const Vec3f& p, double cell, std::int32_t key[3]) const;
+  bool cell_key(const Vec3f& p, double cell, std::int32_t level, std::int32_t key[3]) const;
   void new_cell_generation();  // empties the cell table (O(1) except on stamp wrap-around)
   bool mark(const std::int32_t key[3]);
   bool occupied(const std::int32_t key[3]) const;
-  bool occupied_around(const Vec3f& p, double cell) const;
-  // Drops candidate points near a fused infrastructure point (agent_fill_cell); returns how many.
-  std::uint32_t drop_covered_by_trusted();
+  bool occupied_around(const Vec3f& p, double cell, std::int32_t level) const;
+  // Fraction of candidate points near other sources' points (see header), excluding `slot`;
+  // only trusted (infrastructure) sources are the reference. best_probe: the best fitness of the
+  // candidate displaced by the shift probes.
+  double consistency(std::size_t slot, std::uint32_t& overlap_points, double& best_probe);
+  // Drops candidate points near a trusted source's point (agent_fill_cell); returns how many.
+  std::uint32_t drop_covered_by_trusted(std::size_t slot);
 
   MapFusionParams params_;
   MapSourceInfo sources_[config::kMaxMapSources];
   Vec3f points_[config::kMaxMapPoints];
   std::uint8_t point_source_[config::kMaxMapPoints];
-  std::size_t first_point_[config::kMaxMapSources] = {};  // each source's points are contiguous
   std::size_t num_points_ = 0;
   std::uint64_t revision_ = 0;
   MapFusionCounters counters_;
@@ -162,8 +176,6 @@ class MapFusion {
   FixedVector<Vec3f, config::kMaxScanPoints> staging_;
   FixedVector<Vec3f, config::kMaxMapPoints> candidate_;
   VoxelDownsampleStorage<config::kMapFusionHashSlots, config::kMaxMapPoints> downsample_;
-  MapConsistencyCheck check_;
-  InfraQuorum quorum_;
   Cell cells_[kSlots] = {};
   std::uint32_t stamp_ = 0;
 };
