@@ -21,31 +21,56 @@ bool distinct_basin(const Mat4d& a, const Mat4d& b, const PoseSearchParams& sp) 
 void BasinAudit::configure(const LocalizerParams& params) {
   params_ = params;
   frames_since_audit_ = 0;
+  running_ = false;
 }
 
 AuditOutcome BasinAudit::step(const AuditFrame& f, LocalizerCounters& counters) {
-  if (params_.audit_period_frames == 0 || ++frames_since_audit_ < params_.audit_period_frames) return {};
-  frames_since_audit_ = 0;
-  f.probe(LocalizerStage::kAudit);
-  const AuditOutcome out = audit(f, counters);
+  // A search that outlived its track (frames without tracking in between) is dropped.
+  if (running_ && f.frame - started_frame_ > params_.audit_max_frames) running_ = false;
+  if (!running_) {
+    if (params_.audit_period_frames == 0 || ++frames_since_audit_ < params_.audit_period_frames) return {};
+    frames_since_audit_ = 0;
+    f.probe(LocalizerStage::kAudit);
+    start(f);
+  } else {
+    f.probe(LocalizerStage::kAudit);
+  }
+  const std::uint64_t budget = params_.audit_queries_per_period > 0 ? params_.audit_queries_per_period : ~std::uint64_t{0};
+  AuditOutcome out;
+  if (job_.step(f.map, budget)) {
+    running_ = false;
+    out = finish(f, counters);
+  }
   f.probe(LocalizerStage::kTracking);
   return out;
 }
 
-AuditOutcome BasinAudit::audit(const AuditFrame& f, LocalizerCounters& counters) const {
+void BasinAudit::start(const AuditFrame& f) {
+  search_params_ = params_.search;
+  search_params_.radius = params_.audit_radius;
+  search_params_.sensor_in_body = f.sensor_in_body;
+  search_params_.refine_candidates = params_.audit_refine_candidates;
+  tracked_at_start_ = f.tracked.matrix();
+  odom_at_start_ = f.odom_T_body.matrix();
+  started_frame_ = f.frame;
+  job_.start(f.search_scan, f.map, tracked_at_start_.topRightCorner<3, 1>(), search_params_);
+  running_ = true;
+}
+
+// The search's verdict, in the frame it started at; a nominated basin is carried to this frame
+// by the odometry and decided on this frame's full scan.
+AuditOutcome BasinAudit::finish(const AuditFrame& f, LocalizerCounters& counters) const {
   AuditOutcome out;
   ++counters.basin_audits;
   out.audited = true;
-  const Mat4d& tracked = f.tracked.matrix();
-  PoseSearchParams sp = params_.search;
-  sp.radius = params_.audit_radius;
-  sp.sensor_in_body = f.sensor_in_body;
-  const PoseSearchResult s = search_pose(f.search_scan, f.map, tracked.topRightCorner<3, 1>(), sp, f.icp_hints);
-  if (!s.best.ok() || !distinct_basin(tracked, s.best.transform, sp)) return out;
-  const double tracked_tight = evaluate_registration(f.search_scan, f.map, tracked, sp.select_distance).fitness;
+  const PoseSearchResult& s = job_.result();
+  const PoseSearchParams& sp = search_params_;
+  if (!s.best.ok() || !distinct_basin(tracked_at_start_, s.best.transform, sp)) return out;
+  const double tracked_tight = evaluate_registration(job_.scan(), f.map, tracked_at_start_, sp.select_distance).fitness;
   if (!(s.best_tight_fitness > params_.audit_switch_ratio * tracked_tight)) return out;
+  const Mat4d nominated = s.best.transform * se3_inverse(odom_at_start_) * f.odom_T_body.matrix();
   Mat4d refined = Mat4d::Identity();
-  if (!wins_on_full_scan(f, s.best.transform, refined)) return out;
+  if (!wins_on_full_scan(f, nominated, refined)) return out;
   ++counters.basin_switches;
   out.switch_basin = true;
   out.candidate = Pose3d(refined);

@@ -145,7 +145,8 @@ RegistrationResult Localizer::track(double t, const Mat4d& body_T_lidar) {
   const TrackingFrame frame{filter_.pose(),       scan_.registration_scan(), scan_.tracking_scan(),
                             scan_.search_scan(),  scan_.stereo_cloud(),
                             map_.target(),        body_T_lidar.topRightCorner<3, 1>(),
-                            icp_hints(),          probe_};
+                            icp_hints(),          probe_,
+                            frame_,               odom_T_body_};
   const TrackingOutcome o = tracking_.step(frame, counters_);
   output_.basin_audited = o.audit.audited;
   if (o.audit.switch_basin) {
@@ -222,6 +223,7 @@ void Localizer::fuse(double t, const RegistrationResult& result, bool attempted_
 void Localizer::lose_track() {
   filter_.lose_track();
   startup_.on_track_lost();
+  tracking_.on_track_lost();
   ++counters_.track_losses;
 }
 

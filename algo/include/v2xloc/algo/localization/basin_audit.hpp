@@ -1,8 +1,11 @@
 // The basin audit: every audit_period_frames tracked frames a local exhaustive pose search
 // around the tracked pose asks whether tracking sits in an aliased basin (a street repeats
-// itself along its length). The search's subsample only nominates another basin; the switch is
-// decided on the full scan after the tracking ICP. Owns its period count; one entry point per
-// tracked frame (step) with everything it reads in an AuditFrame.
+// itself along its length). The search runs as a job spread over the following tracked frames,
+// audit_queries_per_period nearest-neighbour queries each (pose_search.hpp), on the scan and
+// tracked pose of the frame it started at; its answer is carried to the current frame by the
+// odometry. The search's subsample only nominates another basin; the switch is decided on the
+// current full scan after the tracking ICP. Owns its period count and the job; one entry point
+// per tracked frame (step) with everything it reads in an AuditFrame.
 #pragma once
 
 #include <cstdint>
@@ -12,6 +15,7 @@
 #include "v2xloc/algo/localization/localizer_types.hpp"
 #include "v2xloc/algo/localization/stage_probe.hpp"
 #include "v2xloc/algo/registration/icp.hpp"
+#include "v2xloc/algo/registration/pose_search.hpp"
 
 namespace v2xloc {
 
@@ -23,6 +27,8 @@ struct AuditFrame {
   Vec3d sensor_in_body = Vec3d::Zero();
   std::span<std::uint32_t> icp_hints{};  // ICP scratch, >= scan.size()
   StageProbe probe{};                    // marks kAudit while it runs, then kTracking
+  std::uint32_t frame = 0;               // localizer frame index
+  Pose3d odom_T_body = Pose3d::Identity();  // this frame's odometry pose
 };
 
 struct AuditOutcome {
@@ -35,15 +41,24 @@ class BasinAudit {
  public:
   void configure(const LocalizerParams& params);
   AuditOutcome step(const AuditFrame& frame, LocalizerCounters& counters);
+  // Tracking was lost: a running search no longer describes the track.
+  void cancel() { running_ = false; }
 
  private:
-  AuditOutcome audit(const AuditFrame& f, LocalizerCounters& counters) const;
+  void start(const AuditFrame& f);
+  AuditOutcome finish(const AuditFrame& f, LocalizerCounters& counters) const;
   // Refines the nominated basin on the full scan; true when it still differs from the tracked
   // pose and beats it by audit_full_switch_ratio.
   bool wins_on_full_scan(const AuditFrame& f, const Mat4d& nominated, Mat4d& refined) const;
 
   LocalizerParams params_{};
   std::uint32_t frames_since_audit_ = 0;
+  PoseSearch job_{};
+  PoseSearchParams search_params_{};
+  bool running_ = false;
+  std::uint32_t started_frame_ = 0;
+  Mat4d tracked_at_start_ = Mat4d::Identity();  // world_T_body the search was started around
+  Mat4d odom_at_start_ = Mat4d::Identity();     // odom_T_body at that frame
 };
 
 }  // namespace v2xloc

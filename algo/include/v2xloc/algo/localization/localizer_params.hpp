@@ -74,6 +74,11 @@ struct LocalizerParams {
   double global_confirm_yaw = 0.035;      // [rad] confirmation: heading disagreement allowed (2 deg)
   std::uint32_t audit_period_frames = 10; // [frames] between basin audits while tracking (0: off)
   double audit_radius = 8.0;              // [m] basin audit: search disc around the tracked pose
+  // [queries/period] the audit's pose search runs beside tracking, this many nearest-neighbour
+  // queries per tracked frame (0: the whole search in one frame)
+  std::uint32_t audit_queries_per_period = 30000;
+  std::uint32_t audit_max_frames = 40;    // [frames] a search not finished within this is dropped
+  std::uint32_t audit_refine_candidates = 10;  // [hypotheses] the audit refines (<= kPoseSearchRefine)
   double audit_switch_ratio = 1.15;       // [ratio] audit pose's tight fitness over tracked: switch
   double audit_full_switch_ratio = 1.15;  // [ratio] ... and again on the full scan after ICP: switch
   std::uint32_t track_frames = 30;        // [frames] GNSS track compared (<= kTrackFrames)

@@ -25,6 +25,8 @@ struct TrackingFrame {
   Vec3d sensor_in_body = Vec3d::Zero();
   std::span<std::uint32_t> icp_hints{};   // ICP scratch, >= scan.size()
   StageProbe probe{};
+  std::uint32_t frame = 0;                  // localizer frame index
+  Pose3d odom_T_body = Pose3d::Identity();  // this frame's odometry pose
 };
 
 struct TrackingOutcome {
@@ -38,6 +40,7 @@ class TrackingRegistration {
  public:
   void configure(const LocalizerParams& params);
   TrackingOutcome step(const TrackingFrame& frame, LocalizerCounters& counters);
+  void on_track_lost() { audit_.cancel(); }
 
  private:
   LocalizerParams params_{};
