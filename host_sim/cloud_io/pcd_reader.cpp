@@ -315,31 +315,48 @@ bool read_binary(std::span<const std::uint8_t> bytes, const Header& h, PointClou
   return true;
 }
 
-bool read_compressed(std::span<const std::uint8_t> bytes, const Header& h, PointCloud& out,
-                     std::string& error) {
+// The [compressed size][raw size] prefix both compressed encodings share, checked against the
+// file (truncation), the header (POINTS x record size) and the codec's largest expansion.
+struct CompressedBlock {
+  const std::uint8_t* data = nullptr;
+  std::uint32_t compressed = 0;
+  std::uint32_t raw = 0;
+};
+
+bool read_block_sizes(std::span<const std::uint8_t> bytes, const Header& h, const char* encoding,
+                      std::uint64_t max_expansion, CompressedBlock& block, std::string& error) {
   std::uint64_t need = 0;
   if (!checked_data_size(h, need, error)) return false;
   const std::size_t have = bytes.size() - h.data_offset;
-  if (have < 8) { error = "truncated: binary_compressed sizes missing"; return false; }
+  if (have < 8) { error = std::string("truncated: ") + encoding + " sizes missing"; return false; }
   const std::uint8_t* base = bytes.data() + h.data_offset;
-  const std::uint32_t compressed = detail::load<std::uint32_t>(base);
-  const std::uint32_t raw = detail::load<std::uint32_t>(base + 4);
-  if (compressed > have - 8) {
-    error = "truncated: compressed block of " + std::to_string(compressed) + " bytes, file has " +
+  block.compressed = detail::load<std::uint32_t>(base);
+  block.raw = detail::load<std::uint32_t>(base + 4);
+  block.data = base + 8;
+  if (block.compressed > have - 8) {
+    error = "truncated: compressed block of " + std::to_string(block.compressed) + " bytes, file has " +
             std::to_string(have - 8);
     return false;
   }
-  if (raw != need) {
-    error = "binary_compressed raw size " + std::to_string(raw) + " != POINTS x record size " +
+  if (block.raw != need) {
+    error = std::string(encoding) + " raw size " + std::to_string(block.raw) + " != POINTS x record size " +
             std::to_string(need);
     return false;
   }
-  if (raw > std::uint64_t{compressed} * kMaxLzfExpansion + 64) {
-    error = "binary_compressed raw size impossible for its compressed size (lying header)";
+  if (block.raw > std::uint64_t{block.compressed} * max_expansion + 64) {
+    error = std::string(encoding) + " raw size impossible for its compressed size (lying header)";
     return false;
   }
+  return true;
+}
+
+bool read_compressed(std::span<const std::uint8_t> bytes, const Header& h, PointCloud& out,
+                     std::string& error) {
+  CompressedBlock b;
+  if (!read_block_sizes(bytes, h, "binary_compressed", kMaxLzfExpansion, b, error)) return false;
+  const std::uint32_t raw = b.raw;
   std::vector<std::uint8_t> soa(raw);
-  if (raw > 0 && lzf_decompress({base + 8, compressed}, soa) != raw) {
+  if (raw > 0 && lzf_decompress({b.data, b.compressed}, soa) != raw) {
     error = "corrupt LZF data in binary_compressed block"; return false;
   }
   // Struct-of-arrays: field f's values start at points * (bytes of the fields before f).
@@ -352,30 +369,12 @@ bool read_compressed(std::span<const std::uint8_t> bytes, const Header& h, Point
 
 bool read_shuffled_zlib(std::span<const std::uint8_t> bytes, const Header& h, PointCloud& out,
                         std::string& error) {
-  std::uint64_t need = 0;
-  if (!checked_data_size(h, need, error)) return false;
-  const std::size_t have = bytes.size() - h.data_offset;
-  if (have < 8) { error = "truncated: binary_shuffled_zlib sizes missing"; return false; }
-  const std::uint8_t* base = bytes.data() + h.data_offset;
-  const std::uint32_t compressed = detail::load<std::uint32_t>(base);
-  const std::uint32_t raw = detail::load<std::uint32_t>(base + 4);
-  if (compressed > have - 8) {
-    error = "truncated: compressed block of " + std::to_string(compressed) + " bytes, file has " +
-            std::to_string(have - 8);
-    return false;
-  }
-  if (raw != need) {
-    error = "binary_shuffled_zlib raw size " + std::to_string(raw) + " != POINTS x record size " +
-            std::to_string(need);
-    return false;
-  }
-  if (raw > std::uint64_t{compressed} * kMaxZlibExpansion + 64) {
-    error = "binary_shuffled_zlib raw size impossible for its compressed size (lying header)";
-    return false;
-  }
+  CompressedBlock b;
+  if (!read_block_sizes(bytes, h, "binary_shuffled_zlib", kMaxZlibExpansion, b, error)) return false;
+  const std::uint32_t raw = b.raw;
   // Not value-initialised: zlib writes every byte (checked), and zeroing 1 MB per scan showed.
   const std::unique_ptr<std::uint8_t[]> planes(new std::uint8_t[raw]);
-  if (raw > 0 && zlib_decompress({base + 8, compressed}, {planes.get(), raw}) != raw) {
+  if (raw > 0 && zlib_decompress({b.data, b.compressed}, {planes.get(), raw}) != raw) {
     error = "corrupt zlib data in binary_shuffled_zlib block"; return false;
   }
   // Value e of field f: byte k at (block start) + k * (values in the block) + e.

@@ -118,20 +118,25 @@ double LidarOdometry::model_sigma() const {
   return std::sqrt(deviation_sse_ / static_cast<double>(deviation_samples_));
 }
 
-OdometryResult LidarOdometry::register_frame(std::span<const Vec3f> scan, const Mat4d* predicted_delta) {
-  OdometryResult r;
-  // Range filter (also drops NaN / Inf).
-  in_range_.clear();
+// Points within [min_range, max_range] (NaN / Inf fail the test too), drops counted.
+void LidarOdometry::keep_in_range(std::span<const Vec3f> points, BoundedVector<Vec3f>& out, OdometryResult& r) const {
+  out.clear();
   const double min2 = params_.min_range * params_.min_range;
   const double max2 = params_.max_range * params_.max_range;
-  for (const Vec3f& p : scan) {
+  for (const Vec3f& p : points) {
     const double d2 = p.cast<double>().squaredNorm();
     if (!(d2 >= min2 && d2 <= max2)) {
       ++r.points_dropped_range;
       continue;
     }
-    if (!in_range_.push_back(p)) ++r.points_dropped_capacity;
+    if (!out.push_back(p)) ++r.points_dropped_capacity;
   }
+}
+
+OdometryResult LidarOdometry::register_frame(std::span<const Vec3f> scan, const Mat4d* predicted_delta) {
+  OdometryResult r;
+  // Range filter (also drops NaN / Inf).
+  keep_in_range(scan, in_range_, r);
   // Double voxelisation (KISS-ICP III-B): 0.5 v for the map, 1.5 v for registration.
   frame_fine_.clear();
   const VoxelDownsampleResult fine = downsample_.run(
@@ -142,17 +147,7 @@ OdometryResult LidarOdometry::register_frame(std::span<const Vec3f> scan, const 
 
 OdometryResult LidarOdometry::register_voxelized_frame(std::span<const Vec3f> fine, const Mat4d* predicted_delta) {
   OdometryResult r;
-  frame_fine_.clear();
-  const double min2 = params_.min_range * params_.min_range;
-  const double max2 = params_.max_range * params_.max_range;
-  for (const Vec3f& p : fine) {
-    const double d2 = p.cast<double>().squaredNorm();
-    if (!(d2 >= min2 && d2 <= max2)) {
-      ++r.points_dropped_range;
-      continue;
-    }
-    if (!frame_fine_.push_back(p)) ++r.points_dropped_capacity;
-  }
+  keep_in_range(fine, frame_fine_, r);
   return register_fine(predicted_delta, r);
 }
 

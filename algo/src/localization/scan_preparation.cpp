@@ -69,12 +69,9 @@ void ScanPreparation::downsample_for_registration(const Mat4d& body_T_lidar) {
   down_.clear();
   for (const Vec3f& p : ingest_.points()) down_.push_back(transform_point(body_T_lidar, p));
   subsample(down_.span(), params_.tracking_points, tracking_);
-  search_.clear();
-  const std::size_t want = params_.search_points < config::kMaxSearchPoints ? params_.search_points
-                                                                             : config::kMaxSearchPoints;
-  const std::size_t n = down_.size();
-  const std::size_t stride = want > 0 && n > want ? (n + want - 1) / want : 1;
-  for (std::size_t i = 0; i < n; i += stride) search_.push_back(down_[i]);
+  subsample(down_.span(), params_.search_points < config::kMaxSearchPoints ? params_.search_points
+                                                                          : config::kMaxSearchPoints,
+            search_);
 }
 
 void ScanPreparation::subsample(std::span<const Vec3f> in, std::size_t want, BoundedVector<Vec3f>& out) {

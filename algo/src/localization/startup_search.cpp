@@ -112,7 +112,7 @@ void StartupSearch::exhaustive_search(const StartupFrame& f, Search& s, Localize
     sp.yaw_prior_tolerance = params_.heading_search_tolerance;
     ++counters.heading_searches;
   }
-  s.searched = search_pose(f.search_scan, f.map, f.gnss.enu, sp, f.icp_hints);
+  s.searched = search_pose(f.search_scan, f.map, f.gnss.enu, sp);
   const PoseSearchResult& searched = s.searched;
   s.best = searched.best;
   const bool distinct = searched.best_tight_fitness > 0.0 &&

@@ -142,9 +142,7 @@ double ray_conflict_ratio(std::span<const Vec3f> scan_body, const IcpTarget& map
 }
 
 PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& map,
-                             const Vec3d& center, const PoseSearchParams& params,
-                             std::span<std::uint32_t> neighbor_scratch) {
-  (void)neighbor_scratch;  // the job keeps its own hints (same results)
+                             const Vec3d& center, const PoseSearchParams& params) {
   g_search.start(scan_body, map, center, params);
   while (!g_search.step(map, ~std::uint64_t{0})) {
   }

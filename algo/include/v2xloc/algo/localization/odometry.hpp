@@ -113,6 +113,7 @@ class LidarOdometry {
   std::uint32_t find_voxel(const std::int32_t key[3]) const;  // index or kNone
   std::uint32_t insert_voxel(const std::int32_t key[3]);      // index or kNone (full)
   bool nearest(const Vec3d& p, double max_d2, Vec3d& q, double& d2) const;
+  void keep_in_range(std::span<const Vec3f> points, BoundedVector<Vec3f>& out, OdometryResult& r) const;
   OdometryResult register_fine(const Mat4d* predicted_delta, OdometryResult& r);
   OdometryResult finish_frame(OdometryResult& r) const;
   void update_threshold(OdometryResult& r);

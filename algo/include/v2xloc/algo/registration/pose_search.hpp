@@ -157,10 +157,9 @@ class PoseSearch {
 };
 
 // Work: hypotheses * score_points bounded nearest queries, then 2 * kPoseSearchRefine ICPs over
-// scan_body (callers bound its size: the localizer passes <= config::kMaxSearchPoints points).
-// neighbor_scratch (optional, >= scan_body.size()): ICP match hints (icp.hpp); same result.
+// scan_body (<= config::kMaxSearchPoints points are searched, the rest counted). One PoseSearch
+// job run to completion; it keeps its own ICP match hints.
 PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& map,
-                             const Vec3d& center, const PoseSearchParams& params,
-                             std::span<std::uint32_t> neighbor_scratch = {});
+                             const Vec3d& center, const PoseSearchParams& params);
 
 }  // namespace v2xloc

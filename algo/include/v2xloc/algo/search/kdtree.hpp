@@ -234,19 +234,21 @@ struct KdTreeStorage {
 
   KdBuildResult build(std::span<const P> points,
                       std::size_t max_node_visits = config::kKdMaxNodeVisits) {
-    KdBuildParams params;
-    params.leaf_size = LeafSize;
-    params.max_node_visits = max_node_visits;
-    return tree.build(points, std::span<std::uint32_t>(indices, N),
-                      std::span<KdNode>(nodes, kd_max_nodes(N, LeafSize)), params);
+    return tree.build(points, index_span(), node_span(), params(max_node_visits));
   }
   KdBuildResult begin_build(std::span<const P> points,
                             std::size_t max_node_visits = config::kKdMaxNodeVisits) {
-    KdBuildParams params;
-    params.leaf_size = LeafSize;
-    params.max_node_visits = max_node_visits;
-    return tree.begin_build(points, std::span<std::uint32_t>(indices, N),
-                            std::span<KdNode>(nodes, kd_max_nodes(N, LeafSize)), params);
+    return tree.begin_build(points, index_span(), node_span(), params(max_node_visits));
+  }
+
+ private:
+  std::span<std::uint32_t> index_span() { return {indices, N}; }
+  std::span<KdNode> node_span() { return {nodes, kd_max_nodes(N, LeafSize)}; }
+  static KdBuildParams params(std::size_t max_node_visits) {
+    KdBuildParams p;
+    p.leaf_size = LeafSize;
+    p.max_node_visits = max_node_visits;
+    return p;
   }
 };
 
