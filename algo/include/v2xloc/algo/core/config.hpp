@@ -38,6 +38,12 @@ inline constexpr std::size_t kKdMaxDepth = 48;          // traversal stack depth
 inline constexpr std::size_t kKdMaxNodeVisits = 4096;   // per query; bounded worst case
 inline constexpr std::size_t kMaxNeighbors = 128;       // kNN / hybrid result buffers
 
+// ---- Proximity grid -------------------------------------------------------------------------
+// Pose-search hypothesis scoring asks "a map point within reach?" of a bitmap, one bit per cell
+// (search/proximity_grid.hpp); rows of 64-bit words. 2^21 cells = 256 KiB: a 220 x 220 x 40 m
+// box (+ reach margin) at 1.125 m cells. Bigger boxes get bigger cells, not an overflow.
+inline constexpr std::size_t kProximityGridWords = kEmbeddedProfile ? 8192 : 32768;  // 64-bit words (host 256 KiB, embedded 64 KiB)
+
 // ---- Normals / FPFH -------------------------------------------------------------------------
 inline constexpr std::size_t kNormalMaxNeighbors = 30;  // Open3D's KDTreeSearchParamHybrid default
 inline constexpr std::size_t kFpfhMaxNeighbors = 100;   // Open3D examples: radius 5 voxels, 100 nn
