@@ -412,40 +412,17 @@ std::size_t PointCloudReassembler::expire(std::int64_t now_ns) {
   return dropped;
 }
 
-CloudStatus PointCloudReassembler::push(std::span<const std::uint8_t> datagram, std::int64_t now_ns) {
-  release_completed();
-  last_accepted_ = AcceptedFragment{};
-  ++counters_.datagrams;
-  expire(now_ns);
+void PointCloudReassembler::open_slot(std::size_t index, const CloudFragmentHeader& h, std::int64_t now_ns) {
+  ReassemblySlot& fresh = storage_.slots[index];
+  fresh.state = ReassemblySlot::State::kFilling;
+  fresh.meta = h;
+  fresh.first_rx_ns = now_ns;
+  for (std::size_t w = 0; w < bitmap_words(); ++w) storage_.bitmaps[index * bitmap_words() + w] = 0;
+}
 
-  CloudFragmentHeader h;
-  std::span<const std::uint8_t> payload;
-  const CloudStatus parsed = parse_cloud_fragment(datagram, h, payload);
-  if (parsed != CloudStatus::kOk) return count(parsed);
-  if (storage_.slots.empty() || h.total_points > storage_.max_points || h.fragment_count > storage_.max_fragments) {
-    return count(CloudStatus::kCapacityExceeded);
-  }
-
-  std::size_t index = find_slot(h);
-  if (index != SIZE_MAX) {
-    if (!same_frame(storage_.slots[index].meta, h)) return count(CloudStatus::kInconsistent);
-  } else {
-    if (recently_finished(h)) return count(CloudStatus::kStaleFrame);
-    index = claim_slot(now_ns);
-    if (index == SIZE_MAX) return count(CloudStatus::kCapacityExceeded);
-    ReassemblySlot& fresh = storage_.slots[index];
-    fresh.state = ReassemblySlot::State::kFilling;
-    fresh.meta = h;
-    fresh.first_rx_ns = now_ns;
-    for (std::size_t w = 0; w < bitmap_words(); ++w) storage_.bitmaps[index * bitmap_words() + w] = 0;
-  }
-  ReassemblySlot& slot = storage_.slots[index];
-  std::uint64_t& word = storage_.bitmaps[index * bitmap_words() + h.fragment_index / 64u];
-  const std::uint64_t bit = std::uint64_t{1} << (h.fragment_index % 64u);
-  if (word & bit) return count(CloudStatus::kDuplicate);
-  word |= bit;
-
-  // Decode straight into the slot; parse_cloud_fragment() guaranteed first + count <= total.
+// Decodes straight into the slot; parse_cloud_fragment() guaranteed first + count <= total.
+void PointCloudReassembler::decode_points(std::size_t index, const CloudFragmentHeader& h,
+                                          std::span<const std::uint8_t> payload) {
   const std::size_t base = static_cast<std::size_t>(index) * storage_.max_points;
   const std::size_t first = static_cast<std::size_t>(h.fragment_index) * h.points_per_fragment;
   const bool wide = (h.flags & cloud_flags::kCoordsInt32) != 0;
@@ -470,11 +447,11 @@ CloudStatus PointCloudReassembler::push(std::span<const std::uint8_t> datagram, 
       r += 2;
     }
   }
-  slot.points_received += h.points_in_fragment;
-  ++slot.fragments_received;
-  last_accepted_ = AcceptedFragment{true, index, h.fragment_index, h.info.type, payload};
-  if (slot.fragments_received < slot.meta.fragment_count) return count(CloudStatus::kOk);
+}
 
+void PointCloudReassembler::publish_completed(std::size_t index, std::int64_t now_ns) {
+  ReassemblySlot& slot = storage_.slots[index];
+  const std::size_t base = static_cast<std::size_t>(index) * storage_.max_points;
   slot.state = ReassemblySlot::State::kComplete;
   remember_finished(slot.meta);
   completed_slot_ = index;
@@ -493,6 +470,43 @@ CloudStatus PointCloudReassembler::push(std::span<const std::uint8_t> datagram, 
   completed_.fragment_count = slot.meta.fragment_count;
   completed_.points_per_fragment = slot.meta.points_per_fragment;
   completed_.slot = index;
+}
+
+CloudStatus PointCloudReassembler::push(std::span<const std::uint8_t> datagram, std::int64_t now_ns) {
+  release_completed();
+  last_accepted_ = AcceptedFragment{};
+  ++counters_.datagrams;
+  expire(now_ns);
+
+  CloudFragmentHeader h;
+  std::span<const std::uint8_t> payload;
+  const CloudStatus parsed = parse_cloud_fragment(datagram, h, payload);
+  if (parsed != CloudStatus::kOk) return count(parsed);
+  if (storage_.slots.empty() || h.total_points > storage_.max_points || h.fragment_count > storage_.max_fragments) {
+    return count(CloudStatus::kCapacityExceeded);
+  }
+
+  std::size_t index = find_slot(h);
+  if (index != SIZE_MAX) {
+    if (!same_frame(storage_.slots[index].meta, h)) return count(CloudStatus::kInconsistent);
+  } else {
+    if (recently_finished(h)) return count(CloudStatus::kStaleFrame);
+    index = claim_slot(now_ns);
+    if (index == SIZE_MAX) return count(CloudStatus::kCapacityExceeded);
+    open_slot(index, h, now_ns);
+  }
+  std::uint64_t& word = storage_.bitmaps[index * bitmap_words() + h.fragment_index / 64u];
+  const std::uint64_t bit = std::uint64_t{1} << (h.fragment_index % 64u);
+  if (word & bit) return count(CloudStatus::kDuplicate);
+  word |= bit;
+
+  decode_points(index, h, payload);
+  ReassemblySlot& slot = storage_.slots[index];
+  slot.points_received += h.points_in_fragment;
+  ++slot.fragments_received;
+  last_accepted_ = AcceptedFragment{true, index, h.fragment_index, h.info.type, payload};
+  if (slot.fragments_received < slot.meta.fragment_count) return count(CloudStatus::kOk);
+  publish_completed(index, now_ns);
   return count(CloudStatus::kFrameComplete);
 }
 

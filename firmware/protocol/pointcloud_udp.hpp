@@ -240,6 +240,12 @@ class PointCloudReassembler {
   std::size_t find_slot(const CloudFragmentHeader& meta) const;
   std::size_t claim_slot(std::int64_t now_ns);
   std::size_t bitmap_words() const;
+  // A claimed slot starts filling frame h: header kept, fragment bits cleared.
+  void open_slot(std::size_t index, const CloudFragmentHeader& h, std::int64_t now_ns);
+  // Dequantizes fragment h's points into slot `index`'s storage.
+  void decode_points(std::size_t index, const CloudFragmentHeader& h, std::span<const std::uint8_t> payload);
+  // Slot `index` holds a whole frame: completed() describes it until the next push.
+  void publish_completed(std::size_t index, std::int64_t now_ns);
 
   Storage storage_;
   ReassemblyConfig config_;

@@ -44,6 +44,80 @@ bool parse_key(const Token& t, PublicKey& key) {
   return true;
 }
 
+bool is_separator(char c) { return c == ' ' || c == '\t' || c == '\r'; }
+
+// Splits one line into tokens up to a '#' comment; false on a byte outside printable ASCII or
+// more than kMaxTokens tokens.
+bool tokenize(const char* line, std::size_t len, Token (&tok)[kMaxTokens], std::size_t& nt) {
+  nt = 0;
+  for (std::size_t i = 0; i < len;) {
+    const char c = line[i];
+    if (c == '#') break;
+    if (is_separator(c)) {
+      ++i;
+      continue;
+    }
+    if (static_cast<unsigned char>(c) < 0x21 || static_cast<unsigned char>(c) > 0x7E) return false;
+    if (nt == kMaxTokens) return false;
+    std::size_t j = i;
+    while (j < len && !is_separator(line[j]) && line[j] != '#') ++j;
+    tok[nt++] = Token{line + i, j - i};
+    i = j;
+  }
+  return true;
+}
+
+// "signer <role> <sender id> <key> [name]" (keyword and field count already checked) into s.
+TrustListStatus parse_signer(const Token* tok, std::size_t nt, TrustedSigner& s) {
+  if (tok[1].is("infrastructure")) {
+    s.role = SignerRole::kInfrastructure;
+  } else if (tok[1].is("agent")) {
+    s.role = SignerRole::kAgent;
+  } else {
+    return TrustListStatus::kBadRole;
+  }
+  if (!parse_u32(tok[2], s.sender_id)) return TrustListStatus::kBadSenderId;
+  if (!parse_key(tok[3], s.key) || check_public_key(s.key) != CryptoStatus::kOk) {
+    return TrustListStatus::kBadKey;
+  }
+  s.id = hashed_id8(s.key);
+  if (nt == 5) {
+    const std::size_t n = tok[4].n < s.name.size() - 1 ? tok[4].n : s.name.size() - 1;
+    std::memcpy(s.name.data(), tok[4].p, n);
+  }
+  return TrustListStatus::kOk;
+}
+
+// Appends s unless its key or sender id is listed already or the list is full.
+TrustListStatus add_signer(const TrustedSigner& s, TrustList& list) {
+  for (std::size_t k = 0; k < list.count; ++k) {
+    if (list.signers[k].id == s.id || list.signers[k].sender_id == s.sender_id) {
+      return TrustListStatus::kDuplicate;
+    }
+  }
+  if (list.count == kMaxTrustedSigners) return TrustListStatus::kTooMany;
+  list.signers[list.count++] = s;
+  return TrustListStatus::kOk;
+}
+
+// One line (without its '\n'): blank or comment, the header (first), or a signer.
+TrustListStatus parse_line(const char* line, std::size_t len, bool& header, TrustList& list) {
+  if (len > kMaxLine) return TrustListStatus::kSyntax;
+  Token tok[kMaxTokens];
+  std::size_t nt = 0;
+  if (!tokenize(line, len, tok, nt)) return TrustListStatus::kSyntax;
+  if (nt == 0) return TrustListStatus::kOk;
+  if (!header) {
+    if (nt != 2 || !tok[0].is("v2xloc-trust-list") || !tok[1].is("1")) return TrustListStatus::kBadHeader;
+    header = true;
+    return TrustListStatus::kOk;
+  }
+  if (!tok[0].is("signer") || nt < 4 || nt > 5) return TrustListStatus::kSyntax;
+  TrustedSigner s;
+  const TrustListStatus status = parse_signer(tok, nt, s);
+  return status == TrustListStatus::kOk ? add_signer(s, list) : status;
+}
+
 }  // namespace
 
 const char* to_string(SignerRole r) { return r == SignerRole::kInfrastructure ? "infrastructure" : "agent"; }
@@ -84,81 +158,12 @@ TrustListParseResult parse_trust_list(std::span<const std::uint8_t> text, TrustL
     ++res.line;
     std::size_t end = pos;
     while (end < text.size() && data[end] != '\n') ++end;
-    const std::size_t len = end - pos;
-    const char* line = data + pos;
+    const TrustListStatus status = parse_line(data + pos, end - pos, header, list);
+    if (status != TrustListStatus::kOk) {
+      res.status = status;
+      return res;
+    }
     pos = end + 1;
-    if (len > kMaxLine) {
-      res.status = TrustListStatus::kSyntax;
-      return res;
-    }
-    Token tok[kMaxTokens];
-    std::size_t nt = 0;
-    for (std::size_t i = 0; i < len;) {
-      const char c = line[i];
-      if (c == '#') break;
-      if (c == ' ' || c == '\t' || c == '\r') {
-        ++i;
-        continue;
-      }
-      if (static_cast<unsigned char>(c) < 0x21 || static_cast<unsigned char>(c) > 0x7E) {
-        res.status = TrustListStatus::kSyntax;
-        return res;
-      }
-      if (nt == kMaxTokens) {
-        res.status = TrustListStatus::kSyntax;
-        return res;
-      }
-      std::size_t j = i;
-      while (j < len && line[j] != ' ' && line[j] != '\t' && line[j] != '\r' && line[j] != '#') ++j;
-      tok[nt++] = Token{line + i, j - i};
-      i = j;
-    }
-    if (nt == 0) continue;
-    if (!header) {
-      if (nt != 2 || !tok[0].is("v2xloc-trust-list") || !tok[1].is("1")) {
-        res.status = TrustListStatus::kBadHeader;
-        return res;
-      }
-      header = true;
-      continue;
-    }
-    if (!tok[0].is("signer") || nt < 4 || nt > 5) {
-      res.status = TrustListStatus::kSyntax;
-      return res;
-    }
-    TrustedSigner s;
-    if (tok[1].is("infrastructure")) {
-      s.role = SignerRole::kInfrastructure;
-    } else if (tok[1].is("agent")) {
-      s.role = SignerRole::kAgent;
-    } else {
-      res.status = TrustListStatus::kBadRole;
-      return res;
-    }
-    if (!parse_u32(tok[2], s.sender_id)) {
-      res.status = TrustListStatus::kBadSenderId;
-      return res;
-    }
-    if (!parse_key(tok[3], s.key) || check_public_key(s.key) != CryptoStatus::kOk) {
-      res.status = TrustListStatus::kBadKey;
-      return res;
-    }
-    s.id = hashed_id8(s.key);
-    if (nt == 5) {
-      const std::size_t n = tok[4].n < s.name.size() - 1 ? tok[4].n : s.name.size() - 1;
-      std::memcpy(s.name.data(), tok[4].p, n);
-    }
-    for (std::size_t k = 0; k < list.count; ++k) {
-      if (list.signers[k].id == s.id || list.signers[k].sender_id == s.sender_id) {
-        res.status = TrustListStatus::kDuplicate;
-        return res;
-      }
-    }
-    if (list.count == kMaxTrustedSigners) {
-      res.status = TrustListStatus::kTooMany;
-      return res;
-    }
-    list.signers[list.count++] = s;
   }
   if (!header) {
     res.status = TrustListStatus::kBadHeader;

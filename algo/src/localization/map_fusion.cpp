@@ -148,53 +148,40 @@ std::uint32_t MapFusion::drop_covered_by_trusted(std::size_t slot) {
   return dropped;
 }
 
-MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
-                                  const Mat4d& world_T_sensor, std::span<const Vec3f> points,
-                                  bool trusted) {
-  MapInsertResult r;
-  r.input_points = static_cast<std::uint32_t>(points.size());
-  if (!std::isfinite(timestamp) || !world_T_sensor.allFinite()) return r;
-
-  // Source slot: same id, else a free slot, else the oldest if older than this cloud.
+std::size_t MapFusion::find_source(std::uint32_t source_id) const {
   std::size_t slot = config::kMaxMapSources;
   for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
     if (sources_[s].active && sources_[s].id == source_id) slot = s;
   }
-  const bool known = slot < config::kMaxMapSources;
-  if (known && !(timestamp > sources_[slot].timestamp)) {
-    r.status = MapInsertStatus::kStale;
-    ++counters_.stale;
-    return r;
-  }
-  bool displace = false;
-  if (!known) {
-    // Per-role cap: at the cap, a new source may only displace the oldest source of its own role.
-    std::uint32_t same_role = 0;
-    for (const MapSourceInfo& s : sources_) same_role += (s.active && s.trusted == trusted) ? 1u : 0u;
-    const bool at_cap = same_role >= (trusted ? params_.max_trusted_sources : params_.max_agent_sources);
-    std::size_t oldest = config::kMaxMapSources;
-    for (std::size_t s = 0; s < config::kMaxMapSources && slot == config::kMaxMapSources && !at_cap; ++s) {
-      if (!sources_[s].active) slot = s;
-    }
-    if (slot == config::kMaxMapSources) {
-      for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
-        if (!sources_[s].active || sources_[s].trusted != trusted) continue;
-        if (oldest == config::kMaxMapSources || sources_[s].timestamp < sources_[oldest].timestamp)
-          oldest = s;
-      }
-      if (oldest < config::kMaxMapSources && sources_[oldest].timestamp < timestamp) {
-        slot = oldest;
-        displace = true;
-      }
-    }
-    if (slot == config::kMaxMapSources) {
-      r.status = MapInsertStatus::kNoSourceSlot;
-      ++counters_.no_source_slot;
-      return r;
-    }
-  }
+  return slot;
+}
 
-  // Into the global frame (double math), non-finite points dropped, then downsampled.
+std::size_t MapFusion::claim_source_slot(bool trusted, double timestamp, bool& displace) const {
+  // Per-role cap: at the cap, a new source may only displace the oldest source of its own role.
+  std::uint32_t same_role = 0;
+  for (const MapSourceInfo& s : sources_) same_role += (s.active && s.trusted == trusted) ? 1u : 0u;
+  const bool at_cap = same_role >= (trusted ? params_.max_trusted_sources : params_.max_agent_sources);
+  std::size_t slot = config::kMaxMapSources;
+  for (std::size_t s = 0; s < config::kMaxMapSources && slot == config::kMaxMapSources && !at_cap; ++s) {
+    if (!sources_[s].active) slot = s;
+  }
+  if (slot != config::kMaxMapSources) return slot;
+  std::size_t oldest = config::kMaxMapSources;
+  for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
+    if (!sources_[s].active || sources_[s].trusted != trusted) continue;
+    if (oldest == config::kMaxMapSources || sources_[s].timestamp < sources_[oldest].timestamp)
+      oldest = s;
+  }
+  if (oldest < config::kMaxMapSources && sources_[oldest].timestamp < timestamp) {
+    displace = true;
+    return oldest;
+  }
+  return config::kMaxMapSources;
+}
+
+// Into the global frame (double math), non-finite points dropped, then downsampled.
+void MapFusion::stage_candidate(const Mat4d& world_T_sensor, std::span<const Vec3f> points,
+                                MapInsertResult& r) {
   staging_.clear();
   const Mat3d R = world_T_sensor.topLeftCorner<3, 3>();
   const Vec3d t = world_T_sensor.topRightCorner<3, 1>();
@@ -210,38 +197,33 @@ MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
       downsample_.run(staging_.span(), static_cast<float>(params_.voxel_size), candidate_);
   r.capacity_dropped += ds.output_overflow + ds.hash_overflow + ds.range_overflow;
   counters_.non_finite_dropped += r.non_finite_dropped;
+}
 
-  if (params_.check_consistency && !candidate_.empty()) {
-    // Agents against the infrastructure: low fitness, or a better fit shifted, is a wrong pose;
-    // too little overlap to tell is held back (an agent whose cloud cannot be checked adds
-    // nothing the map can trust). Infrastructure units against each other where they overlap:
-    // their absolute fitness is low even for exact poses (different faces of the buildings), so
-    // only the shift test applies, and without overlap a surveyed unit is accepted.
-    r.consistency_fitness =
-        consistency(known ? slot : config::kMaxMapSources, r.overlap_points, r.best_probe_fitness);
-    const bool checkable = r.overlap_points >= params_.min_overlap_points;
-    const double margin = trusted ? params_.infra_probe_margin : params_.probe_margin;
-    const bool shifted = checkable && r.best_probe_fitness > r.consistency_fitness + margin;
-    if (!trusted && !checkable) {
-      r.status = MapInsertStatus::kHeldBack;
-      ++counters_.held_back;
-      return r;
-    }
-    if (shifted || (!trusted && r.consistency_fitness < params_.min_fitness)) {
-      r.status = MapInsertStatus::kRejectedInconsistent;
-      ++counters_.rejected_inconsistent;
-      return r;
-    }
-    if (!checkable) r.consistency_fitness = 1.0;
+bool MapFusion::passes_consistency(std::size_t own_slot, bool trusted, MapInsertResult& r) {
+  // Agents against the infrastructure: low fitness, or a better fit shifted, is a wrong pose;
+  // too little overlap to tell is held back (an agent whose cloud cannot be checked adds
+  // nothing the map can trust). Infrastructure units against each other where they overlap:
+  // their absolute fitness is low even for exact poses (different faces of the buildings), so
+  // only the shift test applies, and without overlap a surveyed unit is accepted.
+  r.consistency_fitness = consistency(own_slot, r.overlap_points, r.best_probe_fitness);
+  const bool checkable = r.overlap_points >= params_.min_overlap_points;
+  const double margin = trusted ? params_.infra_probe_margin : params_.probe_margin;
+  const bool shifted = checkable && r.best_probe_fitness > r.consistency_fitness + margin;
+  if (!trusted && !checkable) {
+    r.status = MapInsertStatus::kHeldBack;
+    ++counters_.held_back;
+    return false;
   }
-
-  if (!trusted && params_.agent_fill_cell > 0.0) {
-    r.covered_dropped = drop_covered_by_trusted(known ? slot : config::kMaxMapSources);
-    counters_.agent_points_covered += r.covered_dropped;
+  if (shifted || (!trusted && r.consistency_fitness < params_.min_fitness)) {
+    r.status = MapInsertStatus::kRejectedInconsistent;
+    ++counters_.rejected_inconsistent;
+    return false;
   }
+  if (!checkable) r.consistency_fitness = 1.0;
+  return true;
+}
 
-  if (known || displace) remove_source_points(slot);
-  if (displace) ++counters_.sources_evicted_slot;
+std::uint32_t MapFusion::store_candidate(std::size_t slot, MapInsertResult& r) {
   std::uint32_t stored = 0;
   for (const Vec3f& p : candidate_) {
     if (num_points_ == config::kMaxMapPoints) {
@@ -253,6 +235,45 @@ MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
     ++num_points_;
     ++stored;
   }
+  return stored;
+}
+
+MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
+                                  const Mat4d& world_T_sensor, std::span<const Vec3f> points,
+                                  bool trusted) {
+  MapInsertResult r;
+  r.input_points = static_cast<std::uint32_t>(points.size());
+  if (!std::isfinite(timestamp) || !world_T_sensor.allFinite()) return r;
+
+  // Source slot: same id, else a free slot, else the oldest if older than this cloud.
+  std::size_t slot = find_source(source_id);
+  const bool known = slot < config::kMaxMapSources;
+  if (known && !(timestamp > sources_[slot].timestamp)) {
+    r.status = MapInsertStatus::kStale;
+    ++counters_.stale;
+    return r;
+  }
+  bool displace = false;
+  if (!known) slot = claim_source_slot(trusted, timestamp, displace);
+  if (slot == config::kMaxMapSources) {
+    r.status = MapInsertStatus::kNoSourceSlot;
+    ++counters_.no_source_slot;
+    return r;
+  }
+
+  stage_candidate(world_T_sensor, points, r);
+  // The source's previous cloud is left out of the reference (a displaced slot is not its own).
+  const std::size_t own_slot = known ? slot : config::kMaxMapSources;
+  if (params_.check_consistency && !candidate_.empty() && !passes_consistency(own_slot, trusted, r))
+    return r;
+  if (!trusted && params_.agent_fill_cell > 0.0) {
+    r.covered_dropped = drop_covered_by_trusted(own_slot);
+    counters_.agent_points_covered += r.covered_dropped;
+  }
+
+  if (known || displace) remove_source_points(slot);
+  if (displace) ++counters_.sources_evicted_slot;
+  const std::uint32_t stored = store_candidate(slot, r);
   counters_.points_dropped_capacity += r.capacity_dropped;
   MapSourceInfo& info = sources_[slot];
   info.id = source_id;

@@ -7,33 +7,17 @@
 
 namespace v2xloc {
 
-CorrespondenceResult match_features(std::span<const Feature33> source_features,
-                                    const KdTree<Feature33>& target_tree,
-                                    const CorrespondenceParams& params,
-                                    BoundedVector<Correspondence>& out,
-                                    const KdTree<Feature33>* source_tree,
-                                    std::span<std::uint32_t> scratch) {
-  CorrespondenceResult r;
-  out.clear();
-  if (source_features.empty() || target_tree.empty()) {
-    r.status = CorrespondenceStatus::kEmptyInput;
-    return r;
-  }
-  constexpr std::uint32_t kNone = 0xFFFFFFFFu;
-  const std::size_t num_target = target_tree.points().size();
-  if (params.mutual_filter &&
-      (source_tree == nullptr || source_tree->empty() || scratch.size() < num_target)) {
-    r.status = CorrespondenceStatus::kInvalidStorage;
-    return r;
-  }
+namespace {
 
-  // Source -> target, in source order. With the mutual filter, scratch[j] collects the closest
-  // source among those matched to target j ((distance, index) order, like the tree's ties):
-  // only that one can be j's nearest source.
+constexpr std::uint32_t kNone = 0xFFFFFFFFu;  // no candidate source for a target
+
+// Source -> target, in source order. With the mutual filter, scratch[j] collects the closest
+// source among those matched to target j ((distance, index) order, like the tree's ties):
+// only that one can be j's nearest source.
+void match_sources(std::span<const Feature33> source_features, const KdTree<Feature33>& target_tree,
+                   const CorrespondenceParams& params, std::span<std::uint32_t> scratch,
+                   BoundedVector<Correspondence>& out, CorrespondenceResult& r) {
   const std::span<const Feature33> targets = target_tree.points();
-  if (params.mutual_filter) {
-    for (std::size_t j = 0; j < num_target; ++j) scratch[j] = kNone;
-  }
   // Consecutive sources are usually spatial neighbours (downsampled clouds come out in voxel
   // order) with similar features: the previous match seeds the bound. The exact result does
   // not depend on it; under a visit budget (approximate search) it improves the answer.
@@ -59,37 +43,77 @@ CorrespondenceResult match_features(std::span<const Feature33> source_features,
       }
     }
   }
+}
 
+// (i, j) is mutual iff no source is closer to target j than i. Instead of a full nearest
+// search per target (Open3D's second kNN pass) only the candidate targets are checked, each
+// with the candidate's distance as the initial bound and an exit at the first closer source:
+// the same set as comparing both nearest-neighbour maps, at a fraction of the cost.
+// Candidates that are not mutual are cleared from scratch.
+void drop_non_mutual_candidates(std::span<const Feature33> source_features,
+                                std::span<const Feature33> targets,
+                                const KdTree<Feature33>& source_tree, const FeatureProjections& fp,
+                                std::span<std::uint32_t> scratch, CorrespondenceResult& r) {
+  for (std::size_t j = 0; j < targets.size(); ++j) {
+    const std::uint32_t i = scratch[j];
+    if (i == kNone) continue;
+    const Neighbor candidate{i, KdTree<Feature33>::squared_distance(targets[j], source_features[i])};
+    bool closer_exists = false;
+    const float* qp = fp.target != nullptr ? fp.target + j * fp.stride : nullptr;
+    const KdQueryResult kr = source_tree.has_closer(targets[j], qp, candidate, closer_exists);
+    r.search.add(kr);
+    if (closer_exists) scratch[j] = kNone;
+  }
+}
+
+// Keeps the mutual pairs (scratch[target] == source) when there are at least min_mutual of
+// them, else the one-way set (fell_back).
+void keep_mutual(std::span<const std::uint32_t> scratch, std::size_t min_mutual,
+                 BoundedVector<Correspondence>& out, CorrespondenceResult& r) {
+  std::size_t mutual = 0;
+  for (const Correspondence& c : out) {
+    if (scratch[c.target] == c.source) ++mutual;
+  }
+  if (mutual < min_mutual) {
+    r.fell_back = true;
+    return;
+  }
+  std::size_t w = 0;
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    if (scratch[out[k].target] == out[k].source) out[w++] = out[k];
+  }
+  r.mutual_rejected = static_cast<std::uint32_t>(out.size() - w);
+  out.resize(w);
+}
+
+}  // namespace
+
+CorrespondenceResult match_features(std::span<const Feature33> source_features,
+                                    const KdTree<Feature33>& target_tree,
+                                    const CorrespondenceParams& params,
+                                    BoundedVector<Correspondence>& out,
+                                    const KdTree<Feature33>* source_tree,
+                                    std::span<std::uint32_t> scratch) {
+  CorrespondenceResult r;
+  out.clear();
+  if (source_features.empty() || target_tree.empty()) {
+    r.status = CorrespondenceStatus::kEmptyInput;
+    return r;
+  }
+  const std::size_t num_target = target_tree.points().size();
+  if (params.mutual_filter &&
+      (source_tree == nullptr || source_tree->empty() || scratch.size() < num_target)) {
+    r.status = CorrespondenceStatus::kInvalidStorage;
+    return r;
+  }
   if (params.mutual_filter) {
-    // (i, j) is mutual iff no source is closer to target j than i. Instead of a full nearest
-    // search per target (Open3D's second kNN pass) only the candidate targets are checked, each
-    // with the candidate's distance as the initial bound and an exit at the first closer source:
-    // the same set as comparing both nearest-neighbour maps, at a fraction of the cost.
-    for (std::size_t j = 0; j < num_target; ++j) {
-      const std::uint32_t i = scratch[j];
-      if (i == kNone) continue;
-      const Neighbor candidate{i, KdTree<Feature33>::squared_distance(targets[j], source_features[i])};
-      bool closer_exists = false;
-      const FeatureProjections& fp = params.projections;
-      const float* qp = fp.target != nullptr ? fp.target + j * fp.stride : nullptr;
-      const KdQueryResult kr = source_tree->has_closer(targets[j], qp, candidate, closer_exists);
-      r.search.add(kr);
-      if (closer_exists) scratch[j] = kNone;
-    }
-    std::size_t mutual = 0;
-    for (const Correspondence& c : out) {
-      if (scratch[c.target] == c.source) ++mutual;
-    }
-    if (mutual >= params.min_mutual) {
-      std::size_t w = 0;
-      for (std::size_t k = 0; k < out.size(); ++k) {
-        if (scratch[out[k].target] == out[k].source) out[w++] = out[k];
-      }
-      r.mutual_rejected = static_cast<std::uint32_t>(out.size() - w);
-      out.resize(w);
-    } else {
-      r.fell_back = true;
-    }
+    for (std::size_t j = 0; j < num_target; ++j) scratch[j] = kNone;
+  }
+  match_sources(source_features, target_tree, params, scratch, out, r);
+  if (params.mutual_filter) {
+    drop_non_mutual_candidates(source_features, target_tree.points(), *source_tree,
+                               params.projections, scratch, r);
+    keep_mutual(scratch, params.min_mutual, out, r);
   }
   r.count = static_cast<std::uint32_t>(out.size());
   r.status = r.count > 0 ? CorrespondenceStatus::kOk : CorrespondenceStatus::kNoMatches;

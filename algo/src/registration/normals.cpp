@@ -28,6 +28,55 @@ NormalsResult estimate_normals(const KdTree<Vec3f>& tree, const NormalParams& pa
 
 namespace {
 
+bool valid_params(const NormalParams& params, std::size_t num_points, std::span<Vec3f> normals,
+                  std::span<NormalQuality> quality) {
+  return std::isfinite(params.radius) && params.radius > 0.0f && params.max_nn != 0 &&
+         normals.size() >= num_points && (quality.empty() || quality.size() >= num_points);
+}
+
+// Two-pass centred covariance of the neighbourhood (better conditioned than Open3D's raw moments).
+Mat3d neighborhood_covariance(std::span<const Vec3f> points, std::span<const Neighbor> neighbors) {
+  Vec3d mean = Vec3d::Zero();
+  for (const Neighbor& n : neighbors) mean += points[n.index].cast<double>();
+  mean /= static_cast<double>(neighbors.size());
+  Mat3d cov = Mat3d::Zero();
+  for (const Neighbor& n : neighbors) {
+    const Vec3d d = points[n.index].cast<double>() - mean;
+    for (int a = 0; a < 3; ++a) {
+      for (int b = a; b < 3; ++b) cov(a, b) += d[a] * d[b];
+    }
+  }
+  cov(1, 0) = cov(0, 1);
+  cov(2, 0) = cov(0, 2);
+  cov(2, 1) = cov(1, 2);
+  cov /= static_cast<double>(neighbors.size());
+  return cov;
+}
+
+// Normal of point p's neighbourhood from its covariance: the least-spread eigenvector of a
+// surface, or for a line the normal closest to the viewpoint direction. q: kOk, kCollinear, or
+// kFewNeighbors when all neighbours coincide (normal (0,0,1)).
+Vec3d neighborhood_normal(const Mat3d& cov, const Vec3f& p, const Vec3d& viewpoint,
+                          double collinear_ratio, NormalQuality& q) {
+  Vec3d lambda;
+  Mat3d vectors;
+  symmetric_eigen3(cov, lambda, vectors);
+  if (!(lambda[2] > 0.0)) {
+    q = NormalQuality::kFewNeighbors;
+    return Vec3d(0.0, 0.0, 1.0);
+  }
+  if (lambda[1] <= collinear_ratio * lambda[2]) {
+    q = NormalQuality::kCollinear;
+    const Vec3d dir = vectors.col(2);
+    Vec3d to_view = viewpoint - p.cast<double>();
+    Vec3d perp = to_view - dir * dir.dot(to_view);
+    if (perp.norm() <= 1e-12 * (to_view.norm() + 1.0)) perp = vectors.col(0);
+    return perp.normalized();
+  }
+  q = NormalQuality::kOk;
+  return vectors.col(0);
+}
+
 NormalsResult normals_of_range(const KdNeighborhoods& neighborhoods, const NormalParams& params,
                                std::span<Vec3f> normals, std::span<NormalQuality> quality,
                                std::size_t first, std::size_t count) {
@@ -38,8 +87,7 @@ NormalsResult normals_of_range(const KdNeighborhoods& neighborhoods, const Norma
     r.status = NormalsStatus::kEmptyTree;
     return r;
   }
-  if (!std::isfinite(params.radius) || !(params.radius > 0.0f) || params.max_nn == 0 ||
-      normals.size() < points.size() || (!quality.empty() && quality.size() < points.size())) {
+  if (!valid_params(params, points.size(), normals, quality)) {
     r.status = NormalsStatus::kInvalidParams;
     return r;
   }
@@ -55,7 +103,6 @@ NormalsResult normals_of_range(const KdNeighborhoods& neighborhoods, const Norma
 
   for (std::size_t i = begin; i < end; ++i) {
     const Vec3f& p = points[i];
-    NormalQuality q = NormalQuality::kOk;
     if (!is_finite_point(p)) {
       normals[i] = Vec3f(0.0f, 0.0f, 1.0f);
       ++r.non_finite;
@@ -65,41 +112,11 @@ NormalsResult normals_of_range(const KdNeighborhoods& neighborhoods, const Norma
     const KdQueryResult kr =
         neighborhoods.get(i, params.radius, max_nn, std::span<Neighbor>(neighbors, max_nn));
     r.search.add(kr);
+    NormalQuality q = NormalQuality::kFewNeighbors;
     Vec3d normal(0.0, 0.0, 1.0);
-    if (kr.count < 3) {
-      q = NormalQuality::kFewNeighbors;
-    } else {
-      // Two-pass centred covariance (better conditioned than Open3D's raw moments).
-      Vec3d mean = Vec3d::Zero();
-      for (std::uint32_t k = 0; k < kr.count; ++k) mean += points[neighbors[k].index].cast<double>();
-      mean /= static_cast<double>(kr.count);
-      Mat3d cov = Mat3d::Zero();
-      for (std::uint32_t k = 0; k < kr.count; ++k) {
-        const Vec3d d = points[neighbors[k].index].cast<double>() - mean;
-        for (int a = 0; a < 3; ++a) {
-          for (int b = a; b < 3; ++b) cov(a, b) += d[a] * d[b];
-        }
-      }
-      cov(1, 0) = cov(0, 1);
-      cov(2, 0) = cov(0, 2);
-      cov(2, 1) = cov(1, 2);
-      cov /= static_cast<double>(kr.count);
-      Vec3d lambda;
-      Mat3d vectors;
-      symmetric_eigen3(cov, lambda, vectors);
-      if (!(lambda[2] > 0.0)) {
-        q = NormalQuality::kFewNeighbors;  // all neighbours coincide
-      } else if (lambda[1] <= params.collinear_ratio * lambda[2]) {
-        q = NormalQuality::kCollinear;
-        // Closest to the viewpoint direction among the normals of the line.
-        const Vec3d dir = vectors.col(2);
-        Vec3d to_view = viewpoint - p.cast<double>();
-        Vec3d perp = to_view - dir * dir.dot(to_view);
-        if (perp.norm() <= 1e-12 * (to_view.norm() + 1.0)) perp = vectors.col(0);
-        normal = perp.normalized();
-      } else {
-        normal = vectors.col(0);
-      }
+    if (kr.count >= 3) {
+      const Mat3d cov = neighborhood_covariance(points, std::span<const Neighbor>(neighbors, kr.count));
+      normal = neighborhood_normal(cov, p, viewpoint, params.collinear_ratio, q);
     }
     if (q == NormalQuality::kFewNeighbors) ++r.few_neighbors;
     if (q == NormalQuality::kCollinear) ++r.collinear;

@@ -11,6 +11,127 @@ namespace {
 
 constexpr double kMaxVoxelIndex = 2147483520.0;  // < 2^31, exactly representable
 
+struct VoxelIndex {
+  std::int32_t x = 0, y = 0, z = 0;
+  bool operator==(const VoxelIndex&) const = default;
+};
+
+// Component-wise minimum of the finite points into lo; the others are counted.
+void finite_min_bound(std::span<const Vec3f> points, double lo[3], std::uint32_t& non_finite) {
+  for (const Vec3f& p : points) {
+    if (!is_finite_point(p)) {
+      ++non_finite;
+      continue;
+    }
+    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], static_cast<double>(p[d]));
+  }
+}
+
+// floor((p - origin) / voxel) per axis in double; false when an index does not fit int32.
+bool voxel_index_of(const Vec3f& p, const double origin[3], double voxel, VoxelIndex& index) {
+  double ref[3];
+  bool in_range = true;
+  for (int d = 0; d < 3; ++d) {
+    ref[d] = std::floor((static_cast<double>(p[d]) - origin[d]) / voxel);
+    in_range = in_range && ref[d] >= 0.0 && ref[d] <= kMaxVoxelIndex;
+  }
+  if (!in_range) return false;
+  index = {static_cast<std::int32_t>(ref[0]), static_cast<std::int32_t>(ref[1]),
+           static_cast<std::int32_t>(ref[2])};
+  return true;
+}
+
+void add_point(VoxelAccumulator& acc, const Vec3f& p) {
+  acc.sum[0] += p.x();
+  acc.sum[1] += p.y();
+  acc.sum[2] += p.z();
+  ++acc.count;
+}
+
+// The caller's hash table and accumulators for one call: voxels are numbered in order of first
+// occurrence, at most max_voxels of them.
+class VoxelTable {
+ public:
+  VoxelTable(std::span<VoxelHashSlot> slots, std::span<VoxelAccumulator> accumulators,
+             std::size_t max_voxels)
+      : slots_(slots),
+        accumulators_(accumulators),
+        max_voxels_(max_voxels),
+        max_probes_(static_cast<std::uint32_t>(std::min(config::kVoxelMaxProbes, slots.size()))) {}
+
+  // The accumulator of voxel `index`, created on first sight; nullptr when no slot is found
+  // within the probe bound or the output is full (counted in r, as is the probe length).
+  VoxelAccumulator* find_or_add(const VoxelIndex& index, VoxelDownsampleResult& r) {
+    VoxelAccumulator* acc = nullptr;
+    const ProbeResult probe = linear_probe(
+        spatial_hash_folded(index.x, index.y, index.z), slots_.size(), max_probes_, [&](std::size_t s) {
+          VoxelHashSlot& slot = slots_[s];
+          if (slot.voxel_plus_one == 0) {  // new voxel
+            if (num_voxels_ == max_voxels_) return true;  // output full: counted below
+            slot = {index.x, index.y, index.z, static_cast<std::uint32_t>(num_voxels_ + 1)};
+            acc = &accumulators_[num_voxels_];
+            *acc = {{0.0, 0.0, 0.0}, 0, static_cast<std::uint32_t>(s)};
+            ++num_voxels_;
+            return true;
+          }
+          if (slot.ix == index.x && slot.iy == index.y && slot.iz == index.z) {
+            acc = &accumulators_[slot.voxel_plus_one - 1];
+            return true;
+          }
+          return false;
+        });
+    const bool no_slot = !probe.stopped;
+    r.max_probe = std::max(r.max_probe, no_slot ? probe.probes : probe.probes + 1);
+    if (acc == nullptr) {
+      if (no_slot) {
+        ++r.hash_overflow;
+      } else {
+        ++r.output_overflow;
+      }
+    }
+    return acc;
+  }
+
+  // Centroids into out, and the slots emptied for the next call.
+  void write_centroids(BoundedVector<Vec3f>& out) {
+    for (std::size_t v = 0; v < num_voxels_; ++v) {
+      const VoxelAccumulator& acc = accumulators_[v];
+      const double n = static_cast<double>(acc.count);
+      out.push_back(Vec3f(static_cast<float>(acc.sum[0] / n), static_cast<float>(acc.sum[1] / n),
+                          static_cast<float>(acc.sum[2] / n)));
+      slots_[acc.slot] = VoxelHashSlot{};
+    }
+  }
+
+ private:
+  std::span<VoxelHashSlot> slots_;
+  std::span<VoxelAccumulator> accumulators_;
+  std::size_t max_voxels_;
+  std::uint32_t max_probes_;
+  std::size_t num_voxels_ = 0;
+};
+
+// Every finite point into the accumulator of its voxel (range overflows counted in r).
+void accumulate_points(std::span<const Vec3f> points, const double origin[3], double voxel,
+                       VoxelTable& table, VoxelDownsampleResult& r) {
+  VoxelAccumulator* last = nullptr;  // voxel of the previous accepted point
+  VoxelIndex last_index;
+  for (const Vec3f& p : points) {
+    if (!is_finite_point(p)) continue;
+    VoxelIndex index;
+    if (!voxel_index_of(p, origin, voxel, index)) {
+      ++r.range_overflow;
+      continue;
+    }
+    // Consecutive returns of a scan usually fall in the same voxel: skip the table lookup.
+    VoxelAccumulator* acc = last != nullptr && index == last_index ? last : table.find_or_add(index, r);
+    if (acc == nullptr) continue;
+    add_point(*acc, p);
+    last = acc;
+    last_index = index;
+  }
+}
+
 }  // namespace
 
 VoxelDownsampleResult voxel_downsample(std::span<const Vec3f> points, float voxel_size,
@@ -29,17 +150,10 @@ VoxelDownsampleResult voxel_downsample(std::span<const Vec3f> points, float voxe
     r.status = VoxelStatus::kInvalidStorage;
     return r;
   }
-  const std::size_t max_voxels = std::min(out.capacity(), accumulators.size());
 
   // Pass 1: bounds of the finite points.
   double lo[3] = {INFINITY, INFINITY, INFINITY};
-  for (const Vec3f& p : points) {
-    if (!is_finite_point(p)) {
-      ++r.non_finite_dropped;
-      continue;
-    }
-    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], static_cast<double>(p[d]));
-  }
+  finite_min_bound(points, lo, r.non_finite_dropped);
   if (r.non_finite_dropped == r.input_points) {
     r.status = VoxelStatus::kEmptyInput;
     return r;
@@ -47,80 +161,10 @@ VoxelDownsampleResult voxel_downsample(std::span<const Vec3f> points, float voxe
   const double voxel = voxel_size;
   const double origin[3] = {lo[0] - voxel * 0.5, lo[1] - voxel * 0.5, lo[2] - voxel * 0.5};
 
-  // Pass 2: accumulate per voxel, voxels numbered in order of first occurrence.
-  const auto max_probes = static_cast<std::uint32_t>(std::min(config::kVoxelMaxProbes, num_slots));
-  std::size_t num_voxels = 0;
-  VoxelAccumulator* last = nullptr;  // voxel of the previous accepted point
-  std::int32_t last_ix = 0, last_iy = 0, last_iz = 0;
-  for (const Vec3f& p : points) {
-    if (!is_finite_point(p)) continue;
-    double ref[3];
-    bool in_range = true;
-    for (int d = 0; d < 3; ++d) {
-      ref[d] = std::floor((static_cast<double>(p[d]) - origin[d]) / voxel);
-      in_range = in_range && ref[d] >= 0.0 && ref[d] <= kMaxVoxelIndex;
-    }
-    if (!in_range) {
-      ++r.range_overflow;
-      continue;
-    }
-    const auto ix = static_cast<std::int32_t>(ref[0]);
-    const auto iy = static_cast<std::int32_t>(ref[1]);
-    const auto iz = static_cast<std::int32_t>(ref[2]);
-    // Consecutive returns of a scan usually fall in the same voxel: skip the table lookup.
-    if (last != nullptr && ix == last_ix && iy == last_iy && iz == last_iz) {
-      last->sum[0] += p.x();
-      last->sum[1] += p.y();
-      last->sum[2] += p.z();
-      ++last->count;
-      continue;
-    }
-    VoxelAccumulator* acc = nullptr;
-    const ProbeResult probe = linear_probe(
-        spatial_hash_folded(ix, iy, iz), num_slots, max_probes, [&](std::size_t s) {
-          VoxelHashSlot& slot = slots[s];
-          if (slot.voxel_plus_one == 0) {  // new voxel
-            if (num_voxels == max_voxels) return true;  // output full: counted below
-            slot = {ix, iy, iz, static_cast<std::uint32_t>(num_voxels + 1)};
-            acc = &accumulators[num_voxels];
-            *acc = {{0.0, 0.0, 0.0}, 0, static_cast<std::uint32_t>(s)};
-            ++num_voxels;
-            return true;
-          }
-          if (slot.ix == ix && slot.iy == iy && slot.iz == iz) {
-            acc = &accumulators[slot.voxel_plus_one - 1];
-            return true;
-          }
-          return false;
-        });
-    const bool no_slot = !probe.stopped;
-    r.max_probe = std::max(r.max_probe, no_slot ? probe.probes : probe.probes + 1);
-    if (acc == nullptr) {
-      if (no_slot) {
-        ++r.hash_overflow;
-      } else {
-        ++r.output_overflow;
-      }
-      continue;
-    }
-    acc->sum[0] += p.x();
-    acc->sum[1] += p.y();
-    acc->sum[2] += p.z();
-    ++acc->count;
-    last = acc;
-    last_ix = ix;
-    last_iy = iy;
-    last_iz = iz;
-  }
-
-  // Centroids, and leave the hash table empty for the next call.
-  for (std::size_t v = 0; v < num_voxels; ++v) {
-    const VoxelAccumulator& acc = accumulators[v];
-    const double n = static_cast<double>(acc.count);
-    out.push_back(Vec3f(static_cast<float>(acc.sum[0] / n), static_cast<float>(acc.sum[1] / n),
-                        static_cast<float>(acc.sum[2] / n)));
-    slots[acc.slot] = VoxelHashSlot{};
-  }
+  // Pass 2: accumulate per voxel; then centroids, leaving the hash table empty for the next call.
+  VoxelTable table(slots, accumulators, std::min(out.capacity(), accumulators.size()));
+  accumulate_points(points, origin, voxel, table, r);
+  table.write_centroids(out);
   r.output_points = static_cast<std::uint32_t>(out.size());
   const bool dropped = r.output_overflow + r.hash_overflow + r.range_overflow > 0;
   r.status = dropped ? VoxelStatus::kTruncated : VoxelStatus::kOk;

@@ -164,6 +164,18 @@ class MapFusion {
   double consistency(std::size_t slot, std::uint32_t& overlap_points, double& best_probe);
   // Drops candidate points near a trusted source's point (agent_fill_cell); returns how many.
   std::uint32_t drop_covered_by_trusted(std::size_t slot);
+  // Slot of the active source with this id, else kMaxMapSources.
+  std::size_t find_source(std::uint32_t source_id) const;
+  // Slot for a new source: a free one, else the oldest of its role if older than timestamp
+  // (displace set), else kMaxMapSources.
+  std::size_t claim_source_slot(bool trusted, double timestamp, bool& displace) const;
+  // The cloud in the global frame, downsampled into candidate_ (drops counted in r).
+  void stage_candidate(const Mat4d& world_T_sensor, std::span<const Vec3f> points, MapInsertResult& r);
+  // Consistency verdict on candidate_ against the other sources; false (status and counter
+  // set in r) when the cloud is held back or rejected.
+  bool passes_consistency(std::size_t own_slot, bool trusted, MapInsertResult& r);
+  // Appends candidate_ under `slot` up to the map capacity (overflow counted in r); returns how many.
+  std::uint32_t store_candidate(std::size_t slot, MapInsertResult& r);
 
   MapFusionParams params_;
   MapSourceInfo sources_[config::kMaxMapSources];
