@@ -55,6 +55,9 @@ RowMetrics compute_metrics(const std::vector<FrameRecord>& records) {
     fused_ungated.add(position(r.out.fused_pose_ungated), truth);
     fused_lag.add(position(r.lagged_pose), truth);
     row.revised_frames += r.revised ? 1 : 0;
+    const int index = static_cast<int>(&r - records.data());
+    if (row.first_localized_frame < 0 && r.out.localized) row.first_localized_frame = index;
+    if (row.first_initialized_frame < 0 && r.out.filter_initialized) row.first_initialized_frame = index;
     row.fused_max = std::max(row.fused_max, (position(r.out.fused_pose) - truth).norm());
   }
   for (bool align : {false, true}) {

@@ -34,6 +34,8 @@ struct RowMetrics {
   ColumnErrors aligned;
   double fused_max = 0.0;   // unaligned worst frame of the gated EKF
   int revised_frames = 0;   // frames the backfill revised
+  int first_localized_frame = -1;  // first frame flagged localized (-1: none)
+  int first_initialized_frame = -1;  // first frame the filter ran (output not the GNSS fix)
 };
 
 RowMetrics compute_metrics(const std::vector<FrameRecord>& records);

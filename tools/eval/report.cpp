@@ -130,6 +130,8 @@ std::string format_json(const std::vector<RowReport>& rows) {
                 {"frames", r.metrics.frames},
                 {"valid_frames", r.metrics.valid_frames},
                 {"reg_ok_frames", r.metrics.reg_ok_frames},
+                {"first_localized_frame", r.metrics.first_localized_frame},
+                {"first_initialized_frame", r.metrics.first_initialized_frame},
                 {"fused_max", number(r.metrics.fused_max)},
                 {"localizer_ms_per_frame", number(r.metrics.frames ? 1e3 * r.stats.seconds / r.metrics.frames : 0.0)},
                 {"localizer_max_frame_ms", number(r.stats.max_frame_ms)}};

@@ -126,7 +126,7 @@ void Localizer::register_frame(double t, const Mat4d& body_T_lidar) {
   } else {
     output_.mode = LocalizationMode::kGlobalSearch;
     const StartupOutcome s = search(t, body_T_lidar);
-    if (s.status == StartupStatus::kNotDue) {
+    if (s.status == StartupStatus::kNotDue || s.status == StartupStatus::kSearching) {
       filter_.count_failed_frame();
       return;
     }
@@ -172,6 +172,7 @@ StartupOutcome Localizer::search(double t, const Mat4d& body_T_lidar) {
   frame.t = t;
   frame.scan = scan_.registration_scan();
   frame.search_scan = scan_.search_scan();
+  frame.tracking_scan = scan_.tracking_scan();
   frame.map = map_.target();
   frame.gnss = gnss_;
   frame.course_known = course_.at(t, vehicle_.yaw_rate, frame.course);

@@ -19,7 +19,7 @@ double horizontal_distance(const Mat4d& pose, const Vec3d& enu) {
 struct StartupSearch::Search {
   double region = 0.0;        // [m] radius around the GNSS fix the solution must lie in
   PoseSearchParams params{};  // the pose search's, for this frame's region and course
-  PoseSearchResult searched{};
+  PoseSearchResult searched{};  // carried to the current frame
   RegistrationResult best{};  // the basin picked so far
 };
 
@@ -28,12 +28,16 @@ void StartupSearch::configure(const LocalizerParams& params) {
   candidate_ = {};
   track_count_ = 0;
   frames_since_search_ = params.global_retry_frames;  // allow a search at the first frame
+  job_kind_ = JobKind::kNone;
+  finalist_count_ = 0;
+  job_.set_proximity_grid(params.search_on_proximity_grid ? &grid_ : nullptr);
 }
 
 void StartupSearch::on_frame(bool odometry_ok, const Pose3d& odom_T_body, const GnssFix& gnss) {
   ++frames_since_search_;
   if (!odometry_ok) {
     track_count_ = 0;  // the odometry track is broken: start a new one
+    job_track_broken_ = true;  // a running job's result can no longer be carried
     return;
   }
   TrackSample& s = track_[track_count_ % kTrackFrames];
@@ -47,6 +51,8 @@ void StartupSearch::on_frame(bool odometry_ok, const Pose3d& odom_T_body, const 
 
 void StartupSearch::on_track_lost() {
   candidate_.valid = false;
+  finalist_count_ = 0;
+  job_kind_ = JobKind::kNone;
   frames_since_search_ = params_.global_retry_frames;
 }
 
@@ -56,6 +62,7 @@ void StartupSearch::nominate(std::uint32_t frame, const Pose3d& pose, const Pose
   candidate_.frame = frame;
   candidate_.pose = pose.matrix();
   candidate_.odom = odom_T_body.matrix();
+  finalist_count_ = 0;  // an exhaustive search must confirm it
 }
 
 bool StartupSearch::candidate_pose(std::uint32_t frame, const Pose3d& odom_T_body, Pose3d& pose) const {
@@ -66,28 +73,49 @@ bool StartupSearch::candidate_pose(std::uint32_t frame, const Pose3d& odom_T_bod
   return true;
 }
 
-// FPFH + RANSAC against the map around the GNSS fix, ICP refinement, then two checks the
-// symmetric intersection needs: the solution must lie inside the GNSS uncertainty region and
-// explain enough of the scan.
+// One period of the search job (started when due), then, in the period it finishes: the
+// ambiguity check, FPFH + RANSAC, the final ICP and the acceptance checks the symmetric
+// intersection needs (inside the GNSS uncertainty region, enough of the scan explained).
 StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& counters) {
   StartupOutcome out;
-  if (!f.gnss.valid || frames_since_search_ < params_.global_retry_frames) return out;
-  frames_since_search_ = 0;
-  f.probe(LocalizerStage::kGlobalSearch);
-  ++counters.global_searches;
+  if (job_kind_ != JobKind::kNone &&
+      (job_track_broken_ || f.frame - job_frame_ >= params_.startup_max_frames)) {
+    job_kind_ = JobKind::kNone;  // its result could not be carried here, or it took too long
+    ++counters.global_searches_dropped;
+  }
+  if (job_kind_ == JobKind::kNone) {
+    if (!f.gnss.valid || frames_since_search_ < params_.global_retry_frames) return out;
+    frames_since_search_ = 0;
+    f.probe(LocalizerStage::kGlobalSearch);
+    ++counters.global_searches;
+    start_job(f, counters);
+  } else {
+    f.probe(LocalizerStage::kGlobalSearch);
+  }
+  const std::uint64_t budget =
+      params_.startup_queries_per_period > 0 ? params_.startup_queries_per_period : ~std::uint64_t{0};
+  if (!job_.step(f.map, budget)) {
+    out.status = StartupStatus::kSearching;
+    f.probe(LocalizerStage::kFusion);
+    return out;
+  }
+  const JobKind kind = job_kind_;
+  job_kind_ = JobKind::kNone;
   Search s;
-  exhaustive_search(f, s, counters);
+  take_result(f, s);
+  resolve_ambiguity(f, s, counters);
   StartupSearchReport& r = out.report;
   r.searched = true;
-  r.heading_used = f.course_known;
+  r.heading_used = job_heading_used_;
   r.best_tight = s.searched.best_tight_fitness;
   r.runner_up_tight = s.searched.runner_up_tight_fitness;
   r.best_conflicts = s.searched.best_conflicts;
   r.runner_up_conflicts = s.searched.runner_up_conflicts;
   r.best_pose = Pose3d(s.searched.best.transform);
   r.runner_up_pose = Pose3d(s.searched.runner_up.transform);
-  if (params_.use_fpfh_ransac) fpfh_ransac(f, s);
+  if (kind == JobKind::kExhaustive && params_.use_fpfh_ransac) fpfh_ransac(f, s);
   out.status = accept(f, s, out.registration, counters);
+  if (out.status == StartupStatus::kRejected && candidate_.valid && candidate_.frame == f.frame) keep_finalists(f);
   f.probe(LocalizerStage::kFusion);
   return out;
 }
@@ -98,23 +126,55 @@ double StartupSearch::region_radius(const StartupFrame& f) const {
   return region;
 }
 
-// (1) Exhaustive, GNSS-seeded search over position and heading; an ambiguous result is decided
-// by the GNSS track when one pose explains it clearly better.
-void StartupSearch::exhaustive_search(const StartupFrame& f, Search& s, LocalizerCounters& counters) const {
-  s.region = region_radius(f);
-  PoseSearchParams& sp = s.params;
+// (1) Exhaustive, GNSS-seeded search over position and heading; or, to confirm a candidate, the
+// candidate's search finalists carried here by the odometry, re-decided on this frame's scan.
+void StartupSearch::start_job(const StartupFrame& f, LocalizerCounters& counters) {
+  job_region_ = region_radius(f);
+  PoseSearchParams& sp = job_params_;
   sp = params_.search;
-  sp.radius = s.region < sp.radius ? s.region : sp.radius;
+  sp.radius = job_region_ < sp.radius ? job_region_ : sp.radius;
   sp.sensor_in_body = f.sensor_in_body;
+  job_heading_used_ = f.course_known;
   if (f.course_known) {
     sp.use_yaw_prior = true;
     sp.yaw_prior = f.course;
     sp.yaw_prior_tolerance = params_.heading_search_tolerance;
     ++counters.heading_searches;
   }
-  s.searched = search_pose(f.search_scan, f.map, f.gnss.enu, sp);
+  job_frame_ = f.frame;
+  job_odom_ = f.odom_T_body.matrix();
+  job_track_broken_ = false;
+  const bool confirm_finalists = params_.global_confirm_finalists && finalist_count_ > 0 && candidate_.valid &&
+                                 f.frame - candidate_.frame <= params_.global_confirm_window;
+  if (!confirm_finalists) {
+    job_kind_ = JobKind::kExhaustive;
+    job_.start(f.search_scan, f.map, f.gnss.enu, sp);
+    return;
+  }
+  Mat4d carried[kPoseSearchRefine];
+  const Mat4d to_now = se3_inverse(candidate_.odom) * job_odom_;
+  for (std::uint32_t i = 0; i < finalist_count_; ++i) carried[i] = finalists_[i] * to_now;
+  job_kind_ = JobKind::kFinalists;
+  job_.start_from_poses(f.search_scan, f.map, std::span<const Mat4d>(carried, finalist_count_), finalists_ground_z_,
+                        sp);
+}
+
+// The finished job's result, carried from the frame it started at to this one.
+void StartupSearch::take_result(const StartupFrame& f, Search& s) const {
+  s.region = job_region_;
+  s.params = job_params_;
+  s.searched = job_.result();
+  if (job_frame_ != f.frame) {
+    const Mat4d to_now = se3_inverse(job_odom_) * f.odom_T_body.matrix();
+    s.searched.best.transform = s.searched.best.transform * to_now;
+    s.searched.runner_up.transform = s.searched.runner_up.transform * to_now;
+  }
+  s.best = s.searched.best;
+}
+
+// An ambiguous result is decided by the GNSS track when one pose explains it clearly better.
+void StartupSearch::resolve_ambiguity(const StartupFrame& f, Search& s, LocalizerCounters& counters) const {
   const PoseSearchResult& searched = s.searched;
-  s.best = searched.best;
   const bool distinct = searched.best_tight_fitness > 0.0 &&
                         searched.runner_up_tight_fitness < params_.global_max_ambiguity * searched.best_tight_fitness;
   if (distinct) return;
@@ -129,6 +189,15 @@ void StartupSearch::exhaustive_search(const StartupFrame& f, Search& s, Localize
       ++counters.ambiguities_resolved;
     }
   }
+}
+
+// A new candidate keeps its search's finalists (carried here) for the confirming search.
+void StartupSearch::keep_finalists(const StartupFrame& f) {
+  finalist_count_ = job_.finalists(std::span<Mat4d>(finalists_, kPoseSearchRefine));
+  finalists_ground_z_ = job_.result().ground_z;
+  if (job_frame_ == f.frame) return;
+  const Mat4d to_now = se3_inverse(job_odom_) * f.odom_T_body.matrix();
+  for (std::uint32_t i = 0; i < finalist_count_; ++i) finalists_[i] = finalists_[i] * to_now;
 }
 
 // (2) The paper's FPFH + RANSAC against the map around the fix, with the same prior. It only
@@ -162,7 +231,8 @@ StartupStatus StartupSearch::accept(const StartupFrame& f, const Search& s, Regi
     result = s.best;
     return StartupStatus::kRejected;
   }
-  result = icp(f.scan, f.map, s.best.transform, params_.icp, f.icp_hints);
+  const bool subsample = params_.startup_icp_on_tracking_scan && !f.tracking_scan.empty();
+  result = icp(subsample ? f.tracking_scan : f.scan, f.map, s.best.transform, params_.icp, f.icp_hints);
   if (!result.ok()) return StartupStatus::kRejected;
   const Mat4d& odom = f.odom_T_body.matrix();
   double track_distance = 0.0;

@@ -4,12 +4,17 @@
 
 #include "v2xloc/algo/core/det_math.hpp"
 #include "v2xloc/algo/search/kdtree.hpp"
+#include "v2xloc/algo/search/proximity_grid.hpp"
 #include "v2xloc/algo/core/rigid_motion.hpp"
 
 namespace v2xloc {
 namespace {
 
 using Candidate = PoseSearchCandidate;
+// Work accounting: this many proximity-grid lookups count as one nearest-neighbour query
+// (~35 against ~1000 instructions).
+constexpr std::uint32_t kGridLookupsPerQuery = 16;
+constexpr std::uint64_t kGridWorkPerQuery = 8;  // build units (~50 instructions each)
 
 PoseSearch g_search;  // search_pose()'s job: ~40 kB, static
 
@@ -149,18 +154,17 @@ PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& 
   return g_search.result();
 }
 
-void PoseSearch::start(std::span<const Vec3f> scan_body, const IcpTarget& map, const Vec3d& center,
-                       const PoseSearchParams& params) {
-  params_ = params;
-  center_ = center;
+// Resets the job and copies the scan; false (result kInvalidInput) when nothing can be searched.
+bool PoseSearch::copy_scan(std::span<const Vec3f> scan_body, const IcpTarget& map) {
   result_ = PoseSearchResult{};
   result_.best.status = RegistrationStatus::kNotEnoughPoints;
   work_ = 0;
   phase_ = Phase::kDone;
-  if (map.tree == nullptr || map.points.empty() || scan_body.empty() || !(params.step > 0.0) ||
-      params.yaw_steps == 0) {
+  from_given_ = false;
+  if (map.tree == nullptr || map.points.empty() || scan_body.empty() || !(params_.step > 0.0) ||
+      params_.yaw_steps == 0) {
     result_.best.status = RegistrationStatus::kInvalidInput;
-    return;
+    return false;
   }
   scan_count_ = 0;
   for (const Vec3f& p : scan_body) {
@@ -170,6 +174,24 @@ void PoseSearch::start(std::span<const Vec3f> scan_body, const IcpTarget& map, c
     }
     scan_[scan_count_++] = p;
   }
+  // The coarse ICP's points: every coarse_stride-th scan point (1: the scan itself).
+  const std::uint32_t stride = params_.coarse_stride > 1 ? params_.coarse_stride : 1u;
+  coarse_count_ = 0;
+  for (std::size_t i = 0; i < scan_count_; i += stride) coarse_points_[coarse_count_++] = scan_[i];
+  for (Candidate& c : top_) c = Candidate{};
+  candidate_ = 0;
+  refining_fine_ = false;
+  run_started_ = false;
+  best_fitness_ = 0.0;
+  winner_ = kPoseSearchRefine;
+  return true;
+}
+
+void PoseSearch::start(std::span<const Vec3f> scan_body, const IcpTarget& map, const Vec3d& center,
+                       const PoseSearchParams& params) {
+  params_ = params;
+  center_ = center;
+  if (!copy_scan(scan_body, map)) return;
   // Fixed subsample of above-ground points (every k-th), in body coordinates.
   std::uint32_t above = 0;
   for (const Vec3f& p : scan()) above += p.z() > params.min_height ? 1u : 0u;
@@ -184,15 +206,51 @@ void PoseSearch::start(std::span<const Vec3f> scan_body, const IcpTarget& map, c
   }
   // Not around the fix's altitude: a canyon fix can be far off vertically (TUNING.md).
   road_height_near(map.points, center, params.radius + params.ground_margin, result_.ground_z);
-  for (Candidate& c : top_) c = Candidate{};
+  if (grid_ != nullptr) build_grid(map);
   cells_ = static_cast<int>(std::floor(params.radius / params.step));
   iy_ = -cells_;
   ix_ = -cells_;
   yaw_index_ = 0;
-  candidate_ = 0;
-  refining_fine_ = false;
-  best_fitness_ = 0.0;
   phase_ = Phase::kScore;
+}
+
+// The proximity grid over the box every hypothesis's score points can reach: the search disc
+// widened by the points' horizontal range, their height span above the road, and the reach.
+// Built whole here: at most kProximityGridWords * 26 + map points work units (proximity_grid.hpp).
+void PoseSearch::build_grid(const IcpTarget& map) {
+  double range = 0.0, z_lo = 1e300, z_hi = -1e300;
+  for (std::uint32_t i = 0; i < score_count_; ++i) {
+    const Vec3f& p = score_pts_[i];
+    const double r = std::sqrt(static_cast<double>(p.x()) * p.x() + static_cast<double>(p.y()) * p.y());
+    range = r > range ? r : range;
+    z_lo = p.z() < z_lo ? p.z() : z_lo;
+    z_hi = p.z() > z_hi ? p.z() : z_hi;
+  }
+  const double margin = params_.score_distance;
+  const Vec3d center(center_.x(), center_.y(), result_.ground_z + 0.5 * (z_lo + z_hi));
+  const Vec3d half(params_.radius + range + margin, params_.radius + range + margin, 0.5 * (z_hi - z_lo) + margin);
+  ProximityGridParams gp;
+  gp.cell = params_.grid_cell;
+  gp.reach = params_.grid_reach;
+  grid_->build(map.points, center, half, gp);
+  work_ += grid_->total_work() / kGridWorkPerQuery;
+}
+
+void PoseSearch::start_from_poses(std::span<const Vec3f> scan_body, const IcpTarget& map,
+                                  std::span<const Mat4d> poses, double ground_z, const PoseSearchParams& params) {
+  params_ = params;
+  if (!copy_scan(scan_body, map) || poses.empty()) return;
+  const std::size_t n = poses.size() < kPoseSearchRefine ? poses.size() : kPoseSearchRefine;
+  params_.refine_candidates = static_cast<std::uint32_t>(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    given_[i] = poses[i];
+    const Mat4d& p = poses[i];
+    top_[i] = Candidate{1.0, p(0, 3), p(1, 3), yaw_of(p.topLeftCorner<3, 3>())};
+  }
+  center_ = poses[0].topRightCorner<3, 1>();
+  result_.ground_z = ground_z;
+  from_given_ = true;
+  phase_ = Phase::kRefine;
 }
 
 bool PoseSearch::step(const IcpTarget& map, std::uint64_t budget) {
@@ -220,6 +278,9 @@ void PoseSearch::score_hypotheses(const IcpTarget& map, std::uint64_t stop) {
   float d2max_f = static_cast<float>(d2max);
   if (static_cast<double>(d2max_f) > d2max) d2max_f = std::nextafter(d2max_f, 0.0f);
   const double r2 = params_.radius * params_.radius;
+  // The proximity bitmap built at start(): same question, looser answer (a hit may be up to a
+  // few cells farther), ~30x cheaper.
+  const ProximityGrid* grid = grid_ != nullptr && grid_->ready() && grid_->valid() ? grid_ : nullptr;
   for (; iy_ <= cells_; ++iy_, ix_ = -cells_) {
     for (; ix_ <= cells_; ++ix_, yaw_index_ = 0) {
       const double ox = ix_ * params_.step, oy = iy_ * params_.step;
@@ -230,7 +291,7 @@ void PoseSearch::score_hypotheses(const IcpTarget& map, std::uint64_t stop) {
         if (params_.use_yaw_prior && std::abs(det::wrap_pi(yaw - params_.yaw_prior)) > params_.yaw_prior_tolerance) continue;
         if (result_.hypotheses >= params_.max_hypotheses) break;
         ++result_.hypotheses;
-        work_ += score_count_;
+        work_ += grid != nullptr ? (score_count_ + kGridLookupsPerQuery - 1) / kGridLookupsPerQuery : score_count_;
         const double c = det::cos(yaw), s = det::sin(yaw);
         const double x = center_.x() + ox, y = center_.y() + oy;
         std::uint32_t hits = 0;
@@ -238,7 +299,7 @@ void PoseSearch::score_hypotheses(const IcpTarget& map, std::uint64_t stop) {
           const Vec3f& p = score_pts_[i];
           const Vec3f q(static_cast<float>(c * p.x() - s * p.y() + x), static_cast<float>(s * p.x() + c * p.y() + y),
                         static_cast<float>(p.z() + result_.ground_z));
-          hits += map.tree->any_within(q, d2max_f) ? 1u : 0u;
+          hits += (grid != nullptr ? grid->near(q) : map.tree->any_within(q, d2max_f)) ? 1u : 0u;
         }
         keep_distinct_best(top_, Candidate{static_cast<double>(hits) / score_count_, x, y, yaw}, params_);
       }
@@ -268,18 +329,29 @@ void PoseSearch::refine_candidate(const IcpTarget& map, std::uint64_t stop) {
     ++candidate_;
     return;
   }
+  if (from_given_ && !refining_fine_) {  // a known pose: straight to the fine ICP
+    coarse_ = RegistrationResult{};
+    coarse_.status = RegistrationStatus::kOk;
+    coarse_.transform = given_[candidate_];
+    refining_fine_ = true;
+  }
   const IcpParams& icp_params = refining_fine_ ? params_.fine_icp : params_.icp;
+  // The coarse ICP only pulls a hypothesis into its basin: it may run on every k-th point.
+  const std::span<const Vec3f> points = refining_fine_ ? scan() : coarse_scan();
+  const std::span<std::uint32_t> hints = refining_fine_ ? this->hints() : std::span<std::uint32_t>(hints_, coarse_count_);
   if (!run_started_) {
     const Mat4d initial = refining_fine_ ? coarse_.transform : pose_of(cand.x, cand.y, result_.ground_z, cand.yaw);
-    icp_begin(run_, scan(), map, initial, icp_params, hints());
+    icp_begin(run_, points, map, initial, icp_params, hints);
     run_started_ = true;
   }
+  const std::uint64_t n = points.size();
   const std::uint64_t left = stop > work_ ? stop - work_ : 0;
-  const std::uint64_t passes = scan_count_ > 0 ? (left + scan_count_ - 1) / scan_count_ : 1;
+  // ceil(left / points) without overflow (left is ~2^64 for an unbounded step), >= 1
+  const std::uint64_t passes = n > 0 ? left / n + (left % n != 0 ? 1 : 0) : 1;
   const std::uint32_t before = run_.passes;
   const bool finished =
-      icp_continue(run_, scan(), map, icp_params, passes > 1000 ? 1000u : static_cast<std::uint32_t>(passes), hints());
-  work_ += static_cast<std::uint64_t>(run_.passes - before) * scan_count_;
+      icp_continue(run_, points, map, icp_params, passes > 1000 ? 1000u : static_cast<std::uint32_t>(passes), hints);
+  work_ += static_cast<std::uint64_t>(run_.passes - before) * n;
   if (!finished) return;
   run_started_ = false;
   if (!refining_fine_) {
@@ -354,6 +426,16 @@ void PoseSearch::finish() {
     }
   }
   result_.best_conflicts = conflicts_[winner_];
+}
+
+std::uint32_t PoseSearch::finalists(std::span<Mat4d> out) const {
+  if (phase_ != Phase::kDone || winner_ == kPoseSearchRefine || out.empty()) return 0;
+  std::uint32_t n = 0;
+  out[n++] = refined_[winner_].transform;
+  for (std::uint32_t i = 0; i < refine_count() && n < out.size(); ++i) {
+    if (i != winner_ && tight_[i] >= 0.0) out[n++] = refined_[i].transform;
+  }
+  return n;
 }
 
 }  // namespace v2xloc

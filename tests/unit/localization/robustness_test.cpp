@@ -15,6 +15,7 @@
 #include "v2xloc/algo/registration/normals.hpp"
 #include "v2xloc/algo/localization/odometry.hpp"
 #include "v2xloc/algo/registration/pose_search.hpp"
+#include "v2xloc/algo/search/proximity_grid.hpp"
 #include "v2xloc/algo/core/rigid_motion.hpp"
 
 namespace v2xloc {
@@ -214,6 +215,133 @@ TEST(PoseSearchRobustness, SteppedSearchEqualsOneCallAndKeepsItsBudget) {
   EXPECT_EQ(stepped.runner_up_tight_fitness, once.runner_up_tight_fitness);
   EXPECT_EQ(stepped.best_conflicts, once.best_conflicts);
   EXPECT_EQ(stepped.conflict_rejected, once.conflict_rejected);
+}
+
+// The confirming search re-decides a finished search's finalists on a later scan: both basins
+// of the courtyard's mirror reach it, the same winner comes out at a fraction of the work, and a
+// finalist moved 1 m (the odometry's carry error) is pulled back by the fine ICP.
+TEST(PoseSearchRobustness, FinalistsAreReDecidedWithoutScoring) {
+  std::mt19937_64 rng(7);
+  static CourtyardTarget map;
+  map.points = courtyard(rng);
+  ASSERT_EQ(map.tree.build(map.points).status, KdBuildStatus::kOk);
+  map.normals.assign(map.points.size(), Vec3f::Zero());
+  NormalParams np;
+  np.radius = 0.8f;
+  estimate_normals(map.tree.tree, np, std::span<Vec3f>(map.normals));
+  const IcpTarget target{map.points, map.normals, &map.tree.tree};
+  Mat4d truth = Mat4d::Identity();
+  truth.topLeftCorner<3, 3>() = rot_z(0.3);
+  truth(0, 3) = 0.5;
+  const Mat4d inv = se3_inverse(truth);
+  std::vector<Vec3f> scan;
+  int k = 0;
+  for (const Vec3f& p : courtyard(rng)) {
+    if (k++ % 4 != 0) continue;
+    scan.push_back((inv.topLeftCorner<3, 3>() * p.cast<double>() + inv.topRightCorner<3, 1>()).cast<float>());
+  }
+  PoseSearchParams sp;
+  sp.radius = 4.0;
+  sp.step = 1.0;
+  sp.yaw_steps = 24;
+  sp.score_points = 128;
+  sp.icp.max_correspondence_distance = 1.0;
+  sp.fine_icp = sp.icp;
+  sp.fine_icp.max_correspondence_distance = 0.3;
+  static PoseSearch full;
+  full.start(scan, target, Vec3d(1.5, 0.5, 0.0), sp);
+  ASSERT_TRUE(full.step(target, ~std::uint64_t{0}));
+  ASSERT_TRUE(full.result().best.ok());
+  Mat4d finalists[kPoseSearchRefine];
+  const std::uint32_t n = full.finalists(finalists);
+  ASSERT_GE(n, 2u) << "the mirror is a finalist";
+  EXPECT_TRUE(finalists[0] == full.result().best.transform) << "winner first";
+
+  // Each finalist 1 m and 3 deg off, as a carry over a few frames might leave it.
+  Mat4d nudge = Mat4d::Identity();
+  nudge.topLeftCorner<3, 3>() = rot_z(0.05);
+  nudge(0, 3) = 1.0;
+  for (std::uint32_t i = 0; i < n; ++i) finalists[i] = finalists[i] * nudge;
+  static PoseSearch again;
+  again.start_from_poses(scan, target, std::span<const Mat4d>(finalists, n), full.result().ground_z, sp);
+  ASSERT_TRUE(again.step(target, ~std::uint64_t{0}));
+  const PoseSearchResult& r = again.result();
+  ASSERT_TRUE(r.best.ok());
+  EXPECT_EQ(r.hypotheses, 0u) << "nothing scored";
+  EXPECT_LT(again.work(), full.work());
+  const Mat4d d = se3_inverse(full.result().best.transform) * r.best.transform;
+  EXPECT_LT(std::hypot(d(0, 3), d(1, 3)), 0.05);
+  EXPECT_LT(std::abs(det::wrap_pi(yaw_of(d.topLeftCorner<3, 3>()))), 0.01);
+  EXPECT_GT(r.runner_up_tight_fitness, 0.0) << "the mirror is measured again";
+
+  static PoseSearch none;
+  none.start_from_poses(scan, target, std::span<const Mat4d>(), 0.0, sp);
+  EXPECT_TRUE(none.done());
+  EXPECT_FALSE(none.result().best.ok());
+  Mat4d out[2];
+  EXPECT_EQ(none.finalists(out), 0u);
+}
+
+// Scoring on the proximity bitmap (start-up search) instead of the k-d tree: the same pose
+// comes out, the hypotheses cost a fraction of the work, and the grid covers the search region.
+TEST(PoseSearchRobustness, GridScoredSearchFindsTheTreeScoredPose) {
+  std::mt19937_64 rng(7);
+  static CourtyardTarget map;
+  map.points = courtyard(rng);
+  ASSERT_EQ(map.tree.build(map.points).status, KdBuildStatus::kOk);
+  map.normals.assign(map.points.size(), Vec3f::Zero());
+  NormalParams np;
+  np.radius = 0.8f;
+  estimate_normals(map.tree.tree, np, std::span<Vec3f>(map.normals));
+  const IcpTarget target{map.points, map.normals, &map.tree.tree};
+  Mat4d truth = Mat4d::Identity();
+  truth.topLeftCorner<3, 3>() = rot_z(0.3);
+  truth(0, 3) = 0.5;
+  const Mat4d inv = se3_inverse(truth);
+  std::vector<Vec3f> scan;
+  int k = 0;
+  for (const Vec3f& p : courtyard(rng)) {
+    if (k++ % 4 != 0) continue;
+    scan.push_back((inv.topLeftCorner<3, 3>() * p.cast<double>() + inv.topRightCorner<3, 1>()).cast<float>());
+  }
+  PoseSearchParams sp;
+  sp.radius = 4.0;
+  sp.step = 1.0;
+  sp.yaw_steps = 24;
+  sp.score_points = 128;
+  sp.score_distance = 0.5;
+  sp.grid_cell = 0.25f;
+  sp.grid_reach = 0.5f;
+  sp.icp.max_correspondence_distance = 1.0;
+  sp.fine_icp = sp.icp;
+  sp.fine_icp.max_correspondence_distance = 0.3;
+  sp.use_yaw_prior = true;
+  sp.yaw_prior = 0.3;
+  const Vec3d gnss(1.5, 0.5, 0.0);
+  static PoseSearch tree_job, grid_job;
+  static ProximityGrid grid;
+  tree_job.start(scan, target, gnss, sp);
+  ASSERT_TRUE(tree_job.step(target, ~std::uint64_t{0}));
+  grid_job.set_proximity_grid(&grid);
+  grid_job.start(scan, target, gnss, sp);
+  ASSERT_TRUE(grid.ready());
+  ASSERT_TRUE(grid.valid());
+  EXPECT_EQ(grid.points_outside(), 0u) << "the courtyard lies inside the searched box";
+  EXPECT_GT(grid.points_marked(), 0u);
+  ASSERT_TRUE(grid_job.step(target, ~std::uint64_t{0}));
+  const PoseSearchResult& a = tree_job.result();
+  const PoseSearchResult& b = grid_job.result();
+  ASSERT_TRUE(a.best.ok());
+  ASSERT_TRUE(b.best.ok());
+  EXPECT_EQ(a.hypotheses, b.hypotheses);
+  const Mat4d d = se3_inverse(a.best.transform) * b.best.transform;
+  EXPECT_LT(std::hypot(d(0, 3), d(1, 3)), 0.02);
+  EXPECT_LT(std::abs(det::wrap_pi(yaw_of(d.topLeftCorner<3, 3>()))), 0.005);
+  const Mat4d e = se3_inverse(truth) * b.best.transform;
+  EXPECT_LT(std::hypot(e(0, 3), e(1, 3)), 0.05);
+  // With grid_reach = score_distance the grid's hits are a superset of the tree's (no false
+  // negatives): scores never drop.
+  EXPECT_GE(b.best_score, a.best_score);
 }
 
 TEST(PoseSearchRobustness, RoadHeightIgnoresTheFixAltitudeAndSaysWhenTheMapIsAbsent) {

@@ -53,7 +53,7 @@ struct LocalizerParams {
   IcpParams icp = default_icp();      // tracking ICP: point-to-plane from the EKF prediction
   RegisterCloudsParams global = default_global();   // start-up FPFH + RANSAC (paper)
   PoseSearchParams search = default_search();        // start-up GNSS-seeded exhaustive search
-  bool use_fpfh_ransac = true;        // also try FPFH + RANSAC at start-up; better ICP fitness wins
+  bool use_fpfh_ransac = false;       // also try FPFH + RANSAC at start-up; better ICP fitness wins
   // [points] the pose search (start-up, audit) refines and compares its candidates on every k-th
   // registration-scan point, <= config::kMaxSearchPoints; the accepted pose is refined again on
   // the whole scan (this only picks the basin; a 0.5 m-voxel scan holds 5-20k points).
@@ -69,6 +69,17 @@ struct LocalizerParams {
   double tracking_max_sigma_xy = 0.5; // [m] EKF position sigma above which we search globally
   std::uint32_t max_failed_frames = 10;   // [frames] consecutive unfused registrations -> global search
   std::uint32_t global_retry_frames = 2;  // [frames] between two global searches (bounded cost)
+  // [queries/period] the start-up search runs as a job, this many nearest-neighbour queries per
+  // period; its result is carried to the frame it finishes in by the odometry (0: at once)
+  std::uint32_t startup_queries_per_period = 0;
+  std::uint32_t startup_max_frames = 20;  // [frames] a search job not finished within this is dropped
+  // The confirming search re-decides the candidate's search finalists (carried by the odometry)
+  // on its later scan instead of searching the whole region again.
+  bool global_confirm_finalists = true;
+  bool startup_icp_on_tracking_scan = true;  // an accepted pose's final ICP on the tracking subsample
+  // The start-up search scores its hypotheses on a proximity bitmap of the searched region (~35
+  // instructions a score point against ~1000 for the map's k-d tree; search.grid_cell).
+  bool search_on_proximity_grid = true;
   std::uint32_t global_confirm_window = 10;  // [frames] a second search within this confirms (0: off)
   double global_confirm_distance = 0.5;   // [m] confirmation: horizontal disagreement allowed
   double global_confirm_yaw = 0.035;      // [rad] confirmation: heading disagreement allowed (2 deg)
@@ -167,13 +178,17 @@ struct LocalizerParams {
     PoseSearchParams p;
     p.icp.method = IcpMethod::kPointToPlane;
     p.icp.max_correspondence_distance = 2.0;  // the grid is 2.5 m / 7.5 deg coarse
-    p.icp.criteria.max_iterations = 30;
+    p.icp.criteria.max_iterations = 20;
+    p.icp.criteria.relative_fitness = 1e-3;  // the coarse ICP only picks the basin
+    p.icp.criteria.relative_rmse = 1e-3;     // [m]
     p.icp.kernel.type = RobustKernelType::kTukey;
     p.icp.kernel.scale = 1.0;
     p.yaw_steps = 24;               // 15 deg; the coarse ICP pulls in +-7.5 deg
     p.step = 3.0;
     p.radius = 30.0;                // [m] = global_min_region (bounded work: ~8k hypotheses)
     p.score_points = 96;
+    p.refine_candidates = 10;       // the best distinct hypotheses refined
+    p.coarse_stride = 1;            // the coarse ICP on every search point
     // Half the grid cell's diagonal (step 3 m): with 1 m the true pose's cell, 1.5 m off, scored
     // 0.1 and was not shortlisted (Sim 0's first frame); the aliases this lets in are removed
     // by the ray check below.

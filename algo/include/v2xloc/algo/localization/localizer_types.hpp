@@ -110,6 +110,7 @@ struct LocalizerFrameOutput {
 struct LocalizerCounters {
   std::uint32_t frames = 0;
   std::uint32_t global_searches = 0;
+  std::uint32_t global_searches_dropped = 0;   // search jobs dropped: odometry broke, or too slow
   std::uint32_t global_accepted = 0;
   std::uint32_t tracking_registrations = 0;
   std::uint32_t registrations_ok = 0;

@@ -3,9 +3,12 @@
 // paper's FPFH + RANSAC, refined by the tracking ICP and checked against the GNSS region, the
 // course over ground and the GNSS track the odometry implies. An accepted solution starts the
 // filter only when a second search within global_confirm_window frames agrees with it through
-// the odometry (the candidate). Owns all its state: the candidate, the track of recent
-// odometry / GNSS positions, the retry spacing and the FPFH + RANSAC workspace.
-// One entry point per frame (step) with everything it reads in a StartupFrame.
+// the odometry (the candidate); that search may re-decide only the first one's finalists
+// (global_confirm_finalists). The search is a job: startup_queries_per_period bounds its work per
+// frame, its result is carried to the frame it finishes in by the odometry. Owns all its state:
+// the job, the candidate, the track of recent odometry / GNSS positions, the retry spacing and
+// the FPFH + RANSAC workspace. One entry point per frame (step), everything it reads in a
+// StartupFrame.
 #pragma once
 
 #include <cstdint>
@@ -17,6 +20,7 @@
 #include "v2xloc/algo/localization/localizer_types.hpp"
 #include "v2xloc/algo/localization/stage_probe.hpp"
 #include "v2xloc/algo/registration/icp.hpp"
+#include "v2xloc/algo/registration/pose_search.hpp"
 #include "v2xloc/algo/registration/register_clouds.hpp"
 
 namespace v2xloc {
@@ -27,6 +31,7 @@ struct StartupFrame {
   double t = 0.0;                           // [s]
   std::span<const Vec3f> scan{};            // registration scan (body frame, downsampled)
   std::span<const Vec3f> search_scan{};     // its subsample for the pose search
+  std::span<const Vec3f> tracking_scan{};   // the tracking ICP's subsample
   IcpTarget map{};                          // the reference map as an ICP target
   GnssFix gnss{};
   bool course_known = false;                // GNSS course over ground at t ...
@@ -50,6 +55,7 @@ struct StartupSearchReport {
 
 enum class StartupStatus : std::uint8_t {
   kNotDue,       // no GNSS yet, or within global_retry_frames of the last search
+  kSearching,    // a search job is running (its work spread over the frames)
   kRejected,     // searched; no solution, or one not (yet) trusted (reported, not fused)
   kAccepted,     // a solution for the running filter (gated and fused like a tracking one)
   kStartFilter,  // a confirmed solution: the filter starts at it, then it is gated and fused
@@ -92,9 +98,13 @@ class StartupSearch {
   };
   static constexpr std::size_t kTrackFrames = 32;
   struct Search;                     // one search's intermediate results (startup_search.cpp)
+  enum class JobKind : std::uint8_t { kNone, kExhaustive, kFinalists };
 
   double region_radius(const StartupFrame& f) const;
-  void exhaustive_search(const StartupFrame& f, Search& s, LocalizerCounters& counters) const;
+  void start_job(const StartupFrame& f, LocalizerCounters& counters);
+  void take_result(const StartupFrame& f, Search& s) const;
+  void resolve_ambiguity(const StartupFrame& f, Search& s, LocalizerCounters& counters) const;
+  void keep_finalists(const StartupFrame& f);
   void fpfh_ransac(const StartupFrame& f, Search& s);
   StartupStatus accept(const StartupFrame& f, const Search& s, RegistrationResult& result,
                        LocalizerCounters& counters);
@@ -109,6 +119,21 @@ class StartupSearch {
   TrackSample track_[kTrackFrames];
   std::uint32_t track_count_ = 0;    // consecutive samples pushed (reset by odometry failures)
   std::uint32_t frames_since_search_ = 0;
+  // The running search job and what its result needs: the frame it started at and that frame's
+  // odometry pose (to carry the result), its region and parameters.
+  PoseSearch job_;
+  ProximityGrid grid_;               // the job's hypothesis scoring (search_on_proximity_grid)
+  JobKind job_kind_ = JobKind::kNone;
+  bool job_track_broken_ = false;    // the odometry failed since the job started
+  std::uint32_t job_frame_ = 0;
+  Mat4d job_odom_ = Mat4d::Identity();
+  double job_region_ = 0.0;
+  PoseSearchParams job_params_{};
+  bool job_heading_used_ = false;
+  // The candidate's search finalists (world_T_body at candidate_.frame), winner first.
+  Mat4d finalists_[kPoseSearchRefine];
+  std::uint32_t finalist_count_ = 0;
+  double finalists_ground_z_ = 0.0;
   FixedVector<Vec3f, config::kMaxMapPoints> map_crop_;
   RegistrationWorkspace workspace_;
 };

@@ -14,6 +14,7 @@
 #include <span>
 
 #include "v2xloc/algo/registration/icp.hpp"
+#include "v2xloc/algo/search/proximity_grid.hpp"
 #include "v2xloc/algo/registration/registration_result.hpp"
 #include "v2xloc/algo/core/config.hpp"
 #include "v2xloc/algo/core/types.hpp"
@@ -62,6 +63,12 @@ struct PoseSearchParams {
   double yaw_prior = 0.0;            // [rad]
   double yaw_prior_tolerance = 1.05; // [rad] (60 deg)
   std::uint32_t refine_candidates = 10;  // best distinct hypotheses refined (<= kPoseSearchRefine)
+  std::uint32_t coarse_stride = 1;  // the coarse ICP registers every k-th scan point
+  // Scoring on a proximity grid (set_proximity_grid): a score point hits when a map point lies
+  // in a cell within ceil(grid_reach / grid_cell) cells of its own on every axis, a cube that
+  // stands for the score_distance sphere (1 m cells, reach 1: 3 m cube ~ the 2 m sphere's volume).
+  float grid_cell = 1.0f;          // [m]
+  float grid_reach = 1.0f;         // [m]
 };
 
 struct PoseSearchResult {
@@ -112,11 +119,22 @@ class PoseSearch {
  public:
   void start(std::span<const Vec3f> scan_body, const IcpTarget& map, const Vec3d& center,
              const PoseSearchParams& params);
+  // Re-decides between known poses (world_T_body, e.g. a finished search's finalists carried to
+  // a later scan by the odometry): no scoring, each pose refined by the fine ICP only, then the
+  // same selection (ray check, tight fitness, runner-up). At most kPoseSearchRefine poses.
+  void start_from_poses(std::span<const Vec3f> scan_body, const IcpTarget& map, std::span<const Mat4d> poses,
+                        double ground_z, const PoseSearchParams& params);
   bool step(const IcpTarget& map, std::uint64_t budget);
+  // Score hypotheses on this caller-owned proximity grid (proximity_grid.hpp), built by start()
+  // over the searched region, instead of the map's k-d tree (nullptr: the tree).
+  void set_proximity_grid(ProximityGrid* grid) { grid_ = grid; }
   bool done() const { return phase_ == Phase::kDone; }
   const PoseSearchResult& result() const { return result_; }
   std::uint64_t work() const { return work_; }  // queries so far
   std::span<const Vec3f> scan() const { return {scan_, scan_count_}; }
+  // The refined poses that reached the selection (not dropped by fitness or rays), winner
+  // first; valid once done(). Returns how many were written (<= out.size()).
+  std::uint32_t finalists(std::span<Mat4d> out) const;
 
  private:
   enum class Phase : std::uint8_t { kScore, kRefine, kSelect, kDone };
@@ -125,12 +143,16 @@ class PoseSearch {
   void refine_candidate(const IcpTarget& map, std::uint64_t stop);
   void select_candidate(const IcpTarget& map);
   void finish();
+  bool copy_scan(std::span<const Vec3f> scan_body, const IcpTarget& map);
+  void build_grid(const IcpTarget& map);
   std::uint32_t refine_count() const {
     return params_.refine_candidates < kPoseSearchRefine ? params_.refine_candidates : kPoseSearchRefine;
   }
   std::span<std::uint32_t> hints() { return {hints_, scan_count_}; }
+  std::span<const Vec3f> coarse_scan() const { return {coarse_points_, coarse_count_}; }
 
   PoseSearchParams params_{};
+  ProximityGrid* grid_ = nullptr;
   Vec3d center_ = Vec3d::Zero();
   PoseSearchResult result_{};
   Phase phase_ = Phase::kDone;
@@ -138,6 +160,8 @@ class PoseSearch {
   Vec3f scan_[config::kMaxSearchPoints];
   std::uint32_t hints_[config::kMaxSearchPoints];
   std::size_t scan_count_ = 0;
+  Vec3f coarse_points_[config::kMaxSearchPoints];
+  std::size_t coarse_count_ = 0;
   Vec3f score_pts_[kMaxScorePoints];
   std::uint32_t score_count_ = 0;
   int cells_ = 0, iy_ = 0, ix_ = 0;               // scoring cursor: grid row, column ...
@@ -145,6 +169,8 @@ class PoseSearch {
   PoseSearchCandidate top_[kPoseSearchRefine];
   RegistrationResult refined_[kPoseSearchRefine];
   RegistrationResult coarse_{};
+  Mat4d given_[kPoseSearchRefine];                // start_from_poses: the fine ICP's starts
+  bool from_given_ = false;
   IcpRun run_{};
   bool run_started_ = false;
   bool refining_fine_ = false;
