@@ -53,6 +53,7 @@ void StartupSearch::on_track_lost() {
   candidate_.valid = false;
   finalist_count_ = 0;
   job_kind_ = JobKind::kNone;
+  provisional_valid_ = false;
   frames_since_search_ = params_.global_retry_frames;
 }
 
@@ -67,7 +68,10 @@ void StartupSearch::nominate(std::uint32_t frame, const Pose3d& pose, const Pose
 
 bool StartupSearch::candidate_pose(std::uint32_t frame, const Pose3d& odom_T_body, Pose3d& pose) const {
   if (!candidate_.valid || !candidate_.output || frame - candidate_.frame > params_.global_confirm_window) {
-    return false;
+    if (job_kind_ != JobKind::kExhaustive || !provisional_valid_) return false;
+    // The running search's best pose so far, carried from the frame it started at.
+    pose = Pose3d(provisional_ * se3_inverse(job_odom_) * odom_T_body.matrix());
+    return true;
   }
   pose = Pose3d(candidate_.pose * se3_inverse(candidate_.odom) * odom_T_body.matrix());
   return true;
@@ -81,6 +85,7 @@ StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& cou
   if (job_kind_ != JobKind::kNone &&
       (job_track_broken_ || f.frame - job_frame_ >= params_.startup_max_frames)) {
     job_kind_ = JobKind::kNone;  // its result could not be carried here, or it took too long
+    provisional_valid_ = false;
     ++counters.global_searches_dropped;
   }
   if (job_kind_ == JobKind::kNone) {
@@ -95,12 +100,14 @@ StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& cou
   const std::uint64_t budget =
       params_.startup_queries_per_period > 0 ? params_.startup_queries_per_period : ~std::uint64_t{0};
   if (!job_.step(f.map, budget)) {
+    if (job_kind_ == JobKind::kExhaustive) provisional_valid_ = job_.provisional(provisional_);
     out.status = StartupStatus::kSearching;
     f.probe(LocalizerStage::kFusion);
     return out;
   }
   const JobKind kind = job_kind_;
   job_kind_ = JobKind::kNone;
+  provisional_valid_ = false;
   Search s;
   take_result(f, s);
   resolve_ambiguity(f, s, counters);
@@ -141,9 +148,11 @@ void StartupSearch::start_job(const StartupFrame& f, LocalizerCounters& counters
     sp.yaw_prior_tolerance = params_.heading_search_tolerance;
     ++counters.heading_searches;
   }
+  sp.provisional = params_.startup_output_provisional && params_.startup_queries_per_period > 0;
   job_frame_ = f.frame;
   job_odom_ = f.odom_T_body.matrix();
   job_track_broken_ = false;
+  provisional_valid_ = false;
   const bool confirm_finalists = params_.global_confirm_finalists && finalist_count_ > 0 && candidate_.valid &&
                                  f.frame - candidate_.frame <= params_.global_confirm_window;
   if (!confirm_finalists) {

@@ -184,6 +184,7 @@ bool PoseSearch::copy_scan(std::span<const Vec3f> scan_body, const IcpTarget& ma
   run_started_ = false;
   best_fitness_ = 0.0;
   winner_ = kPoseSearchRefine;
+  provisional_tight_ = -1.0;
   return true;
 }
 
@@ -372,7 +373,31 @@ void PoseSearch::refine_candidate(const IcpTarget& map, std::uint64_t stop) {
     refined.status = RegistrationStatus::kDidNotConverge;  // slid out of the prior
   }
   if (refined.ok() && refined.fitness > best_fitness_) best_fitness_ = refined.fitness;
+  if (params_.provisional && refined.ok()) judge_provisional(map, refined);
   ++candidate_;
+}
+
+// The best refined pose so far by the selection's own measures (rays, tight fitness), for a
+// caller that outputs something while the search goes on; the final selection is unchanged.
+void PoseSearch::judge_provisional(const IcpTarget& map, const RegistrationResult& refined) {
+  if (params_.max_conflicts > 0.0) {
+    std::uint32_t samples = 0;
+    const double conflicts = ray_conflict_ratio(scan(), map, refined.transform, result_.ground_z, params_, &samples);
+    work_ += samples;
+    if (conflicts > params_.max_conflicts) return;
+  }
+  const double tight = evaluate_registration(scan(), map, refined.transform, params_.select_distance).fitness;
+  work_ += scan_count_;
+  if (tight > provisional_tight_) {
+    provisional_tight_ = tight;
+    provisional_pose_ = refined.transform;
+  }
+}
+
+bool PoseSearch::provisional(Mat4d& pose) const {
+  if (!(provisional_tight_ > 0.0)) return false;
+  pose = provisional_pose_;
+  return true;
 }
 
 // The winner: the highest fitness at a tight threshold (an aliased pose explains the scan at

@@ -73,6 +73,8 @@ struct LocalizerParams {
   // period; its result is carried to the frame it finishes in by the odometry (0: at once)
   std::uint32_t startup_queries_per_period = 0;
   std::uint32_t startup_max_frames = 20;  // [frames] a search job not finished within this is dropped
+  // While a spread search runs, output its best refined pose so far (not localized, not fused).
+  bool startup_output_provisional = true;
   // The confirming search re-decides the candidate's search finalists (carried by the odometry)
   // on its later scan instead of searching the whole region again.
   bool global_confirm_finalists = true;

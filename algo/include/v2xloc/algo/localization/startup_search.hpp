@@ -130,6 +130,8 @@ class StartupSearch {
   double job_region_ = 0.0;
   PoseSearchParams job_params_{};
   bool job_heading_used_ = false;
+  bool provisional_valid_ = false;   // the running search's best pose so far (output only)
+  Mat4d provisional_ = Mat4d::Identity();  // world_T_body at job_frame_
   // The candidate's search finalists (world_T_body at candidate_.frame), winner first.
   Mat4d finalists_[kPoseSearchRefine];
   std::uint32_t finalist_count_ = 0;

@@ -64,6 +64,9 @@ struct PoseSearchParams {
   double yaw_prior_tolerance = 1.05; // [rad] (60 deg)
   std::uint32_t refine_candidates = 10;  // best distinct hypotheses refined (<= kPoseSearchRefine)
   std::uint32_t coarse_stride = 1;  // the coarse ICP registers every k-th scan point
+  // Judge each refined pose as it comes (rays, tight fitness) so that provisional() names the
+  // best so far while the search runs over several periods (costs ~1 fitness pass a candidate).
+  bool provisional = false;
   // Scoring on a proximity grid (set_proximity_grid): a score point hits when a map point lies
   // in a cell within ceil(grid_reach / grid_cell) cells of its own on every axis, a cube that
   // stands for the score_distance sphere (1 m cells, reach 1: 3 m cube ~ the 2 m sphere's volume).
@@ -135,6 +138,8 @@ class PoseSearch {
   // The refined poses that reached the selection (not dropped by fitness or rays), winner
   // first; valid once done(). Returns how many were written (<= out.size()).
   std::uint32_t finalists(std::span<Mat4d> out) const;
+  // With params.provisional: the best pose refined so far (world_T_body); false before any.
+  bool provisional(Mat4d& pose) const;
 
  private:
   enum class Phase : std::uint8_t { kScore, kRefine, kSelect, kDone };
@@ -145,6 +150,7 @@ class PoseSearch {
   void finish();
   bool copy_scan(std::span<const Vec3f> scan_body, const IcpTarget& map);
   void build_grid(const IcpTarget& map);
+  void judge_provisional(const IcpTarget& map, const RegistrationResult& refined);
   std::uint32_t refine_count() const {
     return params_.refine_candidates < kPoseSearchRefine ? params_.refine_candidates : kPoseSearchRefine;
   }
@@ -179,6 +185,8 @@ class PoseSearch {
   double tight_[kPoseSearchRefine] = {};
   double conflicts_[kPoseSearchRefine] = {};
   double best_tight_ = -1.0;
+  double provisional_tight_ = -1.0;
+  Mat4d provisional_pose_ = Mat4d::Identity();
   std::uint32_t winner_ = kPoseSearchRefine;
 };
 
