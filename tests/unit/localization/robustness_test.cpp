@@ -154,29 +154,43 @@ TEST(PoseSearchRobustness, MirrorIsMeasuredAsRunnerUpAndExcludedByHeadingPrior) 
   EXPECT_LT(std::hypot(dh(0, 3), dh(1, 3)), 0.05);
 }
 
+// The courtyard as a search target (tree, normals) and a sparse scan of it from `truth`, heading
+// 0.3 rad at (0.5, 0): the scene of the pose-search job tests.
+struct CourtyardScene {
+  CourtyardTarget map;
+  IcpTarget target;
+  Mat4d truth = Mat4d::Identity();
+  std::vector<Vec3f> scan;
+};
+
+void build_courtyard_scene(CourtyardScene& c) {
+  std::mt19937_64 rng(7);
+  c.map.points = courtyard(rng);
+  ASSERT_EQ(c.map.tree.build(c.map.points).status, KdBuildStatus::kOk);
+  c.map.normals.assign(c.map.points.size(), Vec3f::Zero());
+  NormalParams np;
+  np.radius = 0.8f;
+  estimate_normals(c.map.tree.tree, np, std::span<Vec3f>(c.map.normals));
+  c.target = IcpTarget{c.map.points, c.map.normals, &c.map.tree.tree};
+  c.truth.topLeftCorner<3, 3>() = rot_z(0.3);
+  c.truth(0, 3) = 0.5;
+  const Mat4d inv = se3_inverse(c.truth);
+  c.scan.clear();
+  int k = 0;
+  for (const Vec3f& p : courtyard(rng)) {
+    if (k++ % 4 != 0) continue;
+    c.scan.push_back((inv.topLeftCorner<3, 3>() * p.cast<double>() + inv.topRightCorner<3, 1>()).cast<float>());
+  }
+}
+
 // The start-up search and the basin audit run as a job over several periods: stepped with a
 // small query budget it reaches exactly search_pose()'s result, and no step overruns its budget
 // by more than one indivisible unit (a hypothesis, an ICP pass, one candidate's ray check).
 TEST(PoseSearchRobustness, SteppedSearchEqualsOneCallAndKeepsItsBudget) {
-  std::mt19937_64 rng(7);
-  static CourtyardTarget map;
-  map.points = courtyard(rng);
-  ASSERT_EQ(map.tree.build(map.points).status, KdBuildStatus::kOk);
-  map.normals.assign(map.points.size(), Vec3f::Zero());
-  NormalParams np;
-  np.radius = 0.8f;
-  estimate_normals(map.tree.tree, np, std::span<Vec3f>(map.normals));
-  const IcpTarget target{map.points, map.normals, &map.tree.tree};
-  Mat4d truth = Mat4d::Identity();
-  truth.topLeftCorner<3, 3>() = rot_z(0.3);
-  truth(0, 3) = 0.5;
-  const Mat4d inv = se3_inverse(truth);
-  std::vector<Vec3f> scan;
-  int k = 0;
-  for (const Vec3f& p : courtyard(rng)) {
-    if (k++ % 4 != 0) continue;
-    scan.push_back((inv.topLeftCorner<3, 3>() * p.cast<double>() + inv.topRightCorner<3, 1>()).cast<float>());
-  }
+  static CourtyardScene scene;
+  build_courtyard_scene(scene);
+  const IcpTarget& target = scene.target;
+  const std::vector<Vec3f>& scan = scene.scan;
   PoseSearchParams sp;
   sp.radius = 4.0;
   sp.step = 1.0;
@@ -221,25 +235,10 @@ TEST(PoseSearchRobustness, SteppedSearchEqualsOneCallAndKeepsItsBudget) {
 // of the courtyard's mirror reach it, the same winner comes out at a fraction of the work, and a
 // finalist moved 1 m (the odometry's carry error) is pulled back by the fine ICP.
 TEST(PoseSearchRobustness, FinalistsAreReDecidedWithoutScoring) {
-  std::mt19937_64 rng(7);
-  static CourtyardTarget map;
-  map.points = courtyard(rng);
-  ASSERT_EQ(map.tree.build(map.points).status, KdBuildStatus::kOk);
-  map.normals.assign(map.points.size(), Vec3f::Zero());
-  NormalParams np;
-  np.radius = 0.8f;
-  estimate_normals(map.tree.tree, np, std::span<Vec3f>(map.normals));
-  const IcpTarget target{map.points, map.normals, &map.tree.tree};
-  Mat4d truth = Mat4d::Identity();
-  truth.topLeftCorner<3, 3>() = rot_z(0.3);
-  truth(0, 3) = 0.5;
-  const Mat4d inv = se3_inverse(truth);
-  std::vector<Vec3f> scan;
-  int k = 0;
-  for (const Vec3f& p : courtyard(rng)) {
-    if (k++ % 4 != 0) continue;
-    scan.push_back((inv.topLeftCorner<3, 3>() * p.cast<double>() + inv.topRightCorner<3, 1>()).cast<float>());
-  }
+  static CourtyardScene scene;
+  build_courtyard_scene(scene);
+  const IcpTarget& target = scene.target;
+  const std::vector<Vec3f>& scan = scene.scan;
   PoseSearchParams sp;
   sp.radius = 4.0;
   sp.step = 1.0;
@@ -285,25 +284,11 @@ TEST(PoseSearchRobustness, FinalistsAreReDecidedWithoutScoring) {
 // Scoring on the proximity bitmap (start-up search) instead of the k-d tree: the same pose
 // comes out, the hypotheses cost a fraction of the work, and the grid covers the search region.
 TEST(PoseSearchRobustness, GridScoredSearchFindsTheTreeScoredPose) {
-  std::mt19937_64 rng(7);
-  static CourtyardTarget map;
-  map.points = courtyard(rng);
-  ASSERT_EQ(map.tree.build(map.points).status, KdBuildStatus::kOk);
-  map.normals.assign(map.points.size(), Vec3f::Zero());
-  NormalParams np;
-  np.radius = 0.8f;
-  estimate_normals(map.tree.tree, np, std::span<Vec3f>(map.normals));
-  const IcpTarget target{map.points, map.normals, &map.tree.tree};
-  Mat4d truth = Mat4d::Identity();
-  truth.topLeftCorner<3, 3>() = rot_z(0.3);
-  truth(0, 3) = 0.5;
-  const Mat4d inv = se3_inverse(truth);
-  std::vector<Vec3f> scan;
-  int k = 0;
-  for (const Vec3f& p : courtyard(rng)) {
-    if (k++ % 4 != 0) continue;
-    scan.push_back((inv.topLeftCorner<3, 3>() * p.cast<double>() + inv.topRightCorner<3, 1>()).cast<float>());
-  }
+  static CourtyardScene scene;
+  build_courtyard_scene(scene);
+  const IcpTarget& target = scene.target;
+  const Mat4d& truth = scene.truth;
+  const std::vector<Vec3f>& scan = scene.scan;
   PoseSearchParams sp;
   sp.radius = 4.0;
   sp.step = 1.0;
