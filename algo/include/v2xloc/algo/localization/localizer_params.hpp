@@ -71,7 +71,7 @@ struct LocalizerParams {
   std::uint32_t global_retry_frames = 2;  // [frames] between two global searches (bounded cost)
   // [queries/period] the start-up search runs as a job, this many nearest-neighbour queries per
   // period; its result is carried to the frame it finishes in by the odometry (0: at once)
-  std::uint32_t startup_queries_per_period = 0;
+  std::uint32_t startup_queries_per_period = 50000;
   std::uint32_t startup_max_frames = 20;  // [frames] a search job not finished within this is dropped
   // While a spread search runs, output its best refined pose so far (not localized, not fused).
   bool startup_output_provisional = true;
@@ -189,7 +189,7 @@ struct LocalizerParams {
     p.step = 3.0;
     p.radius = 30.0;                // [m] = global_min_region (bounded work: ~8k hypotheses)
     p.score_points = 96;
-    p.refine_candidates = 10;       // the best distinct hypotheses refined
+    p.refine_candidates = 5;        // the best distinct hypotheses refined
     p.coarse_stride = 1;            // the coarse ICP on every search point
     // Half the grid cell's diagonal (step 3 m): with 1 m the true pose's cell, 1.5 m off, scored
     // 0.1 and was not shortlisted (Sim 0's first frame); the aliases this lets in are removed
