@@ -27,6 +27,7 @@
 #endif
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include <cstdio>
 #include <cstring>
@@ -81,15 +82,6 @@ std::string format_value(double v) {
   return buf;
 }
 
-std::string json_string(const char* s) {
-  std::string q = "\"";
-  for (const char* c = s; *c; ++c) {
-    if (*c == '"' || *c == '\\') q += '\\';
-    q += *c;
-  }
-  return q + "\"";
-}
-
 void print_text() {
   std::printf("v2xloc algo configuration (%s profile)\n\n",
               v2xloc::config::kEmbeddedProfile ? "EMBEDDED" : "default");
@@ -113,25 +105,19 @@ void print_text() {
 }
 
 void print_json() {
-  std::string out = "{\"profile\":";
-  out += v2xloc::config::kEmbeddedProfile ? "\"embedded\"" : "\"default\"";
-  out += ",\"config\":{";
-  bool first = true;
-  for (const auto& e : v2xloc::tools::config_entries()) {
-    out += (first ? "" : ",") + json_string(e.name) + ":" + format_value(e.value);
-    first = false;
-  }
-  out += "},\"static_memory_bytes\":{";
-  first = true;
+  nlohmann::ordered_json out;  // keys in config.hpp's order
+  out["profile"] = v2xloc::config::kEmbeddedProfile ? "embedded" : "default";
+  nlohmann::ordered_json& config = out["config"] = nlohmann::ordered_json::object();
+  for (const auto& e : v2xloc::tools::config_entries()) config[e.name] = e.value;
+  nlohmann::ordered_json& memory = out["static_memory_bytes"] = nlohmann::ordered_json::object();
   std::size_t total = 0;
   for (const auto& m : memory_entries()) {
     if (m.part) continue;
-    out += (first ? "" : ",") + json_string(m.name) + ":" + std::to_string(m.bytes);
+    memory[m.name] = m.bytes;
     total += m.bytes;
-    first = false;
   }
-  out += ",\"total\":" + std::to_string(total) + "}}\n";
-  std::fputs(out.c_str(), stdout);
+  memory["total"] = total;
+  std::fputs((out.dump() + "\n").c_str(), stdout);
 }
 
 }  // namespace
