@@ -174,10 +174,6 @@ bool PoseSearch::copy_scan(std::span<const Vec3f> scan_body, const IcpTarget& ma
     }
     scan_[scan_count_++] = p;
   }
-  // The coarse ICP's points: every coarse_stride-th scan point (1: the scan itself).
-  const std::uint32_t stride = params_.coarse_stride > 1 ? params_.coarse_stride : 1u;
-  coarse_count_ = 0;
-  for (std::size_t i = 0; i < scan_count_; i += stride) coarse_points_[coarse_count_++] = scan_[i];
   for (Candidate& c : top_) c = Candidate{};
   candidate_ = 0;
   refining_fine_ = false;
@@ -337,22 +333,18 @@ void PoseSearch::refine_candidate(const IcpTarget& map, std::uint64_t stop) {
     refining_fine_ = true;
   }
   const IcpParams& icp_params = refining_fine_ ? params_.fine_icp : params_.icp;
-  // The coarse ICP only pulls a hypothesis into its basin: it may run on every k-th point.
-  const std::span<const Vec3f> points = refining_fine_ ? scan() : coarse_scan();
-  const std::span<std::uint32_t> hints = refining_fine_ ? this->hints() : std::span<std::uint32_t>(hints_, coarse_count_);
   if (!run_started_) {
     const Mat4d initial = refining_fine_ ? coarse_.transform : pose_of(cand.x, cand.y, result_.ground_z, cand.yaw);
-    icp_begin(run_, points, map, initial, icp_params, hints);
+    icp_begin(run_, scan(), map, initial, icp_params, hints());
     run_started_ = true;
   }
-  const std::uint64_t n = points.size();
   const std::uint64_t left = stop > work_ ? stop - work_ : 0;
-  // ceil(left / points) without overflow (left is ~2^64 for an unbounded step), >= 1
-  const std::uint64_t passes = n > 0 ? left / n + (left % n != 0 ? 1 : 0) : 1;
+  // ceil(left / scan points) without overflow (left is ~2^64 for an unbounded step), >= 1
+  const std::uint64_t passes = scan_count_ > 0 ? left / scan_count_ + (left % scan_count_ != 0 ? 1 : 0) : 1;
   const std::uint32_t before = run_.passes;
   const bool finished =
-      icp_continue(run_, points, map, icp_params, passes > 1000 ? 1000u : static_cast<std::uint32_t>(passes), hints);
-  work_ += static_cast<std::uint64_t>(run_.passes - before) * n;
+      icp_continue(run_, scan(), map, icp_params, passes > 1000 ? 1000u : static_cast<std::uint32_t>(passes), hints());
+  work_ += static_cast<std::uint64_t>(run_.passes - before) * scan_count_;
   if (!finished) return;
   run_started_ = false;
   if (!refining_fine_) {
@@ -380,18 +372,25 @@ void PoseSearch::refine_candidate(const IcpTarget& map, std::uint64_t stop) {
 // The best refined pose so far by the selection's own measures (rays, tight fitness), for a
 // caller that outputs something while the search goes on; the final selection is unchanged.
 void PoseSearch::judge_provisional(const IcpTarget& map, const RegistrationResult& refined) {
-  if (params_.max_conflicts > 0.0) {
-    std::uint32_t samples = 0;
-    const double conflicts = ray_conflict_ratio(scan(), map, refined.transform, result_.ground_z, params_, &samples);
-    work_ += samples;
-    if (conflicts > params_.max_conflicts) return;
-  }
-  const double tight = evaluate_registration(scan(), map, refined.transform, params_.select_distance).fitness;
-  work_ += scan_count_;
-  if (tight > provisional_tight_) {
+  double conflicts = -1.0, tight = -1.0;
+  if (rate_pose(map, refined.transform, conflicts, tight) && tight > provisional_tight_) {
     provisional_tight_ = tight;
     provisional_pose_ = refined.transform;
   }
+}
+
+// The selection's measures of one refined pose, both counted as work: the ray conflict ratio
+// (when max_conflicts is on) and, unless its rays cross the map (false), the tight fitness.
+bool PoseSearch::rate_pose(const IcpTarget& map, const Mat4d& pose, double& conflicts, double& tight) {
+  if (params_.max_conflicts > 0.0) {
+    std::uint32_t samples = 0;
+    conflicts = ray_conflict_ratio(scan(), map, pose, result_.ground_z, params_, &samples);
+    work_ += samples;
+    if (conflicts > params_.max_conflicts) return false;
+  }
+  tight = evaluate_registration(scan(), map, pose, params_.select_distance).fitness;
+  work_ += scan_count_;
+  return true;
 }
 
 bool PoseSearch::provisional(Mat4d& pose) const {
@@ -416,17 +415,10 @@ void PoseSearch::select_candidate(const IcpTarget& map) {
   tight_[i] = -1.0;
   conflicts_[i] = -1.0;
   if (!r.ok() || r.fitness < best_fitness_ - 0.1) return;
-  if (params_.max_conflicts > 0.0) {
-    std::uint32_t samples = 0;
-    conflicts_[i] = ray_conflict_ratio(scan(), map, r.transform, result_.ground_z, params_, &samples);
-    work_ += samples;
-    if (conflicts_[i] > params_.max_conflicts) {
-      ++result_.conflict_rejected;
-      return;
-    }
+  if (!rate_pose(map, r.transform, conflicts_[i], tight_[i])) {
+    ++result_.conflict_rejected;
+    return;
   }
-  tight_[i] = evaluate_registration(scan(), map, r.transform, params_.select_distance).fitness;
-  work_ += scan_count_;
   if (tight_[i] > best_tight_) {
     best_tight_ = tight_[i];
     winner_ = i;

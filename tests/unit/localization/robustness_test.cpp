@@ -183,14 +183,9 @@ void build_courtyard_scene(CourtyardScene& c) {
   }
 }
 
-// The start-up search and the basin audit run as a job over several periods: stepped with a
-// small query budget it reaches exactly search_pose()'s result, and no step overruns its budget
-// by more than one indivisible unit (a hypothesis, an ICP pass, one candidate's ray check).
-TEST(PoseSearchRobustness, SteppedSearchEqualsOneCallAndKeepsItsBudget) {
-  static CourtyardScene scene;
-  build_courtyard_scene(scene);
-  const IcpTarget& target = scene.target;
-  const std::vector<Vec3f>& scan = scene.scan;
+// The pose search over the courtyard scene: a 4 m disc on a 1 m grid, 24 headings, ICP at 1 m
+// then 0.3 m.
+PoseSearchParams courtyard_search_params() {
   PoseSearchParams sp;
   sp.radius = 4.0;
   sp.step = 1.0;
@@ -199,6 +194,18 @@ TEST(PoseSearchRobustness, SteppedSearchEqualsOneCallAndKeepsItsBudget) {
   sp.icp.max_correspondence_distance = 1.0;
   sp.fine_icp = sp.icp;
   sp.fine_icp.max_correspondence_distance = 0.3;
+  return sp;
+}
+
+// The start-up search and the basin audit run as a job over several periods: stepped with a
+// small query budget it reaches exactly search_pose()'s result, and no step overruns its budget
+// by more than one indivisible unit (a hypothesis, an ICP pass, one candidate's ray check).
+TEST(PoseSearchRobustness, SteppedSearchEqualsOneCallAndKeepsItsBudget) {
+  static CourtyardScene scene;
+  build_courtyard_scene(scene);
+  const IcpTarget& target = scene.target;
+  const std::vector<Vec3f>& scan = scene.scan;
+  PoseSearchParams sp = courtyard_search_params();
   sp.max_conflicts = 0.5;
   sp.sensor_in_body = Vec3d(0.0, 0.0, 1.0);
   const Vec3d gnss(1.5, 0.5, 0.0);
@@ -239,14 +246,7 @@ TEST(PoseSearchRobustness, FinalistsAreReDecidedWithoutScoring) {
   build_courtyard_scene(scene);
   const IcpTarget& target = scene.target;
   const std::vector<Vec3f>& scan = scene.scan;
-  PoseSearchParams sp;
-  sp.radius = 4.0;
-  sp.step = 1.0;
-  sp.yaw_steps = 24;
-  sp.score_points = 128;
-  sp.icp.max_correspondence_distance = 1.0;
-  sp.fine_icp = sp.icp;
-  sp.fine_icp.max_correspondence_distance = 0.3;
+  const PoseSearchParams sp = courtyard_search_params();
   static PoseSearch full;
   full.start(scan, target, Vec3d(1.5, 0.5, 0.0), sp);
   ASSERT_TRUE(full.step(target, ~std::uint64_t{0}));
@@ -289,17 +289,10 @@ TEST(PoseSearchRobustness, GridScoredSearchFindsTheTreeScoredPose) {
   const IcpTarget& target = scene.target;
   const Mat4d& truth = scene.truth;
   const std::vector<Vec3f>& scan = scene.scan;
-  PoseSearchParams sp;
-  sp.radius = 4.0;
-  sp.step = 1.0;
-  sp.yaw_steps = 24;
-  sp.score_points = 128;
+  PoseSearchParams sp = courtyard_search_params();
   sp.score_distance = 0.5;
   sp.grid_cell = 0.25f;
   sp.grid_reach = 0.5f;
-  sp.icp.max_correspondence_distance = 1.0;
-  sp.fine_icp = sp.icp;
-  sp.fine_icp.max_correspondence_distance = 0.3;
   sp.use_yaw_prior = true;
   sp.yaw_prior = 0.3;
   const Vec3d gnss(1.5, 0.5, 0.0);

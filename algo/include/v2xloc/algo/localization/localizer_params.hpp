@@ -190,7 +190,6 @@ struct LocalizerParams {
     p.radius = 30.0;                // [m] = global_min_region (bounded work: ~8k hypotheses)
     p.score_points = 96;
     p.refine_candidates = 5;        // the best distinct hypotheses refined
-    p.coarse_stride = 1;            // the coarse ICP on every search point
     // Half the grid cell's diagonal (step 3 m): with 1 m the true pose's cell, 1.5 m off, scored
     // 0.1 and was not shortlisted (Sim 0's first frame); the aliases this lets in are removed
     // by the ray check below.

@@ -63,7 +63,6 @@ struct PoseSearchParams {
   double yaw_prior = 0.0;            // [rad]
   double yaw_prior_tolerance = 1.05; // [rad] (60 deg)
   std::uint32_t refine_candidates = 10;  // best distinct hypotheses refined (<= kPoseSearchRefine)
-  std::uint32_t coarse_stride = 1;  // the coarse ICP registers every k-th scan point
   // Judge each refined pose as it comes (rays, tight fitness) so that provisional() names the
   // best so far while the search runs over several periods (costs ~1 fitness pass a candidate).
   bool provisional = false;
@@ -151,11 +150,11 @@ class PoseSearch {
   bool copy_scan(std::span<const Vec3f> scan_body, const IcpTarget& map);
   void build_grid(const IcpTarget& map);
   void judge_provisional(const IcpTarget& map, const RegistrationResult& refined);
+  bool rate_pose(const IcpTarget& map, const Mat4d& pose, double& conflicts, double& tight);
   std::uint32_t refine_count() const {
     return params_.refine_candidates < kPoseSearchRefine ? params_.refine_candidates : kPoseSearchRefine;
   }
   std::span<std::uint32_t> hints() { return {hints_, scan_count_}; }
-  std::span<const Vec3f> coarse_scan() const { return {coarse_points_, coarse_count_}; }
 
   PoseSearchParams params_{};
   ProximityGrid* grid_ = nullptr;
@@ -166,8 +165,6 @@ class PoseSearch {
   Vec3f scan_[config::kMaxSearchPoints];
   std::uint32_t hints_[config::kMaxSearchPoints];
   std::size_t scan_count_ = 0;
-  Vec3f coarse_points_[config::kMaxSearchPoints];
-  std::size_t coarse_count_ = 0;
   Vec3f score_pts_[kMaxScorePoints];
   std::uint32_t score_count_ = 0;
   int cells_ = 0, iy_ = 0, ix_ = 0;               // scoring cursor: grid row, column ...
