@@ -1,5 +1,6 @@
 #include "v2xloc/algo/localization/map_fusion.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "v2xloc/algo/core/spatial_hash.hpp"
@@ -100,33 +101,36 @@ double MapFusion::consistency(std::size_t slot, std::uint32_t& overlap_points, d
     if (cell_key(points_[i], fine, 0, key)) mark(key);
     if (cell_key(points_[i], params_.overlap_cell, 1, key)) mark(key);
   }
+  // An even subsample of the candidate; the overlap count is scaled back to the whole cloud.
+  const std::size_t cap = std::min<std::size_t>(
+      params_.max_consistency_points > 0 ? params_.max_consistency_points : overlap_.capacity(), overlap_.capacity());
+  const std::size_t stride = std::max<std::size_t>(1, (candidate_.size() + cap - 1) / cap);
+  overlap_.clear();
   std::uint32_t inliers = 0;
-  for (const Vec3f& p : candidate_) {
-    if (!occupied_around(p, params_.overlap_cell, 1)) continue;  // outside the others' region
-    ++overlap_points;
-    if (occupied_around(p, fine, 0)) ++inliers;
+  for (std::size_t i = 0; i < candidate_.size(); i += stride) {
+    if (!occupied_around(candidate_[i], params_.overlap_cell, 1)) continue;  // outside the others' region
+    overlap_.push_back(static_cast<std::uint32_t>(i));  // <= cap samples: never full
+    if (occupied_around(candidate_[i], fine, 0)) ++inliers;
   }
-  if (overlap_points == 0) return 1.0;
-  // Shift probes over an even subsample of the overlap points (the same points for every probe).
+  overlap_points = static_cast<std::uint32_t>(overlap_.size() * stride);
+  if (overlap_.empty()) return 1.0;
+  // Shift probes over an even subsample of those (the same points for every probe).
   const float d = static_cast<float>(params_.probe_step);
   const Vec3f probes[] = {{d, 0, 0},  {-d, 0, 0}, {0, d, 0},      {0, -d, 0},      {d, d, 0},  {d, -d, 0},
                           {-d, d, 0}, {-d, -d, 0}, {2 * d, 0, 0}, {-2 * d, 0, 0}, {0, 2 * d, 0}, {0, -2 * d, 0}};
-  const std::uint32_t stride =
-      params_.max_probe_points > 0 ? (overlap_points + params_.max_probe_points - 1) / params_.max_probe_points : 1;
+  const std::size_t n = overlap_.size();
+  const std::size_t probe_stride =
+      params_.max_probe_points > 0 ? (n + params_.max_probe_points - 1) / params_.max_probe_points : 1;
   for (const Vec3f& o : probes) {
-    std::uint32_t seen = 0, counted = 0, hits = 0;
-    for (const Vec3f& p : candidate_) {
-      if (!occupied_around(p, params_.overlap_cell, 1)) continue;
-      if (seen++ % stride != 0) continue;
+    std::uint32_t counted = 0, hits = 0;
+    for (std::size_t k = 0; k < n; k += probe_stride) {
       ++counted;
-      if (occupied_around(p + o, fine, 0)) ++hits;
+      if (occupied_around(candidate_[overlap_[k]] + o, fine, 0)) ++hits;
     }
-    if (counted > 0) {
-      const double f = static_cast<double>(hits) / counted;
-      if (f > best_probe) best_probe = f;
-    }
+    const double f = static_cast<double>(hits) / counted;
+    if (f > best_probe) best_probe = f;
   }
-  return static_cast<double>(inliers) / overlap_points;
+  return static_cast<double>(inliers) / static_cast<double>(n);
 }
 
 std::uint32_t MapFusion::drop_covered_by_trusted(std::size_t slot) {

@@ -85,16 +85,28 @@ std::uint32_t LidarOdometry::insert_voxel(const std::int32_t key[3]) {
 
 // The nearest map point among the 2 x 2 x 2 voxels around p (its own and, per axis, the
 // neighbour on the side p lies in): exact for every point within half a voxel of p, which
-// covers the tracking threshold tau; 8 voxel lookups instead of KISS-ICP's 27.
+// covers the tracking threshold tau; 8 voxel lookups instead of KISS-ICP's 27. A neighbour
+// voxel whose box lies farther than the best match so far is skipped: it cannot hold a closer
+// point (same result, ~3x fewer lookups and distances at the usual tau of a few decimetres).
 bool LidarOdometry::nearest(const Vec3d& p, double max_d2, Vec3d& q, double& d2) const {
   std::int32_t key[3];
   if (!voxel_key(p, key)) return false;
   std::int32_t side[3];
-  for (int a = 0; a < 3; ++a) side[a] = p(a) / params_.voxel_size - key[a] < 0.5 ? -1 : 1;
+  double gap2[3];  // squared distance from p to the neighbour voxel's face, per axis
+  for (int a = 0; a < 3; ++a) {
+    const double frac = p(a) / params_.voxel_size - key[a];
+    side[a] = frac < 0.5 ? -1 : 1;
+    const double gap = (side[a] < 0 ? frac : 1.0 - frac) * params_.voxel_size;
+    gap2[a] = gap * gap;
+  }
   bool found = false;
   d2 = max_d2;
   const Vec3f* pts = map_[active_];
-  for (int corner = 0; corner < 8; ++corner) {
+  static constexpr int kCornerOrder[8] = {0, 1, 2, 4, 3, 5, 6, 7};  // own voxel, faces, edges, corner
+  for (const int corner : kCornerOrder) {
+    double box2 = 0.0;
+    for (int a = 0; a < 3; ++a) box2 += (corner & (1 << a)) ? gap2[a] : 0.0;
+    if (box2 * 0.999 >= d2) continue;  // 0.1 % slack: voxel keys are floors of rounded quotients
     const std::int32_t k[3] = {key[0] + ((corner & 1) ? side[0] : 0), key[1] + ((corner & 2) ? side[1] : 0),
                                key[2] + ((corner & 4) ? side[2] : 0)};
     const std::uint32_t v = find_voxel(k);

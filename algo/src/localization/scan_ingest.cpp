@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "v2xloc/algo/core/det_math.hpp"
 #include "v2xloc/algo/core/finite.hpp"
 #include "v2xloc/algo/core/spatial_hash.hpp"
 #include "v2xloc/algo/localization/deskew.hpp"
@@ -53,9 +54,8 @@ ScanIngestResult ScanIngest::run(std::span<const Vec3f> points, std::span<const 
       ++r.range_dropped;
       continue;
     }
-    const std::int32_t key[3] = {static_cast<std::int32_t>(std::floor(p.x() * inv)),
-                                 static_cast<std::int32_t>(std::floor(p.y() * inv)),
-                                 static_cast<std::int32_t>(std::floor(p.z() * inv))};
+    const std::int32_t key[3] = {det::floor_to_int(p.x() * inv), det::floor_to_int(p.y() * inv),
+                                 det::floor_to_int(p.z() * inv)};
     Accumulator* a = last;
     if (a == nullptr || key[0] != last_key[0] || key[1] != last_key[1] || key[2] != last_key[2]) {
       a = find_or_add(key);

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <random>
 
 namespace v2xloc {
 namespace {
@@ -36,6 +38,18 @@ TEST(DetMath, EdgeCases) {
   EXPECT_DOUBLE_EQ(det::atan2(-1.0, 0.0), -det::kHalfPi);
   EXPECT_NEAR(det::wrap_pi(3.0 * det::kPi), det::kPi, 1e-15);
   EXPECT_NEAR(det::wrap_pi(-7.0), -7.0 + 2.0 * det::kPi, 1e-15);
+}
+
+TEST(DetMath, FloorToIntMatchesStdFloor) {
+  const float edges[] = {0.0f, -0.0f, 1.0f, -1.0f, 0.5f, -0.5f, 1e-30f, -1e-30f, 0.99999994f, -0.99999994f,
+                         1234567.0f, -1234567.5f, 8388607.5f, -8388608.0f, 2.0e9f, -2.0e9f};
+  for (const float x : edges) EXPECT_EQ(det::floor_to_int(x), static_cast<std::int32_t>(std::floor(x))) << x;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-2000.0f, 2000.0f);
+  for (int i = 0; i < 100000; ++i) {
+    const float x = u(rng);
+    ASSERT_EQ(det::floor_to_int(x), static_cast<std::int32_t>(std::floor(x))) << x;
+  }
 }
 
 }  // namespace

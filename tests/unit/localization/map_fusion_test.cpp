@@ -214,5 +214,30 @@ TEST(MapFusion, ShiftedAgentRejectedAndUncheckableAgentHeldBack) {
   EXPECT_EQ(map.insert(40, 1.0, agent, in_sensor_frame(scene, agent)).status, MapInsertStatus::kHeldBack);
 }
 
+// The check scores an even subsample of a large cloud: the same verdicts as scoring every point,
+// and the overlap count scaled back to the whole cloud.
+TEST(MapFusion, SampledConsistencyKeepsTheVerdicts) {
+  const auto scene = corner_scene();
+  const Mat4d infra = sensor_pose(12.0, 12.0, 2.0);
+  const Mat4d agent = sensor_pose(-5.0, 15.0, -0.7);
+  for (const double shift : {0.0, 0.25, 3.0}) {
+    MapInsertResult full, sampled;
+    for (const std::uint32_t cap : {0u, 300u}) {  // 0: the config cap (more than the cloud)
+      MapFusionParams p;
+      p.max_consistency_points = cap;
+      MapFusion& map = fresh_map(p);
+      ASSERT_EQ(map.insert(1, 1.0, infra, in_sensor_frame(scene, infra), true).status, MapInsertStatus::kInserted);
+      Mat4d claimed = agent;
+      claimed(0, 3) += shift;
+      (cap == 0 ? full : sampled) = map.insert(40, 1.0, claimed, in_sensor_frame(scene, agent));
+    }
+    ASSERT_GT(full.overlap_points, 1000u);  // the subsample really is one (stride > 3)
+    EXPECT_EQ(sampled.status, full.status) << "shift " << shift;
+    EXPECT_NEAR(sampled.consistency_fitness, full.consistency_fitness, 0.05) << "shift " << shift;
+    EXPECT_NEAR(static_cast<double>(sampled.overlap_points), static_cast<double>(full.overlap_points),
+                0.1 * full.overlap_points);
+  }
+}
+
 }  // namespace
 }  // namespace v2xloc

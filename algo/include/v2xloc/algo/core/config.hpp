@@ -85,6 +85,7 @@ inline constexpr std::size_t kOdometryHashSlots = kEmbeddedProfile ? 16384 : 131
 inline constexpr std::size_t kOdometryMaxPointsPerVoxel = 20;
 inline constexpr std::uint32_t kOdometryMaxIterations = 50;
 // Map fusion: voxel hash slots for merging / consistency checks (power of two, >= 2x points).
+inline constexpr std::size_t kMapConsistencyPoints = 4096;  // candidate points a consistency check samples
 inline constexpr std::size_t kMapFusionHashSlots = kEmbeddedProfile ? 16384 : 262144;
 
 // ---- Geodesy --------------------------------------------------------------------------------

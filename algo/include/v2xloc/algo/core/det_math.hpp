@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstdint>
 
 namespace v2xloc::det {
 
@@ -140,6 +141,13 @@ inline double wrap_pi(double a) {
   if (r <= -kPi) r += 2.0 * kPi;
   if (r > kPi) r -= 2.0 * kPi;
   return r;
+}
+
+// floor(x) as an integer for |x| < 2^31, without a libm call (std::floor is one on baseline
+// x86-64 and many Cortex builds): truncate, then step down for negative non-integers. Exact.
+inline std::int32_t floor_to_int(float x) {
+  const auto t = static_cast<std::int32_t>(x);
+  return t - (x < static_cast<float>(t) ? 1 : 0);
 }
 
 }  // namespace v2xloc::det

@@ -40,8 +40,9 @@ struct LocalizerParams {
   std::uint32_t map_min_points = 100; // [points] a map with fewer is not registered against
   // [points/period] a map rebuild runs beside the registration, one step per period (extract,
   // k-d tree, then this many normals); registration keeps the previous map meanwhile. The first
-  // map is built at once (nothing to register against).
-  std::uint32_t map_normals_per_period = 4096;
+  // map is built at once (nothing to register against). ~4k instructions a normal: 2048 keep the
+  // slice near 8 M per period and a 60k-point map refreshed about every 3 s.
+  std::uint32_t map_normals_per_period = 2048;
   // [point visits/period] the next map's k-d tree is built this much per period (a build
   // visits ~N log2(N / leaf) points; 0: at once)
   std::uint32_t map_tree_work_per_period = 250000;
@@ -85,11 +86,13 @@ struct LocalizerParams {
   std::uint32_t global_confirm_window = 10;  // [frames] a second search within this confirms (0: off)
   double global_confirm_distance = 0.5;   // [m] confirmation: horizontal disagreement allowed
   double global_confirm_yaw = 0.035;      // [rad] confirmation: heading disagreement allowed (2 deg)
-  std::uint32_t audit_period_frames = 10; // [frames] between basin audits while tracking (0: off)
+  // [frames] from one basin audit's end to the next start while tracking (0: off); an audit
+  // costs ~270 M instructions in all, so every 3 s keeps its share of a period near 8 M
+  std::uint32_t audit_period_frames = 30;
   double audit_radius = 8.0;              // [m] basin audit: search disc around the tracked pose
   // [queries/period] the audit's pose search runs beside tracking, this many nearest-neighbour
-  // queries per tracked frame (0: the whole search in one frame)
-  std::uint32_t audit_queries_per_period = 30000;
+  // queries per tracked frame (0: the whole search in one frame); 15k: <= ~40 M a period
+  std::uint32_t audit_queries_per_period = 15000;
   std::uint32_t audit_max_frames = 40;    // [frames] a search not finished within this is dropped
   std::uint32_t audit_refine_candidates = 10;  // [hypotheses] the audit refines (<= kPoseSearchRefine)
   double audit_switch_ratio = 1.15;       // [ratio] audit pose's tight fitness over tracked: switch

@@ -58,6 +58,10 @@ struct MapFusionParams {
   // 3 m shift and never inverted in the runs; a quorum over overlapping units is the real fix.
   double infra_probe_margin = 0.1;  // fitness difference, infrastructure
   std::uint32_t max_probe_points = 2048;  // overlap points scored per probe (even stride)
+  // Candidate points the consistency check scores (even stride; clamped to
+  // config::kMapConsistencyPoints): a fitness is a fraction, ~4k samples pin it to ~1 %, and a
+  // full pass cost ~80 M instructions per 30k-point infrastructure cloud. 0: the cap.
+  std::uint32_t max_consistency_points = 4096;
   // Sources per role: invented agent ids cannot evict surveyed infrastructure, nor the reverse.
   std::uint32_t max_trusted_sources = config::kMaxMapSources / 2;
   std::uint32_t max_agent_sources = config::kMaxMapSources / 2;
@@ -187,6 +191,7 @@ class MapFusion {
 
   FixedVector<Vec3f, config::kMaxScanPoints> staging_;
   FixedVector<Vec3f, config::kMaxMapPoints> candidate_;
+  FixedVector<std::uint32_t, config::kMapConsistencyPoints> overlap_;  // sampled candidate indices
   VoxelDownsampleStorage<config::kMapFusionHashSlots, config::kMaxMapPoints> downsample_;
   Cell cells_[kSlots] = {};
   std::uint32_t stamp_ = 0;
