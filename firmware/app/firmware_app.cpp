@@ -93,7 +93,7 @@ void FirmwareApp::discipline_clock(std::int64_t rx_monotonic_ns) {
   if (age < 0) return;  // the message predates the edge: wait for the next one
   pps_pending_ = false;
   if (age >= 1'000'000'000) return;  // no time message within the second: edge unusable
-  const protocol::GnssTimeDop& t = decoder_.last_gnss_time();
+  const protocol::GnssTime& t = decoder_.last_gnss_time();
   const std::int64_t gnss_ns = gps_second_to_unix_ns(t.week, t.time_of_week_s);
   const std::int64_t step = gnss_ns - disciplined(pps_edge_ns_);
   if (counters_.clock_disciplined > 0 && (step > config_.max_clock_step_ns || step < -config_.max_clock_step_ns)) {

@@ -97,9 +97,9 @@ void print_counters(const FirmwareApp& app) {
               (unsigned long long)v.bad_signature, (unsigned long long)v.crypto_error, (unsigned long long)v.signatures_rx,
               (unsigned long long)v.signatures_malformed, (unsigned long long)d.wrong_channel,
               (unsigned long long)d.ego_time_rejected, (unsigned long long)c.ego_frames_held);
-  std::printf("v2xloc-firmware: can_repeated %llu can_counter_gaps %llu gnss_time_rejected %llu\n",
+  std::printf("v2xloc-firmware: can_repeated %llu can_counter_gaps %llu gnss_position_dropped %llu gnss_time_rejected %llu\n",
               (unsigned long long)d.can_repeated, (unsigned long long)d.can_counter_gaps,
-              (unsigned long long)c.gnss_time_rejected);
+              (unsigned long long)d.gnss_position_dropped, (unsigned long long)c.gnss_time_rejected);
   std::printf("v2xloc-firmware: map fusion of trusted shares: inconsistent %llu held_back %llu no_slot %llu stale %llu\n",
               (unsigned long long)c.map_inconsistent, (unsigned long long)c.map_held_back,
               (unsigned long long)c.map_no_slot, (unsigned long long)c.map_stale);

@@ -23,8 +23,10 @@ struct Signal {
 // fails on any difference (kSignalTable below lists these constants by DBC name). ----
 constexpr Signal kWheelSpeed{0, 16, true, 0.01, 0.0, -327.68, 327.67};
 constexpr Signal kYawRate{16, 16, true, 0.0001, 0.0, -3.2768, 3.2767};
+// 0x130 is multiplexed: latitude and longitude take the same bits, PositionMux says which.
 constexpr Signal kLatitude{0, 32, true, 1e-7, 0.0, -90.0, 90.0};
-constexpr Signal kLongitude{32, 32, true, 1e-7, 0.0, -180.0, 180.0};
+constexpr Signal kLongitude{0, 32, true, 1e-7, 0.0, -180.0, 180.0};
+constexpr unsigned kPositionMuxBit = 32;
 constexpr Signal kAltitude{0, 20, false, 0.01, -1000.0, -1000.0, 9485.75};
 constexpr Signal kHAcc{20, 12, false, 0.05, 0.0, 0.0, 204.75};
 constexpr Signal kVAcc{32, 12, false, 0.05, 0.0, 0.0, 204.75};
@@ -38,8 +40,8 @@ constexpr unsigned kVelocityValidBit = 51;
 constexpr Signal kGnssStatusCounter{52, 4, false, 1.0, 0.0, 0.0, 15.0};
 constexpr Signal kTimeOfWeek{0, 32, false, 0.001, 0.0, 0.0, 604799.999};
 constexpr Signal kWeek{32, 16, false, 1.0, 0.0, 0.0, 65535.0};
-constexpr Signal kHdop{48, 8, false, 0.1, 0.0, 0.0, 25.5};
-constexpr Signal kPdop{56, 8, false, 0.1, 0.0, 0.0, 25.5};
+constexpr Signal kHdop{0, 8, false, 0.1, 0.0, 0.0, 25.5};
+constexpr Signal kPdop{8, 8, false, 0.1, 0.0, 0.0, 25.5};
 constexpr Signal kPoseX{0, 24, true, 0.001, 0.0, -8388.608, 8388.607};
 constexpr Signal kPoseY{24, 24, true, 0.001, 0.0, -8388.608, 8388.607};
 constexpr Signal kPoseZ{0, 16, true, 0.01, 0.0, -327.68, 327.67};
@@ -81,7 +83,7 @@ constexpr unsigned kRegAttemptedBit = 48, kRegOkBit = 49, kRegClampedBit = 50;
 constexpr unsigned kGateDecidedBit = 32, kGateValidBit = 33, kGateFilterInitializedBit = 36;
 constexpr unsigned kOdomOkBit = 48, kOdomClampedBit = 49;
 constexpr unsigned kCounterBit48 = 48;  // VehicleMotion, PoseSigma, Heartbeat, GateDecision
-constexpr unsigned kCounterBit52 = 52;  // GnssStatus, Pose/Registration/Odometry frames (flags in 48..51)
+constexpr unsigned kCounterBit52 = 52;  // GNSS frames, Pose/Registration/Odometry frames (flags in 48..51)
 constexpr unsigned kFlagsBit = 48;
 constexpr unsigned kCrcByte = 7;
 
@@ -102,10 +104,10 @@ constexpr NamedCanSignal kSignalTable[] = {
     V2XLOC_SIGNAL(kGnssVelocityId, "VelNorth", kVelNorth),
     V2XLOC_SIGNAL(kGnssVelocityId, "VelUp", kVelUp),
     V2XLOC_SIGNAL(kGnssVelocityId, "SpeedAccuracy", kSpeedAcc),
-    V2XLOC_SIGNAL(kGnssTimeDopId, "TimeOfWeek", kTimeOfWeek),
-    V2XLOC_SIGNAL(kGnssTimeDopId, "Week", kWeek),
-    V2XLOC_SIGNAL(kGnssTimeDopId, "Hdop", kHdop),
-    V2XLOC_SIGNAL(kGnssTimeDopId, "Pdop", kPdop),
+    V2XLOC_SIGNAL(kGnssTimeId, "TimeOfWeek", kTimeOfWeek),
+    V2XLOC_SIGNAL(kGnssTimeId, "Week", kWeek),
+    V2XLOC_SIGNAL(kGnssDopId, "Hdop", kHdop),
+    V2XLOC_SIGNAL(kGnssDopId, "Pdop", kPdop),
     V2XLOC_SIGNAL(kPosePositionId, "PoseX", kPoseX),
     V2XLOC_SIGNAL(kPosePositionId, "PoseY", kPoseY),
     V2XLOC_SIGNAL(kPoseAttitudeId, "PoseZ", kPoseZ),
@@ -219,10 +221,11 @@ CanFrame start_frame(std::uint32_t id) {
 }
 void seal(CanFrame& f) { f.data[kCrcByte] = frame_crc(f.id, f.data); }
 
-DecodeStatus check(const CanFrame& f, std::uint32_t id, bool has_crc) {
+// Every message carries the CRC (layout 2 gave the GNSS position and time frames theirs).
+DecodeStatus check(const CanFrame& f, std::uint32_t id) {
   if (f.id != id) return DecodeStatus::kWrongId;
   if (f.dlc != 8) return DecodeStatus::kWrongDlc;
-  if (has_crc && f.data[kCrcByte] != frame_crc(f.id, f.data)) return DecodeStatus::kBadChecksum;
+  if (f.data[kCrcByte] != frame_crc(f.id, f.data)) return DecodeStatus::kBadChecksum;
   return DecodeStatus::kOk;
 }
 
@@ -295,7 +298,7 @@ CanFrame pack(const VehicleMotion& m, PackStats* stats) {
 }
 
 DecodeStatus unpack(const CanFrame& f, VehicleMotion& m) {
-  const DecodeStatus s = check(f, kVehicleMotionId, true);
+  const DecodeStatus s = check(f, kVehicleMotionId);
   if (s != DecodeStatus::kOk) return s;
   bool oor = false;
   m.wheel_speed_mps = decode(f.data, kWheelSpeed, oor);
@@ -309,17 +312,22 @@ DecodeStatus unpack(const CanFrame& f, VehicleMotion& m) {
 // ---- GNSS -------------------------------------------------------------------------------------
 CanFrame pack(const GnssPosition& m, PackStats* stats) {
   CanFrame f = start_frame(kGnssPositionId);
-  encode(f.data, kLatitude, m.lat_deg, stats);
-  encode(f.data, kLongitude, m.lon_deg, stats);
+  const bool lon = m.half == GnssPositionHalf::kLongitude;
+  encode(f.data, lon ? kLongitude : kLatitude, m.deg, stats);
+  put_flag(f.data, kPositionMuxBit, lon);
+  put_counter(f.data, kCounterBit52, m.counter);
+  seal(f);
   return f;
 }
 
 DecodeStatus unpack(const CanFrame& f, GnssPosition& m) {
-  const DecodeStatus s = check(f, kGnssPositionId, false);
+  const DecodeStatus s = check(f, kGnssPositionId);
   if (s != DecodeStatus::kOk) return s;
   bool oor = false;
-  m.lat_deg = decode(f.data, kLatitude, oor);
-  m.lon_deg = decode(f.data, kLongitude, oor);
+  const bool lon = get_flag(f.data, kPositionMuxBit);
+  m.half = lon ? GnssPositionHalf::kLongitude : GnssPositionHalf::kLatitude;
+  m.deg = decode(f.data, lon ? kLongitude : kLatitude, oor);
+  m.counter = static_cast<std::uint8_t>(get_bits_le(f.data, kCounterBit52, 4));
   return range_status(oor);
 }
 
@@ -336,7 +344,7 @@ CanFrame pack(const GnssStatus& m, PackStats* stats) {
 }
 
 DecodeStatus unpack(const CanFrame& f, GnssStatus& m) {
-  const DecodeStatus s = check(f, kGnssStatusId, true);
+  const DecodeStatus s = check(f, kGnssStatusId);
   if (s != DecodeStatus::kOk) return s;
   bool oor = false;
   m.alt_m = decode(f.data, kAltitude, oor);
@@ -361,7 +369,7 @@ CanFrame pack(const GnssVelocity& m, PackStats* stats) {
 }
 
 DecodeStatus unpack(const CanFrame& f, GnssVelocity& m) {
-  const DecodeStatus s = check(f, kGnssVelocityId, true);
+  const DecodeStatus s = check(f, kGnssVelocityId);
   if (s != DecodeStatus::kOk) return s;
   bool oor = false;
   m.vel_east_mps = decode(f.data, kVelEast, oor);
@@ -373,23 +381,41 @@ DecodeStatus unpack(const CanFrame& f, GnssVelocity& m) {
   return range_status(oor);
 }
 
-CanFrame pack(const GnssTimeDop& m, PackStats* stats) {
-  CanFrame f = start_frame(kGnssTimeDopId);
+CanFrame pack(const GnssTime& m, PackStats* stats) {
+  CanFrame f = start_frame(kGnssTimeId);
   encode(f.data, kTimeOfWeek, m.time_of_week_s, stats);
   encode(f.data, kWeek, static_cast<double>(m.week), stats);
-  encode(f.data, kHdop, m.hdop, stats);
-  encode(f.data, kPdop, m.pdop, stats);
+  put_counter(f.data, kCounterBit52, m.counter);
+  seal(f);
   return f;
 }
 
-DecodeStatus unpack(const CanFrame& f, GnssTimeDop& m) {
-  const DecodeStatus s = check(f, kGnssTimeDopId, false);
+DecodeStatus unpack(const CanFrame& f, GnssTime& m) {
+  const DecodeStatus s = check(f, kGnssTimeId);
   if (s != DecodeStatus::kOk) return s;
   bool oor = false;
   m.time_of_week_s = decode(f.data, kTimeOfWeek, oor);
   m.week = static_cast<std::uint16_t>(get_bits_le(f.data, kWeek.start, kWeek.length));
+  m.counter = static_cast<std::uint8_t>(get_bits_le(f.data, kCounterBit52, 4));
+  return range_status(oor);
+}
+
+CanFrame pack(const GnssDop& m, PackStats* stats) {
+  CanFrame f = start_frame(kGnssDopId);
+  encode(f.data, kHdop, m.hdop, stats);
+  encode(f.data, kPdop, m.pdop, stats);
+  put_counter(f.data, kCounterBit52, m.counter);
+  seal(f);
+  return f;
+}
+
+DecodeStatus unpack(const CanFrame& f, GnssDop& m) {
+  const DecodeStatus s = check(f, kGnssDopId);
+  if (s != DecodeStatus::kOk) return s;
+  bool oor = false;
   m.hdop = decode(f.data, kHdop, oor);
   m.pdop = decode(f.data, kPdop, oor);
+  m.counter = static_cast<std::uint8_t>(get_bits_le(f.data, kCounterBit52, 4));
   return range_status(oor);
 }
 
@@ -405,7 +431,7 @@ CanFrame pack(const PosePosition& m, PackStats* stats) {
 }
 
 DecodeStatus unpack(const CanFrame& f, PosePosition& m) {
-  const DecodeStatus s = check(f, kPosePositionId, true);
+  const DecodeStatus s = check(f, kPosePositionId);
   if (s != DecodeStatus::kOk) return s;
   bool oor = false;
   m.x_m = decode(f.data, kPoseX, oor);
@@ -428,7 +454,7 @@ CanFrame pack(const PoseAttitude& m, PackStats* stats) {
 }
 
 DecodeStatus unpack(const CanFrame& f, PoseAttitude& m) {
-  const DecodeStatus s = check(f, kPoseAttitudeId, true);
+  const DecodeStatus s = check(f, kPoseAttitudeId);
   if (s != DecodeStatus::kOk) return s;
   bool oor = false;
   m.z_m = decode(f.data, kPoseZ, oor);
@@ -451,7 +477,7 @@ CanFrame pack(const PoseSigma& m, PackStats* stats) {
 }
 
 DecodeStatus unpack(const CanFrame& f, PoseSigma& m) {
-  const DecodeStatus s = check(f, kPoseSigmaId, true);
+  const DecodeStatus s = check(f, kPoseSigmaId);
   if (s != DecodeStatus::kOk) return s;
   bool oor = false;
   m.sigma_x_m = decode(f.data, kSigmaX, oor);
@@ -476,7 +502,7 @@ CanFrame pack(const Heartbeat& m, PackStats* stats) {
 }
 
 DecodeStatus unpack(const CanFrame& f, Heartbeat& m) {
-  const DecodeStatus s = check(f, kHeartbeatId, true);
+  const DecodeStatus s = check(f, kHeartbeatId);
   if (s != DecodeStatus::kOk) return s;
   bool oor = false;
   const auto state = static_cast<std::uint8_t>(decode(f.data, kState, oor));
@@ -500,7 +526,7 @@ CanFrame pack(const TrustRejections& m, PackStats* stats) {
 }
 
 DecodeStatus unpack(const CanFrame& f, TrustRejections& m) {
-  const DecodeStatus s = check(f, kTrustRejectionsId, true);
+  const DecodeStatus s = check(f, kTrustRejectionsId);
   if (s != DecodeStatus::kOk) return s;
   std::uint8_t* counts[6] = {&m.unknown_signer, &m.bad_signature, &m.too_old, &m.future, &m.replay, &m.queue_overflow};
   for (int k = 0; k < 6; ++k) *counts[k] = static_cast<std::uint8_t>(get_bits_le(f.data, kTrustCount[k].start, 8));
@@ -518,7 +544,7 @@ CanFrame pack(const InputGuards& m, PackStats* stats) {
 }
 
 DecodeStatus unpack(const CanFrame& f, InputGuards& m) {
-  const DecodeStatus s = check(f, kInputGuardsId, true);
+  const DecodeStatus s = check(f, kInputGuardsId);
   if (s != DecodeStatus::kOk) return s;
   std::uint16_t* counts[4] = {&m.can_crc_rejected, &m.can_counter_rejected, &m.ego_time_rejected, &m.missing_signature};
   for (int k = 0; k < 4; ++k) *counts[k] = static_cast<std::uint16_t>(get_bits_le(f.data, kGuardCount[k].start, 12));
@@ -541,7 +567,7 @@ CanFrame pack(const RegistrationPosition& m, PackStats* stats) {
 }
 
 DecodeStatus unpack(const CanFrame& f, RegistrationPosition& m) {
-  const DecodeStatus s = check(f, kRegistrationPositionId, true);
+  const DecodeStatus s = check(f, kRegistrationPositionId);
   if (s != DecodeStatus::kOk) return s;
   bool oor = false;
   m.x_m = decode(f.data, kRegX, oor);
@@ -565,7 +591,7 @@ CanFrame pack(const RegistrationQuality& m, PackStats* stats) {
 }
 
 DecodeStatus unpack(const CanFrame& f, RegistrationQuality& m) {
-  const DecodeStatus s = check(f, kRegistrationQualityId, true);
+  const DecodeStatus s = check(f, kRegistrationQualityId);
   if (s != DecodeStatus::kOk) return s;
   bool oor = false;
   m.z_m = decode(f.data, kRegZ, oor);
@@ -590,7 +616,7 @@ CanFrame pack(const GateDecision& m, PackStats* stats) {
 }
 
 DecodeStatus unpack(const CanFrame& f, GateDecision& m) {
-  const DecodeStatus s = check(f, kGateDecisionId, true);
+  const DecodeStatus s = check(f, kGateDecisionId);
   if (s != DecodeStatus::kOk) return s;
   bool oor = false;
   m.decided_frame = static_cast<std::uint16_t>(get_bits_le(f.data, kGateDecidedFrame.start, kGateDecidedFrame.length));
@@ -616,7 +642,7 @@ CanFrame pack(const OdometryPosition& m, PackStats* stats) {
 }
 
 DecodeStatus unpack(const CanFrame& f, OdometryPosition& m) {
-  const DecodeStatus s = check(f, kOdometryPositionId, true);
+  const DecodeStatus s = check(f, kOdometryPositionId);
   if (s != DecodeStatus::kOk) return s;
   bool oor = false;
   m.x_m = decode(f.data, kOdomX, oor);
@@ -642,7 +668,7 @@ CanFrame pack(const OdometryAttitude& m, PackStats* stats) {
 }
 
 DecodeStatus unpack(const CanFrame& f, OdometryAttitude& m) {
-  const DecodeStatus s = check(f, kOdometryAttitudeId, true);
+  const DecodeStatus s = check(f, kOdometryAttitudeId);
   if (s != DecodeStatus::kOk) return s;
   bool oor = false;
   m.z_m = decode(f.data, kOdomZ, oor);
@@ -668,6 +694,34 @@ bool RollingCounterMonitor::update(std::uint8_t counter) {
   if (step == 0) ++repeated_;
   else lost_ += static_cast<std::uint32_t>(step - 1);
   return false;
+}
+
+
+// ---- GNSS position pairing -----------------------------------------------------------------------
+GnssPositionPairer::Result GnssPositionPairer::push(const GnssPosition& half) {
+  if (half.half == GnssPositionHalf::kLatitude) {
+    if (waiting_) ++dropped_;  // the previous latitude's longitude never came
+    waiting_ = true;
+    lat_counter_ = static_cast<std::uint8_t>(half.counter % kCounterModulo);
+    pending_lat_deg_ = half.deg;
+    return Result::kWaiting;
+  }
+  // The longitude of the waiting latitude is the very next frame of this id.
+  const bool next = waiting_ && half.counter % kCounterModulo == (lat_counter_ + 1) % kCounterModulo;
+  if (!next) {
+    dropped_ += waiting_ ? 2u : 1u;
+    waiting_ = false;
+    return Result::kDropped;
+  }
+  waiting_ = false;
+  lat_deg_ = pending_lat_deg_;
+  lon_deg_ = half.deg;
+  return Result::kPaired;
+}
+
+void GnssPositionPairer::end_fix() {
+  if (waiting_) ++dropped_;
+  waiting_ = false;
 }
 
 }  // namespace v2xloc::protocol

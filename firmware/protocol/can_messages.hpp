@@ -1,7 +1,8 @@
 // CAN messages of v2xloc, bit-exact with tools/dbc/v2xloc.dbc (classic CAN, 500 kbit/s, 11-bit ids,
 // Intel / little-endian signals). Physical-value structs, pack/unpack per message, range clamping
-// with a saturation count, a 4-bit rolling counter and a CRC-8 (SAE J1850) on the safety-relevant
-// frames. Allocation-free, no exceptions: shared by the firmware and the host tools.
+// with a saturation count, a 4-bit rolling counter and a CRC-8 (SAE J1850) on every frame (CAN
+// layout 2; layout 1 had neither on 0x130/0x132, host_sim/canlog/can_layout.hpp converts such logs).
+// Allocation-free, no exceptions: shared by the firmware and the host tools.
 // Formats: firmware/WIRE_FORMATS.md (## CAN).
 #pragma once
 
@@ -18,8 +19,9 @@ using hal::CanFrame;  // the frame type belongs to the hardware layer; codecs fi
 inline constexpr std::uint32_t kVehicleMotionId = 0x120;
 inline constexpr std::uint32_t kGnssPositionId = 0x130;
 inline constexpr std::uint32_t kGnssStatusId = 0x131;
-inline constexpr std::uint32_t kGnssTimeDopId = 0x132;
+inline constexpr std::uint32_t kGnssTimeId = 0x132;
 inline constexpr std::uint32_t kGnssVelocityId = 0x133;
+inline constexpr std::uint32_t kGnssDopId = 0x134;
 inline constexpr std::uint32_t kPosePositionId = 0x200;
 inline constexpr std::uint32_t kPoseAttitudeId = 0x201;
 inline constexpr std::uint32_t kPoseSigmaId = 0x202;
@@ -66,10 +68,17 @@ struct VehicleMotion {
   std::uint8_t counter = 0;      // 0..15
 };
 
-// ---- GNSS (0x130 position, 0x131 status, 0x133 velocity, 0x132 time + DOP), 1-10 Hz ----------
+// ---- GNSS, 1-10 Hz: one fix is 0x130 (latitude), 0x130 (longitude), 0x131 status, 0x133 velocity,
+// 0x134 DOP, 0x132 time (closes the fix). Every frame carries a rolling counter and a CRC. --------
+// 0x130 is multiplexed (PositionMux): 32 bits at 1e-7 deg (cm, what RTK needs) for each of
+// latitude and longitude leave no room for a counter and a CRC in one frame, so the latitude goes
+// first and the longitude follows with the next counter value (GnssPositionPairer).
+enum class GnssPositionHalf : std::uint8_t { kLatitude = 0, kLongitude = 1 };  // PositionMux
+
 struct GnssPosition {
-  double lat_deg = 0.0;  // [-90, 90], 1e-7 deg
-  double lon_deg = 0.0;  // [-180, 180], 1e-7 deg
+  GnssPositionHalf half = GnssPositionHalf::kLatitude;
+  double deg = 0.0;          // latitude [-90, 90] or longitude [-180, 180], 1e-7 deg
+  std::uint8_t counter = 0;  // +1 per frame of 0x130: the longitude carries the latitude's + 1
 };
 
 enum class GnssFixType : std::uint8_t { kNoFix = 0, kFix2D = 1, kFix3D = 2, kDeadReckoning = 3 };
@@ -94,11 +103,16 @@ struct GnssVelocity {
   std::uint8_t counter = 0;
 };
 
-struct GnssTimeDop {
+struct GnssTime {
   double time_of_week_s = 0.0;  // [0, 604799.999], 1 ms
   std::uint16_t week = 0;       // GPS week (full, no rollover)
-  double hdop = 0.0;            // [0, 25.5], 0.1
-  double pdop = 0.0;            // [0, 25.5], 0.1
+  std::uint8_t counter = 0;
+};
+
+struct GnssDop {
+  double hdop = 0.0;  // [0, 25.5], 0.1 (saturates)
+  double pdop = 0.0;  // [0, 25.5], 0.1 (saturates)
+  std::uint8_t counter = 0;
 };
 
 // ---- Fused pose out (0x200..0x202, at the localizer's frame rate) -----------------------------
@@ -250,8 +264,9 @@ std::span<const NamedCanSignal> can_signal_table();
 CanFrame pack(const VehicleMotion& m, PackStats* stats = nullptr);
 CanFrame pack(const GnssPosition& m, PackStats* stats = nullptr);
 CanFrame pack(const GnssStatus& m, PackStats* stats = nullptr);
-CanFrame pack(const GnssTimeDop& m, PackStats* stats = nullptr);
+CanFrame pack(const GnssTime& m, PackStats* stats = nullptr);
 CanFrame pack(const GnssVelocity& m, PackStats* stats = nullptr);
+CanFrame pack(const GnssDop& m, PackStats* stats = nullptr);
 CanFrame pack(const PosePosition& m, PackStats* stats = nullptr);
 CanFrame pack(const PoseAttitude& m, PackStats* stats = nullptr);
 CanFrame pack(const PoseSigma& m, PackStats* stats = nullptr);
@@ -265,13 +280,14 @@ CanFrame pack(const GateDecision& m, PackStats* stats = nullptr);
 CanFrame pack(const OdometryPosition& m, PackStats* stats = nullptr);
 CanFrame pack(const OdometryAttitude& m, PackStats* stats = nullptr);
 
-// Unpacking checks id, DLC (exactly 8), CRC where present, and DBC ranges. On kWrongId /
+// Unpacking checks id, DLC (exactly 8), CRC, and DBC ranges. On kWrongId /
 // kWrongDlc / kBadChecksum the output is left untouched.
 DecodeStatus unpack(const CanFrame& f, VehicleMotion& m);
 DecodeStatus unpack(const CanFrame& f, GnssPosition& m);
 DecodeStatus unpack(const CanFrame& f, GnssStatus& m);
-DecodeStatus unpack(const CanFrame& f, GnssTimeDop& m);
+DecodeStatus unpack(const CanFrame& f, GnssTime& m);
 DecodeStatus unpack(const CanFrame& f, GnssVelocity& m);
+DecodeStatus unpack(const CanFrame& f, GnssDop& m);
 DecodeStatus unpack(const CanFrame& f, PosePosition& m);
 DecodeStatus unpack(const CanFrame& f, PoseAttitude& m);
 DecodeStatus unpack(const CanFrame& f, PoseSigma& m);
@@ -297,6 +313,29 @@ class RollingCounterMonitor {
   std::uint8_t last_ = 0;
   bool seen_ = false;
   std::uint32_t lost_ = 0, repeated_ = 0;
+};
+
+// A fix's position from its two 0x130 frames (frames that passed the CRC, range and rolling-counter
+// checks, in receive order): a latitude, then the longitude with the next counter value. Nothing
+// else pairs: a longitude without the latitude just before it, or after a counter jump, and a
+// latitude that another latitude or the end of the fix replaces, are dropped and counted, so a new
+// latitude is never combined with an older longitude (or the reverse).
+class GnssPositionPairer {
+ public:
+  enum class Result : std::uint8_t { kWaiting, kPaired, kDropped };
+  Result push(const GnssPosition& half);
+  // The fix closed (its time frame): a latitude still waiting for its longitude is dropped.
+  void end_fix();
+  // The position of the latest kPaired (both in degrees).
+  double lat_deg() const { return lat_deg_; }
+  double lon_deg() const { return lon_deg_; }
+  std::uint32_t dropped() const { return dropped_; }  // halves that formed no position
+
+ private:
+  bool waiting_ = false;
+  std::uint8_t lat_counter_ = 0;
+  double pending_lat_deg_ = 0.0, lat_deg_ = 0.0, lon_deg_ = 0.0;
+  std::uint32_t dropped_ = 0;
 };
 
 // Bit-level helpers (Intel byte order, DBC start bit = LSB), exposed for the DBC conformance test.

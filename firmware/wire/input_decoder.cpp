@@ -21,61 +21,91 @@ bool InputDecoder::counter_ok(protocol::RollingCounterMonitor& monitor, std::uin
 DecodedCan InputDecoder::decode_can(const hal::CanFrame& frame, std::int64_t time_ns) {
   ++counters_.can_frames;
   const double t = localizer_time_s(time_ns, epoch_ns_);
-  DecodedCan out;
-  const auto kind = [&out](CanInputKind k) {
-    out.kind = k;
-    return out;
-  };
-  const auto rejected = [this, &kind] {
-    ++counters_.can_rejected;
-    return kind(CanInputKind::kRejected);
-  };
   switch (frame.id) {
-    case protocol::kVehicleMotionId: {
-      protocol::VehicleMotion m;
-      if (protocol::unpack(frame, m) != protocol::DecodeStatus::kOk) return rejected();
-      if (!counter_ok(vehicle_counter_, m.counter)) return kind(CanInputKind::kRejected);
-      if (!m.speed_valid || !m.yaw_rate_valid) {
-        ++counters_.vehicle_invalid;
-        return kind(CanInputKind::kInvalid);
-      }
-      out.vehicle = VehicleInput{t, m.wheel_speed_mps, m.yaw_rate_rps};
-      ++counters_.vehicle_inputs;
-      return kind(CanInputKind::kVehicle);
-    }
-    case protocol::kGnssPositionId:
-      if (protocol::unpack(frame, gnss_position_) != protocol::DecodeStatus::kOk) return rejected();
-      have_position_ = true;
-      return kind(CanInputKind::kGnssPart);
-    case protocol::kGnssStatusId:
-      if (protocol::unpack(frame, gnss_status_) != protocol::DecodeStatus::kOk) return rejected();
-      if (!counter_ok(gnss_status_counter_, gnss_status_.counter)) return kind(CanInputKind::kRejected);
-      have_status_ = true;
-      return kind(CanInputKind::kGnssPart);
+    case protocol::kVehicleMotionId: return decode_vehicle(frame, t);
+    case protocol::kGnssPositionId: return decode_position(frame);
+    case protocol::kGnssStatusId: return decode_gnss_part(frame, gnss_status_counter_, gnss_status_, have_status_);
     case protocol::kGnssVelocityId:
-      if (protocol::unpack(frame, gnss_velocity_) != protocol::DecodeStatus::kOk) return rejected();
-      if (!counter_ok(gnss_velocity_counter_, gnss_velocity_.counter)) return kind(CanInputKind::kRejected);
-      have_velocity_ = true;
-      return kind(CanInputKind::kGnssPart);
-    case protocol::kGnssTimeDopId: {
-      // The time/DOP frame closes a fix (sent last: position, status, time). A fix without its
-      // status frame is incomplete; without a position it is forwarded as invalid (no fix).
-      if (protocol::unpack(frame, gnss_time_) != protocol::DecodeStatus::kOk) return rejected();
-      if (!have_status_) {
-        have_position_ = have_velocity_ = false;
-        ++counters_.gnss_incomplete;
-        return kind(CanInputKind::kInvalid);
-      }
-      out.gnss = assemble_gnss_fix(t);
-      have_position_ = have_status_ = have_velocity_ = false;
-      ++counters_.gnss_inputs;
-      gnss_since_last_scan_ = true;
-      return kind(CanInputKind::kGnssFix);
-    }
+      return decode_gnss_part(frame, gnss_velocity_counter_, gnss_velocity_, have_velocity_);
+    case protocol::kGnssDopId: return decode_gnss_part(frame, gnss_dop_counter_, gnss_dop_, have_dop_);
+    case protocol::kGnssTimeId: return decode_time(frame, t);
     default:
       ++counters_.can_unknown_id;
-      return kind(CanInputKind::kUnknownId);
+      return with_kind(CanInputKind::kUnknownId);
   }
+}
+
+DecodedCan InputDecoder::with_kind(CanInputKind kind) {
+  DecodedCan out;
+  out.kind = kind;
+  return out;
+}
+
+// Unpacks into a scratch copy, so a frame refused for its range or counter leaves the stored part.
+template <typename M>
+bool InputDecoder::accept(const hal::CanFrame& frame, protocol::RollingCounterMonitor& monitor, M& out) {
+  M m;
+  if (protocol::unpack(frame, m) != protocol::DecodeStatus::kOk) {
+    ++counters_.can_rejected;
+    return false;
+  }
+  if (!counter_ok(monitor, m.counter)) return false;
+  out = m;
+  return true;
+}
+
+DecodedCan InputDecoder::decode_vehicle(const hal::CanFrame& frame, double t) {
+  protocol::VehicleMotion m;
+  if (!accept(frame, vehicle_counter_, m)) return with_kind(CanInputKind::kRejected);
+  if (!m.speed_valid || !m.yaw_rate_valid) {
+    ++counters_.vehicle_invalid;
+    return with_kind(CanInputKind::kInvalid);
+  }
+  DecodedCan out = with_kind(CanInputKind::kVehicle);
+  out.vehicle = VehicleInput{t, m.wheel_speed_mps, m.yaw_rate_rps};
+  ++counters_.vehicle_inputs;
+  return out;
+}
+
+template <typename M>
+DecodedCan InputDecoder::decode_gnss_part(const hal::CanFrame& frame, protocol::RollingCounterMonitor& monitor, M& part,
+                                          bool& have) {
+  if (!accept(frame, monitor, part)) return with_kind(CanInputKind::kRejected);
+  have = true;
+  return with_kind(CanInputKind::kGnssPart);
+}
+
+// One half of the fix's position (0x130). A latitude starts a new position: whatever pair came
+// before belongs to another fix. A half that pairs with nothing leaves the fix without a position.
+DecodedCan InputDecoder::decode_position(const hal::CanFrame& frame) {
+  protocol::GnssPosition half;
+  if (!accept(frame, gnss_position_counter_, half)) return with_kind(CanInputKind::kRejected);
+  const std::uint32_t dropped = position_pairer_.dropped();
+  const protocol::GnssPositionPairer::Result r = position_pairer_.push(half);
+  counters_.gnss_position_dropped += position_pairer_.dropped() - dropped;
+  have_position_ = r == protocol::GnssPositionPairer::Result::kPaired;
+  if (r == protocol::GnssPositionPairer::Result::kDropped) return with_kind(CanInputKind::kInvalid);
+  return with_kind(CanInputKind::kGnssPart);
+}
+
+// The time frame closes a fix (sent last). A fix without its status frame is incomplete; without a
+// position it is forwarded as invalid (no fix); without DOP its hdop stays unknown (GnssInput's).
+DecodedCan InputDecoder::decode_time(const hal::CanFrame& frame, double t) {
+  if (!accept(frame, gnss_time_counter_, gnss_time_)) return with_kind(CanInputKind::kRejected);
+  const std::uint32_t dropped = position_pairer_.dropped();
+  position_pairer_.end_fix();
+  counters_.gnss_position_dropped += position_pairer_.dropped() - dropped;
+  DecodedCan out = with_kind(CanInputKind::kInvalid);
+  if (!have_status_) {
+    ++counters_.gnss_incomplete;
+  } else {
+    out = with_kind(CanInputKind::kGnssFix);
+    out.gnss = assemble_gnss_fix(t);
+    ++counters_.gnss_inputs;
+    gnss_since_last_scan_ = true;
+  }
+  have_position_ = have_status_ = have_velocity_ = have_dop_ = false;
+  return out;
 }
 
 GnssInput InputDecoder::assemble_gnss_fix(double t) const {
@@ -85,14 +115,14 @@ GnssInput InputDecoder::assemble_gnss_fix(double t) const {
                      gnss_status_.fix_type == protocol::GnssFixType::kFix3D;
   g.valid = fixed && have_position_;
   if (have_position_) {
-    g.lat_deg = gnss_position_.lat_deg;
-    g.lon_deg = gnss_position_.lon_deg;
+    g.lat_deg = position_pairer_.lat_deg();
+    g.lon_deg = position_pairer_.lon_deg();
   }
   g.alt_m = gnss_status_.alt_m;
   g.h_acc = gnss_status_.h_acc_m;
   g.v_acc = gnss_status_.v_acc_m;
   g.num_sats = gnss_status_.num_sats;
-  g.hdop = gnss_time_.hdop;
+  if (have_dop_) g.hdop = gnss_dop_.hdop;
   if (have_velocity_ && gnss_velocity_.valid) {
     g.velocity_valid = true;
     g.vel_east = gnss_velocity_.vel_east_mps;

@@ -1,4 +1,4 @@
-// Wire -> localizer inputs. CAN frames (vehicle motion, GNSS position/status/velocity/time) are decoded with
+// Wire -> localizer inputs. CAN frames (vehicle motion, GNSS position/status/velocity/DOP/time) are decoded with
 // the DBC codec; point-cloud datagrams are reassembled and dequantized into an ego scan or a map
 // share. The decoder RETURNS typed inputs and never calls the localizer: the firmware loop
 // (firmware/app), the offline evaluator and the replayer's in-process path each hand them to their
@@ -30,10 +30,11 @@ using CloudReassembler = protocol::StaticPointCloudReassembler<kReassemblySlots,
 
 enum class CanInputKind : std::uint8_t {
   kVehicle,       // decoded a VehicleInput
-  kGnssFix,       // decoded a GnssInput (on the time/DOP frame that closes a fix)
-  kGnssPart,      // position or status of a fix, stored until the time frame
-  kInvalid,       // decoded, but flagged invalid by the sender (counted, not forwarded)
-  kRejected,      // wrong DLC, CRC or range (counted)
+  kGnssFix,       // decoded a GnssInput (on the time frame that closes a fix)
+  kGnssPart,      // position half, status, velocity or DOP of a fix, stored until the time frame
+  kInvalid,       // decoded, but flagged invalid by the sender, or a position half that pairs with
+                  // nothing, or a time frame closing a fix without status (counted, not forwarded)
+  kRejected,      // wrong DLC, CRC or range, or a repeated rolling counter (counted)
   kUnknownId,     // not ours (counted)
 };
 
@@ -76,6 +77,7 @@ struct DecoderCounters {
   std::uint64_t vehicle_invalid = 0;
   std::uint64_t gnss_inputs = 0;
   std::uint64_t gnss_incomplete = 0;   // time frame without the fix's status frame
+  std::uint64_t gnss_position_dropped = 0;  // 0x130 halves that formed no position (GnssPositionPairer)
   std::uint64_t can_rejected = 0;      // DLC / CRC / range failures
   std::uint64_t can_unknown_id = 0;
   std::uint64_t datagrams = 0;
@@ -103,7 +105,7 @@ class InputDecoder {
   // One CAN frame received at disciplined time time_ns.
   DecodedCan decode_can(const hal::CanFrame& frame, std::int64_t time_ns);
   // Latest GNSS time frame (valid after kGnssFix), for PPS discipline.
-  const protocol::GnssTimeDop& last_gnss_time() const { return gnss_time_; }
+  const protocol::GnssTime& last_gnss_time() const { return gnss_time_; }
 
   // One datagram received at monotonic now_ns. True when it completed a cloud: the caller first
   // drains earlier inputs (CAN), then calls decode_completed() before the next datagram.
@@ -147,11 +149,20 @@ class InputDecoder {
   const protocol::ReassemblyCounters& reassembly_counters() const { return reassembler_.counters(); }
 
  private:
-  // The fix closed by the time/DOP frame, from the stored position, status and velocity frames.
+  static DecodedCan with_kind(CanInputKind kind);
+  // CRC / DLC / range, then the rolling counter; only an accepted frame reaches `out` (counted).
+  template <typename M>
+  bool accept(const hal::CanFrame& frame, protocol::RollingCounterMonitor& monitor, M& out);
+  DecodedCan decode_vehicle(const hal::CanFrame& frame, double t);
+  template <typename M>
+  DecodedCan decode_gnss_part(const hal::CanFrame& frame, protocol::RollingCounterMonitor& monitor, M& part, bool& have);
+  DecodedCan decode_position(const hal::CanFrame& frame);
+  DecodedCan decode_time(const hal::CanFrame& frame, double t);
+  // The fix closed by the time frame, from the stored position, status, velocity and DOP frames.
   GnssInput assemble_gnss_fix(double t) const;
   bool pose_to_matrix(const protocol::SensorPose& pose, Mat4d& out) const;
   DecodedCloud queue_share(const protocol::ReassembledCloud& cloud, const Mat4d& pose, double t);
-  // Rolling counters of the frames that carry one (0x120, 0x131, 0x133): a repeat is dropped.
+  // Rolling counters (every inbound frame carries one): a repeat is dropped, a gap counted.
   bool counter_ok(protocol::RollingCounterMonitor& monitor, std::uint8_t counter);
 
   std::int64_t epoch_ns_ = 0;
@@ -178,15 +189,18 @@ class InputDecoder {
   std::array<std::array<Vec3f, kMaxCloudPoints>, kShareVerifyQueueCapacity> queue_points_{};
   ShareSchedule schedule_{};
   std::int64_t period_time_ns_ = 0;  // local clock of the latest period boundary
-  protocol::RollingCounterMonitor vehicle_counter_{}, gnss_status_counter_{}, gnss_velocity_counter_{};
+  protocol::RollingCounterMonitor vehicle_counter_{}, gnss_position_counter_{}, gnss_status_counter_{},
+      gnss_velocity_counter_{}, gnss_dop_counter_{}, gnss_time_counter_{};
 
-  protocol::GnssPosition gnss_position_{};
+  protocol::GnssPositionPairer position_pairer_{};
   protocol::GnssStatus gnss_status_{};
   protocol::GnssVelocity gnss_velocity_{};
-  protocol::GnssTimeDop gnss_time_{};
-  bool have_position_ = false;
+  protocol::GnssDop gnss_dop_{};
+  protocol::GnssTime gnss_time_{};
+  bool have_position_ = false;  // the pairer holds this fix's latitude + longitude
   bool have_status_ = false;
   bool have_velocity_ = false;
+  bool have_dop_ = false;
   bool gnss_since_last_scan_ = false;
   DecoderCounters counters_{};
 };

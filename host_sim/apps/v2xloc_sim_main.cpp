@@ -5,6 +5,9 @@
 // runs one process per recording instead, on every core).
 // v2xloc-sim export-pcd RECORDING_DIR --out DIR [--encoding binary_compressed|binary|ascii]
 // writes standard float32 PCD copies of a recording's clouds (format 2 stores them quantised).
+// v2xloc-sim upgrade-can RECORDING_DIR rewrites a CAN layout 1 log (recorded before every GNSS frame
+// had a counter and a CRC) in the current layout beside the original and points the manifest at it.
+#include "host_sim/recording/can_log_upgrade.hpp"
 #include "host_sim/recording/pcd_export.hpp"
 #include "host_sim/recording/recorder.hpp"
 
@@ -63,6 +66,61 @@ int run_export(const std::string& dir, const std::string& out, const std::string
   return 0;
 }
 
+int run_upgrade_can(const std::string& dir) {
+  CanLogUpgrade result;
+  std::string error;
+  if (!upgrade_can_log(dir, result, error)) {
+    std::fprintf(stderr, "v2xloc-sim upgrade-can: %s\n", error.c_str());
+    return 1;
+  }
+  if (result.already_current) {
+    std::printf("%s: CAN log %s is already layout %d\n", dir.c_str(), result.log_file.c_str(), kCanLayoutVersion);
+    return 0;
+  }
+  std::printf("%s: CAN log converted to layout %d: %s (%zu frames; %zu position and %zu time frames split, %zu left as"
+              " they were); the manifest names it, the original is kept\n",
+              dir.c_str(), kCanLayoutVersion, result.log_file.c_str(), result.frames, result.conversion.positions,
+              result.conversion.times, result.conversion.kept);
+  return 0;
+}
+
+int run_generate(RecorderConfig base, bool all, int scenario, const std::string& perm_name, const std::string& out) {
+  std::vector<RecorderConfig> jobs;
+  if (all) {
+    for (int s = 0; s < kScenarioCount; ++s)
+      for (Permutation p : kAllPermutations) {
+        RecorderConfig c = base;
+        c.scenario = s;
+        c.permutation = p;
+        c.out_dir = out + "/" + recording_name(s, p);
+        jobs.push_back(c);
+      }
+  } else {
+    RecorderConfig c = base;
+    c.scenario = scenario;
+    parse_permutation(perm_name, c.permutation);  // checked by IsMember above
+    c.out_dir = out;
+    jobs.push_back(c);
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<RecordingSummary> summaries;
+  for (std::size_t j = 0; j < jobs.size(); ++j) {
+    const std::string name = recording_name(jobs[j].scenario, jobs[j].permutation);
+    const std::string tag = "[" + std::to_string(j + 1) + "/" + std::to_string(jobs.size()) + "]";
+    RecordingSummary s;
+    std::string error;
+    if (!generate_recording(jobs[j], s, error, progress_printer(tag, name))) {
+      std::fprintf(stderr, "\nerror: %s: %s\n", name.c_str(), error.c_str());
+      return 1;
+    }
+    summaries.push_back(s);
+  }
+  const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  for (const auto& s : summaries) std::printf("%s\n", s.one_line().c_str());
+  if (summaries.size() > 1) std::printf("total: %zu recordings in %.1f s\n", summaries.size(), total);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -98,6 +156,11 @@ int main(int argc, char** argv) {
       ->required();
   export_pcd->add_option("--encoding", encoding_name, "PCD DATA kind (binary_compressed: LZF, as PCL writes it)")
       ->check(CLI::IsMember({"binary_compressed", "binary", "ascii"}));
+  CLI::App* upgrade = app.add_subcommand(
+      "upgrade-can", "rewrite a recording's CAN log in the current CAN layout (the original is kept; readers "
+                     "convert old logs on the fly anyway)");
+  std::string upgrade_dir;
+  upgrade->add_option("RECORDING_DIR", upgrade_dir, "recording folder")->required();
   try {
     app.parse(argc, argv);
     if (generate->parsed() && !all && (scenario < 0 || perm_name.empty()))
@@ -106,40 +169,7 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? 0 : 2;  // usage errors keep exit code 2
   }
   if (export_pcd->parsed()) return run_export(export_in, export_out, encoding_name);
+  if (upgrade->parsed()) return run_upgrade_can(upgrade_dir);
   base.stereo = !no_stereo;
-
-  std::vector<RecorderConfig> jobs;
-  if (all) {
-    for (int s = 0; s < kScenarioCount; ++s)
-      for (Permutation p : kAllPermutations) {
-        RecorderConfig c = base;
-        c.scenario = s;
-        c.permutation = p;
-        c.out_dir = out + "/" + recording_name(s, p);
-        jobs.push_back(c);
-      }
-  } else {
-    RecorderConfig c = base;
-    c.scenario = scenario;
-    parse_permutation(perm_name, c.permutation);  // checked by IsMember above
-    c.out_dir = out;
-    jobs.push_back(c);
-  }
-  const auto t0 = std::chrono::steady_clock::now();
-  std::vector<RecordingSummary> summaries;
-  for (std::size_t j = 0; j < jobs.size(); ++j) {
-    const std::string name = recording_name(jobs[j].scenario, jobs[j].permutation);
-    const std::string tag = "[" + std::to_string(j + 1) + "/" + std::to_string(jobs.size()) + "]";
-    RecordingSummary s;
-    std::string error;
-    if (!generate_recording(jobs[j], s, error, progress_printer(tag, name))) {
-      std::fprintf(stderr, "\nerror: %s: %s\n", name.c_str(), error.c_str());
-      return 1;
-    }
-    summaries.push_back(s);
-  }
-  const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  for (const auto& s : summaries) std::printf("%s\n", s.one_line().c_str());
-  if (summaries.size() > 1) std::printf("total: %zu recordings in %.1f s\n", summaries.size(), total);
-  return 0;
+  return run_generate(base, all, scenario, perm_name, out);
 }

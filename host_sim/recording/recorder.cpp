@@ -20,6 +20,7 @@
 #endif
 #if V2XLOC_SIM_HAVE_CANLOG
 #include "firmware/protocol/can_messages.hpp"
+#include "host_sim/canlog/can_layout.hpp"
 #include "host_sim/canlog/candump_log.hpp"
 #endif
 
@@ -351,7 +352,7 @@ std::vector<GnssFix> record_gnss(Session& s, RecordingSummary& summary, TopViewD
 #if V2XLOC_SIM_HAVE_GNSS && V2XLOC_SIM_HAVE_CANLOG && V2XLOC_SIM_HAVE_VEHICLE
 struct TimedCanFrame {
   std::int64_t us;
-  int order;  // tie-break at equal stamps: vehicle motion, then position, status, velocity, time
+  int order;  // tie-break at equal stamps: vehicle motion, then latitude, longitude, status, velocity, DOP, time
   hal::CanFrame frame;
 };
 
@@ -375,46 +376,60 @@ void append_vehicle_frames(const Session& s, std::vector<TimedCanFrame>& out) {
   }
 }
 
-// Each GNSS fix as position (valid fixes only), status, velocity and time + DOP frames.
+// GPS week and time of week of a unix time (GPS epoch 1980-01-06, 18 leap seconds since 2017).
+protocol::GnssTime gps_time(double unix_t) {
+  const double gps_s = unix_t - 315964800.0 + 18.0;
+  protocol::GnssTime td;
+  td.week = static_cast<std::uint16_t>(std::floor(gps_s / 604800.0));
+  td.time_of_week_s = gps_s - 604800.0 * td.week;
+  return td;
+}
+
+// Each GNSS fix as the CAN layout 2 group (tools/dbc/v2xloc.dbc): latitude and longitude (valid
+// fixes only), status, velocity, DOP and time. The status, velocity, DOP and time counters step
+// once per fix; the position id's once per frame (twice per fix).
 void append_gnss_frames(const Session& s, const std::vector<GnssFix>& fixes, std::vector<TimedCanFrame>& out) {
-  std::uint8_t gnss_counter = 0;
+  std::uint8_t gnss_counter = 0, position_counter = 0;
+  const auto next = [](std::uint8_t& c) {
+    const std::uint8_t now = c;
+    c = static_cast<std::uint8_t>((c + 1) % protocol::kCounterModulo);
+    return now;
+  };
   for (const GnssFix& f : fixes) {
     const double unix_t = s.cfg.time_origin_unix_s + f.t;
     const std::int64_t us = candump_timestamp_us(unix_t);
-    protocol::GnssPosition pos;
-    pos.lat_deg = f.lat_deg;
-    pos.lon_deg = f.lon_deg;
     protocol::GnssStatus status;
     status.alt_m = f.alt_m;
     status.h_acc_m = f.h_acc_m;
     status.v_acc_m = f.v_acc_m;
     status.num_sats = static_cast<std::uint8_t>(std::clamp(f.num_sats, 0, 63));
     status.fix_type = f.valid ? protocol::GnssFixType::kFix3D : protocol::GnssFixType::kNoFix;
-    status.counter = gnss_counter;
-    gnss_counter = static_cast<std::uint8_t>((gnss_counter + 1) % protocol::kCounterModulo);
-    protocol::GnssTimeDop td;
-    // GPS time = unix time - GPS epoch (1980-01-06) + leap seconds (18 s since 2017).
-    const double gps_s = unix_t - 315964800.0 + 18.0;
-    td.week = static_cast<std::uint16_t>(std::floor(gps_s / 604800.0));
-    td.time_of_week_s = gps_s - 604800.0 * td.week;
-    td.hdop = f.hdop;
-    td.pdop = f.pdop;
+    status.counter = next(gnss_counter);
     protocol::GnssVelocity vel;
     vel.vel_east_mps = f.vel_east;
     vel.vel_north_mps = f.vel_north;
     vel.vel_up_mps = f.vel_up;
     vel.speed_acc_mps = f.speed_acc_mps;
     vel.valid = f.velocity_valid;
-    vel.counter = status.counter;  // one counter step per fix, like the status frame
-    if (f.valid) out.push_back({us, 1, protocol::pack(pos)});
-    out.push_back({us, 2, protocol::pack(status)});
-    out.push_back({us, 3, protocol::pack(vel)});
-    out.push_back({us, 4, protocol::pack(td)});
+    vel.counter = status.counter;
+    protocol::GnssDop dop{f.hdop, f.pdop, status.counter};
+    protocol::GnssTime td = gps_time(unix_t);
+    td.counter = status.counter;
+    if (f.valid) {
+      const protocol::GnssPosition lat{protocol::GnssPositionHalf::kLatitude, f.lat_deg, next(position_counter)};
+      const protocol::GnssPosition lon{protocol::GnssPositionHalf::kLongitude, f.lon_deg, next(position_counter)};
+      out.push_back({us, 1, protocol::pack(lat)});
+      out.push_back({us, 2, protocol::pack(lon)});
+    }
+    out.push_back({us, 3, protocol::pack(status)});
+    out.push_back({us, 4, protocol::pack(vel)});
+    out.push_back({us, 5, protocol::pack(dop)});
+    out.push_back({us, 6, protocol::pack(td)});
   }
 }
 
-// CAN log: vehicle motion at 100 Hz and the GNSS fixes (position, status, time + DOP), merged in
-// time order, time stamps = time_origin_unix_s + t.
+// CAN log: vehicle motion at 100 Hz and the GNSS fixes (position, status, velocity, DOP, time),
+// merged in time order, time stamps = time_origin_unix_s + t.
 void write_can_log(Session& s, const std::vector<GnssFix>& fixes, RecordingSummary& summary, Json& can_json) {
   std::vector<TimedCanFrame> out;
   append_vehicle_frames(s, out);
@@ -432,7 +447,8 @@ void write_can_log(Session& s, const std::vector<GnssFix>& fixes, RecordingSumma
   can_json["format"] = "candump -L: (unix_seconds.microseconds) can0 ID#HEXDATA";
   can_json["frames"] = writer.frames_written();
   can_json["vehicle_motion"] = "0x120 at 100 Hz (wheel speed, yaw rate)";
-  can_json["gnss"] = "0x130 position, 0x131 status, 0x133 velocity, 0x132 time + DOP at the GNSS rate";
+  can_json["gnss"] = kCanLayoutGnssFrames;
+  can_json["layout_version"] = kCanLayoutVersion;
   can_json["codec"] = "firmware/protocol/can_messages.hpp";
 }
 #endif

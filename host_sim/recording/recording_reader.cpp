@@ -1,5 +1,6 @@
 #include "host_sim/recording/recording_reader.hpp"
 
+#include "host_sim/canlog/can_layout.hpp"
 #include "host_sim/canlog/candump_log.hpp"
 #include "host_sim/cloud_io/pcd.hpp"
 #include "host_sim/common/text_file.hpp"
@@ -75,6 +76,18 @@ class Fields {
   std::string where_;
   std::string& error_;
 };
+
+// can_log.layout_version: absent (recordings made before CAN layout 2) means layout 1; a newer
+// layout than this build decodes is refused.
+bool read_can_layout_version(const Fields& top, std::string& error, int& out) {
+  out = kCanLayoutLegacy;
+  const Json* can = top.find("can_log");
+  if (can == nullptr || !can->is_object() || !can->contains("layout_version")) return true;
+  std::int64_t version = kCanLayoutLegacy;
+  if (!Fields(*can, "can_log.", error).integer("layout_version", kCanLayoutLegacy, kCanLayoutVersion, version)) return false;
+  out = static_cast<int>(version);
+  return true;
+}
 
 // A relative path inside the recording: no absolute paths, no "..", no control characters.
 bool plain_relative_path(const std::string& rel, std::string& why) {
@@ -230,6 +243,7 @@ bool RecordingReader::parse_manifest(const std::string& text, std::string& error
       !f.path("ground_truth", gt_file_) || !f.path("ground_truth_100hz", gt100_file_) ||
       !f.path("can_log", can_log_file_, false) || !f.path("trust_list", trust_list_file_, false))
     return false;
+  if (!read_can_layout_version(top, error, can_layout_version_)) return false;
   std::string why;
   if (!parse_index_pattern(scan, scan_pattern_, why)) return f.fail("ego_scan_pattern", why);
   if (f.find("disparity_pattern") && !parse_index_pattern(disparity, disparity_pattern_, why))
@@ -356,7 +370,8 @@ std::string RecordingReader::can_log_path() const {
   return can_log_file_.empty() ? std::string() : dir_ + "/" + can_log_file_;
 }
 
-bool RecordingReader::can_frames(std::vector<CanLogFrame>& out, std::string& error) const {
+bool RecordingReader::can_records(std::vector<CandumpRecord>& out, std::string& error,
+                                  CanLayoutConversion* conversion) const {
   out.clear();
   std::string path;
   if (can_log_file_.empty()) {
@@ -380,6 +395,21 @@ bool RecordingReader::can_frames(std::vector<CanLogFrame>& out, std::string& err
       error = path + " line " + std::to_string(number) + ": " + (why.empty() ? "too many lines" : why);
       return false;
     }
+    out.push_back(std::move(r));
+  }
+  if (can_layout_version_ == kCanLayoutLegacy) {
+    const CanLayoutConversion done = convert_can_layout_1_to_2(out);
+    if (conversion != nullptr) *conversion = done;
+  }
+  return true;
+}
+
+bool RecordingReader::can_frames(std::vector<CanLogFrame>& out, std::string& error) const {
+  out.clear();
+  std::vector<CandumpRecord> records;
+  if (!can_records(records, error)) return false;
+  out.reserve(records.size());
+  for (CandumpRecord& r : records) {
     CanLogFrame f;
     // Exact integer microseconds -> seconds (the division rounds once, like parsing the decimal text).
     f.t = static_cast<double>(r.timestamp_us) / 1e6 - time_origin_unix_;

@@ -6,6 +6,8 @@
 // folder), the ground truth must cover every frame; any violation is an error naming the field.
 #pragma once
 
+#include "host_sim/canlog/can_layout.hpp"
+#include "host_sim/canlog/candump_log.hpp"
 #include "host_sim/common/png.hpp"
 #include "host_sim/recording/pose_io.hpp"
 #include "host_sim/cloud_io/point_cloud.hpp"
@@ -52,6 +54,9 @@ class RecordingReader {
   const std::string& dir() const { return dir_; }
   // Manifest format_version (1 when absent): 1 float32 PCD clouds, 2 quantised .pcdz clouds.
   int format_version() const { return format_version_; }
+  // CAN layout of the log as recorded: manifest can_log.layout_version, 1 when absent
+  // (host_sim/canlog/can_layout.hpp). The readers below always return the current layout.
+  int can_layout_version() const { return can_layout_version_; }
   int scenario() const { return scenario_; }
   const std::string& permutation() const { return permutation_; }
   int frame_count() const { return frame_count_; }
@@ -91,6 +96,10 @@ class RecordingReader {
   // trust_list.txt of the recording (manifest files.trust_list); empty for recordings made before it.
   std::string trust_list_path() const;
   bool can_frames(std::vector<CanLogFrame>& out, std::string& error) const;
+  // The same log as candump records (unix time stamps), in the current CAN layout: a layout-1 log
+  // is converted as it is read, so every replay path sees what a layout-2 recording holds.
+  // `conversion` (optional) reports what a layout-1 log's conversion did.
+  bool can_records(std::vector<CandumpRecord>& out, std::string& error, CanLayoutConversion* conversion = nullptr) const;
 
   // A per-frame file name: literal text around one `%0Nd` token (N = 1..9), e.g. "ego_lidar/%06d.pcd".
   struct IndexPattern {
@@ -110,6 +119,7 @@ class RecordingReader {
 
   std::string dir_, real_dir_;
   int format_version_ = 1;
+  int can_layout_version_ = 1;
   int scenario_ = 0;
   std::string permutation_;
   int frame_count_ = 0;

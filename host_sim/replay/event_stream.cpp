@@ -37,15 +37,11 @@ bool EventStream::open(const RecordingReader& reader, const EventStreamConfig& c
   if (config.max_frames >= 0) frame_count_ = std::min(frame_count_, config.max_frames);
   // Whole microseconds, so candump stamps (us) map to exact recording nanoseconds.
   epoch_ns_ = std::llround(reader.time_origin_unix() * 1e6) * 1000;
-  const std::string log = reader.can_log_path();
-  if (!log.empty()) {
-    const CandumpLog parsed = read_candump_file(log);
-    if (!parsed.errors.empty()) {
-      error = log + ":" + std::to_string(parsed.errors.front().line_number) + ": " + parsed.errors.front().message;
-      return false;
-    }
-    can_.reserve(parsed.records.size());
-    for (const CandumpRecord& r : parsed.records) can_.push_back({r.timestamp_us * 1000 - epoch_ns_, r.frame});
+  if (!reader.can_log_path().empty()) {
+    std::vector<CandumpRecord> records;  // in the current CAN layout, whichever the recording has
+    if (!reader.can_records(records, error)) return false;
+    can_.reserve(records.size());
+    for (const CandumpRecord& r : records) can_.push_back({r.timestamp_us * 1000 - epoch_ns_, r.frame});
   }
   for (const MapCloudInfo& c : reader.map_clouds()) {
     std::uint32_t id = 0;

@@ -1,5 +1,7 @@
 #include "host_sim/replay/fault_injection.hpp"
 
+#include "firmware/protocol/can_messages.hpp"
+
 #include <cstdlib>
 #include <sstream>
 #include <utility>
@@ -137,7 +139,9 @@ void FaultInjector::transport(std::vector<std::vector<std::uint8_t>>& d, FaultSt
 }
 
 bool FaultInjector::gnss_dropped(std::uint32_t id, double t) const {
-  return spec_.gnss_outage_s > 0 && id >= 0x130 && id <= 0x133 && t >= spec_.gnss_outage_at_s &&
+  // Every GNSS frame of a fix: 0x130 (latitude, longitude), 0x131, 0x132, 0x133, 0x134.
+  const bool gnss = id >= protocol::kGnssPositionId && id <= protocol::kGnssDopId;
+  return spec_.gnss_outage_s > 0 && gnss && t >= spec_.gnss_outage_at_s &&
          t < spec_.gnss_outage_at_s + spec_.gnss_outage_s;
 }
 

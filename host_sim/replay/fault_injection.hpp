@@ -8,7 +8,7 @@
 //   reorder=P          each V2X datagram swapped with the next one with probability P
 //   dup=P              each V2X datagram sent twice with probability P
 //   delay=S            V2X shares delivered S seconds after their stamp
-//   gnss-outage=S      GNSS CAN frames (0x130..0x133) dropped for S seconds from gnss-outage-at
+//   gnss-outage=S      GNSS CAN frames (0x130..0x134) dropped for S seconds from gnss-outage-at
 //   gnss-outage-at=S   start of the outage, recording time (default 1.0)
 //   infra-dropout=S    every infrastructure unit silent for S seconds from infra-dropout-at
 //   infra-dropout-at=S (default 1.0)

@@ -35,8 +35,9 @@ LocalizationMode mode_from_code(protocol::LocalizerModeCode code) {
   return LocalizationMode::kUninitialized;
 }
 
-// The GNSS fixes of the recording's CAN log, assembled as the in-process path does (position,
-// status and time/DOP frames of one stamp; valid = 2D/3D fix), in ENU minus the lever arm.
+// The GNSS fixes of the recording's CAN log, assembled as the in-process path does (a latitude and
+// longitude paired by the codec's GnssPositionPairer, status and time frames of one stamp; valid =
+// 2D/3D fix), in ENU minus the lever arm. The log is the recorded sender's: no counter checks here.
 class GnssTrack {
  public:
   GnssTrack(const GeodeticOrigin& origin, const Eigen::Vector3d& lever) : origin_(origin), lever_(lever) {}
@@ -47,17 +48,21 @@ class GnssTrack {
     frame.dlc = f.dlc;
     for (int b = 0; b < 8; ++b) frame.data[b] = f.data[b];
     if (f.id == protocol::kGnssPositionId) {
-      if (protocol::unpack(frame, position_) == protocol::DecodeStatus::kOk) position_t_ = f.t;
+      protocol::GnssPosition half;
+      if (protocol::unpack(frame, half) != protocol::DecodeStatus::kOk) return;
+      const bool paired = pairer_.push(half) == protocol::GnssPositionPairer::Result::kPaired;
+      position_t_ = paired ? f.t : -1.0;
     } else if (f.id == protocol::kGnssStatusId) {
       if (protocol::unpack(frame, status_) == protocol::DecodeStatus::kOk) status_t_ = f.t;
-    } else if (f.id == protocol::kGnssTimeDopId) {
-      protocol::GnssTimeDop time;
+    } else if (f.id == protocol::kGnssTimeId) {
+      protocol::GnssTime time;
       if (protocol::unpack(frame, time) != protocol::DecodeStatus::kOk) return;
+      pairer_.end_fix();
       if (std::abs(position_t_ - f.t) > 1e-4 || std::abs(status_t_ - f.t) > 1e-4) return;
       const bool valid = status_.fix_type == protocol::GnssFixType::kFix3D ||
                          status_.fix_type == protocol::GnssFixType::kFix2D;
       if (!valid) return;
-      const Vec3d enu = geodetic_to_enu(origin_, GeodeticPoint{position_.lat_deg, position_.lon_deg, status_.alt_m});
+      const Vec3d enu = geodetic_to_enu(origin_, GeodeticPoint{pairer_.lat_deg(), pairer_.lon_deg(), status_.alt_m});
       body_ = enu - lever_;  // roll = pitch = 0: the lever is vertical
       has_fix_ = true;
     }
@@ -68,7 +73,7 @@ class GnssTrack {
  private:
   GeodeticOrigin origin_;
   Eigen::Vector3d lever_;
-  protocol::GnssPosition position_{};
+  protocol::GnssPositionPairer pairer_{};
   protocol::GnssStatus status_{};
   double position_t_ = -1.0, status_t_ = -2.0;
   bool has_fix_ = false;

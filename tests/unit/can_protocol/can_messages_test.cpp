@@ -24,10 +24,15 @@ TEST(CanMessages, RoundTripEveryMessage) {
   EXPECT_FALSE(vm2.yaw_rate_valid);
   EXPECT_EQ(vm2.counter, 7);
 
-  GnssPosition gp{48.1371549, -11.5761241}, gp2;
-  ASSERT_EQ(unpack(pack(gp), gp2), DecodeStatus::kOk);
-  EXPECT_NEAR(gp2.lat_deg, gp.lat_deg, 5.1e-8);
-  EXPECT_NEAR(gp2.lon_deg, gp.lon_deg, 5.1e-8);
+  GnssPosition lat{GnssPositionHalf::kLatitude, 48.1371549, 6}, lon{GnssPositionHalf::kLongitude, -179.9999999, 7}, gp2;
+  ASSERT_EQ(unpack(pack(lat), gp2), DecodeStatus::kOk);
+  EXPECT_EQ(gp2.half, GnssPositionHalf::kLatitude);
+  EXPECT_NEAR(gp2.deg, lat.deg, 5.1e-8);
+  EXPECT_EQ(gp2.counter, 6);
+  ASSERT_EQ(unpack(pack(lon), gp2), DecodeStatus::kOk);
+  EXPECT_EQ(gp2.half, GnssPositionHalf::kLongitude);
+  EXPECT_NEAR(gp2.deg, lon.deg, 5.1e-8);  // 1e-7 deg over the whole longitude range
+  EXPECT_EQ(gp2.counter, 7);
 
   GnssStatus gs{519.37, 4.75, 8.2, 11, GnssFixType::kFix3D, 15}, gs2;
   ASSERT_EQ(unpack(pack(gs), gs2), DecodeStatus::kOk);
@@ -38,12 +43,17 @@ TEST(CanMessages, RoundTripEveryMessage) {
   EXPECT_EQ(gs2.fix_type, GnssFixType::kFix3D);
   EXPECT_EQ(gs2.counter, 15);
 
-  GnssTimeDop td{345600.125, 2390, 1.3, 2.1}, td2;
+  GnssTime td{345600.125, 2390, 12}, td2;
   ASSERT_EQ(unpack(pack(td), td2), DecodeStatus::kOk);
   EXPECT_NEAR(td2.time_of_week_s, td.time_of_week_s, 5e-4);
   EXPECT_EQ(td2.week, 2390);
-  EXPECT_NEAR(td2.hdop, 1.3, 0.05);
-  EXPECT_NEAR(td2.pdop, 2.1, 0.05);
+  EXPECT_EQ(td2.counter, 12);
+
+  GnssDop dop{1.3, 2.1, 5}, dop2;
+  ASSERT_EQ(unpack(pack(dop), dop2), DecodeStatus::kOk);
+  EXPECT_NEAR(dop2.hdop, 1.3, 0.05);
+  EXPECT_NEAR(dop2.pdop, 2.1, 0.05);
+  EXPECT_EQ(dop2.counter, 5);
 
   PosePosition pp{-123.4567, 4567.891, {true, false, true, false}, 3}, pp2;
   ASSERT_EQ(unpack(pack(pp), pp2), DecodeStatus::kOk);
@@ -93,8 +103,8 @@ TEST(CanMessages, SaturationClampsAndCounts) {
   EXPECT_EQ(out.num_sats, 63);
 
   PackStats s2;
-  GnssTimeDop td{1.0, 1, 99.0, std::numeric_limits<double>::infinity()};
-  GnssTimeDop td2;
+  GnssDop td{99.0, std::numeric_limits<double>::infinity(), 0};
+  GnssDop td2;
   ASSERT_EQ(unpack(pack(td, &s2), td2), DecodeStatus::kOk);
   EXPECT_EQ(s2.saturated, 2u);
   EXPECT_NEAR(td2.hdop, 25.5, 1e-9);
@@ -142,17 +152,90 @@ TEST(CanMessages, RejectsWrongIdDlcAndChecksum) {
 
 TEST(CanMessages, OutOfRangeRawValuesFlagged) {
   // Raw bit patterns the packer never produces but a faulty sender could.
-  CanFrame f = pack(GnssPosition{0.0, 0.0});
+  CanFrame f = pack(GnssPosition{GnssPositionHalf::kLatitude, 0.0, 0});
   put_bits_le(f.data, 0, 32, static_cast<std::uint32_t>(1000000000));  // 100 deg latitude
+  f.data[7] = frame_crc(f.id, f.data);
   GnssPosition gp;
   EXPECT_EQ(unpack(f, gp), DecodeStatus::kOutOfRange);
-  EXPECT_NEAR(gp.lat_deg, 100.0, 1e-9);
+  EXPECT_NEAR(gp.deg, 100.0, 1e-9);
+  // The same bits are a valid longitude: the multiplexer picks the range.
+  put_bits_le(f.data, 32, 1, 1);
+  f.data[7] = frame_crc(f.id, f.data);
+  EXPECT_EQ(unpack(f, gp), DecodeStatus::kOk);
+  EXPECT_EQ(gp.half, GnssPositionHalf::kLongitude);
 
   CanFrame h = pack(Heartbeat{});
   put_bits_le(h.data, 0, 4, 9);  // state 9 does not exist
   h.data[7] = frame_crc(h.id, h.data);
   Heartbeat hb;
   EXPECT_EQ(unpack(h, hb), DecodeStatus::kOutOfRange);
+}
+
+// Every inbound frame, the GNSS position and time included, carries the CRC over id and payload.
+TEST(CanMessages, EveryInboundFrameIsCrcProtected) {
+  const CanFrame frames[] = {pack(VehicleMotion{}),
+                             pack(GnssPosition{GnssPositionHalf::kLatitude, 48.0, 0}),
+                             pack(GnssPosition{GnssPositionHalf::kLongitude, 11.0, 1}),
+                             pack(GnssStatus{}),
+                             pack(GnssVelocity{}),
+                             pack(GnssDop{}),
+                             pack(GnssTime{})};
+  for (const CanFrame& good : frames) {
+    EXPECT_EQ(good.data[7], frame_crc(good.id, good.data)) << std::hex << good.id;
+    for (int bit = 0; bit < 64; ++bit) {
+      CanFrame f = good;
+      f.data[bit / 8] = static_cast<std::uint8_t>(f.data[bit / 8] ^ (1u << (bit % 8)));
+      GnssPosition gp;
+      GnssTime gt;
+      GnssDop gd;
+      VehicleMotion vm;
+      GnssStatus gs;
+      GnssVelocity gv;
+      DecodeStatus s = DecodeStatus::kOk;
+      switch (f.id) {
+        case kGnssPositionId: s = unpack(f, gp); break;
+        case kGnssTimeId: s = unpack(f, gt); break;
+        case kGnssDopId: s = unpack(f, gd); break;
+        case kVehicleMotionId: s = unpack(f, vm); break;
+        case kGnssStatusId: s = unpack(f, gs); break;
+        default: s = unpack(f, gv); break;
+      }
+      EXPECT_EQ(s, DecodeStatus::kBadChecksum) << std::hex << good.id << " bit " << std::dec << bit;
+    }
+  }
+}
+
+TEST(CanMessages, GnssPositionPairsOnlyConsecutiveHalves) {
+  const auto lat = [](double deg, std::uint8_t c) { return GnssPosition{GnssPositionHalf::kLatitude, deg, c}; };
+  const auto lon = [](double deg, std::uint8_t c) { return GnssPosition{GnssPositionHalf::kLongitude, deg, c}; };
+  using R = GnssPositionPairer::Result;
+  GnssPositionPairer p;
+  EXPECT_EQ(p.push(lat(48.1, 15)), R::kWaiting);
+  EXPECT_EQ(p.push(lon(11.5, 0)), R::kPaired);  // 15 -> 0 wraps
+  EXPECT_DOUBLE_EQ(p.lat_deg(), 48.1);
+  EXPECT_DOUBLE_EQ(p.lon_deg(), 11.5);
+  EXPECT_EQ(p.dropped(), 0u);
+  // A longitude alone (its latitude lost), or a second one, pairs with nothing.
+  EXPECT_EQ(p.push(lon(11.6, 2)), R::kDropped);
+  EXPECT_EQ(p.dropped(), 1u);
+  // A latitude whose longitude skipped a counter value: both halves dropped.
+  EXPECT_EQ(p.push(lat(48.2, 3)), R::kWaiting);
+  EXPECT_EQ(p.push(lon(11.7, 5)), R::kDropped);
+  EXPECT_EQ(p.dropped(), 3u);
+  // A latitude replaced by the next fix's latitude; then the new pair forms, never old with new.
+  EXPECT_EQ(p.push(lat(48.3, 6)), R::kWaiting);
+  EXPECT_EQ(p.push(lat(48.4, 8)), R::kWaiting);
+  EXPECT_EQ(p.dropped(), 4u);
+  EXPECT_EQ(p.push(lon(11.8, 9)), R::kPaired);
+  EXPECT_DOUBLE_EQ(p.lat_deg(), 48.4);
+  EXPECT_DOUBLE_EQ(p.lon_deg(), 11.8);
+  // The fix ends with a latitude waiting: dropped; a longitude after that pairs with nothing.
+  EXPECT_EQ(p.push(lat(48.5, 10)), R::kWaiting);
+  p.end_fix();
+  EXPECT_EQ(p.dropped(), 5u);
+  EXPECT_EQ(p.push(lon(11.9, 11)), R::kDropped);
+  EXPECT_EQ(p.dropped(), 6u);
+  EXPECT_DOUBLE_EQ(p.lat_deg(), 48.4) << "the last pair stays as it was";
 }
 
 TEST(CanMessages, RollingCounterMonitor) {

@@ -22,16 +22,25 @@ TEST(DbcConformance, FileDescribesEveryMessage) {
     const DbcMessage& m = dbc.messages.at(b.id);
     EXPECT_EQ(m.dlc, 8u);
     EXPECT_LE(m.id, 0x7FFu);
-    // Signals do not overlap and fit into 64 bits; all Intel byte order.
-    std::uint64_t used = 0;
-    for (const auto& [name, s] : m.signals) {
-      EXPECT_TRUE(s.little_endian) << name;
-      ASSERT_LE(s.start + s.length, 64u) << name;
-      for (unsigned i = s.start; i < s.start + s.length; ++i) {
-        EXPECT_FALSE((used >> i) & 1u) << m.name << "." << name << " overlaps at bit " << i;
-        used |= std::uint64_t{1} << i;
+    // The signals of a frame (per multiplexer value) do not overlap and fit into 64 bits; all Intel
+    // byte order. Every inbound and outbound frame ends in the 4-bit rolling counter and the CRC.
+    for (const int mux : m.mux_values()) {
+      std::uint64_t used = 0;
+      for (const auto& [name, s] : m.active(mux)) {
+        EXPECT_TRUE(s.little_endian) << name;
+        ASSERT_LE(s.start + s.length, 64u) << name;
+        for (unsigned i = s.start; i < s.start + s.length; ++i) {
+          EXPECT_FALSE((used >> i) & 1u) << m.name << "." << name << " overlaps at bit " << i << " (mux " << mux << ")";
+          used |= std::uint64_t{1} << i;
+        }
       }
     }
+    ASSERT_TRUE(m.signals.count("Crc")) << m.name;
+    EXPECT_EQ(m.signals.at("Crc").start, 56u) << m.name;
+    EXPECT_EQ(m.signals.at("Crc").length, 8u) << m.name;
+    ASSERT_TRUE(m.signals.count("Counter")) << m.name;
+    EXPECT_EQ(m.signals.at("Counter").length, 4u) << m.name;
+    EXPECT_EQ(m.signals.at("Counter").mux_value, -1) << m.name << ": every frame of the id carries the counter";
   }
 }
 
@@ -67,18 +76,29 @@ TEST(DbcConformance, CodecSignalTableEqualsDbc) {
   EXPECT_EQ(checked, scaled_in_dbc + 1);
 }
 
-// The test bindings name exactly the DBC's signals (CRC aside), both ways.
+// The physical values of one frame: the multiplexer (if any) set to `mux`.
+Values mux_values_in(const DbcMessage& m, int mux) {
+  Values in;
+  if (const DbcSignal* mx = m.multiplexer()) in[mx->name] = mux;
+  return in;
+}
+
+// The test bindings name exactly the DBC's signals (CRC aside), both ways, per multiplexer value.
 TEST(DbcConformance, BindingsNameExactlyTheDbcSignals) {
   const Dbc dbc = read_dbc(dbc_path());
   for (const auto& b : message_bindings()) {
     const DbcMessage& m = dbc.messages.at(b.id);
-    Values decoded;
-    b.unpack(b.pack({}, nullptr), decoded);
-    for (const auto& [name, s] : m.signals) {
-      if (name == "Crc") continue;
-      EXPECT_TRUE(decoded.count(name)) << m.name << "." << name << " has no binding";
+    for (const int mux : m.mux_values()) {
+      const auto active = m.active(mux);
+      Values decoded;
+      b.unpack(b.pack(mux_values_in(m, mux), nullptr), decoded);
+      for (const auto& [name, s] : active) {
+        if (name == "Crc") continue;
+        EXPECT_TRUE(decoded.count(name)) << m.name << "." << name << " has no binding (mux " << mux << ")";
+      }
+      for (const auto& [name, v] : decoded)
+        EXPECT_TRUE(active.count(name)) << m.name << "." << name << " is not in the DBC (mux " << mux << ")";
     }
-    for (const auto& [name, v] : decoded) EXPECT_TRUE(m.signals.count(name)) << m.name << "." << name << " is not in the DBC";
   }
 }
 
@@ -87,10 +107,13 @@ TEST(DbcConformance, RandomPhysicalValuesMatchDbcScaling) {
   std::mt19937_64 rng(20261123);
   for (const auto& b : message_bindings()) {
     const DbcMessage& m = dbc.messages.at(b.id);
+    const std::vector<int> muxes = m.mux_values();
     for (int trial = 0; trial < 300; ++trial) {
-      Values in;
-      for (const auto& [name, s] : m.signals) {
-        if (name == "Crc") continue;
+      const int mux = muxes[static_cast<std::size_t>(trial) % muxes.size()];
+      const auto signals = m.active(mux);
+      Values in = mux_values_in(m, mux);
+      for (const auto& [name, s] : signals) {
+        if (name == "Crc" || in.count(name)) continue;
         std::uniform_real_distribution<double> u(s.min, s.max);
         double v = u(rng);
         if (s.factor == 1.0) v = std::round(v);  // integer-valued signals (counters, enums, flags)
@@ -103,14 +126,14 @@ TEST(DbcConformance, RandomPhysicalValuesMatchDbcScaling) {
       ASSERT_EQ(f.dlc, m.dlc);
       // Bits outside every DBC signal stay zero.
       std::uint64_t covered = 0, payload = 0;
-      for (const auto& [name, s] : m.signals) {
+      for (const auto& [name, s] : signals) {
         for (unsigned i = s.start; i < s.start + s.length; ++i) covered |= std::uint64_t{1} << i;
       }
       for (int i = 0; i < 8; ++i) payload |= static_cast<std::uint64_t>(f.data[i]) << (8 * i);
       EXPECT_EQ(payload & ~covered, 0u) << m.name;
       Values decoded;
       EXPECT_EQ(b.unpack(f, decoded), protocol::DecodeStatus::kOk) << m.name;
-      for (const auto& [name, s] : m.signals) {
+      for (const auto& [name, s] : signals) {
         const double dbc_value = s.decode(f.data);
         if (name == "Crc") {
           EXPECT_EQ(static_cast<int>(dbc_value), protocol::frame_crc(f.id, f.data)) << m.name;

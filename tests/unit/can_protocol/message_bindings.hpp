@@ -64,12 +64,21 @@ inline std::vector<MessageBinding> message_bindings() {
                       {"YawRateValid", m.yaw_rate_valid}, {"Counter", m.counter}};
                  return st;
                }});
+  // Multiplexed: PositionMux picks the signal the frame carries (Latitude m0, Longitude m1).
   b.push_back({kGnssPositionId,
-               [](const Values& v, PackStats* s) { return pack(GnssPosition{get(v, "Latitude"), get(v, "Longitude")}, s); },
+               [](const Values& v, PackStats* s) {
+                 GnssPosition m;
+                 const bool lon = get(v, "PositionMux") != 0.0;
+                 m.half = lon ? GnssPositionHalf::kLongitude : GnssPositionHalf::kLatitude;
+                 m.deg = get(v, lon ? "Longitude" : "Latitude");
+                 m.counter = as<std::uint8_t>(v, "Counter");
+                 return pack(m, s);
+               },
                [](const CanFrame& f, Values& v) {
                  GnssPosition m;
                  const auto st = unpack(f, m);
-                 v = {{"Latitude", m.lat_deg}, {"Longitude", m.lon_deg}};
+                 const bool lon = m.half == GnssPositionHalf::kLongitude;
+                 v = {{"PositionMux", lon ? 1.0 : 0.0}, {lon ? "Longitude" : "Latitude", m.deg}, {"Counter", m.counter}};
                  return st;
                }});
   b.push_back({kGnssStatusId,
@@ -90,19 +99,32 @@ inline std::vector<MessageBinding> message_bindings() {
                       {"NumSatellites", m.num_sats}, {"FixType", static_cast<double>(m.fix_type)}, {"Counter", m.counter}};
                  return st;
                }});
-  b.push_back({kGnssTimeDopId,
+  b.push_back({kGnssTimeId,
                [](const Values& v, PackStats* s) {
-                 GnssTimeDop m;
+                 GnssTime m;
                  m.time_of_week_s = get(v, "TimeOfWeek");
                  m.week = as<std::uint16_t>(v, "Week");
-                 m.hdop = get(v, "Hdop");
-                 m.pdop = get(v, "Pdop");
+                 m.counter = as<std::uint8_t>(v, "Counter");
                  return pack(m, s);
                },
                [](const CanFrame& f, Values& v) {
-                 GnssTimeDop m;
+                 GnssTime m;
                  const auto st = unpack(f, m);
-                 v = {{"TimeOfWeek", m.time_of_week_s}, {"Week", m.week}, {"Hdop", m.hdop}, {"Pdop", m.pdop}};
+                 v = {{"TimeOfWeek", m.time_of_week_s}, {"Week", m.week}, {"Counter", m.counter}};
+                 return st;
+               }});
+  b.push_back({kGnssDopId,
+               [](const Values& v, PackStats* s) {
+                 GnssDop m;
+                 m.hdop = get(v, "Hdop");
+                 m.pdop = get(v, "Pdop");
+                 m.counter = as<std::uint8_t>(v, "Counter");
+                 return pack(m, s);
+               },
+               [](const CanFrame& f, Values& v) {
+                 GnssDop m;
+                 const auto st = unpack(f, m);
+                 v = {{"Hdop", m.hdop}, {"Pdop", m.pdop}, {"Counter", m.counter}};
                  return st;
                }});
   b.push_back({kGnssVelocityId,

@@ -179,13 +179,17 @@ TEST(FirmwareSecurityDiagnostics, HeartbeatIsFollowedByTheRefusalCounts) {
   SimTimeCanBus sim_can(can, clock);
   ScriptedLink v2x, ego;
   // An unsigned share, a vehicle frame with a broken CRC, the same vehicle frame twice (its
-  // rolling counter does not advance), an ego scan dated 10 s ahead, then 1.1 s of time.
+  // rolling counter does not advance), the same for the GNSS latitude and time frames (layout 2
+  // gave them a counter and a CRC), an ego scan dated 10 s ahead, then 1.1 s of time.
   for (const auto& d : cloud(protocol::CloudMessageType::kMapShare, kInfraSenderBase, 0)) v2x.queue.push_back(d);
   protocol::VehicleMotion vm;
   vm.speed_valid = vm.yaw_rate_valid = true;
   hal::CanFrame good = protocol::pack(vm), bad = good;
   bad.data[0] ^= 0x01;
-  can.queue = {make_sim_time_frame(50'000'000), bad, good, good};
+  const hal::CanFrame time = protocol::pack(protocol::GnssTime{100.0, 2300, 3});
+  hal::CanFrame bad_lat = protocol::pack(protocol::GnssPosition{protocol::GnssPositionHalf::kLatitude, 48.0, 0});
+  bad_lat.data[3] ^= 0x40;
+  can.queue = {make_sim_time_frame(50'000'000), bad, good, good, bad_lat, time, time};
   for (const auto& d : cloud(protocol::CloudMessageType::kEgoScan, kEgoSenderId, 10'000'000'000)) ego.queue.push_back(d);
 
   auto decoder = std::make_unique<InputDecoder>(kEpoch);
@@ -211,8 +215,8 @@ TEST(FirmwareSecurityDiagnostics, HeartbeatIsFollowedByTheRefusalCounts) {
     if (can.sent[i].id == protocol::kInputGuardsId) {
       protocol::InputGuards g;
       ASSERT_EQ(protocol::unpack(can.sent[i], g), protocol::DecodeStatus::kOk);
-      EXPECT_EQ(g.can_crc_rejected, 1u);
-      EXPECT_EQ(g.can_counter_rejected, 1u);
+      EXPECT_EQ(g.can_crc_rejected, 2u);
+      EXPECT_EQ(g.can_counter_rejected, 2u);
       EXPECT_EQ(g.ego_time_rejected, 1u);
       EXPECT_EQ(g.missing_signature, 1u);
       ++found;

@@ -2,6 +2,7 @@
 #include "host_sim/recording/recorder.hpp"
 #include "host_sim/recording/recording_reader.hpp"
 #include "host_sim/cloud_io/pcd.hpp"
+#include "firmware/protocol/can_messages.hpp"
 
 #include <gtest/gtest.h>
 
@@ -217,17 +218,20 @@ TEST_F(HostSimRecording, CanLogHoldsVehicleAndGnssFramesInTimeOrder) {
   if (r.can_log_path().empty()) GTEST_SKIP() << "built without the CAN codec / candump writer";
   std::vector<CanLogFrame> frames;
   ASSERT_TRUE(r.can_frames(frames, err)) << err;
+  EXPECT_EQ(r.can_layout_version(), kCanLayoutVersion);
   std::size_t motion = 0, gnss = 0;
   double last = -1;
   for (const auto& f : frames) {
     EXPECT_GE(f.t, last - 1e-9);
     last = f.t;
     motion += f.id == 0x120 ? 1 : 0;
-    gnss += (f.id >= 0x130 && f.id <= 0x133) ? 1 : 0;
+    gnss += (f.id >= 0x130 && f.id <= 0x134) ? 1 : 0;
     EXPECT_EQ(f.dlc, 8);
+    // Layout 2: every frame carries its CRC in byte 7.
+    EXPECT_EQ(f.data[7], protocol::frame_crc(f.id, f.data)) << std::hex << f.id;
   }
   EXPECT_EQ(motion, 100u);  // 100 Hz over 1 s
-  EXPECT_GE(gnss, 15u);     // 5 Hz x (status + velocity + time/DOP [+ position])
+  EXPECT_GE(gnss, 20u);     // 5 Hz x (status + velocity + DOP + time [+ latitude + longitude])
   EXPECT_LT(last, 1.0);
 }
 
