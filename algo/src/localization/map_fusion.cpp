@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "v2xloc/algo/core/det_math.hpp"
 #include "v2xloc/algo/core/spatial_hash.hpp"
 
 namespace v2xloc {
@@ -34,9 +35,10 @@ void MapFusion::remove_source_points(std::size_t slot) {
 bool MapFusion::cell_key(const Vec3f& p, double cell, std::int32_t level,
                          std::int32_t key[3]) const {
   for (int i = 0; i < 3; ++i) {
-    const double k = std::floor(static_cast<double>(p(i)) / cell);
-    if (!(k > -268435456.0 && k < 268435456.0)) return false;
-    key[i] = static_cast<std::int32_t>(k);
+    const double q = static_cast<double>(p(i)) / cell;
+    if (!(q > -268435456.0 && q < 268435456.0)) return false;  // 2^28: z keeps 2 level bits
+    key[i] = det::floor_to_int(q);
+    if (key[i] == -268435456) return false;  // floor(q) must stay above -2^28 as well
   }
   key[2] = key[2] * 4 + level;  // two grids share the table: level in the low bits of z
   return true;

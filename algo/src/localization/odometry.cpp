@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "v2xloc/algo/core/det_math.hpp"
+#include "v2xloc/algo/core/normal_equations.hpp"
 #include "v2xloc/algo/core/rigid_motion.hpp"
 #include "v2xloc/algo/core/spatial_hash.hpp"
 
@@ -44,9 +45,10 @@ void LidarOdometry::reset(const Mat4d& initial) {
 
 bool LidarOdometry::voxel_key(const Vec3d& p, std::int32_t key[3]) const {
   for (int i = 0; i < 3; ++i) {
-    const double k = std::floor(p(i) / params_.voxel_size);
-    if (!(k > -1073741824.0 && k < 1073741824.0)) return false;
-    key[i] = static_cast<std::int32_t>(k);
+    const double q = p(i) / params_.voxel_size;
+    if (!(q > -1073741824.0 && q < 1073741824.0)) return false;  // |key| < 2^30
+    key[i] = det::floor_to_int(q);  // libm's floor is a call on baseline x86-64
+    if (key[i] == -1073741824) return false;
   }
   return true;
 }
@@ -225,9 +227,10 @@ void LidarOdometry::build_coarse_frame(OdometryResult& r) {
     std::int32_t key[3];
     bool ok = true;
     for (int a = 0; a < 3; ++a) {
-      const double k = std::floor(p(a) / cv);
-      ok = ok && k > -1073741824.0 && k < 1073741824.0;
-      key[a] = ok ? static_cast<std::int32_t>(k) : 0;
+      const double q = p(a) / cv;
+      ok = ok && q > -1073741824.0 && q < 1073741824.0;
+      key[a] = ok ? det::floor_to_int(q) : 0;
+      ok = ok && key[a] != -1073741824;
     }
     std::uint32_t v = ok ? find_coarse(key) : kNone;
     if (ok && v == kNone && voxels < kMaxCoarse) {
@@ -326,7 +329,7 @@ Mat4d LidarOdometry::align(const Mat4d& prediction, OdometryResult& r) const {
         Vec6d jn;
         jn.head<3>() = n;
         jn.tail<3>() = p.cross(n);  // n^T [I | -[p]x]
-        H += (w * jn) * jn.transpose();
+        add_weighted_outer_lower(H, w, jn);
         b += (w * e) * jn;
         sse += e * e;
       } else {
@@ -335,7 +338,8 @@ Mat4d LidarOdometry::align(const Mat4d& prediction, OdometryResult& r) const {
         J.rightCols<3>() = -skew(p);
         const double denom = k2 + d2;
         const double w = k2 / (denom * denom) * k2;  // normalised so w(0) = 1
-        H += w * (J.transpose() * J);
+        const Mat6d JtJ = J.transpose() * J;
+        H.triangularView<Eigen::Lower>() += w * JtJ;
         b += w * (J.transpose() * res);
         sse += d2;
       }
@@ -348,6 +352,7 @@ Mat4d LidarOdometry::align(const Mat4d& prediction, OdometryResult& r) const {
       r.status = OdometryStatus::kNoCorrespondences;
       break;
     }
+    mirror_lower(H);
     const Eigen::LDLT<Mat6d> ldlt(H);
     if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) {
       r.status = OdometryStatus::kDegenerate;

@@ -25,7 +25,8 @@ MapInsertResult ReferenceMap::insert(const MapCloudInput& in) {
 
 IcpTarget ReferenceMap::target() const {
   const Target& m = targets_[active_];
-  return IcpTarget{m.points.span(), std::span<const Vec3f>(m.normals, m.points.size()), &m.tree.tree};
+  return IcpTarget{m.points.span(), std::span<const Vec3f>(m.normals, m.points.size()), &m.tree.tree,
+                   params_.map_vicinity_cell > 0.0f ? &m.vicinity : nullptr};
 }
 
 bool ReferenceMap::refresh(double t) {
@@ -37,6 +38,26 @@ bool ReferenceMap::refresh(double t) {
     if (!build_step(t, finished)) break;
   }
   return finished;
+}
+
+// The vicinity bitmap over the map's bounding box, reach = the tracking ICP's gate + 1 cm (the
+// ICP asks it only for gates within its reach, less a rounding slack).
+void ReferenceMap::build_vicinity(Target& target) const {
+  if (!(params_.map_vicinity_cell > 0.0f)) return;
+  Vec3d lo = Vec3d::Constant(1e300), hi = Vec3d::Constant(-1e300);
+  for (const Vec3f& p : target.points) {
+    if (!p.allFinite()) continue;
+    lo = lo.cwiseMin(p.cast<double>());
+    hi = hi.cwiseMax(p.cast<double>());
+  }
+  ProximityGridParams gp;
+  gp.cell = params_.map_vicinity_cell;
+  gp.reach = static_cast<float>(params_.icp.max_correspondence_distance + 0.01);
+  if (!(lo.x() <= hi.x())) {
+    target.vicinity.build({}, Vec3d::Zero(), Vec3d::Zero(), gp);  // no finite point: an empty grid
+    return;
+  }
+  target.vicinity.build(target.points.span(), 0.5 * (lo + hi), 0.5 * (hi - lo), gp);
 }
 
 bool ReferenceMap::build_step(double t, bool& finished) {
@@ -61,6 +82,7 @@ bool ReferenceMap::build_step(double t, bool& finished) {
                                                                               : ~std::size_t{0};
       if (!next.tree.tree.build_step(quota, tree_result_)) return false;  // more next period
       tree_started_ = false;
+      build_vicinity(next);  // O(N + grid words), a few M instructions: in the tree's last slice
       normals_done_ = 0;
       phase_ = BuildPhase::kNormals;
       return true;

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "v2xloc/algo/core/det_math.hpp"
+#include "v2xloc/algo/core/normal_equations.hpp"
 #include "v2xloc/algo/core/rigid_motion.hpp"
 #include "v2xloc/algo/core/symmetric_eigen.hpp"
 #include "v2xloc/algo/registration/kabsch.hpp"
@@ -125,6 +126,11 @@ void run_pass(std::span<const Vec3f> source, const IcpTarget& target, const Mat4
   const Vec3d t = transform.topRightCorner<3, 1>();
   const double max_d2 = max_distance * max_distance;
   const bool use_hints = hints.size() >= source.size();
+  // Nothing within reach >= the gate: no correspondence, exactly what the tree would conclude
+  // (1 mm slack: the grid is asked about the float-rounded query).
+  constexpr double kVicinitySlack = 1e-3;
+  const bool skip_empty = target.vicinity != nullptr && target.vicinity->ready() && target.vicinity->valid() &&
+                          max_distance + kVicinitySlack <= target.vicinity->reach();
   for (std::size_t k = 0; k < source.size(); ++k) {
     const Vec3f& pf = source[k];
     if (!pf.allFinite()) continue;
@@ -132,9 +138,13 @@ void run_pass(std::span<const Vec3f> source, const IcpTarget& target, const Mat4
     const Vec3d p = pf.cast<double>();
     const Vec3d pt = r * p + t;
     Neighbor nn{};
+    const Vec3f ptf = pt.cast<float>();
+    if (skip_empty && target.vicinity->none_within_reach(ptf)) {
+      if (use_hints) hints[k] = KdTree<Vec3f>::kNoHint;
+      continue;
+    }
     const std::uint32_t hint = use_hints ? hints[k] : KdTree<Vec3f>::kNoHint;
-    const KdQueryResult qr =
-        target.tree->nearest_within(pt.cast<float>(), search_bound(pt, max_distance), hint, nn);
+    const KdQueryResult qr = target.tree->nearest_within(ptf, search_bound(pt, max_distance), hint, nn);
     if (qr.visit_cap_hit) ++pass.search_truncated;
     if (use_hints) hints[k] = qr.count == 0 ? KdTree<Vec3f>::kNoHint : nn.index;
     if (qr.count == 0) continue;
@@ -157,10 +167,11 @@ void run_pass(std::span<const Vec3f> source, const IcpTarget& target, const Mat4
       Vec6d j;
       j.head<3>() = pt.cross(n);  // d(n.(exp(w^) p + v))/dw at 0 = (p x n)
       j.tail<3>() = n;
-      pass.h += (w * j) * j.transpose();
+      add_weighted_outer_lower(pass.h, w, j);
       pass.b += (w * residual) * j;
     }
   }
+  if (mode == PassMode::kPointToPlane) mirror_lower(pass.h);
 }
 
 bool target_valid(const IcpTarget& target, bool need_normals) {

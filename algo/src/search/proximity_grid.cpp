@@ -46,6 +46,7 @@ void ProximityGrid::begin(std::span<const Vec3f> map_points, const Vec3d& center
   dims_[0] = dims_[1] = dims_[2] = 0;
   total_words_ = row_words_ = plane_words_ = 0;
   cell_ = inv_cell_ = 0.0;
+  reach_ = 0.0;
   phase_ = Phase::kDone;
   valid_ = false;
   const double reach = params.reach;
@@ -64,6 +65,7 @@ void ProximityGrid::begin(std::span<const Vec3f> map_points, const Vec3d& center
     }
   }
   if (!fits) return;
+  reach_ = reach;
   cell_ = cell;
   inv_cell_ = 1.0 / cell;
   for (int a = 0; a < 3; ++a) origin_[a] = center[a] - half_extent[a] - static_cast<double>(r_) * cell;

@@ -52,5 +52,17 @@ TEST(DetMath, FloorToIntMatchesStdFloor) {
   }
 }
 
+TEST(DetMath, FloorToIntOfDoubleMatchesStdFloor) {
+  const double edges[] = {0.0, -0.0, 1.0, -1.0, 0.5, -0.5, 1e-300, -1e-300, 0.9999999999999999, -0.9999999999999999,
+                          -1073741823.5, 1073741823.9999998, 2.0e9, -2.0e9, 4503599627370495.5 / 4194304.0};
+  for (const double x : edges) EXPECT_EQ(det::floor_to_int(x), static_cast<std::int32_t>(std::floor(x))) << x;
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> u(-2000.0, 2000.0);
+  for (int i = 0; i < 100000; ++i) {
+    const double x = u(rng);
+    ASSERT_EQ(det::floor_to_int(x), static_cast<std::int32_t>(std::floor(x))) << x;
+  }
+}
+
 }  // namespace
 }  // namespace v2xloc

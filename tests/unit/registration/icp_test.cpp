@@ -149,6 +149,41 @@ TEST(Icp, SlicedRunIsBitIdenticalToOneCall) {
   EXPECT_TRUE(icp_continue(bad, source, IcpTarget{}, IcpParams{}, 5));
 }
 
+// A vicinity bitmap over the target lets queries with nothing within the gate skip the tree:
+// the same bits, and only when the gate is within its reach.
+TEST(Icp, VicinitySkipGivesTheSameResult) {
+  const Mat4d truth = rotation_zyx(0.03, 0.01, -0.01, Vec3d(0.25, -0.15, 0.05));
+  const testing::CloudPair pair = testing::make_urban_pair(5, 6, truth, small_scene());
+  const TargetMap map(downsample(pair.target));
+  std::vector<Vec3f> source = downsample(pair.source);
+  for (int k = 0; k < 200; ++k) source.push_back(Vec3f(100.0f + k, -50.0f, 3.0f));  // nothing near
+  Vec3d lo = Vec3d::Constant(1e9), hi = Vec3d::Constant(-1e9);
+  for (const Vec3f& p : map.points) {
+    lo = lo.cwiseMin(p.cast<double>());
+    hi = hi.cwiseMax(p.cast<double>());
+  }
+  static ProximityGrid vicinity;
+  vicinity.build(map.points, 0.5 * (lo + hi), 0.5 * (hi - lo), {0.5f, 1.01f});
+  ASSERT_TRUE(vicinity.ready() && vicinity.valid());
+  IcpTarget with = map.view();
+  with.vicinity = &vicinity;
+  for (const double gate : {1.0, 2.0}) {  // 2 m: beyond the reach, the tree answers all
+    IcpParams params;
+    params.max_correspondence_distance = gate;
+    params.criteria.max_iterations = 40;
+    std::vector<std::uint32_t> hints_a(source.size()), hints_b(source.size());
+    const RegistrationResult a = icp(source, map.view(), Mat4d::Identity(), params, hints_a);
+    const RegistrationResult b = icp(source, with, Mat4d::Identity(), params, hints_b);
+    ASSERT_TRUE(a.ok());
+    EXPECT_EQ(a.iterations, b.iterations);
+    EXPECT_EQ(a.inliers, b.inliers);
+    EXPECT_EQ(a.fitness, b.fitness);
+    EXPECT_EQ(a.inlier_rmse, b.inlier_rmse);
+    EXPECT_TRUE(a.transform == b.transform);
+    EXPECT_TRUE(a.information == b.information);
+  }
+}
+
 TEST(Icp, RobustKernelDownWeightsOutliers) {
   const Mat4d truth = rotation_zyx(0.01, 0.0, 0.0, Vec3d(0.08, 0.05, 0.0));
   testing::UrbanSceneOptions o;

@@ -96,6 +96,30 @@ TEST(ProximityGrid, NoFalseNegativeAndBoundedFalsePositivesAgainstBruteForce) {
   }
 }
 
+// none_within_reach() is a proof: wherever it says so (queries all over and beyond the grid),
+// brute force finds no map point within reach; covers() holds on the whole box B.
+TEST(ProximityGrid, NoneWithinReachIsExact) {
+  const Vec3d center(-2.0, 7.5, 0.5), half(30.0, 20.0, 5.0);
+  Pcg32 rng(21);
+  const auto map = uniform_points(rng, 300, center - half, center + half);
+  for (const float reach : {1.01f, 2.0f}) {
+    grid.build(map, center, half, {0.5f, reach});
+    ASSERT_TRUE(grid.ready() && grid.valid());
+    EXPECT_EQ(grid.reach(), static_cast<double>(reach));
+    int proven = 0;
+    const Vec3d margin(4.0, 4.0, 4.0);
+    for (const Vec3f& q : uniform_points(rng, 20000, center - half - margin, center + half + margin)) {
+      if (!grid.none_within_reach(q)) continue;
+      ++proven;
+      EXPECT_FALSE(brute_force(map, q, reach).within_reach) << q.transpose();
+    }
+    EXPECT_GT(proven, 1000) << reach;
+    for (const Vec3f& q : uniform_points(rng, 2000, center - half, center + half)) EXPECT_TRUE(grid.covers(q));
+  }
+  EXPECT_FALSE(grid.covers(Vec3f(NAN, 0.0f, 0.0f)));
+  EXPECT_FALSE(grid.none_within_reach(Vec3f(NAN, 0.0f, 0.0f)));
+}
+
 // Pairs at exactly `reach` along an axis (the case where cell indices differ by exactly r), over
 // many grid origins and positions near cell faces.
 TEST(ProximityGrid, ExactReachAlongAnAxisIsNear) {

@@ -149,5 +149,9 @@ inline std::int32_t floor_to_int(float x) {
   const auto t = static_cast<std::int32_t>(x);
   return t - (x < static_cast<float>(t) ? 1 : 0);
 }
+inline std::int32_t floor_to_int(double x) {
+  const auto t = static_cast<std::int32_t>(x);
+  return t - (x < static_cast<double>(t) ? 1 : 0);
+}
 
 }  // namespace v2xloc::det

@@ -46,6 +46,10 @@ struct LocalizerParams {
   // [point visits/period] the next map's k-d tree is built this much per period (a build
   // visits ~N log2(N / leaf) points; 0: at once)
   std::uint32_t map_tree_work_per_period = 250000;
+  // [m] requested cell of the map's vicinity bitmap (search/proximity_grid.hpp; grows to fit the
+  // map's box in config::kProximityGridWords): ICP queries it proves empty within the gate skip
+  // the k-d tree (same matches); 0: off
+  float map_vicinity_cell = 0.5f;
 
   // ---- Odometry ----
   OdometryParams odometry{};          // KISS-ICP-style LiDAR odometry (odometry.hpp)

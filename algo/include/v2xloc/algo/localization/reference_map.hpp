@@ -1,6 +1,6 @@
 // The reference map the ego scan registers to: the fused infrastructure and agent clouds
 // (map_fusion.hpp) and, double-buffered, the registration target built from them (points, k-d
-// tree, normals). Registration reads the active target while the next one is built over several
+// tree, vicinity bitmap, normals). Registration reads the active target while the next one is built over several
 // periods, at most every map_refresh_period: infrastructure clouds arrive several times per
 // second and the static scene hardly changes between them.
 #pragma once
@@ -15,6 +15,7 @@
 #include "v2xloc/algo/localization/map_fusion.hpp"
 #include "v2xloc/algo/registration/icp.hpp"
 #include "v2xloc/algo/search/kdtree.hpp"
+#include "v2xloc/algo/search/proximity_grid.hpp"
 
 namespace v2xloc {
 
@@ -36,12 +37,14 @@ class ReferenceMap {
     FixedVector<Vec3f, config::kMaxMapPoints> points;
     Vec3f normals[config::kMaxMapPoints];
     KdTreeStorage<Vec3f, config::kMaxMapPoints> tree;
+    ProximityGrid vicinity;  // "no map point within the ICP gate": those queries skip the tree
   };
   enum class BuildPhase : std::uint8_t { kIdle, kTree, kNormals };
   static constexpr std::uint32_t kBuildSteps = 3;  // extract, tree, normals: one rebuild
 
   // One build step; false: nothing (more) to do this period. finished: the new target is active.
   bool build_step(double t, bool& finished);
+  void build_vicinity(Target& target) const;
 
   LocalizerParams params_{};
   MapFusion fusion_{};

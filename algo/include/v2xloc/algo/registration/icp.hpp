@@ -15,6 +15,7 @@
 
 #include "v2xloc/algo/core/config.hpp"
 #include "v2xloc/algo/search/kdtree.hpp"
+#include "v2xloc/algo/search/proximity_grid.hpp"
 #include "v2xloc/algo/registration/registration_result.hpp"
 #include "v2xloc/algo/core/types.hpp"
 
@@ -56,11 +57,14 @@ struct IcpParams {
 
 // The (map) target as a view: reusable across frames without rebuilding. normals may be empty
 // for point-to-point; for point-to-plane it must have points.size() entries. tree must be built
-// over exactly `points`.
+// over exactly `points`. vicinity (optional, ready, built over the same points): a source point it
+// proves has no target point within its reach needs no tree search when the correspondence gate
+// is within that reach (same result: about half the tracking queries have no match).
 struct IcpTarget {
   std::span<const Vec3f> points{};
   std::span<const Vec3f> normals{};
   const KdTree<Vec3f>* tree = nullptr;
+  const ProximityGrid* vicinity = nullptr;
 };
 
 // Registers source to target starting from `initial` (p_target = T p_source).

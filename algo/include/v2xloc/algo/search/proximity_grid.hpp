@@ -103,7 +103,25 @@ class ProximityGrid {
     return ((word >> (ix & 63u)) & 1u) != 0;
   }
 
+  // The part of the grid where near() has no false negative (u(q) in [r, n - r] on every axis,
+  // shrunk by 2^-20 cells for rounding): there, !near(q) proves that no map point lies within
+  // reach of q. False before ready() and for non-finite queries.
+  bool covers(const Vec3f& q) const {
+    constexpr double kSlack = 1.0 / 1048576.0;
+    const double lo = static_cast<double>(r_) + kSlack;
+    const double u[3] = {(static_cast<double>(q.x()) - origin_[0]) * inv_cell_,
+                         (static_cast<double>(q.y()) - origin_[1]) * inv_cell_,
+                         (static_cast<double>(q.z()) - origin_[2]) * inv_cell_};
+    for (int a = 0; a < 3; ++a) {
+      if (!(u[a] >= lo && u[a] <= limit_[a] - lo)) return false;
+    }
+    return true;
+  }
+  // No map point within reach of q, proven (covers(q) and !near(q)); false: maybe one.
+  bool none_within_reach(const Vec3f& q) const { return covers(q) && !near(q); }
+
   double cell() const { return cell_; }               // used cell edge [m] (>= requested)
+  double reach() const { return reach_; }             // [m] as requested
   std::uint32_t reach_cells() const { return r_; }     // r
   std::uint32_t nx() const { return dims_[0]; }
   std::uint32_t ny() const { return dims_[1]; }
@@ -136,6 +154,7 @@ class ProximityGrid {
   double inv_cell_ = 0.0;
   double limit_[3] = {0.0, 0.0, 0.0};  // query bounds in cells: dims once ready, else 0
   double cell_ = 0.0;
+  double reach_ = 0.0;
   std::uint64_t total_work_ = 0;
   std::uint64_t work_done_ = 0;
   std::uint64_t cursor_ = 0;           // position inside the current phase / pass
