@@ -1,71 +1,82 @@
 #include "tools/register/register_cli.hpp"
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
-#include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <sstream>
+#include <utility>
 
 namespace v2xloc::tools {
 namespace {
 
-void append_number(std::string& out, double v) {
-  if (!std::isfinite(v)) {
-    out += "null";  // JSON has no NaN/Inf
-    return;
-  }
-  char buf[32];
-  // 17 significant digits: the printed transform reads back to the same bits.
-  std::snprintf(buf, sizeof(buf), "%.17g", v);
-  out += buf;
-}
+using Json = nlohmann::ordered_json;  // keys in the order they are set, like v2xloc-info --json
 
-void append_ms(std::string& out, double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.3f", v);
-  out += buf;
-}
+// JSON has no NaN/Inf: those become null. Finite doubles are dumped shortest-round-trip, so the
+// printed transform reads back to the same bits.
+Json number(double v) { return std::isfinite(v) ? Json(v) : Json(nullptr); }
 
-std::string quoted(const std::string& s) {
-  std::string q = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') {
-      q += '\\';
-      q += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof(buf), "\\u%04x", static_cast<unsigned>(c));
-      q += buf;
-    } else {
-      q += c;
-    }
-  }
-  return q + "\"";
-}
+// Milliseconds to the microsecond: more digits would be timer noise.
+Json ms(double v) { return number(std::round(v * 1000.0) / 1000.0); }
 
-void append_matrix(std::string& out, const Mat4d& m) {
-  out += "[";
+Json matrix_rows(const Mat4d& m) {
+  Json rows = Json::array();
   for (int r = 0; r < 4; ++r) {
-    out += r ? ",[" : "[";
-    for (int c = 0; c < 4; ++c) {
-      if (c) out += ",";
-      append_number(out, m(r, c));
-    }
-    out += "]";
+    Json row = Json::array();
+    for (int c = 0; c < 4; ++c) row.push_back(number(m(r, c)));
+    rows.push_back(std::move(row));
   }
-  out += "]";
+  return rows;
 }
 
-void append_registration(std::string& out, const RegistrationResult& r) {
-  out += "\"status\":" + quoted(to_string(r.status)) + ",\"transform\":";
-  append_matrix(out, r.transform);
-  out += ",\"fitness\":";
-  append_number(out, r.fitness);
-  out += ",\"inlier_rmse\":";
-  append_number(out, r.inlier_rmse);
-  out += ",\"iterations\":" + std::to_string(r.iterations) + ",\"inliers\":" + std::to_string(r.inliers) +
-         ",\"converged\":" + (r.converged ? "true" : "false");
+void add_registration(Json& out, const RegistrationResult& r) {
+  out["status"] = to_string(r.status);
+  out["transform"] = matrix_rows(r.transform);
+  out["fitness"] = number(r.fitness);
+  out["inlier_rmse"] = number(r.inlier_rmse);
+  out["iterations"] = r.iterations;
+  out["inliers"] = r.inliers;
+  out["converged"] = r.converged;
+}
+
+Json point_counts(const RegisterCloudsResult& result) {
+  const RegisterStageStats& s = result.stats;
+  Json points;
+  points["source_input"] = s.source_input;
+  points["target_input"] = s.target_input;
+  points["source_downsampled"] = s.source_downsampled;
+  points["target_downsampled"] = s.target_downsampled;
+  points["correspondences"] = s.correspondences;
+  points["ransac_correspondence_inliers"] = s.ransac_correspondence_inliers;
+  points["final_inliers"] = result.registration.inliers;
+  return points;
+}
+
+Json dropped_counts(const RegisterCloudsResult& result) {
+  const RegisterStageStats& s = result.stats;
+  Json dropped;
+  dropped["nonfinite"] = result.registration.nonfinite_dropped;
+  dropped["source_truncated"] = s.source_truncated;
+  dropped["target_truncated"] = s.target_truncated;
+  dropped["downsample_overflow"] = s.downsample_overflow;
+  dropped["correspondences_truncated"] = s.correspondences_truncated;
+  dropped["search_cap_hits"] = s.search_cap_hits;
+  dropped["feature_queries_cut"] = s.feature_queries_cut;
+  return dropped;
+}
+
+Json stage_ms(const RegisterTimings& timings) {
+  static constexpr const char* kStageNames[] = {"downsample", "normals", "fpfh", "correspondences",
+                                                "ransac", "icp"};
+  static_assert(std::size(kStageNames) == static_cast<std::size_t>(RegisterStage::kCount));
+  Json out;
+  out["read_source"] = ms(timings.read_source_ms);
+  out["read_target"] = ms(timings.read_target_ms);
+  for (std::size_t i = 0; i < std::size(kStageNames); ++i) out[kStageNames[i]] = ms(timings.stage_ms[i]);
+  out["registration"] = ms(timings.registration_ms);
+  return out;
 }
 
 }  // namespace
@@ -175,50 +186,23 @@ bool read_matrix4(const std::string& path, Mat4d& matrix, std::string& error) {
 
 std::string register_json(const RegisterOptions& options, const RegisterCloudsParams& params,
                           const RegisterCloudsResult& result, const RegisterTimings& timings) {
-  const RegisterStageStats& s = result.stats;
-  std::string out = "{";
-  append_registration(out, result.registration);
-  out += ",\"mode\":";
-  out += params.mode == RegistrationMode::kGlobal ? "\"global\"" : "\"icp\"";
-  out += ",\"voxel\":";
-  append_number(out, params.voxel_size);
-  out += ",\"seed\":" + std::to_string(params.ransac.seed);
-  out += ",\"feature_search_visits\":" + std::to_string(params.feature_search_visits);
-  out += ",\"source\":" + quoted(options.source_path) + ",\"target\":" + quoted(options.target_path);
-  out += ",\"coarse\":{";
-  append_registration(out, result.coarse);
-  out += "}";
-  out += ",\"points\":{\"source_input\":" + std::to_string(s.source_input) +
-         ",\"target_input\":" + std::to_string(s.target_input) +
-         ",\"source_downsampled\":" + std::to_string(s.source_downsampled) +
-         ",\"target_downsampled\":" + std::to_string(s.target_downsampled) +
-         ",\"correspondences\":" + std::to_string(s.correspondences) +
-         ",\"ransac_correspondence_inliers\":" + std::to_string(s.ransac_correspondence_inliers) +
-         ",\"final_inliers\":" + std::to_string(result.registration.inliers) + "}";
-  out += ",\"dropped\":{\"nonfinite\":" + std::to_string(result.registration.nonfinite_dropped) +
-         ",\"source_truncated\":" + std::to_string(s.source_truncated) +
-         ",\"target_truncated\":" + std::to_string(s.target_truncated) +
-         ",\"downsample_overflow\":" + std::to_string(s.downsample_overflow) +
-         ",\"correspondences_truncated\":" + std::to_string(s.correspondences_truncated) +
-         ",\"search_cap_hits\":" + std::to_string(s.search_cap_hits) +
-         ",\"feature_queries_cut\":" + std::to_string(s.feature_queries_cut) + "}";
-  out += ",\"ransac_validations\":" + std::to_string(s.ransac_validations) +
-         ",\"icp_iterations\":" + std::to_string(s.icp_iterations);
-  static constexpr const char* kStageNames[] = {"downsample", "normals", "fpfh", "correspondences",
-                                                "ransac", "icp"};
-  static_assert(sizeof(kStageNames) / sizeof(kStageNames[0]) == static_cast<int>(RegisterStage::kCount));
-  out += ",\"ms\":{\"read_source\":";
-  append_ms(out, timings.read_source_ms);
-  out += ",\"read_target\":";
-  append_ms(out, timings.read_target_ms);
-  for (int i = 0; i < static_cast<int>(RegisterStage::kCount); ++i) {
-    out += ",\"" + std::string(kStageNames[i]) + "\":";
-    append_ms(out, timings.stage_ms[i]);
-  }
-  out += ",\"registration\":";
-  append_ms(out, timings.registration_ms);
-  out += "}}\n";
-  return out;
+  Json out;
+  add_registration(out, result.registration);
+  out["mode"] = params.mode == RegistrationMode::kGlobal ? "global" : "icp";
+  out["voxel"] = number(params.voxel_size);
+  out["seed"] = params.ransac.seed;
+  out["feature_search_visits"] = params.feature_search_visits;
+  out["source"] = options.source_path;
+  out["target"] = options.target_path;
+  Json& coarse = out["coarse"] = Json::object();
+  add_registration(coarse, result.coarse);
+  out["points"] = point_counts(result);
+  out["dropped"] = dropped_counts(result);
+  out["ransac_validations"] = result.stats.ransac_validations;
+  out["icp_iterations"] = result.stats.icp_iterations;
+  out["ms"] = stage_ms(timings);
+  // Invalid UTF-8 in a file name is replaced rather than thrown on: the result is still printed.
+  return out.dump(-1, ' ', false, Json::error_handler_t::replace) + "\n";
 }
 
 }  // namespace v2xloc::tools

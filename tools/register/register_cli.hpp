@@ -39,7 +39,9 @@ struct RegisterTimings {
 
 // One JSON object (single line + newline): status, transform (4 rows), fitness, inlier_rmse,
 // iterations, inliers, converged, coarse (RANSAC) result, point counts per stage, overflow
-// counters and per-stage milliseconds.
+// counters and per-stage milliseconds (rounded to 3 decimals). Written with nlohmann-json: other
+// doubles round-trip to the same bits, NaN/Inf are null, and bytes of a file name that are not
+// UTF-8 become U+FFFD.
 std::string register_json(const RegisterOptions& options, const RegisterCloudsParams& params,
                           const RegisterCloudsResult& result, const RegisterTimings& timings);
 
