@@ -71,7 +71,10 @@ const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
     startup_.on_frame(output_.odometry_ok, odom_T_body_, gnss_);
     filter_.predict_to(in.t);
     probe_(LocalizerStage::kMapRefresh);
-    if (map_.refresh(in.t)) ++counters_.map_rebuilds;
+    LazyNormalCounters normals;
+    if (map_.refresh(in.t, normals)) ++counters_.map_rebuilds;
+    counters_.map_normals_computed += normals.computed;
+    counters_.map_normals_refused += normals.refused;
     register_frame(in.t, in.body_T_lidar.matrix());
     last_frame_t_ = in.t;
     have_frame_ = true;

@@ -12,7 +12,6 @@ void ReferenceMap::configure(const LocalizerParams& params) {
   active_ = 0;
   phase_ = BuildPhase::kIdle;
   tree_started_ = false;
-  normals_done_ = 0;
   build_revision_ = 0;
   revision_ = ~0ull;
   built_t_ = -1e300;
@@ -23,13 +22,14 @@ MapInsertResult ReferenceMap::insert(const MapCloudInput& in) {
   return fusion_.insert(in.source_id, in.t, in.world_T_sensor.matrix(), in.points, !in.is_agent);
 }
 
-IcpTarget ReferenceMap::target() const {
-  const Target& m = targets_[active_];
+IcpTarget ReferenceMap::target() {
+  Target& m = targets_[active_];
   return IcpTarget{m.points.span(), std::span<const Vec3f>(m.normals, m.points.size()), &m.tree.tree,
-                   params_.map_vicinity_cell > 0.0f ? &m.vicinity : nullptr};
+                   params_.map_vicinity_cell > 0.0f ? &m.vicinity : nullptr, &m.lazy};
 }
 
-bool ReferenceMap::refresh(double t) {
+bool ReferenceMap::refresh(double t, LazyNormalCounters& normals) {
+  normals = targets_[active_].lazy.new_period(params_.map_normals_per_period);
   fusion_.expire(t);
   // One build step per period while a map is in use; the first one is built at once.
   const std::uint32_t steps = ready_ ? 1u : kBuildSteps;
@@ -37,6 +37,7 @@ bool ReferenceMap::refresh(double t) {
   for (std::uint32_t s = 0; s < steps; ++s) {
     if (!build_step(t, finished)) break;
   }
+  if (finished) targets_[active_].lazy.new_period(params_.map_normals_per_period);
   return finished;
 }
 
@@ -58,6 +59,19 @@ void ReferenceMap::build_vicinity(Target& target) const {
     return;
   }
   target.vicinity.build(target.points.span(), 0.5 * (lo + hi), 0.5 * (hi - lo), gp);
+}
+
+// The built target becomes the registration's; its normals start empty (computed on first use).
+void ReferenceMap::activate(Target& next) {
+  NormalParams np;
+  np.radius = params_.map_normal_radius;
+  np.orient_to_viewpoint = false;  // point-to-plane residuals do not care about the sign
+  next.lazy.reset(&next.tree.tree, np, std::span<Vec3f>(next.normals, config::kMaxMapPoints),
+                  std::span<std::uint64_t>(next.normal_done, (config::kMaxMapPoints + 63) / 64));
+  active_ = 1 - active_;
+  revision_ = build_revision_;
+  phase_ = BuildPhase::kIdle;
+  ready_ = next.points.size() >= params_.map_min_points;
 }
 
 bool ReferenceMap::build_step(double t, bool& finished) {
@@ -83,24 +97,7 @@ bool ReferenceMap::build_step(double t, bool& finished) {
       if (!next.tree.tree.build_step(quota, tree_result_)) return false;  // more next period
       tree_started_ = false;
       build_vicinity(next);  // O(N + grid words), a few M instructions: in the tree's last slice
-      normals_done_ = 0;
-      phase_ = BuildPhase::kNormals;
-      return true;
-    }
-    case BuildPhase::kNormals: {
-      NormalParams np;
-      np.radius = params_.map_normal_radius;
-      np.orient_to_viewpoint = false;  // point-to-plane residuals do not care about the sign
-      const std::size_t n = next.points.size();
-      const std::size_t slice = ready_ && params_.map_normals_per_period > 0 ? params_.map_normals_per_period : n;
-      estimate_normals_range(next.tree.tree, np, normals_done_, slice,
-                             std::span<Vec3f>(next.normals, config::kMaxMapPoints));
-      normals_done_ += slice;
-      if (normals_done_ < n) return false;  // more next period
-      active_ = 1 - active_;
-      revision_ = build_revision_;
-      phase_ = BuildPhase::kIdle;
-      ready_ = next.points.size() >= params_.map_min_points;
+      activate(next);
       finished = true;
       return false;
     }

@@ -8,6 +8,7 @@
 #include "v2xloc/algo/core/rigid_motion.hpp"
 #include "v2xloc/algo/core/symmetric_eigen.hpp"
 #include "v2xloc/algo/registration/kabsch.hpp"
+#include "v2xloc/algo/registration/lazy_normals.hpp"
 
 namespace v2xloc {
 
@@ -159,7 +160,8 @@ void run_pass(std::span<const Vec3f> source, const IcpTarget& target, const Mat4
     if (mode == PassMode::kPointToPoint) {
       pass.kabsch.add(p, q, kernel.weight(std::sqrt(d2)));
     } else if (mode == PassMode::kPointToPlane) {
-      const Vec3d n = target.normals[nn.index].cast<double>();
+      const Vec3d n =
+          (target.lazy_normals != nullptr ? target.lazy_normals->get(nn.index) : target.normals[nn.index]).cast<double>();
       if (!n.allFinite()) continue;
       const double residual = n.dot(e);
       const double w = kernel.weight(residual);

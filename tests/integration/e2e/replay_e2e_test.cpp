@@ -154,7 +154,7 @@ TEST_F(ReplayE2e, FirmwarePoseFramesAreBitIdenticalToTheOfflinePath) {
 TEST_F(ReplayE2e, FirmwarePathRecordsMatchTheInProcessRecordsWithinCanResolution) {
   // Both paths verify at most kMaxSignatureVerificationsPerPeriod shares per period from the same
   // queue (firmware/wire/share_schedule.hpp), so their maps grow in the same periods.
-  constexpr int kFrames = 20;
+  constexpr int kFrames = 40;
   eval::FirmwareRunOptions options;
   options.firmware_path = kBin + "v2xloc-firmware";
   options.max_frames = kFrames;

@@ -1,5 +1,6 @@
 // PCA normals on analytic surfaces, orientation, degenerate neighbourhoods, eigen solver.
 #include "v2xloc/algo/registration/normals.hpp"
+#include "v2xloc/algo/registration/lazy_normals.hpp"
 #include "v2xloc/algo/core/symmetric_eigen.hpp"
 
 #include <gtest/gtest.h>
@@ -103,6 +104,49 @@ TEST(Normals, DegenerateNeighbourhoodsFlagged) {
   EXPECT_EQ(estimate_normals(tree_storage.tree, np, normals).status, NormalsStatus::kInvalidParams);
   KdTree<Vec3f> empty;
   EXPECT_EQ(estimate_normals(empty, NormalParams{}, normals).status, NormalsStatus::kEmptyTree);
+}
+
+// Normals on first use: each one the bits estimate_normals() gives, in any order of asking; the
+// per-period quota answers NaN past it and counts; reset forgets; out-of-range indices are NaN.
+TEST(LazyNormals, SameBitsAsTheWholeCloudAndQuotaCounted) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-3.0f, 3.0f);
+  std::vector<Vec3f> pts(3000);
+  for (auto& p : pts) p = Vec3f(u(rng), u(rng), 0.1f * std::sin(u(rng)));
+  pts[7] = Vec3f(NAN, 0.0f, 0.0f);
+  ASSERT_EQ(tree_storage.build(pts).status, KdBuildStatus::kOk);
+  NormalParams np;
+  np.radius = 0.6f;
+  np.orient_to_viewpoint = false;
+  estimate_normals(tree_storage.tree, np, normals);
+  static Vec3f lazy_storage[20000];
+  static std::uint64_t done[(20000 + 63) / 64];
+  LazyNormals lazy;
+  lazy.reset(&tree_storage.tree, np, lazy_storage, done);
+  lazy.new_period(0);
+  for (std::uint32_t k = 0; k < 6000; ++k) {  // every point, twice, in a scrambled order
+    const std::uint32_t i = (k * 1237u) % 3000u;
+    const Vec3f n = lazy.get(i);
+    ASSERT_TRUE(n == normals[i]) << i;
+  }
+  EXPECT_EQ(lazy.new_period(100).computed, 3000u);
+  lazy.reset(&tree_storage.tree, np, lazy_storage, done);
+  lazy.new_period(100);
+  for (std::uint32_t i = 0; i < 150; ++i) {
+    const Vec3f n = lazy.get(i);
+    if (i < 100) {
+      EXPECT_TRUE(n == normals[i]) << i;
+    } else {
+      EXPECT_FALSE(n.allFinite()) << i;
+    }
+  }
+  EXPECT_TRUE(lazy.get(42) == normals[42]) << "a computed normal stays available past the quota";
+  const LazyNormalCounters c = lazy.new_period(100);
+  EXPECT_EQ(c.computed, 100u);
+  EXPECT_EQ(c.refused, 50u);
+  EXPECT_TRUE(lazy.get(120) == normals[120]) << "the next period computes it";
+  EXPECT_FALSE(lazy.get(3000).allFinite());
+  EXPECT_FALSE(lazy.get(0xFFFFFFFFu).allFinite());
 }
 
 }  // namespace

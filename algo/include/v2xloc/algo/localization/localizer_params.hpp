@@ -39,10 +39,12 @@ struct LocalizerParams {
   float map_normal_radius = 0.6f;     // [m] normal estimation radius on the map (3 map voxels)
   std::uint32_t map_min_points = 100; // [points] a map with fewer is not registered against
   // [points/period] a map rebuild runs beside the registration, one step per period (extract,
-  // k-d tree, then this many normals); registration keeps the previous map meanwhile. The first
-  // map is built at once (nothing to register against). ~4k instructions a normal: 2048 keep the
-  // slice near 8 M per period and a 60k-point map refreshed about every 3 s.
-  std::uint32_t map_normals_per_period = 2048;
+  // then k-d tree and vicinity bitmap); registration keeps the previous map meanwhile. The first
+  // map is built at once (nothing to register against). Map normals are computed when an ICP
+  // first matches a point (registration/lazy_normals.hpp, ~4k instructions each), at most this
+  // many per period: a tracked frame needs ~1-3k on a fresh map, the start-up search more; past
+  // the cap a pair goes without its normal this period (counted).
+  std::uint32_t map_normals_per_period = 8192;
   // [point visits/period] the next map's k-d tree is built this much per period (a build
   // visits ~N log2(N / leaf) points; 0: at once)
   std::uint32_t map_tree_work_per_period = 250000;

@@ -117,6 +117,8 @@ struct LocalizerCounters {
   std::uint32_t registrations_fused = 0;       // main EKF
   std::uint32_t registrations_gate_rejected = 0;
   std::uint32_t map_rebuilds = 0;
+  std::uint32_t map_normals_computed = 0;      // map normals computed on first use
+  std::uint32_t map_normals_refused = 0;       // asked past the per-period cap: pair skipped
   std::uint32_t gnss_received = 0;
   std::uint32_t gnss_invalid = 0;
   std::uint32_t scan_points_dropped = 0;       // non-finite, out of range or over capacity

@@ -1,6 +1,6 @@
 // The reference map the ego scan registers to: the fused infrastructure and agent clouds
 // (map_fusion.hpp) and, double-buffered, the registration target built from them (points, k-d
-// tree, vicinity bitmap, normals). Registration reads the active target while the next one is built over several
+// tree, vicinity bitmap, normals on first use). Registration reads the active target while the next one is built over several
 // periods, at most every map_refresh_period: infrastructure clouds arrive several times per
 // second and the static scene hardly changes between them.
 #pragma once
@@ -14,6 +14,7 @@
 #include "v2xloc/algo/localization/localizer_types.hpp"
 #include "v2xloc/algo/localization/map_fusion.hpp"
 #include "v2xloc/algo/registration/icp.hpp"
+#include "v2xloc/algo/registration/lazy_normals.hpp"
 #include "v2xloc/algo/search/kdtree.hpp"
 #include "v2xloc/algo/search/proximity_grid.hpp"
 
@@ -25,10 +26,11 @@ class ReferenceMap {
 
   MapInsertResult insert(const MapCloudInput& in);
   // Expires old clouds and advances the target build; true when a rebuild finished this period.
-  bool refresh(double t);
+  // normals: the map normals computed / refused (cap) in the period that ends here.
+  bool refresh(double t, LazyNormalCounters& normals);
 
   bool ready() const { return ready_; }  // the active target has at least map_min_points
-  IcpTarget target() const;
+  IcpTarget target();  // non-const: its normals are computed as the registration asks for them
   std::span<const Vec3f> points() const { return targets_[active_].points.span(); }
   const MapFusion& fusion() const { return fusion_; }
 
@@ -38,20 +40,22 @@ class ReferenceMap {
     Vec3f normals[config::kMaxMapPoints];
     KdTreeStorage<Vec3f, config::kMaxMapPoints> tree;
     ProximityGrid vicinity;  // "no map point within the ICP gate": those queries skip the tree
+    LazyNormals lazy;        // normals on first use, into `normals`
+    std::uint64_t normal_done[(config::kMaxMapPoints + 63) / 64];
   };
-  enum class BuildPhase : std::uint8_t { kIdle, kTree, kNormals };
-  static constexpr std::uint32_t kBuildSteps = 3;  // extract, tree, normals: one rebuild
+  enum class BuildPhase : std::uint8_t { kIdle, kTree };
+  static constexpr std::uint32_t kBuildSteps = 2;  // extract, tree (+ vicinity): one rebuild
 
   // One build step; false: nothing (more) to do this period. finished: the new target is active.
   bool build_step(double t, bool& finished);
   void build_vicinity(Target& target) const;
+  void activate(Target& next);
 
   LocalizerParams params_{};
   MapFusion fusion_{};
   Target targets_[2];
   std::uint32_t active_ = 0;
   BuildPhase phase_ = BuildPhase::kIdle;
-  std::size_t normals_done_ = 0;
   bool tree_started_ = false;        // the next target's tree is being built in slices
   KdBuildResult tree_result_{};
   std::uint64_t build_revision_ = 0;

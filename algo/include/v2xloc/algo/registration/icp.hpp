@@ -60,11 +60,15 @@ struct IcpParams {
 // over exactly `points`. vicinity (optional, ready, built over the same points): a source point it
 // proves has no target point within its reach needs no tree search when the correspondence gate
 // is within that reach (same result: about half the tracking queries have no match).
+// lazy_normals (optional): normals computed on first use (registration/lazy_normals.hpp), read
+// instead of `normals` (which still gives their storage).
+class LazyNormals;
 struct IcpTarget {
   std::span<const Vec3f> points{};
   std::span<const Vec3f> normals{};
   const KdTree<Vec3f>* tree = nullptr;
   const ProximityGrid* vicinity = nullptr;
+  LazyNormals* lazy_normals = nullptr;
 };
 
 // Registers source to target starting from `initial` (p_target = T p_source).
