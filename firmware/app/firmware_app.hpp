@@ -75,7 +75,6 @@ class FirmwareApp {
 
   const FirmwareCounters& counters() const { return counters_; }
   const InputDecoder& decoder() const { return decoder_; }
-  const LocalizerFrameOutput* latest_output() const { return has_output_ ? &latest_ : nullptr; }
   protocol::Heartbeat heartbeat_now() const;
   // The security diagnostics frames' contents (0x301, 0x302), sent with every heartbeat.
   protocol::TrustRejections trust_rejections_now() const;

@@ -21,7 +21,7 @@
 #include "firmware/app/alloc_counter.hpp"
 #include "firmware/app/emulated_wiring.hpp"
 #include "firmware/app/firmware_app.hpp"
-#include "firmware/app/selected_localizer.hpp"
+#include "firmware/app/configure_localizer.hpp"
 #include "firmware/trust/trust_list.hpp"
 #include "hal/emulated/emulated_can_bus.hpp"
 #include "hal/emulated/sim_clock.hpp"
@@ -43,17 +43,17 @@ using namespace v2xloc;
 using namespace v2xloc::firmware;
 
 // ---- The static objects of the ECU (BSS; nothing of this size lives on the stack or heap). ----
-SelectedLocalizer g_localizer;
+Localizer g_localizer;
 InputDecoder g_decoder;
 
 volatile std::sig_atomic_t g_stop = 0;
 void on_signal(int) { g_stop = 1; }
 
 void print_memory() {
-  std::printf("v2xloc-firmware: localizer: %s\n", kSelectedLocalizerName);
+  std::printf("v2xloc-firmware: localizer: v2xloc::Localizer\n");
   std::printf("v2xloc-firmware: static memory: localizer %.1f MiB, decoder (reassembler %zu slots x %zu points + cloud buffers) %.1f MiB,"
               " app %zu B; .bss %.1f MiB, .data %zu B\n",
-              sizeof(SelectedLocalizer) / 1048576.0, kReassemblySlots, kMaxCloudPoints, sizeof(InputDecoder) / 1048576.0,
+              sizeof(Localizer) / 1048576.0, kReassemblySlots, kMaxCloudPoints, sizeof(InputDecoder) / 1048576.0,
               sizeof(FirmwareApp), static_cast<double>(&_end - &__bss_start) / 1048576.0,
               static_cast<std::size_t>(&_edata - &__data_start));
 }
@@ -385,7 +385,7 @@ int main(int argc, char** argv) {
   print_memory();
   configure_localizer(g_localizer, origin);
   g_decoder.set_epoch_ns(epoch_ns);
-  static LocalizerAdapter<SelectedLocalizer> port(g_localizer);
+  static LocalizerAdapter<Localizer> port(g_localizer);
 
   Backends b;
   if (!open_cloud_link(options, b)) return 1;

@@ -219,7 +219,6 @@ class PointCloudReassembler {
   std::size_t expire(std::int64_t now_ns);
   const ReassembledCloud& completed() const { return completed_; }
   const AcceptedFragment& last_accepted() const { return last_accepted_; }
-  std::size_t slot_count() const { return storage_.slots.size(); }
   const ReassemblyCounters& counters() const { return counters_; }
   std::size_t frames_in_flight() const;
   void reset();  // frees every slot and clears the counters

@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "firmware/trust/crypto_arena.hpp"
+#include "hal/little_endian.hpp"
 
 namespace v2xloc::trust {
 namespace {
@@ -60,17 +61,18 @@ void Sha256::update(std::span<const std::uint8_t> bytes) {
   if (!bytes.empty()) mbedtls_sha256_update_ret(ctx(ctx_), bytes.data(), bytes.size());
 }
 void Sha256::update_u16(std::uint16_t v) {
-  const std::uint8_t b[2] = {static_cast<std::uint8_t>(v), static_cast<std::uint8_t>(v >> 8)};
+  std::uint8_t b[2];
+  hal::le::put_u16(b, v);
   update(b);
 }
 void Sha256::update_u32(std::uint32_t v) {
   std::uint8_t b[4];
-  for (int i = 0; i < 4; ++i) b[i] = static_cast<std::uint8_t>(v >> (8 * i));
+  hal::le::put_u32(b, v);
   update(b);
 }
 void Sha256::update_u64(std::uint64_t v) {
   std::uint8_t b[8];
-  for (int i = 0; i < 8; ++i) b[i] = static_cast<std::uint8_t>(v >> (8 * i));
+  hal::le::put_u64(b, v);
   update(b);
 }
 Digest Sha256::finish() {

@@ -19,7 +19,7 @@
 #include "firmware/trust/map_share_verifier.hpp"
 #include "firmware/wire/share_schedule.hpp"
 #include "v2xloc/algo/core/config.hpp"
-#include "v2xloc/algo/localization/localizer.hpp"
+#include "v2xloc/algo/localization/localizer_types.hpp"
 
 namespace v2xloc::firmware {
 

@@ -29,7 +29,6 @@ class SimClock final : public Clock {
   // Time never goes backwards: an earlier target is kInvalidArgument and changes nothing.
   Status advance_to(std::int64_t monotonic_ns);
   Status advance_by(std::int64_t delta_ns);
-  void set_sleep_mode(SleepMode mode) { mode_ = mode; }
 
  private:
   std::atomic<std::int64_t> monotonic_ns_;

@@ -26,6 +26,7 @@
 #include "host_sim/recording/recording_reader.hpp"
 #include "host_sim/recording/sim_trust.hpp"
 #include "host_sim/replay/fault_injection.hpp"
+#include "v2xloc/algo/localization/localizer.hpp"
 
 namespace v2xloc::sim::replay {
 

@@ -1,4 +1,4 @@
-// Benchmarks of the feature stages on the real outdoor scan (shared/data/outdoor_lidar_pair),
+// Benchmarks of the feature stages on the real outdoor scan (tests/data/outdoor_lidar_pair),
 // with the Open3D registration-tutorial parameters at voxel 0.5 m: normals 1.0 m / 30 nn,
 // FPFH 2.5 m / 100 nn. Without the data file the benchmarks report an error and skip.
 #include <benchmark/benchmark.h>

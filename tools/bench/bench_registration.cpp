@@ -1,5 +1,5 @@
 // Per-stage benchmarks of the registration pipeline on the real outdoor LiDAR pair
-// (../shared/data/outdoor_lidar_pair), with the parameters tools/bench/compare_open3d.py gives
+// (tests/data/outdoor_lidar_pair), with the parameters tools/bench/compare_open3d.py gives
 // Open3D: voxel 0.25 m, normals 2 voxels / 30 nn, FPFH 5 voxels / 100 nn, mutual matching,
 // RANSAC 1.5 voxels (edge 0.9 + distance checkers, 100000 iterations, confidence 0.999),
 // point-to-plane ICP at 1 voxel with Tukey k = 0.5 voxel. The full-pipeline benchmarks report the error vs the reference

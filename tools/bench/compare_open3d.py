@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Per-stage timing of the registration pipeline: Open3D (single thread) vs v2xloc.
 
-Runs the outdoor_lidar_pair (../shared/data) through Open3D with the parameters of our
+Runs the outdoor_lidar_pair (tests/data) through Open3D with the parameters of our
 pipeline (voxel 0.25 m, normals 2 voxels / 30 nn, FPFH 5 voxels / 100 nn, mutual feature
 matching, RANSAC 1.5 voxels with edge-length 0.9 + distance checkers, 100000 iterations /
 0.999 confidence, point-to-plane ICP at 1 voxel, Tukey kernel k = 0.5 voxel) and reads our per-stage times from
@@ -13,7 +13,7 @@ result is within 5 cm / 0.5 deg of the reference transform.
 Ours runs twice per round: exact feature matching (the default) and --feature-visits 24
 (approximate, a node-visit budget per 33-D query).
 
-usage: compare_open3d.py [--build build/host] [--data ../shared/data/outdoor_lidar_pair] [--runs 3]
+usage: compare_open3d.py [--build build/host] [--data tests/data/outdoor_lidar_pair] [--runs 3]
 """
 import os
 
@@ -119,7 +119,7 @@ def ours_from_bench(build, runs):
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--build", default=os.path.join(ROOT, "build", "host"))
-    ap.add_argument("--data", default=os.path.join(ROOT, "..", "shared", "data", "outdoor_lidar_pair"))
+    ap.add_argument("--data", default=os.path.join(ROOT, "tests", "data", "outdoor_lidar_pair"))
     ap.add_argument("--voxel", type=float, default=0.25)
     ap.add_argument("--runs", type=int, default=3)
     a = ap.parse_args()

@@ -294,8 +294,7 @@ void Ekf::propagate(double t) {
 template <int M>
 EkfFuseStatus Ekf::fuse(const Eigen::Matrix<double, M, 1>& y,
                         const Eigen::Matrix<double, M, kEkfStateSize>& H,
-                        const Eigen::Matrix<double, M, M>& R, double nis_threshold,
-                        double* nis_out) {
+                        const Eigen::Matrix<double, M, M>& R, double nis_threshold) {
   using MatM = Eigen::Matrix<double, M, M>;
   const Eigen::Matrix<double, M, kEkfStateSize> HP = H.lazyProduct(P_);
   const MatM S = HP.lazyProduct(H.transpose()) + R;
@@ -307,7 +306,6 @@ EkfFuseStatus Ekf::fuse(const Eigen::Matrix<double, M, 1>& y,
   // S is at most 4x4 and positive definite here: Eigen's closed-form inverse (no heap path).
   const MatM S_inv = S.inverse();
   const double nis = y.dot(S_inv.lazyProduct(y));
-  if (nis_out) *nis_out = nis;
   if (nis_threshold > 0.0 && nis > nis_threshold) return EkfFuseStatus::kRejectedGate;
   // K = P H^T S^-1 = (H P)^T S^-1, P symmetric.
   const Eigen::Matrix<double, kEkfStateSize, M> K = HP.transpose().lazyProduct(S_inv);
@@ -340,7 +338,7 @@ EkfFuseStatus Ekf::apply(const Event& e) {
       Eigen::Matrix<double, 2, 2> R = Eigen::Matrix<double, 2, 2>::Zero();
       R(0, 0) = e.R[0][0];
       R(1, 1) = e.R[1][1];
-      const EkfFuseStatus s = fuse<2>(y, H, R, 0.0, nullptr);
+      const EkfFuseStatus s = fuse<2>(y, H, R, 0.0);
       if (count && s == EkfFuseStatus::kFused) ++counters_.signals_fused;
       return s;
     }
@@ -355,7 +353,7 @@ EkfFuseStatus Ekf::apply(const Event& e) {
       R(1, 1) = e.R[1][1];
       const double gate =
           params_.gates.odometry_gate_enabled ? params_.gates.odometry_nis_threshold : 0.0;
-      const EkfFuseStatus s = fuse<2>(y, H, R, gate, nullptr);
+      const EkfFuseStatus s = fuse<2>(y, H, R, gate);
       if (count && s == EkfFuseStatus::kFused) ++counters_.odometry_fused;
       if (count && s == EkfFuseStatus::kRejectedGate) ++counters_.odometry_rejected;
       return s;
@@ -370,7 +368,7 @@ EkfFuseStatus Ekf::apply(const Event& e) {
         for (int c = 0; c < 3; ++c) R(r, c) = e.R[r][c];
       const double gate =
           params_.gates.gnss_gate_enabled ? params_.gates.gnss_nis_threshold : 0.0;
-      const EkfFuseStatus s = fuse<3>(y, H, R, gate, &last_gnss_nis_);
+      const EkfFuseStatus s = fuse<3>(y, H, R, gate);
       if (count && s == EkfFuseStatus::kFused) ++counters_.gnss_fused;
       if (count && s == EkfFuseStatus::kRejectedGate) ++counters_.gnss_rejected;
       return s;
@@ -387,7 +385,7 @@ EkfFuseStatus Ekf::apply(const Event& e) {
       const double gate = params_.gates.registration_gate_enabled
                               ? params_.gates.registration_nis_threshold
                               : 0.0;
-      const EkfFuseStatus s = fuse<4>(y, H, R, gate, &last_registration_nis_);
+      const EkfFuseStatus s = fuse<4>(y, H, R, gate);
       if (count && s == EkfFuseStatus::kFused) ++counters_.registration_fused;
       if (count && s == EkfFuseStatus::kRejectedGate) ++counters_.registration_rejected;
       return s;

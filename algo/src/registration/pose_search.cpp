@@ -58,13 +58,14 @@ Mat4d pose_of(double x, double y, double z, double yaw) {
 
 bool road_height(std::span<const Vec3f> map, const Vec3d& center, double radius, double& height,
                  std::uint32_t min_points) {
-  constexpr int kBins = 400;  // [-40, 40] m around the centre height
+  constexpr int kBins = 400;  // 2 * kRoadHeightHalfWindow / kRoadHeightBin: [-40, 40] m around center.z
   std::uint32_t hist[kBins] = {};
   const double r2 = radius * radius;
   for (const Vec3f& p : map) {
     const double dx = p.x() - center.x(), dy = p.y() - center.y();
     if (dx * dx + dy * dy > r2) continue;
-    const int b = static_cast<int>(std::floor((p.z() - center.z() + 40.0) / 0.2));
+    const int b =
+        static_cast<int>(std::floor((p.z() - center.z() + kRoadHeightHalfWindow) / kRoadHeightBin));
     if (b >= 0 && b < kBins) ++hist[b];
   }
   int best = -1;
@@ -76,7 +77,7 @@ bool road_height(std::span<const Vec3f> map, const Vec3d& center, double radius,
     }
   }
   const bool found = best >= 0 && count >= min_points;
-  height = found ? center.z() - 40.0 + 0.2 * (best + 0.5) : center.z();
+  height = found ? center.z() - kRoadHeightHalfWindow + kRoadHeightBin * (best + 0.5) : center.z();
   return found;
 }
 
@@ -96,7 +97,7 @@ bool road_height_near(std::span<const Vec3f> map, const Vec3d& center, double ra
     return false;
   }
   // Shifted by whole bins, so the bin edges stay those of a histogram centred on center.z.
-  const double shift = 0.2 * std::round((sum / n - center.z()) / 0.2);
+  const double shift = kRoadHeightBin * std::round((sum / n - center.z()) / kRoadHeightBin);
   if (road_height(map, Vec3d(center.x(), center.y(), center.z() + shift), radius, height, min_points)) return true;
   height = center.z();
   return false;
@@ -394,8 +395,8 @@ bool PoseSearch::rate_pose(const IcpTarget& map, const Mat4d& pose, double& conf
 }
 
 bool PoseSearch::provisional(Mat4d& pose) const {
-  // Refined poses only: the best-scored hypothesis alone was an alias 22 m along the street on
-  // Sim 0's first frame.
+  // Refined poses only: the best-scored hypothesis alone can be an alias along the street
+  // (algo/TUNING.md, start-up).
   if (!(provisional_tight_ > 0.0)) return false;
   pose = provisional_pose_;
   return true;
@@ -414,7 +415,7 @@ void PoseSearch::select_candidate(const IcpTarget& map) {
   const RegistrationResult& r = refined_[i];
   tight_[i] = -1.0;
   conflicts_[i] = -1.0;
-  if (!r.ok() || r.fitness < best_fitness_ - 0.1) return;
+  if (!r.ok() || r.fitness < best_fitness_ - kPoseSearchFitnessMargin) return;
   if (!rate_pose(map, r.transform, conflicts_[i], tight_[i])) {
     ++result_.conflict_rejected;
     return;

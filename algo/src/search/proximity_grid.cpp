@@ -30,10 +30,6 @@ std::uint64_t smear_down(std::uint64_t x, std::uint32_t r) {
   return x;
 }
 
-bool finite_vec(const Vec3d& v) {
-  return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z());
-}
-
 }  // namespace
 
 void ProximityGrid::begin(std::span<const Vec3f> map_points, const Vec3d& center,
@@ -50,7 +46,7 @@ void ProximityGrid::begin(std::span<const Vec3f> map_points, const Vec3d& center
   phase_ = Phase::kDone;
   valid_ = false;
   const double reach = params.reach;
-  if (!finite_vec(center) || !finite_vec(half_extent) || !(half_extent.minCoeff() >= 0.0) ||
+  if (!is_finite_point(center) || !is_finite_point(half_extent) || !(half_extent.minCoeff() >= 0.0) ||
       !(params.cell > 0.0f) || !std::isfinite(params.cell) || !(reach >= 0.0) ||
       !std::isfinite(reach)) {
     return;

@@ -18,7 +18,7 @@
 #include <memory>
 #include <string>
 
-#include "firmware/app/selected_localizer.hpp"
+#include "firmware/app/configure_localizer.hpp"
 #include "host_sim/replay/event_stream.hpp"
 #include "host_sim/replay/replay_session.hpp"
 #include "tools/eval/firmware_run.hpp"
@@ -30,7 +30,7 @@ namespace {
 namespace fs = std::filesystem;
 const std::string kBin = std::string(V2XLOC_BINARY_DIR) + "/bin/";
 
-firmware::SelectedLocalizer g_offline_localizer;
+Localizer g_offline_localizer;
 
 class ReplayE2e : public ::testing::Test {
  protected:

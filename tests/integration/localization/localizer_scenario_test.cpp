@@ -11,36 +11,14 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <atomic>
-#include <cstdlib>
 #include <filesystem>
-#include <new>
 
+#include "firmware/app/alloc_counter.hpp"
 #include "host_sim/recording/recorder.hpp"
 #include "host_sim/recording/recording_reader.hpp"
 #include "tools/eval/metrics.hpp"
 #include "tools/eval/offline_run.hpp"
 #include "v2xloc/algo/core/det_math.hpp"
-
-// The replacement operator new is malloc-backed, so its operator delete must call free; GCC's
-// mismatched-new-delete heuristic cannot see that pairing.
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-
-namespace {
-std::atomic<long> g_allocations{0};
-std::atomic<bool> g_counting{false};
-}  // namespace
-
-void* operator new(std::size_t n) {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) { return ::operator new(n); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 namespace v2xloc {
 namespace {
@@ -207,33 +185,35 @@ TEST(LocalizerScenario, NoHeapAllocationPerFrame) {
   for (int i = 0; i < 5000; ++i) {
     cloud[i] = Vec3f(static_cast<float>(i % 50), static_cast<float>((i / 50) % 50), static_cast<float>(i % 7));
   }
-  g_allocations = 0;
-  g_counting = true;
-  for (int f = 0; f < 5; ++f) {
-    const double t = 0.1 * f;
-    g_localizer.on_vehicle(VehicleInput{t, 5.0, 0.01});
-    GnssInput g;
-    g.t = t;
-    g.lat_deg = 48.1374;
-    g.lon_deg = 11.5755;
-    g.alt_m = 520.0;
-    g.h_acc = 5.0;
-    g.v_acc = 8.0;
-    g.valid = true;
-    g_localizer.on_gnss(g);
-    MapCloudInput m;
-    m.source_id = 1;
-    m.t = t;
-    m.points = std::span<const Vec3f>(cloud, 5000);
-    g_localizer.on_map_cloud(m);
-    EgoScanInput in;
-    in.t = t;
-    in.points = std::span<const Vec3f>(scan, 20000);
-    in.point_times = std::span<const float>(times, 20000);
-    g_localizer.on_ego_scan(in);
+  std::uint64_t allocations = 0;
+  {
+    const firmware::alloc_counter::Scope counting;
+    for (int f = 0; f < 5; ++f) {
+      const double t = 0.1 * f;
+      g_localizer.on_vehicle(VehicleInput{t, 5.0, 0.01});
+      GnssInput g;
+      g.t = t;
+      g.lat_deg = 48.1374;
+      g.lon_deg = 11.5755;
+      g.alt_m = 520.0;
+      g.h_acc = 5.0;
+      g.v_acc = 8.0;
+      g.valid = true;
+      g_localizer.on_gnss(g);
+      MapCloudInput m;
+      m.source_id = 1;
+      m.t = t;
+      m.points = std::span<const Vec3f>(cloud, 5000);
+      g_localizer.on_map_cloud(m);
+      EgoScanInput in;
+      in.t = t;
+      in.points = std::span<const Vec3f>(scan, 20000);
+      in.point_times = std::span<const float>(times, 20000);
+      g_localizer.on_ego_scan(in);
+    }
+    allocations = counting.allocations();
   }
-  g_counting = false;
-  EXPECT_EQ(g_allocations.load(), 0);
+  EXPECT_EQ(allocations, 0u);
   EXPECT_EQ(g_localizer.counters().frames, 5u);
 }
 

@@ -58,7 +58,7 @@ TEST(RegistrationAccuracy, SyntheticUrbanPairsGlobalPlusIcp) {
 
 std::string data_dir() { return std::string(V2XLOC_SHARED_DATA_DIR); }
 
-// ../shared/data/outdoor_lidar_pair: both scans and the reference p_target = T p_source.
+// tests/data/outdoor_lidar_pair (V2XLOC_SHARED_DATA_DIR): both scans and the reference p_target = T p_source.
 void load_outdoor_pair(const std::string& dir, std::vector<Vec3f>& source, std::vector<Vec3f>& target,
                        Mat4d& reference) {
   std::string error;

@@ -1,4 +1,5 @@
-// The real clouds in ../shared/data (PCL's bunny PCDs, CloudCompare's outdoor PLYs).
+// The real clouds in tests/data (PCL's bunny PCDs, small_gicp's outdoor PLYs; origin and licences in
+// tests/data/README.md), read through V2XLOC_SHARED_DATA_DIR.
 #include "test_util.hpp"
 
 #include <gtest/gtest.h>

@@ -10,7 +10,7 @@
 #include "firmware/app/alloc_counter.hpp"
 #include "firmware/app/emulated_wiring.hpp"
 #include "firmware/app/firmware_app.hpp"
-#include "firmware/app/selected_localizer.hpp"
+#include "firmware/app/configure_localizer.hpp"
 #include "firmware/wire/wire_conventions.hpp"
 #include "share_signing.hpp"
 #include "hal/emulated/emulated_can_bus.hpp"
@@ -20,7 +20,7 @@ namespace v2xloc::firmware {
 namespace {
 
 constexpr std::int64_t kEpoch = 1'700'000'000'000'000'000;
-SelectedLocalizer g_localizer;
+Localizer g_localizer;
 InputDecoder g_decoder(kEpoch);
 
 std::vector<std::vector<std::uint8_t>> cloud_datagrams(protocol::CloudMessageType type, std::uint32_t sender,
@@ -77,7 +77,7 @@ TEST(FirmwareAppLoop, NoHeapAllocationAfterStartUpAndOnePosePerFrame) {
   CountingLedLine led;
 
   configure_localizer(g_localizer, make_geodetic_origin(48.1374, 11.5755, 520.0));
-  static LocalizerAdapter<SelectedLocalizer> port(g_localizer);
+  static LocalizerAdapter<Localizer> port(g_localizer);
   FirmwareApp app(FirmwareHal{fw_sim_bus, fw_cloud, clock, &pps, &led}, g_decoder, port);
   ASSERT_EQ(app.start(), hal::Status::kOk);
 

@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
 """Fails on any include or link that points up the layers of the house.
 
-Layers, low to high: algo < hal < firmware < host_sim < tools (docs: architecture.md, "Rules of the
-house"). Inside firmware: protocol < wire < app (app and baremetal are programs: nothing outside
-them includes or links them). tests/ may use anything. algo/ includes only algo/, Eigen and the
+Layers, low to high: algo < hal < firmware < host_sim < tools (docs: README.md, section "Layout",
+its "Layers:" paragraph). Inside firmware: protocol < wire < app (app and baremetal are programs:
+nothing outside them includes or links them). tests/ may use anything. algo/ includes only algo/, Eigen and the
 C++ standard library.
 
 usage: check_include_layers.py SOURCE_DIR      check the tree, print every violation, exit 1 if any

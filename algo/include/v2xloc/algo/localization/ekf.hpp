@@ -196,9 +196,6 @@ class Ekf {
   const EkfCovariance& covariance() const { return P_; }
   const EkfCounters& counters() const { return counters_; }
   const EkfParams& params() const { return params_; }
-  // Last normalised innovation squared per source (for logs / consistency tests).
-  double last_gnss_nis() const { return last_gnss_nis_; }
-  double last_registration_nis() const { return last_registration_nis_; }
 
  private:
   struct Event {
@@ -220,7 +217,7 @@ class Ekf {
   template <int M>
   EkfFuseStatus fuse(const Eigen::Matrix<double, M, 1>& innovation,
                      const Eigen::Matrix<double, M, kEkfStateSize>& H,
-                     const Eigen::Matrix<double, M, M>& R, double nis_threshold, double* nis_out);
+                     const Eigen::Matrix<double, M, M>& R, double nis_threshold);
   void take_snapshot(std::size_t log_pos);
   void drop_oldest_snapshot();
   bool make_room_in_log();
@@ -231,8 +228,6 @@ class Ekf {
   EkfVector x_ = EkfVector::Zero();
   EkfCovariance P_ = EkfCovariance::Zero();
   EkfCounters counters_;
-  double last_gnss_nis_ = 0.0;
-  double last_registration_nis_ = 0.0;
   bool replaying_ = false;
 
   Event log_[config::kEkfEventLogCapacity];

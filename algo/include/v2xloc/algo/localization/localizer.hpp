@@ -56,9 +56,6 @@ class Localizer {
 
   const LocalizerParams& params() const { return params_; }
   const Ekf& ekf() const { return filter_.ekf(); }
-  // A second filter fed with every successful registration (no validity gate), for the paper's
-  // "Fused" column; it never steers the registration. Runs only with shadow_ungated_filter.
-  const Ekf& ekf_ungated() const { return filter_.shadow(); }
   const MapFusion& map() const { return map_.fusion(); }
   const LocalizerCounters& counters() const { return counters_; }
   std::span<const Vec3f> map_points() const { return map_.points(); }

@@ -147,21 +147,19 @@ struct LocalizerParams {
   static IcpParams default_icp() {
     IcpParams p;
     p.method = IcpMethod::kPointToPlane;
-    p.max_correspondence_distance = 1.0;
-    p.criteria.max_iterations = 20;
-    // Stop once an iteration changes the fitness by < 1e-5 and the RMSE by < 10 um: from the
-    // EKF prediction that takes 4-8 iterations; at 1e-7 nearly every frame ran all 20 (each a
-    // nearest-neighbour pass over the scan) for sub-millimetre changes.
+    p.max_correspondence_distance = 1.0;  // [m] tracking gate around the EKF prediction
+    p.criteria.max_iterations = 20;       // [iterations] cap (one nearest-neighbour pass each)
+    // [-] stop once an iteration changes the fitness by < 1e-5 and the RMSE by < 10 um (TUNING.md)
     p.criteria.relative_fitness = 1e-5;
-    p.criteria.relative_rmse = 1e-5;
+    p.criteria.relative_rmse = 1e-5;      // [m]
     p.kernel.type = RobustKernelType::kTukey;
-    p.kernel.scale = 0.3;
+    p.kernel.scale = 0.3;                 // [m] Tukey scale: residuals beyond it weigh nothing
     return p;
   }
   static RegisterCloudsParams default_global() {
     RegisterCloudsParams p;
     p.mode = RegistrationMode::kGlobal;
-    p.voxel_size = 1.0f;            // the map is sparse far from the sensors: coarse descriptors
+    p.voxel_size = 1.0f;            // [m] the map is sparse far from the sensors: coarse descriptors
     p.mutual_filter = false;        // mutual matching leaves too few pairs on sparse maps
     p.ransac.prior.enabled = true;  // hypotheses must be level and inside the GNSS region
     p.ransac.prior.max_tilt = 0.087;  // [rad] 5 deg
@@ -169,12 +167,10 @@ struct LocalizerParams {
   }
   static ValidityGateParams default_gate() {
     ValidityGateParams p;
-    p.min_fitness = 0.3;
-    // With the tracking ICP's 1 m gate, residuals spread evenly over the gate give an RMSE near
-    // 0.58 m: the scan sits off the map's basin (leaving the mapped area, the fit slides by
-    // 0.1-0.3 m). Over the 12 recordings 311 of 319 tracking registrations that were > 0.1 m
-    // off had RMSE > 0.53 m, 144 of 1983 good ones did (measured with this limit off).
-    p.max_rmse = 0.53;              // [m]
+    p.min_fitness = 0.3;            // [0-1] a registration with a lower ICP fitness is not fused (TUNING.md)
+    // [m] a registration with a higher inlier RMSE is not fused: below the ~0.58 m of residuals
+    // spread evenly over the tracking ICP's 1 m gate, i.e. of a scan off the map's basin (TUNING.md)
+    p.max_rmse = 0.53;
     return p;
   }
   static StereoParams default_stereo() {
@@ -188,24 +184,19 @@ struct LocalizerParams {
   static PoseSearchParams default_search() {
     PoseSearchParams p;
     p.icp.method = IcpMethod::kPointToPlane;
-    p.icp.max_correspondence_distance = 2.0;  // the grid is 2.5 m / 7.5 deg coarse
-    p.icp.criteria.max_iterations = 20;
-    p.icp.criteria.relative_fitness = 1e-3;  // the coarse ICP only picks the basin
+    p.icp.max_correspondence_distance = 2.0;  // [m] coarse ICP gate: about half a grid cell's diagonal
+    p.icp.criteria.max_iterations = 20;      // [iterations]
+    p.icp.criteria.relative_fitness = 1e-3;  // [-] the coarse ICP only picks the basin
     p.icp.criteria.relative_rmse = 1e-3;     // [m]
     p.icp.kernel.type = RobustKernelType::kTukey;
-    p.icp.kernel.scale = 1.0;
-    p.yaw_steps = 24;               // 15 deg; the coarse ICP pulls in +-7.5 deg
-    p.step = 3.0;
+    p.icp.kernel.scale = 1.0;       // [m] Tukey scale of the coarse ICP
+    p.yaw_steps = 24;               // [headings] 15 deg apart; the coarse ICP pulls in +-7.5 deg
+    p.step = 3.0;                   // [m] position grid spacing
     p.radius = 30.0;                // [m] = global_min_region (bounded work: ~8k hypotheses)
-    p.score_points = 96;
-    p.refine_candidates = 5;        // the best distinct hypotheses refined
-    // Half the grid cell's diagonal (step 3 m): with 1 m the true pose's cell, 1.5 m off, scored
-    // 0.1 and was not shortlisted (Sim 0's first frame); the aliases this lets in are removed
-    // by the ray check below.
-    p.score_distance = 2.0;
-    // Poses whose rays cross the map's walls are not candidates (pose_search.hpp): the street's
-    // aliases 21-30 m along it fit the facades as well as the truth but look through them.
-    p.max_conflicts = 0.12;
+    p.score_points = 96;            // [points] scan points scored per hypothesis
+    p.refine_candidates = 5;        // [hypotheses] the best distinct ones refined by ICP
+    p.score_distance = 2.0;         // [m] score hit radius: half the grid cell's diagonal (TUNING.md)
+    p.max_conflicts = 0.12;         // [0-1] ray conflict ratio above which a pose is no candidate (TUNING.md)
     p.fine_icp = default_icp();
     return p;
   }

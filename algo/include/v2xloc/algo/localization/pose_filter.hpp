@@ -45,7 +45,6 @@ class PoseFilter {
 
   bool initialized() const { return ekf_.initialized(); }
   const Ekf& ekf() const { return ekf_; }
-  const Ekf& shadow() const { return shadow_; }
   Pose3d pose() const { return Pose3d(ekf_.state().pose()); }
   Pose3d shadow_pose() const { return Pose3d(shadow_.state().pose()); }
   double sigma_xy() const;  // [m] horizontal 1-sigma of the main filter

@@ -24,36 +24,40 @@ namespace v2xloc {
 inline constexpr std::uint32_t kPoseSearchRefine = 10;  // hypotheses refined by ICP (at most)
 inline constexpr std::uint32_t kPoseSearchMaxConflictRays = 512;
 inline constexpr std::uint32_t kPoseSearchMaxRaySteps = 256;  // per ray (128 m at 0.5 m)
+// [0-1 fitness] refined poses more than this below the best ICP fitness (at the loose ICP gate) are
+// not judged further: inside the margin the loose fitness cannot tell the truth from an alias (both
+// explain the scan at 1 m), so the tight fitness (select_distance) decides.
+inline constexpr double kPoseSearchFitnessMargin = 0.1;
 
 struct PoseSearchParams {
   double radius = 20.0;            // [m] search disc around the GNSS fix
-  double step = 2.5;               // [m] grid spacing
-  std::uint32_t yaw_steps = 48;    // 7.5 deg apart
-  std::uint32_t score_points = 256;
-  double score_distance = 1.0;     // [m]
+  double step = 2.5;               // [m] position grid spacing
+  std::uint32_t yaw_steps = 48;    // [headings] over 360 deg (48: 7.5 deg apart)
+  std::uint32_t score_points = 256;  // [points] scan points scored per hypothesis (at most 512 are used)
+  double score_distance = 1.0;     // [m] a score point within this of the map is a hit
   double min_height = 0.5;         // [m] scan points below this (body frame) are ground: not scored
   double ground_margin = 10.0;     // [m] road height taken from the map within radius + this
-  std::uint32_t max_hypotheses = 40000;  // hard cap (worst-case time)
+  std::uint32_t max_hypotheses = 40000;  // [hypotheses] hard cap (worst-case time)
   IcpParams icp{};                 // coarse refinement of the best hypotheses
-  IcpParams fine_icp{};            // then fine ICP; the winner has the highest fitness at
-  double select_distance = 0.3;    // [m] this threshold among those within 0.1 of the best
+  IcpParams fine_icp{};            // then fine ICP of each coarse result
+  // [m] the winner has the highest fitness at this tight threshold, among the refined poses within
+  // kPoseSearchFitnessMargin of the best (loose) fitness
+  double select_distance = 0.3;
   double distinct_distance = 2.0;  // [m] a runner-up farther than this (or distinct_yaw) is
   double distinct_yaw = 0.17;      // [rad] another basin: its score measures the ambiguity
-  // Negative evidence: the fraction of scan rays that cross a map surface (a map point within
-  // conflict_radius of a sample every conflict_step along the ray, ending conflict_margin before
-  // the return). Fitness counts returns that land on the map; it cannot see a pose whose rays go
-  // through walls (a street's facades repeat along it, the cross street's opening does not).
-  // Refined poses above max_conflicts are not candidates (0: off, nothing computed). Rays:
-  // above-ground points beyond conflict_min_range. Measured on the recordings' start-up
-  // searches: true poses 0.02-0.11 (12 recordings), the street's aliases 21-30 m along it
-  // 0.16-0.36 (Sim 0-2, 2_infra, with this check off).
+  // [0-1] negative evidence: refined poses whose fraction of scan rays crossing a map surface
+  // exceeds this are not candidates (0: off, nothing computed). A ray crosses a surface when a map
+  // point lies within conflict_radius of a sample taken every conflict_step along it, ending
+  // conflict_margin before the return; rays are above-ground points beyond conflict_min_range.
+  // Fitness counts returns that land on the map and cannot see a pose whose rays go through walls
+  // (a street's facades repeat along it, the cross street's opening does not). Measured: TUNING.md.
   double max_conflicts = 0.0;
   Vec3d sensor_in_body{0.0, 0.0, 1.8};   // [m] ray origin (the LiDAR) in the body frame
-  std::uint32_t conflict_rays = 128;     // <= kPoseSearchMaxConflictRays
-  double conflict_step = 0.5;            // [m]
+  std::uint32_t conflict_rays = 128;     // [rays] per pose, <= kPoseSearchMaxConflictRays
+  double conflict_step = 0.5;            // [m] sample spacing along a ray
   double conflict_radius = 0.25;         // [m] ~ map voxel
   double conflict_margin = 1.5;          // [m] the return's own surface and its noise
-  double conflict_min_range = 5.0;       // [m]
+  double conflict_min_range = 5.0;       // [m] shorter returns cast no ray
   // [m] samples start this far from the sensor: the infrastructure sees the ego vehicle, so the
   // map may hold its body (and it is where the vehicle truly is: the truth would pay for it).
   double conflict_start = 3.0;
@@ -93,9 +97,16 @@ struct PoseSearchResult {
 double ray_conflict_ratio(std::span<const Vec3f> scan_body, const IcpTarget& map, const Mat4d& pose,
                           double ground_z, const PoseSearchParams& params, std::uint32_t* samples = nullptr);
 
-// Height of the road surface near `center`: the most populated 0.2 m height bin (within +-40 m
-// of center.z) of the map points within `radius` horizontally. False when fewer than min_points
-// fall in that bin (the map does not reach there); height is then center.z.
+// [m] height bin of road_height: the road height (the hypotheses' z) is a bin centre, within
+// 0.1 m of the road's points, far inside the coarse ICP's gate, which refines it.
+inline constexpr double kRoadHeightBin = 0.2;
+// [m] road_height's histogram spans this above and below the reference height (400 bins):
+// road_height_near centres it on the mean height of the map nearby, so the road lies inside.
+inline constexpr double kRoadHeightHalfWindow = 40.0;
+
+// Height of the road surface near `center`: the most populated kRoadHeightBin height bin (within
+// +-kRoadHeightHalfWindow of center.z) of the map points within `radius` horizontally. False when
+// fewer than min_points fall in that bin (the map does not reach there); height is then center.z.
 bool road_height(std::span<const Vec3f> map, const Vec3d& center, double radius, double& height,
                  std::uint32_t min_points = 1);
 
