@@ -54,7 +54,7 @@ struct LocalizerParams {
   float map_vicinity_cell = 0.5f;
 
   // ---- Odometry ----
-  OdometryParams odometry{};          // KISS-ICP-style LiDAR odometry (odometry.hpp)
+  OdometryParams odometry = default_odometry();  // KISS-ICP-style LiDAR odometry (odometry.hpp)
 
   // ---- Registration to the map ----
   IcpParams icp = default_icp();      // tracking ICP: point-to-plane from the EKF prediction
@@ -144,6 +144,11 @@ struct LocalizerParams {
   // "Fused" column (LocalizerFrameOutput::fused_pose_ungated). The ECU leaves it off.
   bool shadow_ungated_filter = false;
 
+  static OdometryParams default_odometry() {
+    OdometryParams p;
+    p.convergence = 5e-4;  // [m, rad] |d xi| stop; 1e-4 ran ~2 more iterations for nothing (TUNING.md)
+    return p;
+  }
   static IcpParams default_icp() {
     IcpParams p;
     p.method = IcpMethod::kPointToPlane;
