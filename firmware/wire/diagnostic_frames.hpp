@@ -8,7 +8,7 @@
 #include <cstdint>
 
 #include "firmware/protocol/can_messages.hpp"
-#include "v2xloc/algo/localization/localizer.hpp"
+#include "v2xloc/algo/localization/localizer_types.hpp"
 
 namespace v2xloc::firmware {
 
