@@ -78,8 +78,8 @@ void make_scene() {
 // Reference map from two "infrastructure" clouds, then the merged map on the voxel grid.
 std::uint32_t fuse_map(std::span<const v2xloc::Vec3f> target, std::span<const v2xloc::Vec3f> source,
                        const v2xloc::Mat4d& target_T_source) {
-  const v2xloc::MapInsertResult a = g_map.insert(1, 0.0, v2xloc::Mat4d::Identity(), target, true);
-  const v2xloc::MapInsertResult b = g_map.insert(2, 0.05, target_T_source, source);
+  const v2xloc::MapInsertResult a = g_map.insert(1, 0.0, v2xloc::Pose3d::Identity(), target, true);
+  const v2xloc::MapInsertResult b = g_map.insert(2, 0.05, v2xloc::Pose3d(target_T_source), source);
   g_map.expire(0.1);
   const v2xloc::MapExtractResult merged = g_map.extract(g_map_points);
   return static_cast<std::uint32_t>(a.status) | (static_cast<std::uint32_t>(b.status) << 4) |
@@ -172,7 +172,7 @@ v2xloc::EkfState run_ekf(const v2xloc::Vec3d& gnss_enu, const v2xloc::OdometryRe
   std::uint32_t status = static_cast<std::uint32_t>(g_ekf.on_vehicle_signals(0.05, 5.0, 0.01));
   status |= static_cast<std::uint32_t>(g_ekf.predict_to(0.1)) << 4;
   status |= static_cast<std::uint32_t>(g_ekf.on_gnss(0.1, gnss_enu, 2.0, 4.0)) << 8;
-  status |= static_cast<std::uint32_t>(g_ekf.on_odometry(0.1, 0.1, odometry.delta)) << 12;
+  status |= static_cast<std::uint32_t>(g_ekf.on_odometry(0.1, 0.1, odometry.delta.matrix())) << 12;
   const Eigen::Matrix<double, 4, 4> cov = v2xloc::registration_covariance(
       registration.information, registration.inlier_rmse, registration.transform);
   status |= static_cast<std::uint32_t>(g_ekf.on_registration(0.1, registration.transform, cov)) << 16;
@@ -191,7 +191,7 @@ std::uint32_t run_backfill(const v2xloc::Mat4d& filter_pose, const v2xloc::Odome
   sample.odometry_ok = true;
   g_backfill.push(sample);  // frame 0: unanchored, at the identity
   sample.frame = 1;
-  sample.odom_T_body = odometry.pose;
+  sample.odom_T_body = odometry.pose.matrix();
   sample.world_T_body = filter_pose;
   sample.anchored = true;
   std::uint32_t revised = g_backfill.push(sample);
@@ -239,7 +239,7 @@ int main() {
   const std::uint32_t stereo_points = run_stereo();
   const v2xloc::EkfState state = run_ekf(gnss_enu, odometry, fine.registration);
   const std::uint32_t revised = run_backfill(state.pose(), odometry, target);
-  g_sink = state.pos_x + state.yaw + geodesy_error + odometry.pose(0, 3) +
+  g_sink = state.pos_x + state.yaw + geodesy_error + odometry.pose.matrix()(0, 3) +
            static_cast<double>(map_status ^ gate_valid ^ stereo_points ^ revised);
   for (;;) {
   }

@@ -48,7 +48,7 @@ bool run_kitti(const KittiRunOptions& options, KittiRunResult& result, std::stri
     const OdometryResult r = odom.register_frame(cloud.points);
     result.odometry_ms += static_cast<double>(thread_cpu_ns() - c0) * 1e-6;
     result.status.push_back(r.status);
-    result.poses.push_back(velo_pose_to_cam(r.pose, result.sequence.velo_to_cam));
+    result.poses.push_back(velo_pose_to_cam(r.pose.matrix(), result.sequence.velo_to_cam));
   }
   if (!result.sequence.poses.empty())
     result.metrics = kitti_odometry_metrics(result.sequence.poses, result.poses);

@@ -91,7 +91,7 @@ const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
 // actual frame gap (a dropped scan doubles it); its relative motion feeds the filter.
 void Localizer::run_odometry(const EgoScanInput& in) {
   const Mat4d& body_T_lidar = in.body_T_lidar.matrix();
-  Mat4d predicted = Mat4d::Identity();
+  Pose3d predicted = Pose3d::Identity();
   const bool predict = scan_.has_vehicle_motion() && have_frame_ &&
                        in.t - last_frame_t_ < params_.odometry_prediction_max_gap;
   if (predict) {
@@ -99,17 +99,17 @@ void Localizer::run_odometry(const EgoScanInput& in) {
     Vec6d xi = Vec6d::Zero();
     xi(0) = vehicle_.speed * dt;
     xi(5) = vehicle_.yaw_rate * dt;
-    predicted = se3_inverse(body_T_lidar) * se3_exp(xi) * body_T_lidar;
+    predicted.matrix() = se3_inverse(body_T_lidar) * se3_exp(xi) * body_T_lidar;
   }
   const OdometryResult r = odometry_.register_voxelized_frame(scan_.deskewed(), predict ? &predicted : nullptr);
   const bool ok = r.status == OdometryStatus::kOk || r.status == OdometryStatus::kFirstFrame;
   if (!ok) ++counters_.odometry_failures;
   const Mat4d lidar_T_body = se3_inverse(body_T_lidar);
   output_.odometry_ok = ok;
-  output_.odometry_pose = Pose3d(r.pose * lidar_T_body);
+  output_.odometry_pose = Pose3d(r.pose.matrix() * lidar_T_body);
   odom_T_body_ = output_.odometry_pose;
   if (r.status != OdometryStatus::kOk || !have_frame_) return;
-  filter_.on_odometry(in.t, in.t - last_frame_t_, body_T_lidar * r.delta * lidar_T_body);
+  filter_.on_odometry(in.t, in.t - last_frame_t_, body_T_lidar * r.delta.matrix() * lidar_T_body);
 }
 
 // Tracking from the filter's prediction while it is tight, else the start-up search; then the

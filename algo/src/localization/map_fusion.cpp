@@ -245,8 +245,9 @@ std::uint32_t MapFusion::store_candidate(std::size_t slot, MapInsertResult& r) {
 }
 
 MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
-                                  const Mat4d& world_T_sensor, std::span<const Vec3f> points,
+                                  const Pose3d& world_T_sensor_pose, std::span<const Vec3f> points,
                                   bool trusted) {
+  const Mat4d& world_T_sensor = world_T_sensor_pose.matrix();
   MapInsertResult r;
   r.input_points = static_cast<std::uint32_t>(points.size());
   if (!std::isfinite(timestamp) || !world_T_sensor.allFinite()) return r;
@@ -284,7 +285,7 @@ MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
   MapSourceInfo& info = sources_[slot];
   info.id = source_id;
   info.timestamp = timestamp;
-  info.world_T_sensor = world_T_sensor;
+  info.world_T_sensor = world_T_sensor_pose;
   info.points = stored;
   info.active = true;
   info.trusted = trusted;

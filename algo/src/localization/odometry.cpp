@@ -31,9 +31,9 @@ void LidarOdometry::configure(const OdometryParams& params) {
   reset();
 }
 
-void LidarOdometry::reset(const Mat4d& initial) {
+void LidarOdometry::reset(const Pose3d& initial) {
   for (std::size_t i = 0; i < num_voxels_; ++i) slots_[voxels_[active_][i].slot] = 0;
-  pose_ = initial;
+  pose_ = initial.matrix();
   delta_ = Mat4d::Identity();
   last_deviation_ = Mat4d::Identity();
   first_frame_ = true;
@@ -147,7 +147,7 @@ void LidarOdometry::keep_in_range(std::span<const Vec3f> points, BoundedVector<V
   }
 }
 
-OdometryResult LidarOdometry::register_frame(std::span<const Vec3f> scan, const Mat4d* predicted_delta) {
+OdometryResult LidarOdometry::register_frame(std::span<const Vec3f> scan, const Pose3d* predicted_delta) {
   OdometryResult r;
   // Range filter (also drops NaN / Inf).
   keep_in_range(scan, in_range_, r);
@@ -156,13 +156,13 @@ OdometryResult LidarOdometry::register_frame(std::span<const Vec3f> scan, const 
   const VoxelDownsampleResult fine = downsample_.run(
       in_range_.span(), static_cast<float>(0.5 * params_.voxel_size), frame_fine_);
   r.points_dropped_capacity += fine.output_overflow + fine.hash_overflow + fine.range_overflow;
-  return register_fine(predicted_delta, r);
+  return register_fine(predicted_delta != nullptr ? &predicted_delta->matrix() : nullptr, r);
 }
 
-OdometryResult LidarOdometry::register_voxelized_frame(std::span<const Vec3f> fine, const Mat4d* predicted_delta) {
+OdometryResult LidarOdometry::register_voxelized_frame(std::span<const Vec3f> fine, const Pose3d* predicted_delta) {
   OdometryResult r;
   keep_in_range(fine, frame_fine_, r);
-  return register_fine(predicted_delta, r);
+  return register_fine(predicted_delta != nullptr ? &predicted_delta->matrix() : nullptr, r);
 }
 
 OdometryResult LidarOdometry::register_fine(const Mat4d* predicted_delta, OdometryResult& r) {
@@ -193,8 +193,8 @@ OdometryResult LidarOdometry::register_fine(const Mat4d* predicted_delta, Odomet
 }
 
 OdometryResult LidarOdometry::finish_frame(OdometryResult& r) const {
-  r.pose = pose_;
-  r.delta = delta_;
+  r.pose = Pose3d(pose_);
+  r.delta = Pose3d(delta_);
   r.map_points = static_cast<std::uint32_t>(map_points_);
   r.map_voxels = static_cast<std::uint32_t>(num_voxels_);
   return r;

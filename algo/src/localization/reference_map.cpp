@@ -19,7 +19,7 @@ void ReferenceMap::configure(const LocalizerParams& params) {
 }
 
 MapInsertResult ReferenceMap::insert(const MapCloudInput& in) {
-  return fusion_.insert(in.source_id, in.t, in.world_T_sensor.matrix(), in.points, !in.is_agent);
+  return fusion_.insert(in.source_id, in.t, in.world_T_sensor, in.points, !in.is_agent);
 }
 
 IcpTarget ReferenceMap::target() {

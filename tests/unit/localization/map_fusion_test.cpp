@@ -51,21 +51,21 @@ TEST(MapFusion, ReplacementStaleAndAgeing) {
   MapFusion& map = fresh_map(params);
   const auto scene = corner_scene();
   const Mat4d pose_a = sensor_pose(12.0, 12.0, 2.0);
-  auto r = map.insert(7, 10.0, pose_a, in_sensor_frame(scene, pose_a), true);
+  auto r = map.insert(7, 10.0, Pose3d(pose_a), in_sensor_frame(scene, pose_a), true);
   ASSERT_EQ(r.status, MapInsertStatus::kInserted);
   const std::size_t n1 = map.point_count();
   EXPECT_GT(n1, 1000u);
   EXPECT_EQ(n1, r.stored_points);
   // The same source re-scans: replaced, not accumulated.
-  r = map.insert(7, 10.1, pose_a, in_sensor_frame(scene, pose_a), true);
+  r = map.insert(7, 10.1, Pose3d(pose_a), in_sensor_frame(scene, pose_a), true);
   EXPECT_EQ(r.status, MapInsertStatus::kReplaced);
   EXPECT_EQ(map.point_count(), n1);
   // Reordered (older) message: stale.
-  r = map.insert(7, 10.05, pose_a, in_sensor_frame(scene, pose_a), true);
+  r = map.insert(7, 10.05, Pose3d(pose_a), in_sensor_frame(scene, pose_a), true);
   EXPECT_EQ(r.status, MapInsertStatus::kStale);
   // A second (surveyed) source: points add up; consistent overlap accepted (shift probes agree).
   const Mat4d pose_b = sensor_pose(-5.0, 15.0, -0.7);
-  r = map.insert(8, 10.5, pose_b, in_sensor_frame(scene, pose_b), true);
+  r = map.insert(8, 10.5, Pose3d(pose_b), in_sensor_frame(scene, pose_b), true);
   EXPECT_EQ(r.status, MapInsertStatus::kInserted);
   EXPECT_GT(r.consistency_fitness, 0.95);
   EXPECT_GT(r.overlap_points, 1000u);
@@ -99,10 +99,10 @@ TEST(MapFusion, AgentPointsOnlyWhereTheInfrastructureDoesNotSee) {
     MapFusionParams params;
     params.agent_fill_cell = cell;
     MapFusion& map = fresh_map(params);
-    ASSERT_EQ(map.insert(1, 1.0, infra, in_sensor_frame(near_half, infra), true).status,
+    ASSERT_EQ(map.insert(1, 1.0, Pose3d(infra), in_sensor_frame(near_half, infra), true).status,
               MapInsertStatus::kInserted);
     const std::size_t infra_points = map.point_count();
-    const MapInsertResult r = map.insert(2, 1.0, agent, in_sensor_frame(scene, agent), false);
+    const MapInsertResult r = map.insert(2, 1.0, Pose3d(agent), in_sensor_frame(scene, agent), false);
     ASSERT_EQ(r.status, MapInsertStatus::kInserted);
     EXPECT_EQ(map.point_count(), infra_points + r.stored_points);
     EXPECT_EQ(map.counters().agent_points_covered, r.covered_dropped);
@@ -116,7 +116,7 @@ TEST(MapFusion, AgentPointsOnlyWhereTheInfrastructureDoesNotSee) {
       EXPECT_LT(r.stored_points, agent_all / 2);
       EXPECT_GT(r.stored_points, agent_all / 5);
       // A trusted source is never thinned by the agent's presence.
-      EXPECT_EQ(map.insert(1, 2.0, infra, in_sensor_frame(near_half, infra), true).covered_dropped, 0u);
+      EXPECT_EQ(map.insert(1, 2.0, Pose3d(infra), in_sensor_frame(near_half, infra), true).covered_dropped, 0u);
     }
   }
 }
@@ -125,7 +125,7 @@ TEST(MapFusion, InconsistentSourceRejected) {
   MapFusion& map = fresh_map();
   const auto scene = corner_scene();
   const Mat4d pose_a = sensor_pose(12.0, 12.0, 2.0);
-  ASSERT_EQ(map.insert(1, 0.0, pose_a, in_sensor_frame(scene, pose_a), true).status,
+  ASSERT_EQ(map.insert(1, 0.0, Pose3d(pose_a), in_sensor_frame(scene, pose_a), true).status,
             MapInsertStatus::kInserted);
   // Agent claims a pose 1.5 m / 0.5 m up / 5 deg off its true one: its cloud lands beside the map.
   const Mat4d true_pose = sensor_pose(3.0, 20.0, -1.0);
@@ -133,7 +133,7 @@ TEST(MapFusion, InconsistentSourceRejected) {
   claimed(0, 3) += 1.5;
   claimed(2, 3) += 0.5;
   claimed.topLeftCorner<3, 3>() = rot_z(-1.0 + 0.087);
-  const auto r = map.insert(2, 0.1, claimed, in_sensor_frame(scene, true_pose));
+  const auto r = map.insert(2, 0.1, Pose3d(claimed), in_sensor_frame(scene, true_pose));
   std::printf("inconsistent source: fitness %.3f over %u overlap points\n", r.consistency_fitness,
               r.overlap_points);
   EXPECT_EQ(r.status, MapInsertStatus::kRejectedInconsistent);
@@ -152,7 +152,7 @@ TEST(MapFusion, CapacityAndSourceSlotOverflowCounted) {
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j) big.emplace_back(0.2f * i + 0.1f, 0.2f * j + 0.1f, 0.0f);
   big.emplace_back(NAN, 0.0f, 0.0f);
-  const auto r = map.insert(1, 0.0, Mat4d::Identity(), big);
+  const auto r = map.insert(1, 0.0, Pose3d(Mat4d::Identity()), big);
   EXPECT_EQ(r.non_finite_dropped, 1u);
   EXPECT_EQ(map.point_count(), config::kMaxMapPoints);
   EXPECT_EQ(r.stored_points + r.capacity_dropped, static_cast<std::uint32_t>(n * n));
@@ -163,11 +163,11 @@ TEST(MapFusion, CapacityAndSourceSlotOverflowCounted) {
   std::vector<Vec3f> small = {Vec3f(0, 0, 0), Vec3f(1, 0, 0)};
   const std::uint32_t half = config::kMaxMapSources / 2;
   for (std::uint32_t s = 0; s < half; ++s)
-    EXPECT_EQ(map.insert(1 + s, 0.5, Mat4d::Identity(), small, true).status, MapInsertStatus::kInserted);
+    EXPECT_EQ(map.insert(1 + s, 0.5, Pose3d(Mat4d::Identity()), small, true).status, MapInsertStatus::kInserted);
   for (std::uint32_t s = 0; s < half; ++s)
-    EXPECT_EQ(map.insert(100 + s, 1.0 + s, Mat4d::Identity(), small).status, MapInsertStatus::kInserted);
-  EXPECT_EQ(map.insert(999, 0.7, Mat4d::Identity(), small).status, MapInsertStatus::kNoSourceSlot);
-  EXPECT_EQ(map.insert(1000, 50.0, Mat4d::Identity(), small).status, MapInsertStatus::kInserted);
+    EXPECT_EQ(map.insert(100 + s, 1.0 + s, Pose3d(Mat4d::Identity()), small).status, MapInsertStatus::kInserted);
+  EXPECT_EQ(map.insert(999, 0.7, Pose3d(Mat4d::Identity()), small).status, MapInsertStatus::kNoSourceSlot);
+  EXPECT_EQ(map.insert(1000, 50.0, Pose3d(Mat4d::Identity()), small).status, MapInsertStatus::kInserted);
   EXPECT_EQ(map.counters().sources_evicted_slot, 1u);
   EXPECT_EQ(map.counters().no_source_slot, 1u);
   bool oldest_agent_present = false;
@@ -179,7 +179,7 @@ TEST(MapFusion, CapacityAndSourceSlotOverflowCounted) {
   EXPECT_FALSE(oldest_agent_present);
   EXPECT_EQ(infra_present, half);
   // Invented agent ids, all newer than the infrastructure: they only churn the agent slots.
-  for (std::uint32_t s = 0; s < 16; ++s) map.insert(5000 + s, 100.0 + s, Mat4d::Identity(), small);
+  for (std::uint32_t s = 0; s < 16; ++s) map.insert(5000 + s, 100.0 + s, Pose3d(Mat4d::Identity()), small);
   infra_present = 0;
   for (const MapSourceInfo& s : map.sources()) infra_present += (s.active && s.trusted) ? 1u : 0u;
   EXPECT_EQ(infra_present, half);
@@ -194,10 +194,10 @@ TEST(MapFusion, ShiftedAgentRejectedAndUncheckableAgentHeldBack) {
   const Mat4d agent = sensor_pose(-5.0, 15.0, -0.7);
   for (const double shift : {0.0, 0.25, 3.0, 200.0}) {
     MapFusion& map = fresh_map();
-    ASSERT_EQ(map.insert(1, 1.0, infra, in_sensor_frame(scene, infra), true).status, MapInsertStatus::kInserted);
+    ASSERT_EQ(map.insert(1, 1.0, Pose3d(infra), in_sensor_frame(scene, infra), true).status, MapInsertStatus::kInserted);
     Mat4d claimed = agent;
     claimed(0, 3) += shift;
-    const MapInsertResult r = map.insert(40, 1.0, claimed, in_sensor_frame(scene, agent));
+    const MapInsertResult r = map.insert(40, 1.0, Pose3d(claimed), in_sensor_frame(scene, agent));
     std::printf("agent shifted %.2f m: fitness %.3f, best probe %.3f, overlap %u -> status %d\n", shift,
                 r.consistency_fitness, r.best_probe_fitness, r.overlap_points, static_cast<int>(r.status));
     if (shift == 0.0) {
@@ -211,7 +211,7 @@ TEST(MapFusion, ShiftedAgentRejectedAndUncheckableAgentHeldBack) {
   }
   // Without any infrastructure in the map an agent cannot be checked: held back.
   MapFusion& map = fresh_map();
-  EXPECT_EQ(map.insert(40, 1.0, agent, in_sensor_frame(scene, agent)).status, MapInsertStatus::kHeldBack);
+  EXPECT_EQ(map.insert(40, 1.0, Pose3d(agent), in_sensor_frame(scene, agent)).status, MapInsertStatus::kHeldBack);
 }
 
 // The check scores an even subsample of a large cloud: the same verdicts as scoring every point,
@@ -226,10 +226,10 @@ TEST(MapFusion, SampledConsistencyKeepsTheVerdicts) {
       MapFusionParams p;
       p.max_consistency_points = cap;
       MapFusion& map = fresh_map(p);
-      ASSERT_EQ(map.insert(1, 1.0, infra, in_sensor_frame(scene, infra), true).status, MapInsertStatus::kInserted);
+      ASSERT_EQ(map.insert(1, 1.0, Pose3d(infra), in_sensor_frame(scene, infra), true).status, MapInsertStatus::kInserted);
       Mat4d claimed = agent;
       claimed(0, 3) += shift;
-      (cap == 0 ? full : sampled) = map.insert(40, 1.0, claimed, in_sensor_frame(scene, agent));
+      (cap == 0 ? full : sampled) = map.insert(40, 1.0, Pose3d(claimed), in_sensor_frame(scene, agent));
     }
     ASSERT_GT(full.overlap_points, 1000u);  // the subsample really is one (stride > 3)
     EXPECT_EQ(sampled.status, full.status) << "shift " << shift;

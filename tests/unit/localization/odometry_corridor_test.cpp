@@ -89,18 +89,18 @@ TEST(LidarOdometry, SyntheticCorridorDriftIsSmall) {
     } else {
       ASSERT_EQ(r.status, OdometryStatus::kOk) << "frame " << k;
       const Mat4d rel_truth = se3_inverse(prev_truth) * truth;
-      const Mat4d rel_est = se3_inverse(prev_est) * r.pose;
+      const Mat4d rel_est = se3_inverse(prev_est) * r.pose.matrix();
       const double e = (rel_truth.topRightCorner<3, 1>() - rel_est.topRightCorner<3, 1>()).norm();
       max_step_err = std::max(max_step_err, e);
     }
     prev_truth = truth;
-    prev_est = r.pose;
+    prev_est = r.pose.matrix();
   }
   // Odometry frame = first sensor pose; compare in that frame.
   const Mat4d truth_rel = se3_inverse(first_truth) * prev_truth;
-  const double drift = (truth_rel.topRightCorner<3, 1>() - r.pose.topRightCorner<3, 1>()).norm();
+  const double drift = (truth_rel.topRightCorner<3, 1>() - r.pose.matrix().topRightCorner<3, 1>()).norm();
   const double yaw_err = std::abs(det::wrap_pi(yaw_of(truth_rel.topLeftCorner<3, 3>()) -
-                                               yaw_of(r.pose.topLeftCorner<3, 3>())));
+                                               yaw_of(r.pose.matrix().topLeftCorner<3, 3>())));
   std::printf("odometry: %d frames, %.1f m, drift %.4f m (%.3f %%), yaw err %.5f rad, max step "
               "err %.4f m, %.1f ms/frame, map %u pts / %u voxels, sigma %.3f m, %u iters\n",
               kFrames, x, drift, 100.0 * drift / x, yaw_err, max_step_err, total_ms / kFrames,

@@ -22,7 +22,7 @@ TEST(LidarOdometry, EmptyAndNonFiniteScansAreHandled) {
   const OdometryResult r = odom.register_frame(scan);
   EXPECT_EQ(r.status, OdometryStatus::kEmptyScan);
   EXPECT_EQ(r.points_dropped_range, 10u);
-  EXPECT_TRUE(r.pose.allFinite());
+  EXPECT_TRUE(r.pose.matrix().allFinite());
 }
 
 TEST(LidarOdometry, MapEvictsVoxelsBeyondRange) {
@@ -40,7 +40,7 @@ TEST(LidarOdometry, MapEvictsVoxelsBeyondRange) {
   // Restart 100 m away: the first frame's voxels are all beyond max_range and must go.
   Mat4d far = Mat4d::Identity();
   far(0, 3) = 100.0;
-  odom.reset(far);
+  odom.reset(Pose3d(far));
   odom.register_frame(scan);
   EXPECT_GT(before, 0u);
   for (const Vec3f& m : odom.map_points()) EXPECT_GT(m.x(), 80.0f);

@@ -419,17 +419,18 @@ TEST(OdometryRobustness, GivenPredictionIsUsedAndNonFiniteOneIgnored) {
     scan1.push_back(s.cast<float>());
   }
   EXPECT_EQ(odom.register_frame(scan0).status, OdometryStatus::kFirstFrame);
-  const OdometryResult r = odom.register_frame(scan1, &motion);
+  const Pose3d given(motion);
+  const OdometryResult r = odom.register_frame(scan1, &given);
   ASSERT_EQ(r.status, OdometryStatus::kOk);
-  const Mat4d e = se3_inverse(motion) * r.delta;
+  const Mat4d e = se3_inverse(motion) * r.delta.matrix();
   const Vec3d e_t = e.topRightCorner<3, 1>();
   EXPECT_LT(e_t.norm(), 0.05);
   EXPECT_LT(std::abs(yaw_of(e.topLeftCorner<3, 3>())), 0.005);
 
-  Mat4d bad = motion;
+  Pose3d bad(motion);
   bad(0, 3) = std::nan("");
   const OdometryResult r2 = odom.register_frame(scan1, &bad);  // falls back to constant velocity
-  EXPECT_TRUE(r2.pose.allFinite());
+  EXPECT_TRUE(r2.pose.matrix().allFinite());
   EXPECT_NE(r2.status, OdometryStatus::kEmptyScan);
 }
 

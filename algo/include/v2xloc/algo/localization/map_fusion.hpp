@@ -24,6 +24,7 @@
 #include "v2xloc/algo/core/bounded_vector.hpp"
 #include "v2xloc/algo/core/config.hpp"
 #include "v2xloc/algo/core/types.hpp"
+#include "v2xloc/algo/localization/pose_types.hpp"
 #include "v2xloc/algo/registration/voxel_downsample.hpp"
 
 namespace v2xloc {
@@ -94,7 +95,7 @@ struct MapInsertResult {
 struct MapSourceInfo {
   std::uint32_t id = 0;
   double timestamp = 0.0;               // [s] of the stored cloud
-  Mat4d world_T_sensor = Mat4d::Identity();
+  Pose3d world_T_sensor = Pose3d::Identity();
   std::uint32_t points = 0;
   bool active = false;
   bool trusted = false;                 // surveyed infrastructure
@@ -136,7 +137,7 @@ class MapFusion {
   // different faces of the same buildings, so their mutual overlap score is low (0.2-0.4
   // measured for exact poses) and would reject good clouds; the check is for self-localized
   // agents.
-  MapInsertResult insert(std::uint32_t source_id, double timestamp, const Mat4d& world_T_sensor,
+  MapInsertResult insert(std::uint32_t source_id, double timestamp, const Pose3d& world_T_sensor,
                          std::span<const Vec3f> points, bool trusted = false);
   // Evicts sources with now - timestamp > max_age; returns how many.
   std::uint32_t expire(double now);

@@ -29,6 +29,7 @@
 #include "v2xloc/algo/search/kdtree.hpp"
 #include "v2xloc/algo/core/config.hpp"
 #include "v2xloc/algo/core/types.hpp"
+#include "v2xloc/algo/localization/pose_types.hpp"
 #include "v2xloc/algo/registration/voxel_downsample.hpp"
 
 namespace v2xloc {
@@ -58,8 +59,8 @@ enum class OdometryStatus : std::uint8_t {
 
 struct OdometryResult {
   OdometryStatus status = OdometryStatus::kEmptyScan;
-  Mat4d pose = Mat4d::Identity();     // world(odom)_T_sensor after this frame
-  Mat4d delta = Mat4d::Identity();    // T_{k-1}^-1 T_k
+  Pose3d pose = Pose3d::Identity();   // world(odom)_T_sensor after this frame
+  Pose3d delta = Pose3d::Identity();  // T_{k-1}^-1 T_k
   double threshold = 0.0;             // tau [m] used this frame
   double sigma = 0.0;                 // adaptive sigma [m]
   double rmse = 0.0;                  // [m] over correspondences of the final iteration
@@ -82,17 +83,18 @@ class LidarOdometry {
   // New parameters (clamped) and reset(): the object is not assignable (it lives in static storage).
   void configure(const OdometryParams& params);
   // Clears the map; the next frame starts at `initial` (world_T_sensor).
-  void reset(const Mat4d& initial = Mat4d::Identity());
+  void reset(const Pose3d& initial = Pose3d::Identity());
   // One deskewed scan in the sensor frame. predicted_delta (optional): the sensor's motion since
   // the last frame from other sensors (wheel speed + gyro); replaces the constant-velocity
   // prediction, which lags a whole frame at a turn's onset.
-  OdometryResult register_frame(std::span<const Vec3f> scan, const Mat4d* predicted_delta = nullptr);
+  OdometryResult register_frame(std::span<const Vec3f> scan, const Pose3d* predicted_delta = nullptr);
   // The same for a scan already voxelised at 0.5 v in the sensor frame (the localizer's ingest
   // does it once for odometry and registration): skips the range filter's copy and the fine pass.
-  OdometryResult register_voxelized_frame(std::span<const Vec3f> fine, const Mat4d* predicted_delta = nullptr);
+  OdometryResult register_voxelized_frame(std::span<const Vec3f> fine, const Pose3d* predicted_delta = nullptr);
 
-  const Mat4d& pose() const { return pose_; }
-  const Mat4d& last_delta() const { return delta_; }
+  // The arithmetic stays on the 4x4 (pose_types.hpp); these label the same 16 doubles.
+  Pose3d pose() const { return Pose3d(pose_); }
+  Pose3d last_delta() const { return Pose3d(delta_); }
   std::span<const Vec3f> map_points() const { return {map_[active_], map_points_}; }
   std::size_t map_voxel_count() const { return num_voxels_; }
   const OdometryParams& params() const { return params_; }
