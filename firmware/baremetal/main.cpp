@@ -172,10 +172,11 @@ v2xloc::EkfState run_ekf(const v2xloc::Vec3d& gnss_enu, const v2xloc::OdometryRe
   std::uint32_t status = static_cast<std::uint32_t>(g_ekf.on_vehicle_signals(0.05, 5.0, 0.01));
   status |= static_cast<std::uint32_t>(g_ekf.predict_to(0.1)) << 4;
   status |= static_cast<std::uint32_t>(g_ekf.on_gnss(0.1, gnss_enu, 2.0, 4.0)) << 8;
-  status |= static_cast<std::uint32_t>(g_ekf.on_odometry(0.1, 0.1, odometry.delta.matrix())) << 12;
-  const Eigen::Matrix<double, 4, 4> cov = v2xloc::registration_covariance(
-      registration.information, registration.inlier_rmse, registration.transform);
-  status |= static_cast<std::uint32_t>(g_ekf.on_registration(0.1, registration.transform, cov)) << 16;
+  status |= static_cast<std::uint32_t>(g_ekf.on_odometry(0.1, 0.1, odometry.delta)) << 12;
+  const v2xloc::Pose3d world_T_body(registration.transform);
+  const v2xloc::PoseCovariance cov = v2xloc::registration_covariance(
+      registration.information, registration.inlier_rmse, world_T_body);
+  status |= static_cast<std::uint32_t>(g_ekf.on_registration(0.1, world_T_body, cov)) << 16;
   // A late wheel-speed sample: rolls back to the snapshot and replays.
   status |= static_cast<std::uint32_t>(g_ekf.on_vehicle_signals(0.08, 5.1, 0.01)) << 20;
   g_localization_status = status;
@@ -238,7 +239,7 @@ int main() {
   const v2xloc::Vec3d gnss_enu = gnss_fix_enu(geodesy_error);
   const std::uint32_t stereo_points = run_stereo();
   const v2xloc::EkfState state = run_ekf(gnss_enu, odometry, fine.registration);
-  const std::uint32_t revised = run_backfill(state.pose(), odometry, target);
+  const std::uint32_t revised = run_backfill(state.pose().matrix(), odometry, target);
   g_sink = state.pos_x + state.yaw + geodesy_error + odometry.pose.matrix()(0, 3) +
            static_cast<double>(map_status ^ gate_valid ^ stereo_points ^ revised);
   for (;;) {

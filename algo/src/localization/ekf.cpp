@@ -29,15 +29,16 @@ EkfState EkfState::from_vector(const EkfVector& x) {
   return s;
 }
 
-Mat4d EkfState::pose() const {
+Pose3d EkfState::pose() const {
   Mat4d T = Mat4d::Identity();
   T.topLeftCorner<3, 3>() = rot_z(yaw);
   T.topRightCorner<3, 1>() = position();
-  return T;
+  return Pose3d(T);
 }
 
-Mat4x4 registration_covariance(const Mat6d& information, double inlier_rmse, const Mat4d& pose,
-                               const RegistrationCovarianceParams& params) {
+PoseCovariance registration_covariance(const Mat6d& information, double inlier_rmse,
+                                      const Pose3d& world_T_body, const RegistrationCovarianceParams& params) {
+  const Mat4d& pose = world_T_body.matrix();
   Mat4x4 cov = Mat4x4::Zero();
   const double huge = 1e6;  // "no information": the NIS gate or the filter will ignore it
   bool ok = information.allFinite() && std::isfinite(inlier_rmse);
@@ -125,7 +126,8 @@ EkfFuseStatus Ekf::on_gnss(double t, const Vec3d& enu, double sigma_horizontal,
   return submit(e);
 }
 
-EkfFuseStatus Ekf::on_registration(double t, const Mat4d& pose, const Mat4x4& covariance) {
+EkfFuseStatus Ekf::on_registration(double t, const Pose3d& world_T_body, const PoseCovariance& covariance) {
+  const Mat4d& pose = world_T_body.matrix();
   Event e;
   e.t = t;
   e.type = EkfEventType::kRegistration;
@@ -138,7 +140,8 @@ EkfFuseStatus Ekf::on_registration(double t, const Mat4d& pose, const Mat4x4& co
   return submit(e);
 }
 
-EkfFuseStatus Ekf::on_odometry(double t, double dt, const Mat4d& relative_pose) {
+EkfFuseStatus Ekf::on_odometry(double t, double dt, const Pose3d& prev_T_curr) {
+  const Mat4d& relative_pose = prev_T_curr.matrix();
   if (!(dt > 0.0)) {
     ++counters_.invalid_inputs;
     return EkfFuseStatus::kInvalidInput;

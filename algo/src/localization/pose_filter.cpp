@@ -58,8 +58,9 @@ GnssFusion PoseFilter::on_gnss(double t, const Vec3d& enu, double h_acc, double 
 
 void PoseFilter::on_odometry(double t, double dt, const Mat4d& body_delta) {
   if (!params_.use_odometry || !ekf_.initialized()) return;
-  ekf_.on_odometry(t, dt, body_delta);
-  if (params_.shadow_ungated_filter) shadow_.on_odometry(t, dt, body_delta);
+  const Pose3d prev_T_curr(body_delta);
+  ekf_.on_odometry(t, dt, prev_T_curr);
+  if (params_.shadow_ungated_filter) shadow_.on_odometry(t, dt, prev_T_curr);
 }
 
 void PoseFilter::predict_to(double t) {
@@ -108,8 +109,8 @@ RegistrationFusion PoseFilter::fuse(const FrameRegistration& in, LocalizerCounte
   reg.odom = in.odom_T_body.matrix();
   reg.ok = in.attempted_ok && result.ok();
   if (reg.ok) {
-    reg.covariance = registration_covariance(result.information, result.inlier_rmse, result.transform,
-                                             params_.registration_covariance);
+    reg.covariance = registration_covariance(result.information, result.inlier_rmse,
+                                             Pose3d(result.transform), params_.registration_covariance);
     // The shadow filter takes every ok registration, before any gate.
     if (params_.shadow_ungated_filter) fuse_into(Which::kShadow, reg, now, counters);
   }
@@ -166,7 +167,7 @@ bool PoseFilter::fuse_into(Which which, const Pending& reg, const Now& now, Loca
   Ekf& ekf = which == Which::kMain ? ekf_ : shadow_;
   std::uint32_t& rejections = which == Which::kMain ? nis_rejections_ : nis_rejections_shadow_;
   if (!ekf.initialized()) return false;
-  const EkfFuseStatus status = ekf.on_registration(reg.t, reg.pose, reg.covariance);
+  const EkfFuseStatus status = ekf.on_registration(reg.t, Pose3d(reg.pose), reg.covariance);
   if (status == EkfFuseStatus::kFused) {
     rejections = 0;
     if (which == Which::kMain) ++counters.registrations_fused;  // the published filter's count
@@ -189,9 +190,10 @@ bool PoseFilter::fuse_stereo(double t, const RegistrationResult& r, double depth
   const double sigma = r.inlier_rmse > depth_sigma ? r.inlier_rmse : depth_sigma;
   RegistrationCovarianceParams cp = params_.registration_covariance;
   cp.scale *= params_.stereo_covariance_scale;
-  const PoseCovariance cov = registration_covariance(r.information, sigma, r.transform, cp);
-  if (params_.shadow_ungated_filter) shadow_.on_registration(t, r.transform, cov);
-  return ekf_.on_registration(t, r.transform, cov) == EkfFuseStatus::kFused;
+  const Pose3d world_T_body(r.transform);
+  const PoseCovariance cov = registration_covariance(r.information, sigma, world_T_body, cp);
+  if (params_.shadow_ungated_filter) shadow_.on_registration(t, world_T_body, cov);
+  return ekf_.on_registration(t, world_T_body, cov) == EkfFuseStatus::kFused;
 }
 
 }  // namespace v2xloc

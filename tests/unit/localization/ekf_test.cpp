@@ -106,7 +106,7 @@ TEST(Ekf, NeesWithinChiSquareBandOverMonteCarloRuns) {
         for (int i = 0; i < 3; ++i) pose(i, 3) = truth.x(i) + reg_sigma[i] * n(rng);
         Eigen::Matrix<double, 4, 4> cov = Eigen::Matrix<double, 4, 4>::Zero();
         for (int i = 0; i < 4; ++i) cov(i, i) = reg_sigma[i] * reg_sigma[i];
-        filter->on_registration(t, pose, cov);
+        filter->on_registration(t, Pose3d(pose), cov);
       }
       nees_sum[frame] += nees(*filter, truth.x);
     }
@@ -168,7 +168,7 @@ TEST(Ekf, NisGateRejectsThirtyMetreOutliersAcceptsNormalFixes) {
       pose.topLeftCorner<3, 3>() = rot_z(yaw);
       pose(0, 3) = x + 0.03 * n(rng);
       pose(1, 3) = y + 0.03 * n(rng);
-      f->on_registration(t, pose, Eigen::Matrix<double, 4, 4>(Eigen::Vector4d(1e-3, 1e-3, 1e-3, 1e-5).asDiagonal()));
+      f->on_registration(t, Pose3d(pose), Eigen::Matrix<double, 4, 4>(Eigen::Vector4d(1e-3, 1e-3, 1e-3, 1e-5).asDiagonal()));
     }
     const bool outlier = frame % 10 == 3;
     Vec3d enu(x + sigma * n(rng), y + sigma * n(rng), sigma * n(rng));
@@ -205,7 +205,7 @@ EkfVector run_with_delay(int delay_frames, EkfCounters* counters = nullptr,
   std::normal_distribution<double> n(0.0, 1.0);
   double t = 0.0;
   const double t_reg = 1.05;  // between frames 10 and 11
-  Mat4d reg_pose = initial_state().pose();
+  Mat4d reg_pose = initial_state().pose().matrix();
   reg_pose(0, 3) += 9.0;
   reg_pose(1, 3) += 2.5;
   const Eigen::Matrix<double, 4, 4> reg_cov =
@@ -216,13 +216,13 @@ EkfVector run_with_delay(int delay_frames, EkfCounters* counters = nullptr,
       t += 0.01;
       filter.on_vehicle_signals(t, 8.0 + 0.05 * n(rng), 0.05 + 0.005 * n(rng));
       if (delay_frames == 0 && std::abs(t - t_reg) < 1e-9) {
-        filter.on_registration(t_reg, reg_pose, reg_cov);
+        filter.on_registration(t_reg, Pose3d(reg_pose), reg_cov);
       }
     }
     filter.predict_to(t);
     if (frame == 15) filter.on_gnss(t, Vec3d(22.0, -1.0, 0.0), 3.0, 3.0);
     if (delay_frames > 0 && frame == deliver_frame) {
-      const EkfFuseStatus st = filter.on_registration(t_reg, reg_pose, reg_cov);
+      const EkfFuseStatus st = filter.on_registration(t_reg, Pose3d(reg_pose), reg_cov);
       if (late_status) *late_status = st;
     }
   }
@@ -294,7 +294,7 @@ TEST(Ekf, RegistrationCovarianceFromInformation) {
   Mat4d pose = Mat4d::Identity();
   pose.topRightCorner<3, 1>() = centre;
   RegistrationCovarianceParams p;
-  const auto cov = registration_covariance(info, 0.05, pose, p);
+  const auto cov = registration_covariance(info, 0.05, Pose3d(pose), p);
   // sigma_xy ~ sqrt(scale) * rmse / sqrt(N) = sqrt(10) * 0.05 / sqrt(200) ~ 0.011 m
   EXPECT_NEAR(std::sqrt(cov(0, 0)), 0.0112, 0.003);
   EXPECT_GE(std::sqrt(cov(3, 3)), p.min_sigma_yaw - 1e-15);
@@ -302,7 +302,7 @@ TEST(Ekf, RegistrationCovarianceFromInformation) {
   // Same information, vehicle far from the world origin but the ICP linearised about the
   // origin: ignoring -[p]x would understate position uncertainty; the result must be the same
   // whatever the origin, which the G-projection guarantees (checked by shifting nothing here).
-  const auto bad = registration_covariance(Mat6d::Zero(), 0.05, pose, p);
+  const auto bad = registration_covariance(Mat6d::Zero(), 0.05, Pose3d(pose), p);
   EXPECT_GE(bad(0, 0), 1e5);
 }
 

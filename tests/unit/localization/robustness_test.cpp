@@ -47,10 +47,10 @@ Mat4d frame_motion(double forward, double dyaw) {
 TEST(EkfRobustness, SlippedOdometryRateIsRejectedConsistentOneFused) {
   auto f = turning_filter();
   // Under-rotated by 3 deg in one frame (measured at Sim 3's turn before the fix).
-  EXPECT_EQ(f->on_odometry(0.1, 0.1, frame_motion(0.65, 0.065 - 0.052)), EkfFuseStatus::kRejectedGate);
+  EXPECT_EQ(f->on_odometry(0.1, 0.1, Pose3d(frame_motion(0.65, 0.065 - 0.052))), EkfFuseStatus::kRejectedGate);
   EXPECT_EQ(f->counters().odometry_rejected, 1u);
   EXPECT_NEAR(f->state().yaw_rate, 0.65, 0.01) << "a rejected rate must not move the state";
-  EXPECT_EQ(f->on_odometry(0.1, 0.1, frame_motion(0.65, 0.065)), EkfFuseStatus::kFused);
+  EXPECT_EQ(f->on_odometry(0.1, 0.1, Pose3d(frame_motion(0.65, 0.065))), EkfFuseStatus::kFused);
   EXPECT_EQ(f->counters().odometry_fused, 1u);
 }
 
@@ -61,7 +61,7 @@ TEST(EkfRobustness, ResetDropsTheFilterAndKeepsCounters) {
   f->reset();
   EXPECT_FALSE(f->initialized());
   EXPECT_EQ(f->on_gnss(0.2, Vec3d::Zero(), 3.0, 5.0), EkfFuseStatus::kNotInitialized);
-  EXPECT_EQ(f->on_registration(0.2, Mat4d::Identity(), Eigen::Matrix4d::Identity()),
+  EXPECT_EQ(f->on_registration(0.2, Pose3d::Identity(), PoseCovariance::Identity()),
             EkfFuseStatus::kNotInitialized);
   f->initialize(1.0, EkfState{}, EkfCovariance::Identity());
   EXPECT_TRUE(f->initialized());

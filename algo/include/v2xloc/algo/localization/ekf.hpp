@@ -38,6 +38,7 @@
 
 #include "v2xloc/algo/core/config.hpp"
 #include "v2xloc/algo/core/types.hpp"
+#include "v2xloc/algo/localization/pose_types.hpp"
 
 namespace v2xloc {
 
@@ -72,7 +73,7 @@ struct EkfState {
   EkfVector to_vector() const;
   static EkfState from_vector(const EkfVector& x);
   Vec3d position() const { return {pos_x, pos_y, pos_z}; }
-  Mat4d pose() const;  // world_T_body (yaw only; roll = pitch = 0)
+  Pose3d pose() const;  // world_T_body (yaw only; roll = pitch = 0)
 };
 static_assert(sizeof(EkfState) == kEkfStateSize * sizeof(double), "EkfState layout is the index table");
 
@@ -164,9 +165,8 @@ struct EkfCounters {
 // The ICP twist is left-multiplied about the world origin (registration_result.hpp), so a yaw
 // uncertainty also moves the vehicle: the position block is G cov6 G^T with G = [-[p]x | I],
 // p = the registered vehicle position (pose translation).
-Eigen::Matrix<double, 4, 4> registration_covariance(const Mat6d& information, double inlier_rmse,
-                                                     const Mat4d& pose,
-                                                     const RegistrationCovarianceParams& params = {});
+PoseCovariance registration_covariance(const Mat6d& information, double inlier_rmse, const Pose3d& pose,
+                                      const RegistrationCovarianceParams& params = {});
 
 class Ekf {
  public:
@@ -183,10 +183,9 @@ class Ekf {
   // GNSS position in local ENU [m] with 1-sigma horizontal / vertical accuracy [m].
   EkfFuseStatus on_gnss(double t, const Vec3d& enu, double sigma_horizontal, double sigma_vertical);
   // Registration pose world_T_body; covariance of (x, y, z, yaw) (see registration_covariance).
-  EkfFuseStatus on_registration(double t, const Mat4d& pose,
-                                const Eigen::Matrix<double, 4, 4>& covariance);
+  EkfFuseStatus on_registration(double t, const Pose3d& pose, const PoseCovariance& covariance);
   // LiDAR odometry between t - dt and t: relative pose prev_T_curr (body frame).
-  EkfFuseStatus on_odometry(double t, double dt, const Mat4d& relative_pose);
+  EkfFuseStatus on_odometry(double t, double dt, const Pose3d& relative_pose);
   // Propagates to t (a frame boundary) and snapshots the state for later rollbacks.
   EkfFuseStatus predict_to(double t);
 

@@ -45,8 +45,8 @@ class PoseFilter {
 
   bool initialized() const { return ekf_.initialized(); }
   const Ekf& ekf() const { return ekf_; }
-  Pose3d pose() const { return Pose3d(ekf_.state().pose()); }
-  Pose3d shadow_pose() const { return Pose3d(shadow_.state().pose()); }
+  Pose3d pose() const { return ekf_.state().pose(); }
+  Pose3d shadow_pose() const { return shadow_.state().pose(); }
   double sigma_xy() const;  // [m] horizontal 1-sigma of the main filter
   // Tracking continues from the prediction while the filter is tight and fuses registrations.
   bool can_track() const;
