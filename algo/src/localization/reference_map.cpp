@@ -37,7 +37,6 @@ bool ReferenceMap::refresh(double t, LazyNormalCounters& normals) {
   for (std::uint32_t s = 0; s < steps; ++s) {
     if (!build_step(t, finished)) break;
   }
-  if (finished) targets_[active_].lazy.new_period(params_.map_normals_per_period);
   return finished;
 }
 
@@ -67,7 +66,8 @@ void ReferenceMap::activate(Target& next) {
   np.radius = params_.map_normal_radius;
   np.orient_to_viewpoint = false;  // point-to-plane residuals do not care about the sign
   next.lazy.reset(&next.tree.tree, np, std::span<Vec3f>(next.normals, config::kMaxMapPoints),
-                  std::span<std::uint64_t>(next.normal_done, (config::kMaxMapPoints + 63) / 64));
+                  std::span<std::uint64_t>(next.normal_done, (config::kMaxMapPoints + 63) / 64),
+                  params_.map_normals_per_period);
   active_ = 1 - active_;
   revision_ = build_revision_;
   phase_ = BuildPhase::kIdle;

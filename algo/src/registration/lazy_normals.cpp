@@ -5,8 +5,9 @@
 namespace v2xloc {
 
 void LazyNormals::reset(const KdTree<Vec3f>* tree, const NormalParams& params, std::span<Vec3f> storage,
-                        std::span<std::uint64_t> done_bits) {
+                        std::span<std::uint64_t> done_bits, std::uint32_t quota) {
   tree_ = tree;
+  quota_ = quota;
   params_ = params;
   normals_ = storage;
   done_ = done_bits;

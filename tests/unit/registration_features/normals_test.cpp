@@ -122,16 +122,14 @@ TEST(LazyNormals, SameBitsAsTheWholeCloudAndQuotaCounted) {
   static Vec3f lazy_storage[20000];
   static std::uint64_t done[(20000 + 63) / 64];
   LazyNormals lazy;
-  lazy.reset(&tree_storage.tree, np, lazy_storage, done);
-  lazy.new_period(0);
+  lazy.reset(&tree_storage.tree, np, lazy_storage, done, 0);
   for (std::uint32_t k = 0; k < 6000; ++k) {  // every point, twice, in a scrambled order
     const std::uint32_t i = (k * 1237u) % 3000u;
     const Vec3f n = lazy.get(i);
     ASSERT_TRUE(n == normals[i]) << i;
   }
   EXPECT_EQ(lazy.new_period(100).computed, 3000u);
-  lazy.reset(&tree_storage.tree, np, lazy_storage, done);
-  lazy.new_period(100);
+  lazy.reset(&tree_storage.tree, np, lazy_storage, done, 100);
   for (std::uint32_t i = 0; i < 150; ++i) {
     const Vec3f n = lazy.get(i);
     if (i < 100) {

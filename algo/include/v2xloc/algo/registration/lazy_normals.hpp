@@ -23,15 +23,14 @@ struct LazyNormalCounters {
 class LazyNormals {
  public:
   // tree over the points whose normals are asked; storage >= points, done_bits >= ceil(points / 64).
-  // Clears the done bits (points / 64 words).
+  // Clears the done bits (points / 64 words) and starts a period with `quota` (see new_period).
   void reset(const KdTree<Vec3f>* tree, const NormalParams& params, std::span<Vec3f> storage,
-             std::span<std::uint64_t> done_bits);
+             std::span<std::uint64_t> done_bits, std::uint32_t quota);
   // A new period: at most `quota` normals computed until the next call (0: no limit). Returns
   // the ending period's {computed, refused}.
   LazyNormalCounters new_period(std::uint32_t quota);
   // The normal of point i: computed now unless done; NaN when the quota is spent or i is out of range.
   Vec3f get(std::uint32_t i);
-  const LazyNormalCounters& counters() const { return counters_; }
 
  private:
   const KdTree<Vec3f>* tree_ = nullptr;
