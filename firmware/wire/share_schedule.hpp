@@ -17,10 +17,12 @@ namespace v2xloc::firmware {
 // sources sending at once the period's trust work is 6 x 6.3 + 2 x 11.9 = 62 M (all six verified
 // at once: 109 M, over budget), the other four follow in the next two periods.
 inline constexpr std::size_t kMaxSignatureVerificationsPerPeriod = 2;
-// Completed, admitted shares waiting for their ECDSA verification. 4 = two periods of backlog at
-// kMaxSignatureVerificationsPerPeriod; overflow drops the OLDEST waiting share (counted: a fresher
-// share from the same sources is worth more to map fusion).
-inline constexpr std::size_t kShareVerifyQueueCapacity = 4;
+// Completed, admitted shares waiting for their ECDSA verification: one slot for every source that
+// may send in the same period (infrastructure units and agents share a 2 Hz cycle, so they arrive
+// together: 6 on the recordings), four periods of backlog at kMaxSignatureVerificationsPerPeriod.
+// A queue of 4 dropped the same two sources' shares every cycle (they arrive first), so those
+// units never reached the map. Overflow drops the OLDEST waiting share (counted).
+inline constexpr std::size_t kShareVerifyQueueCapacity = 8;
 
 template <std::size_t Capacity, std::size_t PerPeriod>
 class SharePeriodSchedule {

@@ -395,16 +395,17 @@ TEST(InputDecoder, MapSharesCarrySourceIdAgentFlagAndPose) {
   EXPECT_EQ(dec->counters().shares_untrusted, 2u);
 }
 
-// Six sources complete a share in the same period: the queue keeps the newest
+// More sources than the queue holds complete a share in the same period: the queue keeps the newest
 // kShareVerifyQueueCapacity (the oldest are dropped and counted), and each ego scan (period
 // boundary) verifies at most kMaxSignatureVerificationsPerPeriod of them, oldest first. A share is
 // judged by the local clock when it completed, so one verified two periods (or 1.2 s) later still
 // passes; fragments that differ from the signed wire bytes fail.
 TEST(InputDecoder, SignatureChecksAreBoundedPerPeriodAndQueued) {
-  static_assert(kMaxSignatureVerificationsPerPeriod == 2 && kShareVerifyQueueCapacity == 4);
+  static_assert(kMaxSignatureVerificationsPerPeriod == 2 && kShareVerifyQueueCapacity == 8);
   auto dec = std::make_unique<InputDecoder>(kEpoch);
   trust::TrustList list;
-  constexpr std::uint32_t kSources = 6;
+  constexpr std::uint32_t kSources = kShareVerifyQueueCapacity + 2;
+  constexpr std::uint32_t kTampered = kSources - 1;
   for (std::uint32_t k = 0; k < kSources; ++k) test::add_signer(list, kInfraSenderBase + k, trust::SignerRole::kInfrastructure);
   dec->provision_trust(list);
   const std::vector<float> xyz = ramp_points(400);
@@ -415,8 +416,8 @@ TEST(InputDecoder, SignatureChecksAreBoundedPerPeriodAndQueued) {
     const auto frags = fragment_cloud(protocol::CloudMessageType::kMapShare, sender, 0, 500'000'000, xyz, {});
     ASSERT_GT(frags.size(), 1u);
     dec->on_datagram(test::sign_share(frags, sender, kEpoch + 500'000'000), 500'000'000);
-    // Source 5 sends fragments that are not the ones it signed; the rest arrive in reverse order.
-    const auto sent = k == 5 ? fragment_cloud(protocol::CloudMessageType::kMapShare, sender, 0, 500'000'000, tampered, {})
+    // The last source sends fragments that are not the ones it signed; the rest arrive in reverse order.
+    const auto sent = k == kTampered ? fragment_cloud(protocol::CloudMessageType::kMapShare, sender, 0, 500'000'000, tampered, {})
                              : frags;
     bool done = false;
     for (auto it = sent.rbegin(); it != sent.rend(); ++it) done = dec->on_datagram(*it, 500'000'000);
@@ -452,16 +453,20 @@ TEST(InputDecoder, SignatureChecksAreBoundedPerPeriodAndQueued) {
     return verified;
   };
   EXPECT_EQ(period(1, 600'000'000), kMaxSignatureVerificationsPerPeriod);
-  EXPECT_EQ(dec->shares_waiting(), 2u);
-  // 1.2 s after completion (beyond the 1 s freshness window by the clock now): still judged by
-  // the completion time.
+  EXPECT_EQ(dec->shares_waiting(), kShareVerifyQueueCapacity - 2);
+  // 1.2 s and more after completion (beyond the 1 s freshness window by the clock now): still
+  // judged by the completion time.
   EXPECT_EQ(period(2, 1'700'000'000), kMaxSignatureVerificationsPerPeriod);
-  EXPECT_EQ(period(3, 1'800'000'000), 0u);
-  EXPECT_EQ(fused, (std::vector<std::uint32_t>{kInfraSenderBase + 2, kInfraSenderBase + 3, kInfraSenderBase + 4}));
+  EXPECT_EQ(period(3, 1'800'000'000), kMaxSignatureVerificationsPerPeriod);
+  EXPECT_EQ(period(4, 1'900'000'000), kMaxSignatureVerificationsPerPeriod);
+  EXPECT_EQ(period(5, 2'000'000'000), 0u);
+  std::vector<std::uint32_t> expected;
+  for (std::uint32_t k = 2; k < kTampered; ++k) expected.push_back(kInfraSenderBase + k);
+  EXPECT_EQ(fused, expected);
   EXPECT_EQ(rejected, 1u);
   EXPECT_EQ(dec->verifier().counters().bad_signature, 1u);
-  EXPECT_EQ(dec->verifier().counters().accepted, 3u);
-  EXPECT_EQ(dec->counters().signature_verifications, 4u);
+  EXPECT_EQ(dec->verifier().counters().accepted, kShareVerifyQueueCapacity - 1);
+  EXPECT_EQ(dec->counters().signature_verifications, kShareVerifyQueueCapacity);
   EXPECT_EQ(dec->counters().shares_untrusted, 1u);
 }
 
