@@ -97,8 +97,9 @@ struct LocalizerParams {
   std::uint32_t audit_period_frames = 30;
   double audit_radius = 8.0;              // [m] basin audit: search disc around the tracked pose
   // [queries/period] the audit's pose search runs beside tracking, this many nearest-neighbour
-  // queries per tracked frame (0: the whole search in one frame); 15k: <= ~40 M a period
-  std::uint32_t audit_queries_per_period = 15000;
+  // queries per tracked frame (0: the whole search in one frame); 7.5k: <= ~37 M a period, an
+  // audit spans ~15 frames (15k: <= ~60 M; fused trajectories identical on the 12 recordings)
+  std::uint32_t audit_queries_per_period = 7500;
   std::uint32_t audit_max_frames = 40;    // [frames] a search not finished within this is dropped
   std::uint32_t audit_refine_candidates = 10;  // [hypotheses] the audit refines (<= kPoseSearchRefine)
   double audit_switch_ratio = 1.15;       // [ratio] audit pose's tight fitness over tracked: switch
