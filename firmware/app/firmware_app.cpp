@@ -237,6 +237,7 @@ protocol::TrustRejections FirmwareApp::trust_rejections_now() const {
   t.future = saturate_u8(v.future);
   t.replay = saturate_u8(v.replay);
   t.queue_overflow = saturate_u8(decoder_.counters().shares_queue_dropped);
+  t.pose_mismatch = static_cast<std::uint8_t>(v.pose_mismatch > 15 ? 15 : v.pose_mismatch);  // a 4-bit signal
   return t;
 }
 
