@@ -71,7 +71,10 @@ void FirmwareApp::apply_can(const DecodedCan& decoded, std::int64_t rx_monotonic
 void FirmwareApp::apply_cloud(const DecodedCloud& decoded) {
   if (decoded.kind == CloudKind::kMapCloud) {
     switch (localizer_.on_map_cloud(decoded.map).status) {
-      case MapInsertStatus::kRejectedInconsistent: ++counters_.map_inconsistent; break;
+      case MapInsertStatus::kRejectedInconsistent:
+        ++counters_.map_inconsistent;
+        if (!decoded.map.is_agent) ++counters_.map_infra_inconsistent;
+        break;
       case MapInsertStatus::kHeldBack: ++counters_.map_held_back; break;
       case MapInsertStatus::kNoSourceSlot: ++counters_.map_no_slot; break;
       case MapInsertStatus::kStale: ++counters_.map_stale; break;

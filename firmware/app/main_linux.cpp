@@ -101,8 +101,10 @@ void print_counters(const FirmwareApp& app) {
   std::printf("v2xloc-firmware: can_repeated %llu can_counter_gaps %llu gnss_position_dropped %llu gnss_time_rejected %llu\n",
               (unsigned long long)d.can_repeated, (unsigned long long)d.can_counter_gaps,
               (unsigned long long)d.gnss_position_dropped, (unsigned long long)c.gnss_time_rejected);
-  std::printf("v2xloc-firmware: map fusion of trusted shares: inconsistent %llu held_back %llu no_slot %llu stale %llu\n",
-              (unsigned long long)c.map_inconsistent, (unsigned long long)c.map_held_back,
+  std::printf("v2xloc-firmware: map fusion of trusted shares: inconsistent %llu (infrastructure %llu) held_back %llu"
+              " no_slot %llu stale %llu\n",
+              (unsigned long long)c.map_inconsistent, (unsigned long long)c.map_infra_inconsistent,
+              (unsigned long long)c.map_held_back,
               (unsigned long long)c.map_no_slot, (unsigned long long)c.map_stale);
   std::printf("v2xloc-firmware: reassembly fragments %llu frames %llu duplicates %llu stale %llu timed_out %llu evicted %llu"
               " bad_crc %llu truncated %llu malformed %llu over_capacity %llu\n",

@@ -135,6 +135,12 @@ double MapFusion::consistency(std::size_t slot, std::uint32_t& overlap_points, d
   return static_cast<double>(inliers) / static_cast<double>(n);
 }
 
+std::uint32_t MapFusion::other_trusted(std::size_t slot) const {
+  std::uint32_t n = 0;
+  for (std::size_t s = 0; s < config::kMaxMapSources; ++s) n += (s != slot && sources_[s].active && sources_[s].trusted) ? 1u : 0u;
+  return n;
+}
+
 std::uint32_t MapFusion::drop_covered_by_trusted(std::size_t slot) {
   new_cell_generation();
   bool any = false;
@@ -211,18 +217,24 @@ bool MapFusion::passes_consistency(std::size_t own_slot, bool trusted, MapInsert
   // nothing the map can trust). Infrastructure units against each other where they overlap:
   // their absolute fitness is low even for exact poses (different faces of the buildings), so
   // only the shift test applies, and without overlap a surveyed unit is accepted.
+  // With two or more other units the quorum rule applies (map_fusion.hpp: infra_quorum_*).
   r.consistency_fitness = consistency(own_slot, r.overlap_points, r.best_probe_fitness);
   const bool checkable = r.overlap_points >= params_.min_overlap_points;
-  const double margin = trusted ? params_.infra_probe_margin : params_.probe_margin;
+  const std::uint32_t others = trusted ? other_trusted(own_slot) : 0;
+  const bool quorum = trusted && others >= 2;
+  const double margin = !trusted ? params_.probe_margin : quorum ? params_.infra_quorum_margin : params_.infra_probe_margin;
   const bool shifted = checkable && r.best_probe_fitness > r.consistency_fitness + margin;
+  const double floor = !trusted ? params_.min_fitness : others >= 3 ? params_.infra_quorum_min_fitness : 0.0;
   if (!trusted && !checkable) {
     r.status = MapInsertStatus::kHeldBack;
     ++counters_.held_back;
     return false;
   }
-  if (shifted || (!trusted && r.consistency_fitness < params_.min_fitness)) {
+  if (shifted || (checkable && r.consistency_fitness < floor)) {  // agents here are checkable
     r.status = MapInsertStatus::kRejectedInconsistent;
     ++counters_.rejected_inconsistent;
+    if (quorum) ++counters_.infra_outvoted;
+    r.outvoted = quorum;
     return false;
   }
   if (!checkable) r.consistency_fitness = 1.0;
@@ -271,8 +283,17 @@ MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
   stage_candidate(world_T_sensor, points, r);
   // The source's previous cloud is left out of the reference (a displaced slot is not its own).
   const std::size_t own_slot = known ? slot : config::kMaxMapSources;
-  if (params_.check_consistency && !candidate_.empty() && !passes_consistency(own_slot, trusted, r))
+  if (params_.check_consistency && !candidate_.empty() && !passes_consistency(own_slot, trusted, r)) {
+    // An outvoted unit's older cloud goes too: it may have been accepted before a quorum existed
+    // (the first share of the first unit to send is checked against nothing).
+    if (r.outvoted && known) {
+      remove_source_points(slot);
+      sources_[slot] = MapSourceInfo{};
+      ++counters_.infra_evicted;
+      ++revision_;
+    }
     return r;
+  }
   if (!trusted && params_.agent_fill_cell > 0.0) {
     r.covered_dropped = drop_covered_by_trusted(own_slot);
     counters_.agent_points_covered += r.covered_dropped;
