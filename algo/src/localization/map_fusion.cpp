@@ -235,8 +235,10 @@ bool MapFusion::passes_consistency(std::size_t own_slot, bool trusted, MapInsert
     ++counters_.rejected_inconsistent;
     if (quorum) ++counters_.infra_outvoted;
     r.outvoted = quorum;
+    r.quorum_checked = quorum && checkable;
     return false;
   }
+  r.quorum_checked = quorum && checkable;
   if (!checkable) r.consistency_fitness = 1.0;
   return true;
 }
@@ -286,12 +288,7 @@ MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
   if (params_.check_consistency && !candidate_.empty() && !passes_consistency(own_slot, trusted, r)) {
     // An outvoted unit's older cloud goes too: it may have been accepted before a quorum existed
     // (the first share of the first unit to send is checked against nothing).
-    if (r.outvoted && known) {
-      remove_source_points(slot);
-      sources_[slot] = MapSourceInfo{};
-      ++counters_.infra_evicted;
-      ++revision_;
-    }
+    if (r.outvoted && known) evict_outvoted(slot);
     return r;
   }
   if (!trusted && params_.agent_fill_cell > 0.0) {
@@ -310,12 +307,37 @@ MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
   info.points = stored;
   info.active = true;
   info.trusted = trusted;
+  info.vetted = r.quorum_checked;
   r.stored_points = stored;
   r.status = known ? MapInsertStatus::kReplaced : MapInsertStatus::kInserted;
   if (known) ++counters_.replaced;
   else ++counters_.inserted;
   ++revision_;
+  if (trusted && params_.check_consistency) vet_infrastructure();
   return r;
+}
+
+void MapFusion::evict_outvoted(std::size_t slot) {
+  remove_source_points(slot);
+  sources_[slot] = MapSourceInfo{};
+  ++counters_.infra_evicted;
+  ++revision_;
+}
+
+void MapFusion::vet_infrastructure() {
+  for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
+    if (!sources_[s].active || !sources_[s].trusted || sources_[s].vetted || other_trusted(s) < 2) continue;
+    candidate_.clear();  // free after the insert: the stored cloud is scored as a candidate would be
+    for (std::size_t i = 0; i < num_points_; ++i) {
+      if (point_source_[i] == s) candidate_.push_back(points_[i]);
+    }
+    MapInsertResult r;
+    if (candidate_.empty() || passes_consistency(s, true, r)) {
+      sources_[s].vetted = r.quorum_checked;
+    } else if (r.outvoted) {
+      evict_outvoted(s);
+    }
+  }
 }
 
 std::uint32_t MapFusion::expire(double now) {

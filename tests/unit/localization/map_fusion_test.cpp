@@ -242,8 +242,8 @@ TEST(MapFusion, ShiftedInfrastructureOutvotedByThreeUnitsNotByOne) {
 }
 
 // The first unit to send is checked against nothing: a rogue that arrives first is accepted, the
-// genuine units after it are not rejected for disagreeing with it (no quorum yet against it), and
-// its next cloud, outvoted, takes its stored cloud out of the map with it.
+// genuine units after it are not rejected for disagreeing with it, and once two other units are
+// present its stored cloud is vetted against them and evicted; its next cloud is outvoted.
 TEST(MapFusion, RogueArrivingFirstIsEvictedOnceOutvoted) {
   const auto scene = corner_scene();
   const Mat4d units[] = {sensor_pose(12.0, 12.0, 2.0), sensor_pose(-3.0, 12.0, 1.2), sensor_pose(12.0, -3.0, 2.6),
@@ -257,11 +257,16 @@ TEST(MapFusion, RogueArrivingFirstIsEvictedOnceOutvoted) {
               MapInsertStatus::kInserted)
         << k;
   }
+  EXPECT_EQ(map.counters().infra_evicted, 1u);
+  for (const MapSourceInfo& s : map.sources()) {
+    EXPECT_FALSE(s.active && s.id == 9u);
+    if (s.active) {
+      EXPECT_TRUE(s.vetted) << s.id;  // the genuine units passed the same check
+    }
+  }
   const MapInsertResult r = map.insert(9, 1.5, Pose3d(units[3]), in_sensor_frame(moved, units[3]), true);
   EXPECT_EQ(r.status, MapInsertStatus::kRejectedInconsistent);
   EXPECT_TRUE(r.outvoted);
-  EXPECT_EQ(map.counters().infra_evicted, 1u);
-  for (const MapSourceInfo& s : map.sources()) EXPECT_FALSE(s.active && s.id == 9u);
 }
 
 // The check scores an even subsample of a large cloud: the same verdicts as scoring every point,
