@@ -235,10 +235,10 @@ bool MapFusion::passes_consistency(std::size_t own_slot, bool trusted, MapInsert
     ++counters_.rejected_inconsistent;
     if (quorum) ++counters_.infra_outvoted;
     r.outvoted = quorum;
-    r.quorum_checked = quorum && checkable;
+    r.quorum_checked = others >= 3 && checkable;
     return false;
   }
-  r.quorum_checked = quorum && checkable;
+  r.quorum_checked = trusted && others >= 3 && checkable;  // the full rule: peak and floor
   if (!checkable) r.consistency_fitness = 1.0;
   return true;
 }
@@ -326,7 +326,7 @@ void MapFusion::evict_outvoted(std::size_t slot) {
 
 void MapFusion::vet_infrastructure() {
   for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
-    if (!sources_[s].active || !sources_[s].trusted || sources_[s].vetted || other_trusted(s) < 2) continue;
+    if (!sources_[s].active || !sources_[s].trusted || sources_[s].vetted || other_trusted(s) < 3) continue;
     candidate_.clear();  // free after the insert: the stored cloud is scored as a candidate would be
     for (std::size_t i = 0; i < num_points_; ++i) {
       if (point_source_[i] == s) candidate_.push_back(points_[i]);

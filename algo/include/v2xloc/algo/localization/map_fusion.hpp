@@ -101,7 +101,7 @@ struct MapInsertResult {
   double consistency_fitness = 1.0;     // inliers / overlap_points (1 when no verdict)
   double best_probe_fitness = 0.0;      // best fitness of the shifted probes (shift check)
   bool outvoted = false;                // infrastructure rejected by the quorum: its stored cloud evicted too
-  bool quorum_checked = false;          // infrastructure checked against >= 2 other units (and passed or not)
+  bool quorum_checked = false;          // infrastructure checked by the full rule (>= 3 other units)
 };
 
 struct MapSourceInfo {
@@ -111,7 +111,7 @@ struct MapSourceInfo {
   std::uint32_t points = 0;
   bool active = false;
   bool trusted = false;                 // surveyed infrastructure
-  bool vetted = false;                  // infrastructure: its stored cloud passed a quorum check
+  bool vetted = false;                  // infrastructure: its stored cloud passed the full quorum rule
 };
 
 struct MapFusionCounters {
@@ -184,8 +184,8 @@ class MapFusion {
   // only trusted (infrastructure) sources are the reference. best_probe: the best fitness of the
   // candidate displaced by the shift probes.
   double consistency(std::size_t slot, std::uint32_t& overlap_points, double& best_probe);
-  // Infrastructure accepted before a quorum existed (the first units to send) is checked once
-  // two other units are present: each unvetted stored cloud against the others, evicted if outvoted.
+  // Infrastructure accepted before the full quorum existed (the first units to send) is checked once
+  // three other units are present: each unvetted stored cloud against the others, evicted if outvoted.
   void vet_infrastructure();
   void evict_outvoted(std::size_t slot);
   // Active trusted sources other than `slot` (the units an infrastructure cloud is checked against).
