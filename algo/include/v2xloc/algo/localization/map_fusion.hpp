@@ -55,8 +55,9 @@ struct MapFusionParams {
   double probe_margin = 0.02;    // fitness difference, agents
   // Infrastructure units are checked against each other, in arrival order: a rogue unit that
   // arrives first becomes part of the reference, and a tight margin then rejects the genuine
-  // units instead (measured: 0.25 m rogue, margin 0.02 -> fused error 4.1 m). 0.1 still rejects a
-  // 3 m shift and never inverted in the runs; a quorum over overlapping units is the real fix.
+  // units instead (measured: 0.25 m rogue, margin 0.02 -> fused error 4.1 m). 0.1 never inverted in
+  // the runs. It applies against one other unit only; with more, the quorum below (and units
+  // accepted before it existed are vetted once it does, so arrival order does not decide).
   double infra_probe_margin = 0.1;  // fitness difference, infrastructure against one other unit
   // Quorum: the more other units the reference holds, the sharper an exact unit's score. Measured on
   // the four Sim scenes (4_infra, t = 0 and 5 s, each unit against every subset of the others, shifts
@@ -148,10 +149,10 @@ class MapFusion {
   void clear();
 
   // points in the sensor frame; world_T_sensor maps them into the global frame. A trusted source
-  // (surveyed infrastructure) skips the consistency check: sensors at different corners see
-  // different faces of the same buildings, so their mutual overlap score is low (0.2-0.4
-  // measured for exact poses) and would reject good clouds; the check is for self-localized
-  // agents.
+  // (surveyed infrastructure) is checked against the other infrastructure units only: sensors at
+  // different corners see different faces of the same buildings, so one pair's overlap score is
+  // low (0.2-0.4 for exact poses) and only the shift probe applies; two or three other units
+  // form the quorum (infra_quorum_*) that can outvote it and evict its stored cloud.
   MapInsertResult insert(std::uint32_t source_id, double timestamp, const Pose3d& world_T_sensor,
                          std::span<const Vec3f> points, bool trusted = false);
   // Evicts sources with now - timestamp > max_age; returns how many.
