@@ -71,7 +71,10 @@ void FirmwareApp::apply_can(const DecodedCan& decoded, std::int64_t rx_monotonic
 void FirmwareApp::apply_cloud(const DecodedCloud& decoded) {
   if (decoded.kind == CloudKind::kMapCloud) {
     switch (localizer_.on_map_cloud(decoded.map).status) {
-      case MapInsertStatus::kRejectedInconsistent: ++counters_.map_inconsistent; break;
+      case MapInsertStatus::kRejectedInconsistent:
+        ++counters_.map_inconsistent;
+        if (!decoded.map.is_agent) ++counters_.map_infra_inconsistent;
+        break;
       case MapInsertStatus::kHeldBack: ++counters_.map_held_back; break;
       case MapInsertStatus::kNoSourceSlot: ++counters_.map_no_slot; break;
       case MapInsertStatus::kStale: ++counters_.map_stale; break;
@@ -237,6 +240,7 @@ protocol::TrustRejections FirmwareApp::trust_rejections_now() const {
   t.future = saturate_u8(v.future);
   t.replay = saturate_u8(v.replay);
   t.queue_overflow = saturate_u8(decoder_.counters().shares_queue_dropped);
+  t.pose_mismatch = static_cast<std::uint8_t>(v.pose_mismatch > 15 ? 15 : v.pose_mismatch);  // a 4-bit signal
   return t;
 }
 

@@ -89,19 +89,22 @@ void print_counters(const FirmwareApp& app) {
               (unsigned long long)d.datagrams_rejected);
   const trust::VerifierCounters& v = app.decoder().verifier().counters();
   std::printf("v2xloc-firmware: trust shares accepted %llu rejected %llu (missing_signature %llu unknown_signer %llu"
-              " sender_mismatch %llu too_old %llu future %llu stamp_skew %llu replay %llu bad_signature %llu crypto_error %llu)"
+              " sender_mismatch %llu too_old %llu future %llu stamp_skew %llu replay %llu pose_mismatch %llu bad_signature %llu"
+              " crypto_error %llu)"
               " signatures %llu malformed %llu; wrong_channel %llu ego_time_rejected %llu ego_frames_held %llu\n",
               (unsigned long long)v.accepted, (unsigned long long)v.rejected(), (unsigned long long)v.missing_signature,
               (unsigned long long)v.unknown_signer, (unsigned long long)v.sender_mismatch, (unsigned long long)v.too_old,
               (unsigned long long)v.future, (unsigned long long)v.stamp_skew, (unsigned long long)v.replay,
-              (unsigned long long)v.bad_signature, (unsigned long long)v.crypto_error, (unsigned long long)v.signatures_rx,
+              (unsigned long long)v.pose_mismatch, (unsigned long long)v.bad_signature, (unsigned long long)v.crypto_error, (unsigned long long)v.signatures_rx,
               (unsigned long long)v.signatures_malformed, (unsigned long long)d.wrong_channel,
               (unsigned long long)d.ego_time_rejected, (unsigned long long)c.ego_frames_held);
   std::printf("v2xloc-firmware: can_repeated %llu can_counter_gaps %llu gnss_position_dropped %llu gnss_time_rejected %llu\n",
               (unsigned long long)d.can_repeated, (unsigned long long)d.can_counter_gaps,
               (unsigned long long)d.gnss_position_dropped, (unsigned long long)c.gnss_time_rejected);
-  std::printf("v2xloc-firmware: map fusion of trusted shares: inconsistent %llu held_back %llu no_slot %llu stale %llu\n",
-              (unsigned long long)c.map_inconsistent, (unsigned long long)c.map_held_back,
+  std::printf("v2xloc-firmware: map fusion of trusted shares: inconsistent %llu (infrastructure %llu) held_back %llu"
+              " no_slot %llu stale %llu\n",
+              (unsigned long long)c.map_inconsistent, (unsigned long long)c.map_infra_inconsistent,
+              (unsigned long long)c.map_held_back,
               (unsigned long long)c.map_no_slot, (unsigned long long)c.map_stale);
   std::printf("v2xloc-firmware: reassembly fragments %llu frames %llu duplicates %llu stale %llu timed_out %llu evicted %llu"
               " bad_crc %llu truncated %llu malformed %llu over_capacity %llu\n",
@@ -261,7 +264,11 @@ bool provision_trust(const Options& options) {
     return false;
   }
   g_decoder.provision_trust(list);
-  std::printf("v2xloc-firmware: trust list: %zu signers\n", list.count);
+  std::size_t infrastructure = 0;
+  for (const trust::TrustedSigner& s : list.view()) infrastructure += s.role == trust::SignerRole::kInfrastructure ? 1u : 0u;
+  // Unsurveyed infrastructure is trusted on the pose it declares (lists written before surveys).
+  std::printf("v2xloc-firmware: trust list: %zu signers, %zu infrastructure, %zu of them surveyed\n", list.count,
+              infrastructure, list.surveyed_count());
   return true;
 }
 

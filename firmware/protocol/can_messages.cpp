@@ -60,6 +60,7 @@ constexpr Signal kUdpDropped{40, 8, false, 1.0, 0.0, 0.0, 255.0};
 constexpr Signal kTrustCount[6] = {{0, 8, false, 1.0, 0.0, 0.0, 255.0},  {8, 8, false, 1.0, 0.0, 0.0, 255.0},
                                    {16, 8, false, 1.0, 0.0, 0.0, 255.0}, {24, 8, false, 1.0, 0.0, 0.0, 255.0},
                                    {32, 8, false, 1.0, 0.0, 0.0, 255.0}, {40, 8, false, 1.0, 0.0, 0.0, 255.0}};
+constexpr Signal kPoseMismatch{52, 4, false, 1.0, 0.0, 0.0, 15.0};  // 0x301 bits 52..55, beside the counter
 constexpr Signal kGuardCount[4] = {{0, 12, false, 1.0, 0.0, 0.0, 4095.0},
                                    {12, 12, false, 1.0, 0.0, 0.0, 4095.0},
                                    {24, 12, false, 1.0, 0.0, 0.0, 4095.0},
@@ -128,6 +129,7 @@ constexpr NamedCanSignal kSignalTable[] = {
     V2XLOC_SIGNAL(kTrustRejectionsId, "Future", kTrustCount[3]),
     V2XLOC_SIGNAL(kTrustRejectionsId, "Replay", kTrustCount[4]),
     V2XLOC_SIGNAL(kTrustRejectionsId, "QueueOverflow", kTrustCount[5]),
+    V2XLOC_SIGNAL(kTrustRejectionsId, "PoseMismatch", kPoseMismatch),
     V2XLOC_SIGNAL(kInputGuardsId, "CanCrcRejected", kGuardCount[0]),
     V2XLOC_SIGNAL(kInputGuardsId, "CanCounterRejected", kGuardCount[1]),
     V2XLOC_SIGNAL(kInputGuardsId, "EgoTimeRejected", kGuardCount[2]),
@@ -520,6 +522,7 @@ CanFrame pack(const TrustRejections& m, PackStats* stats) {
   CanFrame f = start_frame(kTrustRejectionsId);
   const std::uint8_t counts[6] = {m.unknown_signer, m.bad_signature, m.too_old, m.future, m.replay, m.queue_overflow};
   for (int k = 0; k < 6; ++k) encode(f.data, kTrustCount[k], static_cast<double>(counts[k]), stats);
+  encode(f.data, kPoseMismatch, static_cast<double>(m.pose_mismatch), stats);
   put_counter(f.data, kCounterBit48, m.counter);
   seal(f);
   return f;
@@ -530,6 +533,7 @@ DecodeStatus unpack(const CanFrame& f, TrustRejections& m) {
   if (s != DecodeStatus::kOk) return s;
   std::uint8_t* counts[6] = {&m.unknown_signer, &m.bad_signature, &m.too_old, &m.future, &m.replay, &m.queue_overflow};
   for (int k = 0; k < 6; ++k) *counts[k] = static_cast<std::uint8_t>(get_bits_le(f.data, kTrustCount[k].start, 8));
+  m.pose_mismatch = static_cast<std::uint8_t>(get_bits_le(f.data, kPoseMismatch.start, kPoseMismatch.length));
   m.counter = static_cast<std::uint8_t>(get_bits_le(f.data, kCounterBit48, 4));
   return DecodeStatus::kOk;
 }

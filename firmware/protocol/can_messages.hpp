@@ -232,6 +232,7 @@ struct TrustRejections {
   std::uint8_t future = 0;
   std::uint8_t replay = 0;
   std::uint8_t queue_overflow = 0;   // admitted shares dropped from the full verification queue
+  std::uint8_t pose_mismatch = 0;    // [0, 15] infrastructure shares declaring a pose off their survey
   std::uint8_t counter = 0;
 };
 

@@ -1,5 +1,7 @@
 #include "firmware/trust/map_share_verifier.hpp"
 
+#include <cmath>
+
 #include "firmware/trust/cloud_digest.hpp"
 
 namespace v2xloc::trust {
@@ -14,10 +16,30 @@ const char* to_string(ShareVerdict v) {
     case ShareVerdict::kFuture: return "from the future";
     case ShareVerdict::kStampSkew: return "time stamp far from generation time";
     case ShareVerdict::kReplay: return "replay";
+    case ShareVerdict::kPoseMismatch: return "declared pose off the surveyed pose";
     case ShareVerdict::kBadSignature: return "bad signature";
     case ShareVerdict::kCryptoError: return "crypto error";
   }
   return "?";
+}
+
+bool matches_survey(const SurveyedPose& survey, const protocol::SensorPose& declared,
+                    const MapShareVerifierConfig& config) {
+  double d2 = 0.0, dot = 0.0, norm2 = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    const double d = declared.position_m[i] - survey.position_m[i];
+    d2 += d * d;
+  }
+  for (int i = 0; i < 4; ++i) {
+    dot += declared.quaternion_xyzw[i] * survey.quaternion_xyzw[i];
+    norm2 += declared.quaternion_xyzw[i] * declared.quaternion_xyzw[i];
+  }
+  const double tol = config.survey_position_tolerance_m;
+  if (!(d2 <= tol * tol) || !(norm2 > 0.0) || !std::isfinite(norm2)) return false;  // NaN compares false
+  // Rotation angle between the two: 2 acos(|<q1, q2>|) with the declared one normalized (q and -q
+  // are the same rotation; the survey is unit length by the parser).
+  const double cos_half = std::fabs(dot) / std::sqrt(norm2);
+  return cos_half >= std::cos(0.5 * config.survey_angle_tolerance_rad);
 }
 
 void MapShareVerifier::provision(const TrustList& list) {
@@ -82,6 +104,7 @@ ShareVerifyResult MapShareVerifier::reject(ShareVerdict v, const TrustedSigner* 
     case ShareVerdict::kFuture: ++counters_.future; break;
     case ShareVerdict::kStampSkew: ++counters_.stamp_skew; break;
     case ShareVerdict::kReplay: ++counters_.replay; break;
+    case ShareVerdict::kPoseMismatch: ++counters_.pose_mismatch; break;
     case ShareVerdict::kBadSignature: ++counters_.bad_signature; break;
     case ShareVerdict::kCryptoError: ++counters_.crypto_error; break;
     case ShareVerdict::kAccepted: break;
@@ -106,6 +129,9 @@ ShareVerifyResult MapShareVerifier::admit(const protocol::CloudFrameInfo& info, 
   const TrustedSigner* signer = list_.find(sig.signer);
   if (signer == nullptr) return reject(ShareVerdict::kUnknownSigner);
   if (signer->sender_id != info.sender_id) return reject(ShareVerdict::kSenderMismatch, signer);
+  if (signer->surveyed && !matches_survey(signer->survey, info.pose, config_)) {
+    return reject(ShareVerdict::kPoseMismatch, signer);
+  }
   // Unsigned wire times compared in signed form (both are Unix ns < 2^63; larger: refused).
   const auto gen = static_cast<std::int64_t>(sig.generation_time_ns & 0x7FFFFFFFFFFFFFFFull);
   const auto stamp = static_cast<std::int64_t>(info.timestamp_ns & 0x7FFFFFFFFFFFFFFFull);

@@ -12,6 +12,16 @@
 // brief fixes). Replay: per signer, the generation time must strictly increase (a signer signs at
 // most one cloud per sensor per instant; a duplicated or re-sent cloud is a replay).
 //
+// Surveyed pose: an infrastructure unit is a fixed installation whose sensor pose the trust list
+// carries (trust_list.hpp `survey`). A share whose declared pose (header world_T_sensor) is off
+// that survey by more than 2 cm or 0.05 deg is refused (kPoseMismatch), signed or not: a signed
+// unit that lies about where it stands would otherwise place its whole cloud wrong, and map fusion
+// can only outvote it where other units overlap. Both numbers come from the same survey (the unit
+// declares the pose it was provisioned with; the simulator's are bit-identical), so any difference
+// is a fault or an attack; the tolerances only admit a re-surveyed unit's rounding and stay well
+// below the fused-error target (0.02 m): 0.05 deg moves a point 35 m away by 3 cm, less than the
+// map's 0.2 m voxel. An infrastructure signer without a survey keeps today's behaviour.
+//
 // Checks run cheapest first; the ECDSA verification (the only expensive step) runs last, so
 // garbage, unknown signers, stale and replayed shares cost no crypto. Three steps, so the caller can
 // spread the ECDSA work over periods: admit() runs the checks that need no clock when the cloud
@@ -38,6 +48,8 @@ struct MapShareVerifierConfig {
   std::int64_t max_future_ns = 40'000'000;      // [ns] generation time later than now + this: future
   std::int64_t max_stamp_skew_ns = 1'000'000'000;  // [ns] |cloud time stamp - generation time| allowed
   std::int64_t pending_timeout_ns = 1'000'000'000; // [ns] a signature waits this long for its cloud
+  double survey_position_tolerance_m = 0.02;        // [m] declared vs surveyed sensor position
+  double survey_angle_tolerance_rad = 0.05 * 3.14159265358979323846 / 180.0;  // [rad] orientation
 };
 
 enum class ShareVerdict : std::uint8_t {
@@ -49,10 +61,15 @@ enum class ShareVerdict : std::uint8_t {
   kFuture,            // generation time more than max_future ahead of the local clock
   kStampSkew,         // the cloud's own time stamp far from its generation time
   kReplay,            // not newer than the last share accepted from this signer
+  kPoseMismatch,      // infrastructure: declared sensor pose off the surveyed one
   kBadSignature,
   kCryptoError,       // arena exhausted or mbedTLS error (fail closed)
 };
 const char* to_string(ShareVerdict v);
+
+// True when `declared` is within the tolerances of `survey` (a non-finite or zero quaternion: false).
+bool matches_survey(const SurveyedPose& survey, const protocol::SensorPose& declared,
+                    const MapShareVerifierConfig& config);
 
 struct ShareVerifyResult {
   ShareVerdict verdict = ShareVerdict::kMissingSignature;
@@ -79,11 +96,12 @@ struct VerifierCounters {
   std::uint64_t future = 0;
   std::uint64_t stamp_skew = 0;
   std::uint64_t replay = 0;
+  std::uint64_t pose_mismatch = 0;  // infrastructure share declaring a pose off its survey
   std::uint64_t bad_signature = 0;
   std::uint64_t crypto_error = 0;
   std::uint64_t rejected() const {
     return missing_signature + unknown_signer + sender_mismatch + too_old + future + stamp_skew + replay +
-           bad_signature + crypto_error;
+           pose_mismatch + bad_signature + crypto_error;
   }
 };
 

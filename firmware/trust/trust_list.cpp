@@ -1,13 +1,16 @@
 #include "firmware/trust/trust_list.hpp"
 
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 
 namespace v2xloc::trust {
 namespace {
 
 constexpr std::size_t kMaxLine = 512;
-constexpr std::size_t kMaxTokens = 6;
+constexpr std::size_t kMaxTokens = 9;  // survey <id> x y z qx qy qz qw
+constexpr std::size_t kMaxNumberChars = 40;
 
 struct Token {
   const char* p = nullptr;
@@ -32,6 +35,33 @@ bool parse_u32(const Token& t, std::uint32_t& out) {
   if (v > 0xFFFFFFFFull) return false;
   out = static_cast<std::uint32_t>(v);
   return true;
+}
+
+// A plain decimal number: [+-]digits[.digits][(e|E)[+-]digits], at least one mantissa digit.
+// The grammar keeps out what strtod would also take (nan, inf, hex, locale forms); the value is
+// then converted by strtod over a bounded copy and must be finite (1e999 is not).
+bool parse_decimal(const Token& t, double& out) {
+  if (t.n == 0 || t.n > kMaxNumberChars) return false;
+  std::size_t i = 0, digits = 0;
+  if (t.p[i] == '+' || t.p[i] == '-') ++i;
+  for (; i < t.n && t.p[i] >= '0' && t.p[i] <= '9'; ++i) ++digits;
+  if (i < t.n && t.p[i] == '.') {
+    for (++i; i < t.n && t.p[i] >= '0' && t.p[i] <= '9'; ++i) ++digits;
+  }
+  if (digits == 0) return false;
+  if (i < t.n && (t.p[i] == 'e' || t.p[i] == 'E')) {
+    ++i;
+    if (i < t.n && (t.p[i] == '+' || t.p[i] == '-')) ++i;
+    std::size_t exp_digits = 0;
+    for (; i < t.n && t.p[i] >= '0' && t.p[i] <= '9'; ++i) ++exp_digits;
+    if (exp_digits == 0) return false;
+  }
+  if (i != t.n) return false;
+  char buf[kMaxNumberChars + 1];
+  std::memcpy(buf, t.p, t.n);
+  buf[t.n] = '\0';
+  out = std::strtod(buf, nullptr);
+  return std::isfinite(out);
 }
 
 bool parse_key(const Token& t, PublicKey& key) {
@@ -100,7 +130,36 @@ TrustListStatus add_signer(const TrustedSigner& s, TrustList& list) {
   return TrustListStatus::kOk;
 }
 
-// One line (without its '\n'): blank or comment, the header (first), or a signer.
+// "survey <sender id> x y z qx qy qz qw" (9 tokens) onto the infrastructure signer listed above.
+TrustListStatus parse_survey(const Token* tok, TrustList& list) {
+  std::uint32_t sender_id = 0;
+  if (!parse_u32(tok[1], sender_id)) return TrustListStatus::kBadSenderId;
+  TrustedSigner* signer = nullptr;
+  for (std::size_t k = 0; k < list.count; ++k) {
+    if (list.signers[k].sender_id == sender_id) signer = &list.signers[k];
+  }
+  if (signer == nullptr || signer->role != SignerRole::kInfrastructure) return TrustListStatus::kSurveyWithoutSigner;
+  if (signer->surveyed) return TrustListStatus::kDuplicateSurvey;
+  SurveyedPose pose;
+  for (std::size_t i = 0; i < 3; ++i) {
+    if (!parse_decimal(tok[2 + i], pose.position_m[i]) || std::fabs(pose.position_m[i]) > kMaxSurveyCoordinateM) {
+      return TrustListStatus::kBadSurveyNumber;
+    }
+  }
+  double norm2 = 0.0;
+  for (std::size_t i = 0; i < 4; ++i) {
+    if (!parse_decimal(tok[5 + i], pose.quaternion_xyzw[i]) || std::fabs(pose.quaternion_xyzw[i]) > 2.0) {
+      return TrustListStatus::kBadSurveyQuaternion;
+    }
+    norm2 += pose.quaternion_xyzw[i] * pose.quaternion_xyzw[i];
+  }
+  if (!(std::fabs(std::sqrt(norm2) - 1.0) <= kSurveyQuaternionNormTolerance)) return TrustListStatus::kBadSurveyQuaternion;
+  signer->survey = pose;
+  signer->surveyed = true;
+  return TrustListStatus::kOk;
+}
+
+// One line (without its '\n'): blank or comment, the header (first), a signer or a survey.
 TrustListStatus parse_line(const char* line, std::size_t len, bool& header, TrustList& list) {
   if (len > kMaxLine) return TrustListStatus::kSyntax;
   Token tok[kMaxTokens];
@@ -112,6 +171,7 @@ TrustListStatus parse_line(const char* line, std::size_t len, bool& header, Trus
     header = true;
     return TrustListStatus::kOk;
   }
+  if (tok[0].is("survey")) return nt == 9 ? parse_survey(tok, list) : TrustListStatus::kSyntax;
   if (!tok[0].is("signer") || nt < 4 || nt > 5) return TrustListStatus::kSyntax;
   TrustedSigner s;
   const TrustListStatus status = parse_signer(tok, nt, s);
@@ -133,6 +193,11 @@ const char* to_string(TrustListStatus s) {
     case TrustListStatus::kBadKey: return "bad public key";
     case TrustListStatus::kDuplicate: return "duplicate signer or sender id";
     case TrustListStatus::kTooMany: return "too many signers";
+    case TrustListStatus::kSurveyWithoutSigner: return "survey of a sender id with no infrastructure signer listed above";
+    case TrustListStatus::kBadSurveyNumber:
+      return "survey position must be plain decimal numbers (no nan/inf/hex) within +-100 km";
+    case TrustListStatus::kBadSurveyQuaternion: return "survey quaternion must be plain decimal numbers of unit length";
+    case TrustListStatus::kDuplicateSurvey: return "second survey for the same signer";
   }
   return "?";
 }
@@ -142,6 +207,12 @@ const TrustedSigner* TrustList::find(const HashedId8& id) const {
     if (signers[i].id == id) return &signers[i];
   }
   return nullptr;
+}
+
+std::size_t TrustList::surveyed_count() const {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < count; ++i) n += signers[i].surveyed ? 1u : 0u;
+  return n;
 }
 
 TrustListParseResult parse_trust_list(std::span<const std::uint8_t> text, TrustList& out) {
@@ -184,6 +255,7 @@ std::size_t format_trust_list(const TrustList& list, std::span<char> out) {
     return true;
   };
   if (!put("# v2xloc trust list: signer <role> <sender id> <P-256 public key 04||X||Y hex> [name]\n"
+           "#   survey <sender id> <x y z [m]> <qx qy qz qw>: an infrastructure unit's surveyed sensor pose\n"
            "v2xloc-trust-list 1\n")) {
     return 0;
   }
@@ -193,6 +265,13 @@ std::size_t format_trust_list(const TrustList& list, std::span<char> out) {
     for (const std::uint8_t b : s.key) n += std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), "%02x", b);
     std::snprintf(line + n, sizeof line - static_cast<std::size_t>(n), "%s%s\n", s.name[0] ? " " : "", s.name.data());
     if (!put(line)) return 0;
+    if (s.surveyed) {  // %.17g: every double reads back bit-identical
+      const SurveyedPose& p = s.survey;
+      std::snprintf(line, sizeof line, "survey %u %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", s.sender_id,
+                    p.position_m[0], p.position_m[1], p.position_m[2], p.quaternion_xyzw[0], p.quaternion_xyzw[1],
+                    p.quaternion_xyzw[2], p.quaternion_xyzw[3]);
+      if (!put(line)) return 0;
+    }
   }
   return used;
 }

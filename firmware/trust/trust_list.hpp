@@ -6,10 +6,17 @@
 // Text format (one file, e.g. trust_list.txt in a recording folder), UTF-8/ASCII lines:
 //   v2xloc-trust-list 1                          (first non-comment line)
 //   signer <infrastructure|agent> <sender id> <public key: 130 hex digits, 04 || X || Y> [name]
+//   survey <sender id> <x> <y> <z> <qx> <qy> <qz> <qw>   (optional, after that signer's line)
 //   # comment, blank lines ignored
+// A survey line gives an infrastructure unit's surveyed sensor pose (sensor -> map frame: position
+// in metres, unit quaternion in x y z w order as in the share header); the firmware refuses that
+// unit's shares when the pose they declare differs from it (map_share_verifier.hpp). Infrastructure
+// signers without one are trusted on their declared pose as before (older lists parse unchanged).
 // parse_trust_list() is a pure function over bytes (fuzzable): every key is checked to be a
-// P-256 point; duplicates (key or sender id), unknown words, over-long lines and more than
-// kMaxTrustedSigners entries are errors with a line number.
+// P-256 point; duplicates (key, sender id or a second survey), unknown words, over-long lines,
+// more than kMaxTrustedSigners entries, a survey without an infrastructure signer above it, a
+// coordinate that is not a plain decimal number (nan, inf, hex) or beyond kMaxSurveyCoordinateM,
+// and a quaternion that is not unit length are errors with a line number.
 #pragma once
 
 #include <array>
@@ -23,9 +30,19 @@ namespace v2xloc::trust {
 
 inline constexpr std::size_t kMaxTrustedSigners = 32;
 inline constexpr std::size_t kMaxTrustListBytes = 64 * 1024;
+// Survey limits: a local map frame spans kilometres, not 100 km; a surveyed quaternion is written
+// with 17 digits, so its norm is 1 to ~1e-16 and 1e-6 only admits rounding of a shorter print.
+inline constexpr double kMaxSurveyCoordinateM = 100'000.0;
+inline constexpr double kSurveyQuaternionNormTolerance = 1e-6;
 
 enum class SignerRole : std::uint8_t { kInfrastructure, kAgent };
 const char* to_string(SignerRole r);
+
+// Surveyed sensor pose of an infrastructure unit: sensor frame -> map frame.
+struct SurveyedPose {
+  std::array<double, 3> position_m{};
+  std::array<double, 4> quaternion_xyzw{0.0, 0.0, 0.0, 1.0};
+};
 
 struct TrustedSigner {
   PublicKey key{};
@@ -33,6 +50,8 @@ struct TrustedSigner {
   SignerRole role = SignerRole::kAgent;
   std::uint32_t sender_id = 0;
   std::array<char, 32> name{};  // NUL-terminated, informational
+  bool surveyed = false;        // infrastructure only: `survey` holds its surveyed pose
+  SurveyedPose survey{};
 };
 
 struct TrustList {
@@ -40,6 +59,7 @@ struct TrustList {
   std::size_t count = 0;
 
   const TrustedSigner* find(const HashedId8& id) const;
+  std::size_t surveyed_count() const;
   std::span<const TrustedSigner> view() const { return {signers.data(), count}; }
 };
 
@@ -53,6 +73,10 @@ enum class TrustListStatus : std::uint8_t {
   kBadKey,        // not 130 hex digits or not a P-256 point
   kDuplicate,     // key (HashedId8) or sender id listed twice
   kTooMany,       // more than kMaxTrustedSigners
+  kSurveyWithoutSigner,   // survey of a sender id with no infrastructure signer above it
+  kBadSurveyNumber,       // not a plain decimal number, not finite, or beyond kMaxSurveyCoordinateM
+  kBadSurveyQuaternion,   // quaternion norm not 1 within kSurveyQuaternionNormTolerance
+  kDuplicateSurvey,       // a second survey line for the same signer
 };
 const char* to_string(TrustListStatus s);
 

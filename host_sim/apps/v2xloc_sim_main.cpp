@@ -7,9 +7,12 @@
 // writes standard float32 PCD copies of a recording's clouds (format 2 stores them quantised).
 // v2xloc-sim upgrade-can RECORDING_DIR rewrites a CAN layout 1 log (recorded before every GNSS frame
 // had a counter and a CRC) in the current layout beside the original and points the manifest at it.
+// v2xloc-sim upgrade-trust RECORDING_DIR writes the trust list with every infrastructure unit's
+// surveyed pose (recorded before trust lists carried them) beside the original, likewise.
 #include "host_sim/recording/can_log_upgrade.hpp"
 #include "host_sim/recording/pcd_export.hpp"
 #include "host_sim/recording/recorder.hpp"
+#include "host_sim/recording/trust_list_upgrade.hpp"
 
 #include <CLI/CLI.hpp>
 #include <unistd.h>
@@ -81,6 +84,19 @@ int run_upgrade_can(const std::string& dir) {
               " they were); the manifest names it, the original is kept\n",
               dir.c_str(), kCanLayoutVersion, result.log_file.c_str(), result.frames, result.conversion.positions,
               result.conversion.times, result.conversion.kept);
+  return 0;
+}
+
+int run_upgrade_trust(const std::string& dir) {
+  TrustListUpgrade result;
+  std::string error;
+  if (!upgrade_trust_list(dir, result, error)) {
+    std::fprintf(stderr, "v2xloc-sim upgrade-trust: %s\n", error.c_str());
+    return 1;
+  }
+  std::printf("%s: trust list %s: %zu signers, %zu infrastructure surveyed%s\n", dir.c_str(), result.file.c_str(),
+              result.signers, result.surveyed,
+              result.already_surveyed ? " (already)" : "; the manifest names it, the original is kept");
   return 0;
 }
 
@@ -161,6 +177,11 @@ int main(int argc, char** argv) {
                      "convert old logs on the fly anyway)");
   std::string upgrade_dir;
   upgrade->add_option("RECORDING_DIR", upgrade_dir, "recording folder")->required();
+  CLI::App* upgrade_trust = app.add_subcommand(
+      "upgrade-trust", "add every infrastructure unit's surveyed pose to a recording's trust list (the original is "
+                       "kept; without surveys the firmware trusts the pose a unit declares)");
+  std::string upgrade_trust_dir;
+  upgrade_trust->add_option("RECORDING_DIR", upgrade_trust_dir, "recording folder")->required();
   try {
     app.parse(argc, argv);
     if (generate->parsed() && !all && (scenario < 0 || perm_name.empty()))
@@ -170,6 +191,7 @@ int main(int argc, char** argv) {
   }
   if (export_pcd->parsed()) return run_export(export_in, export_out, encoding_name);
   if (upgrade->parsed()) return run_upgrade_can(upgrade_dir);
+  if (upgrade_trust->parsed()) return run_upgrade_trust(upgrade_trust_dir);
   base.stereo = !no_stereo;
   return run_generate(base, all, scenario, perm_name, out);
 }

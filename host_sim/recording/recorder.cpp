@@ -479,13 +479,17 @@ Json manifest_files(const Session& s, const RecordingSummary& summary) {
   return files;
 }
 
-// trust_list.txt: every map-cloud sensor's deterministic test key (sim_trust.hpp), the list the
-// firmware is provisioned with when this recording is replayed.
+// trust_list.txt: every map-cloud sensor's deterministic test key (sim_trust.hpp) and every
+// infrastructure sensor's surveyed pose, the list the firmware is provisioned with when this
+// recording is replayed.
 bool write_trust_list(Session& s, std::string& error) {
   std::vector<SimSigner> signers;
   for (const auto& site : s.sites) {
     SimSigner signer;
-    if (sim_signer("infra", site.name, signer)) signers.push_back(signer);
+    if (!sim_signer("infra", site.name, signer)) continue;
+    signer.surveyed = true;
+    signer.survey = surveyed_pose(site.sensor_to_enu);
+    signers.push_back(signer);
   }
   if (s.agents) {
     for (std::size_t a = 0; a < s.scenario().agents.size(); ++a) {

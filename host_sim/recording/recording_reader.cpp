@@ -277,6 +277,7 @@ bool RecordingReader::parse_manifest(const std::string& text, std::string& error
       Eigen::Isometry3d p;
       if (!s.pose("surveyed_pose_enu", p)) return false;
       infra_poses_.push_back(p);
+      infra_names_.push_back(name);
     }
   }
   if (!have_ego_lidar) return top.fail("sensors", "no ego_lidar entry");

@@ -89,6 +89,7 @@ class RecordingReader {
   std::vector<const MapCloudInfo*> latest_map_clouds(double t) const;
   bool load_map_cloud(const MapCloudInfo& info, cloud_io::PointCloud& out, std::string& error) const;
   const std::vector<Eigen::Isometry3d>& infra_surveyed_poses() const { return infra_poses_; }
+  const std::vector<std::string>& infra_sensor_names() const { return infra_names_; }  // same order
 
   // CAN log (candump -L format: "(unix.usec) iface ID#DATA", host_sim/canlog). False if the
   // recording has none or any line is malformed.
@@ -129,6 +130,7 @@ class RecordingReader {
   IndexPattern scan_pattern_, disparity_pattern_;
   std::string gt_file_, gt100_file_, can_log_file_, trust_list_file_;
   std::vector<Eigen::Isometry3d> infra_poses_;
+  std::vector<std::string> infra_names_;
   Eigen::Isometry3d ego_lidar_mount_ = Eigen::Isometry3d::Identity();
   std::vector<TimedPose> gt_, gt100_;
   bool has_stereo_ = false;

@@ -38,6 +38,14 @@ bool sim_sender_id(const std::string& kind, const std::string& sensor, std::uint
   return false;
 }
 
+trust::SurveyedPose surveyed_pose(const Eigen::Isometry3d& sensor_to_enu) {
+  trust::SurveyedPose p;
+  const Eigen::Quaterniond q(sensor_to_enu.linear());
+  for (int k = 0; k < 3; ++k) p.position_m[static_cast<std::size_t>(k)] = sensor_to_enu.translation()[k];
+  p.quaternion_xyzw = {q.x(), q.y(), q.z(), q.w()};
+  return p;
+}
+
 bool sim_signer(const std::string& kind, const std::string& sensor, SimSigner& out) {
   SimSigner s;
   if (!sim_sender_id(kind, sensor, s.sender_id)) return false;
@@ -69,6 +77,8 @@ trust::TrustList trust_list_of(const std::vector<SimSigner>& signers) {
     t.sender_id = s.sender_id;
     const std::size_t n = std::min(s.sensor.size(), t.name.size() - 1);
     s.sensor.copy(t.name.data(), n);
+    t.surveyed = s.surveyed && s.role == trust::SignerRole::kInfrastructure;
+    t.survey = s.survey;
   }
   return list;
 }

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Geometry>
+
 #include "firmware/trust/trust_list.hpp"
 
 namespace v2xloc::sim {
@@ -22,7 +24,12 @@ struct SimSigner {
   trust::SignerRole role = trust::SignerRole::kAgent;
   trust::PrivateKey priv{};
   trust::PublicKey pub{};
+  bool surveyed = false;  // infrastructure: its sensor pose goes on the trust list as a survey
+  trust::SurveyedPose survey{};
 };
+
+// The trust list's form of a surveyed sensor pose (sensor -> ENU), as the share header declares it.
+trust::SurveyedPose surveyed_pose(const Eigen::Isometry3d& sensor_to_enu);
 
 // Sender id of a map-cloud sensor: "infra_k" -> 1 + k (k < 31), "agent_k..." -> 32 + k.
 bool sim_sender_id(const std::string& kind, const std::string& sensor, std::uint32_t& sender_id);

@@ -214,16 +214,28 @@ bool EventStream::next_frame(int i, std::vector<WireEvent>& out, std::string& er
     const bool rogue = (fs.rogue_shift_m != 0 || fs.rogue_future_s > 0) &&
                        (fs.rogue_source == info.sensor || (fs.rogue_source == "all-infra" && info.kind == "infra"));
     Eigen::Isometry3d shifted = Eigen::Translation3d(fs.rogue_shift_m, 0, 0) * info.sensor_pose;
+    cloud_io::PointCloud moved;  // rogue-points: the same world shift applied to the points instead
+    if (rogue && fs.rogue_points && fs.rogue_shift_m != 0) {
+      moved = cloud;
+      const Eigen::Vector3f in_sensor =
+          (info.sensor_pose.linear().transpose() * Eigen::Vector3d(fs.rogue_shift_m, 0, 0)).cast<float>();
+      for (Eigen::Vector3f& p : moved.points) p += in_sensor;
+      shifted = info.sensor_pose;
+    }
+    const cloud_io::PointCloud& rogue_cloud = moved.points.empty() ? cloud : moved;
     const std::int64_t stamp_ns = seconds_to_ns(info.stamp);
     const std::uint32_t seq = cloud_seq_[id]++;
     WireEvent ev;
     const bool insider = rogue && fs.rogue_signed && fs.rogue_shift_m != 0;
-    if (!map_share(info, id, seq, stamp_ns, insider ? shifted : info.sensor_pose, cloud, signer, ev, error)) return false;
+    if (!map_share(info, id, seq, stamp_ns, insider ? shifted : info.sensor_pose, insider ? rogue_cloud : cloud, signer,
+                   ev, error)) {
+      return false;
+    }
     if (insider) ++fst.rogue_shares;
     std::vector<WireEvent> extra;
     if (rogue && !fs.rogue_signed && fs.rogue_shift_m != 0) {  // outsider: unsigned shifted copy
       WireEvent r;
-      if (!map_share(info, id, seq + 0x40000000u, stamp_ns, shifted, cloud, nullptr, r, error)) return false;
+      if (!map_share(info, id, seq + 0x40000000u, stamp_ns, shifted, rogue_cloud, nullptr, r, error)) return false;
       extra.push_back(std::move(r));
       ++fst.rogue_shares;
     }

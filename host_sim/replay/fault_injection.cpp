@@ -61,6 +61,9 @@ bool parse_fault_spec(const std::string& spec, FaultSpec& out, std::string& erro
     } else if (key == "rogue-signed") {
       ok = value == "0" || value == "1";
       f.rogue_signed = value == "1";
+    } else if (key == "rogue-points") {
+      ok = value == "0" || value == "1";
+      f.rogue_points = value == "1";
     } else if (key == "rogue-future") secs(f.rogue_future_s);
     else if (key == "rogue-ids") {
       ok = to_double(value, 0, 1000, d);
@@ -91,7 +94,8 @@ std::string describe(const FaultSpec& f) {
   if (f.gnss_outage_s > 0) o << " gnss-outage=" << f.gnss_outage_s << "@" << f.gnss_outage_at_s;
   if (f.infra_dropout_s > 0) o << " infra-dropout=" << f.infra_dropout_s << "@" << f.infra_dropout_at_s;
   if (f.can_burst > 0) o << " can-burst=" << f.can_burst << "@" << f.can_burst_at_s;
-  if (f.rogue_shift_m != 0) o << " rogue-shift=" << f.rogue_shift_m << "(" << f.rogue_source << (f.rogue_signed ? ",signed)" : ",unsigned)");
+  if (f.rogue_shift_m != 0) o << " rogue-shift=" << f.rogue_shift_m << "(" << f.rogue_source << (f.rogue_signed ? ",signed" : ",unsigned")
+                              << (f.rogue_points ? ",points)" : ")");
   if (f.rogue_future_s > 0) o << " rogue-future=" << f.rogue_future_s;
   if (f.rogue_ids > 0) o << " rogue-ids=" << f.rogue_ids;
   if (f.ego_time_jump_frame >= 0) o << " ego-time-jump=" << f.ego_time_jump_frame;

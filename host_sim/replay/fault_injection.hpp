@@ -20,6 +20,8 @@
 //                      provisioned key (a compromised / mis-surveyed insider). 0: an outsider
 //                      injects shifted copies under the source's sender id, unsigned, beside the
 //                      genuine clouds.
+//   rogue-points=0|1   1: the shift moves the points and the share declares the true (surveyed)
+//                      pose; 0 (default): the declared pose is shifted, the points are as sensed
 //   rogue-future=S     an outsider injects a copy of rogue-source's clouds dated S seconds ahead
 //                      (signed with rogue-signed=1: by a key not in the trust list)
 //   rogue-ids=N        an outsider floods N invented agent sender ids (unsigned) every share period
@@ -45,6 +47,7 @@ struct FaultSpec {
   double rogue_shift_m = 0.0;
   std::string rogue_source = "infra_0";
   bool rogue_signed = true;
+  bool rogue_points = false;  // shift the points, declare the true pose (what a survey cannot catch)
   double rogue_future_s = 0.0;
   int rogue_ids = 0;
   int ego_time_jump_frame = -1;

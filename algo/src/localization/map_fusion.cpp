@@ -135,6 +135,12 @@ double MapFusion::consistency(std::size_t slot, std::uint32_t& overlap_points, d
   return static_cast<double>(inliers) / static_cast<double>(n);
 }
 
+std::uint32_t MapFusion::other_trusted(std::size_t slot) const {
+  std::uint32_t n = 0;
+  for (std::size_t s = 0; s < config::kMaxMapSources; ++s) n += (s != slot && sources_[s].active && sources_[s].trusted) ? 1u : 0u;
+  return n;
+}
+
 std::uint32_t MapFusion::drop_covered_by_trusted(std::size_t slot) {
   new_cell_generation();
   bool any = false;
@@ -211,20 +217,28 @@ bool MapFusion::passes_consistency(std::size_t own_slot, bool trusted, MapInsert
   // nothing the map can trust). Infrastructure units against each other where they overlap:
   // their absolute fitness is low even for exact poses (different faces of the buildings), so
   // only the shift test applies, and without overlap a surveyed unit is accepted.
+  // With two or more other units the quorum rule applies (map_fusion.hpp: infra_quorum_*).
   r.consistency_fitness = consistency(own_slot, r.overlap_points, r.best_probe_fitness);
   const bool checkable = r.overlap_points >= params_.min_overlap_points;
-  const double margin = trusted ? params_.infra_probe_margin : params_.probe_margin;
+  const std::uint32_t others = trusted ? other_trusted(own_slot) : 0;
+  const bool quorum = trusted && others >= 2;
+  const double margin = !trusted ? params_.probe_margin : quorum ? params_.infra_quorum_margin : params_.infra_probe_margin;
   const bool shifted = checkable && r.best_probe_fitness > r.consistency_fitness + margin;
+  const double floor = !trusted ? params_.min_fitness : others >= 3 ? params_.infra_quorum_min_fitness : 0.0;
   if (!trusted && !checkable) {
     r.status = MapInsertStatus::kHeldBack;
     ++counters_.held_back;
     return false;
   }
-  if (shifted || (!trusted && r.consistency_fitness < params_.min_fitness)) {
+  if (shifted || (checkable && r.consistency_fitness < floor)) {  // agents here are checkable
     r.status = MapInsertStatus::kRejectedInconsistent;
     ++counters_.rejected_inconsistent;
+    if (quorum) ++counters_.infra_outvoted;
+    r.outvoted = quorum;
+    r.quorum_checked = others >= 3 && checkable;
     return false;
   }
+  r.quorum_checked = trusted && others >= 3 && checkable;  // the full rule: peak and floor
   if (!checkable) r.consistency_fitness = 1.0;
   return true;
 }
@@ -271,8 +285,12 @@ MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
   stage_candidate(world_T_sensor, points, r);
   // The source's previous cloud is left out of the reference (a displaced slot is not its own).
   const std::size_t own_slot = known ? slot : config::kMaxMapSources;
-  if (params_.check_consistency && !candidate_.empty() && !passes_consistency(own_slot, trusted, r))
+  if (params_.check_consistency && !candidate_.empty() && !passes_consistency(own_slot, trusted, r)) {
+    // An outvoted unit's older cloud goes too: it may have been accepted before a quorum existed
+    // (the first share of the first unit to send is checked against nothing).
+    if (r.outvoted && known) evict_outvoted(slot);
     return r;
+  }
   if (!trusted && params_.agent_fill_cell > 0.0) {
     r.covered_dropped = drop_covered_by_trusted(own_slot);
     counters_.agent_points_covered += r.covered_dropped;
@@ -289,12 +307,37 @@ MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
   info.points = stored;
   info.active = true;
   info.trusted = trusted;
+  info.vetted = r.quorum_checked;
   r.stored_points = stored;
   r.status = known ? MapInsertStatus::kReplaced : MapInsertStatus::kInserted;
   if (known) ++counters_.replaced;
   else ++counters_.inserted;
   ++revision_;
+  if (trusted && params_.check_consistency) vet_infrastructure();
   return r;
+}
+
+void MapFusion::evict_outvoted(std::size_t slot) {
+  remove_source_points(slot);
+  sources_[slot] = MapSourceInfo{};
+  ++counters_.infra_evicted;
+  ++revision_;
+}
+
+void MapFusion::vet_infrastructure() {
+  for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
+    if (!sources_[s].active || !sources_[s].trusted || sources_[s].vetted || other_trusted(s) < 3) continue;
+    candidate_.clear();  // free after the insert: the stored cloud is scored as a candidate would be
+    for (std::size_t i = 0; i < num_points_; ++i) {
+      if (point_source_[i] == s) candidate_.push_back(points_[i]);
+    }
+    MapInsertResult r;
+    if (candidate_.empty() || passes_consistency(s, true, r)) {
+      sources_[s].vetted = r.quorum_checked;
+    } else if (r.outvoted) {
+      evict_outvoted(s);
+    }
+  }
 }
 
 std::uint32_t MapFusion::expire(double now) {

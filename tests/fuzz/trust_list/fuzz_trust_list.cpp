@@ -1,7 +1,9 @@
 // Trust-list files (firmware/trust/trust_list.hpp) from arbitrary bytes: a file parses or is
 // refused with a status and a line inside the text; a list that parses holds at most
-// kMaxTrustedSigners distinct signers with valid roles, formats to text that parses again to the
-// same signers, and every signer is found by its HashedId8.
+// kMaxTrustedSigners distinct signers with valid roles, surveys only on infrastructure signers
+// with finite coordinates and a unit quaternion, formats to text that parses again to the same
+// signers and bit-identical surveys, and every signer is found by its HashedId8.
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -23,6 +25,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   for (const TrustedSigner& s : list->view()) {
     if (s.role != SignerRole::kInfrastructure && s.role != SignerRole::kAgent) std::abort();
     if (list->find(s.id) != &s) std::abort();
+    if (!s.surveyed) continue;
+    if (s.role != SignerRole::kInfrastructure) std::abort();
+    double norm2 = 0.0;
+    for (const double v : s.survey.position_m) {
+      if (!std::isfinite(v) || std::fabs(v) > kMaxSurveyCoordinateM) std::abort();
+    }
+    for (const double v : s.survey.quaternion_xyzw) norm2 += v * v;
+    if (!(std::fabs(std::sqrt(norm2) - 1.0) <= kSurveyQuaternionNormTolerance)) std::abort();
   }
   auto text = std::make_unique<char[]>(kMaxTrustListBytes);
   const std::size_t n = format_trust_list(*list, {text.get(), kMaxTrustListBytes});
@@ -35,6 +45,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const TrustedSigner& a = list->signers[i];
     const TrustedSigner& b = again->signers[i];
     if (a.key != b.key || a.id != b.id || a.role != b.role || a.sender_id != b.sender_id) std::abort();
+    if (a.surveyed != b.surveyed || std::memcmp(&a.survey, &b.survey, sizeof a.survey) != 0) std::abort();
   }
   return 0;
 }

@@ -312,6 +312,7 @@ inline std::vector<MessageBinding> message_bindings() {
                  m.future = as<std::uint8_t>(v, "Future");
                  m.replay = as<std::uint8_t>(v, "Replay");
                  m.queue_overflow = as<std::uint8_t>(v, "QueueOverflow");
+                 m.pose_mismatch = as<std::uint8_t>(v, "PoseMismatch");
                  m.counter = as<std::uint8_t>(v, "Counter");
                  return pack(m, s);
                },
@@ -320,7 +321,7 @@ inline std::vector<MessageBinding> message_bindings() {
                  const auto st = unpack(f, m);
                  v = {{"UnknownSigner", m.unknown_signer}, {"BadSignature", m.bad_signature}, {"TooOld", m.too_old},
                       {"Future", m.future}, {"Replay", m.replay}, {"QueueOverflow", m.queue_overflow},
-                      {"Counter", m.counter}};
+                      {"PoseMismatch", m.pose_mismatch}, {"Counter", m.counter}};
                  return st;
                }});
   b.push_back({kInputGuardsId,

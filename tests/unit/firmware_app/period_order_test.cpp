@@ -209,7 +209,7 @@ TEST(FirmwareSecurityDiagnostics, HeartbeatIsFollowedByTheRefusalCounts) {
       EXPECT_EQ(can.sent[i - 1].id, protocol::kHeartbeatId) << "sent right after the heartbeat";
       protocol::TrustRejections t;
       ASSERT_EQ(protocol::unpack(can.sent[i], t), protocol::DecodeStatus::kOk);
-      EXPECT_EQ(t.unknown_signer + t.bad_signature + t.too_old + t.future + t.replay + t.queue_overflow, 0);
+      EXPECT_EQ(t.unknown_signer + t.bad_signature + t.too_old + t.future + t.replay + t.queue_overflow + t.pose_mismatch, 0);
       ++found;
     }
     if (can.sent[i].id == protocol::kInputGuardsId) {

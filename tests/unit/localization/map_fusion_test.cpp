@@ -214,6 +214,61 @@ TEST(MapFusion, ShiftedAgentRejectedAndUncheckableAgentHeldBack) {
   EXPECT_EQ(map.insert(40, 1.0, Pose3d(agent), in_sensor_frame(scene, agent)).status, MapInsertStatus::kHeldBack);
 }
 
+// Infrastructure quorum: a unit whose points are shifted under its true pose (what the survey check
+// cannot see) is outvoted by three other units (counted), whatever the shift; against one other unit
+// it is not (two units cannot outvote each other: a 3 m shift leaves no peak to compare).
+TEST(MapFusion, ShiftedInfrastructureOutvotedByThreeUnitsNotByOne) {
+  const auto scene = corner_scene();
+  const Mat4d units[] = {sensor_pose(12.0, 12.0, 2.0), sensor_pose(-3.0, 12.0, 1.2), sensor_pose(12.0, -3.0, 2.6),
+                         sensor_pose(-4.0, -4.0, 0.8)};
+  for (const double shift : {0.0, 0.25, 3.0}) {
+    for (const std::size_t others : {std::size_t{1}, std::size_t{3}}) {
+      MapFusion& map = fresh_map();
+      for (std::size_t k = 0; k < others; ++k) {
+        ASSERT_EQ(map.insert(static_cast<std::uint32_t>(1 + k), 1.0, Pose3d(units[k]), in_sensor_frame(scene, units[k]), true).status,
+                  MapInsertStatus::kInserted);
+      }
+      std::vector<Vec3d> moved = scene;
+      for (Vec3d& p : moved) p.x() += shift;  // the points move, the declared pose does not
+      const MapInsertResult r = map.insert(9, 1.0, Pose3d(units[3]), in_sensor_frame(moved, units[3]), true);
+      const bool outvoted = shift > 0.0 && others == 3;
+      EXPECT_EQ(r.status, outvoted ? MapInsertStatus::kRejectedInconsistent : MapInsertStatus::kInserted)
+          << "shift " << shift << " others " << others << " fitness " << r.consistency_fitness << " probe "
+          << r.best_probe_fitness;
+      EXPECT_EQ(map.counters().infra_outvoted, outvoted ? 1u : 0u);
+      EXPECT_EQ(r.outvoted, outvoted);
+    }
+  }
+}
+
+// The first unit to send is checked against nothing: a rogue that arrives first is accepted, the
+// genuine units after it are not rejected for disagreeing with it, and once three other units are
+// present its stored cloud is vetted against them and evicted; its next cloud is outvoted.
+TEST(MapFusion, RogueArrivingFirstIsEvictedOnceOutvoted) {
+  const auto scene = corner_scene();
+  const Mat4d units[] = {sensor_pose(12.0, 12.0, 2.0), sensor_pose(-3.0, 12.0, 1.2), sensor_pose(12.0, -3.0, 2.6),
+                         sensor_pose(-4.0, -4.0, 0.8)};
+  std::vector<Vec3d> moved = scene;
+  for (Vec3d& p : moved) p.x() += 3.0;
+  MapFusion& map = fresh_map();
+  ASSERT_EQ(map.insert(9, 1.0, Pose3d(units[3]), in_sensor_frame(moved, units[3]), true).status, MapInsertStatus::kInserted);
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_EQ(map.insert(static_cast<std::uint32_t>(1 + k), 1.0, Pose3d(units[k]), in_sensor_frame(scene, units[k]), true).status,
+              MapInsertStatus::kInserted)
+        << k;
+  }
+  EXPECT_EQ(map.counters().infra_evicted, 1u);
+  std::uint32_t genuine = 0;
+  for (const MapSourceInfo& s : map.sources()) {
+    EXPECT_FALSE(s.active && s.id == 9u);
+    genuine += s.active ? 1u : 0u;
+  }
+  EXPECT_EQ(genuine, 3u);
+  const MapInsertResult r = map.insert(9, 1.5, Pose3d(units[3]), in_sensor_frame(moved, units[3]), true);
+  EXPECT_EQ(r.status, MapInsertStatus::kRejectedInconsistent);
+  EXPECT_TRUE(r.outvoted);
+}
+
 // The check scores an even subsample of a large cloud: the same verdicts as scoring every point,
 // and the overlap count scaled back to the whole cloud.
 TEST(MapFusion, SampledConsistencyKeepsTheVerdicts) {

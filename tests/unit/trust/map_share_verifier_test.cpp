@@ -151,6 +151,33 @@ TEST(MapShareVerifier, EveryRejectionIsCountedByReason) {
   EXPECT_EQ(c.accepted, 1u);
 }
 
+// A surveyed infrastructure unit signing shares that declare its pose shifted 0.25 m, 3 m and 200 m
+// (the rogue-shift insider: its own key, a valid signature): refused as kPoseMismatch before any
+// ECDSA; its genuine share is accepted. Without a survey the same shifted share is accepted.
+TEST(MapShareVerifier, SurveyedInfrastructureDeclaringAnotherPoseIsRefused) {
+  for (const bool surveyed : {true, false}) {
+    Fixture f;
+    f.list.signers[0].surveyed = surveyed;
+    f.list.signers[0].survey.position_m = {12.5, 0.0, 0.0};
+    MapShareVerifier v;
+    v.provision(f.list);
+    std::int64_t gen = kNow - 30'000'000;
+    for (const double shift : {0.25, 3.0, 200.0}) {
+      f.cloud.info.pose.position_m[0] = 12.5 + shift;
+      gen += 1'000'000;
+      v.on_signature_datagram(f.signed_datagram(f.infra_priv, f.infra_pub, gen), 0);  // signed as shifted
+      const ShareVerdict want = surveyed ? ShareVerdict::kPoseMismatch : ShareVerdict::kAccepted;
+      EXPECT_EQ(v.verify(f.cloud.info, f.digest(), kNow).verdict, want) << shift;
+    }
+    f.cloud.info.pose.position_m[0] = 12.5;
+    v.on_signature_datagram(f.signed_datagram(f.infra_priv, f.infra_pub, gen + 1'000'000), 0);
+    EXPECT_EQ(v.verify(f.cloud.info, f.digest(), kNow).verdict, ShareVerdict::kAccepted);
+    EXPECT_EQ(v.counters().pose_mismatch, surveyed ? 3u : 0u);
+    EXPECT_EQ(v.counters().accepted, surveyed ? 1u : 4u);
+    EXPECT_EQ(v.counters().rejected(), surveyed ? 3u : 0u);
+  }
+}
+
 // admit(), check_time() then complete(), as the decoder's queue does: freshness is judged once, at
 // the first period boundary, so a job completed later still passes; two jobs of one signer completed newest first leave the older one
 // a replay (the replay check runs again at completion); the digest binds the wire bytes.

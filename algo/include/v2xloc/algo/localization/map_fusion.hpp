@@ -55,9 +55,20 @@ struct MapFusionParams {
   double probe_margin = 0.02;    // fitness difference, agents
   // Infrastructure units are checked against each other, in arrival order: a rogue unit that
   // arrives first becomes part of the reference, and a tight margin then rejects the genuine
-  // units instead (measured: 0.25 m rogue, margin 0.02 -> fused error 4.1 m). 0.1 still rejects a
-  // 3 m shift and never inverted in the runs; a quorum over overlapping units is the real fix.
-  double infra_probe_margin = 0.1;  // fitness difference, infrastructure
+  // units instead (measured: 0.25 m rogue, margin 0.02 -> fused error 4.1 m). 0.1 never inverted in
+  // the runs. It applies against one other unit only; with more, the quorum below (and units
+  // accepted before it existed are vetted once it does, so arrival order does not decide).
+  double infra_probe_margin = 0.1;  // fitness difference, infrastructure against one other unit
+  // Quorum: the more other units the reference holds, the sharper an exact unit's score. Measured on
+  // the four Sim scenes (4_infra, t = 0 and 5 s, each unit against every subset of the others, shifts
+  // of 0.25-10 m along x and y): against two others an exact unit peaks at zero offset (fitness minus
+  // best probe 0.012..0.097) while one shifted 0.25 or 0.5 m does not (<= -0.016); against three
+  // others an exact unit scores >= 0.563 and one shifted >= 0.5 m <= 0.471 (and 1-10 m shifts, whose
+  // probe profile is flat, are caught only by that floor). Against one other unit the ranges overlap
+  // (exact 0.17-0.40, shifted 0.06-0.37): two units cannot outvote each other, the survey
+  // (firmware trust list) is their only check, and the loose margin above stays.
+  double infra_quorum_margin = 0.0;     // probe margin with >= 2 other units in the reference
+  double infra_quorum_min_fitness = 0.5;  // fitness floor with >= 3 other units in the reference
   std::uint32_t max_probe_points = 1024;  // overlap points scored per probe (even stride)
   // Candidate points the consistency check scores (even stride; clamped to
   // config::kMapConsistencyPoints): a fitness is a fraction, 2k samples pin it to ~1 % (the
@@ -90,6 +101,8 @@ struct MapInsertResult {
   std::uint32_t covered_dropped = 0;    // agent points where the infrastructure already sees
   double consistency_fitness = 1.0;     // inliers / overlap_points (1 when no verdict)
   double best_probe_fitness = 0.0;      // best fitness of the shifted probes (shift check)
+  bool outvoted = false;                // infrastructure rejected by the quorum: its stored cloud evicted too
+  bool quorum_checked = false;          // infrastructure checked by the full rule (>= 3 other units)
 };
 
 struct MapSourceInfo {
@@ -99,6 +112,7 @@ struct MapSourceInfo {
   std::uint32_t points = 0;
   bool active = false;
   bool trusted = false;                 // surveyed infrastructure
+  bool vetted = false;                  // infrastructure: its stored cloud passed the full quorum rule
 };
 
 struct MapFusionCounters {
@@ -107,6 +121,8 @@ struct MapFusionCounters {
   std::uint64_t stale = 0;
   std::uint64_t no_source_slot = 0;
   std::uint64_t rejected_inconsistent = 0;  // low fitness or fits better shifted
+  std::uint64_t infra_outvoted = 0;         // of those: infrastructure rejected by the quorum rule
+  std::uint64_t infra_evicted = 0;          // outvoted units' stored clouds removed with them
   std::uint64_t held_back = 0;              // agent clouds that could not be checked
   std::uint64_t sources_evicted_age = 0;
   std::uint64_t sources_evicted_slot = 0;   // oldest source displaced by a new one
@@ -133,10 +149,10 @@ class MapFusion {
   void clear();
 
   // points in the sensor frame; world_T_sensor maps them into the global frame. A trusted source
-  // (surveyed infrastructure) skips the consistency check: sensors at different corners see
-  // different faces of the same buildings, so their mutual overlap score is low (0.2-0.4
-  // measured for exact poses) and would reject good clouds; the check is for self-localized
-  // agents.
+  // (surveyed infrastructure) is checked against the other infrastructure units only: sensors at
+  // different corners see different faces of the same buildings, so one pair's overlap score is
+  // low (0.2-0.4 for exact poses) and only the shift probe applies; two or three other units
+  // form the quorum (infra_quorum_*) that can outvote it and evict its stored cloud.
   MapInsertResult insert(std::uint32_t source_id, double timestamp, const Pose3d& world_T_sensor,
                          std::span<const Vec3f> points, bool trusted = false);
   // Evicts sources with now - timestamp > max_age; returns how many.
@@ -169,6 +185,12 @@ class MapFusion {
   // only trusted (infrastructure) sources are the reference. best_probe: the best fitness of the
   // candidate displaced by the shift probes.
   double consistency(std::size_t slot, std::uint32_t& overlap_points, double& best_probe);
+  // Infrastructure accepted before the full quorum existed (the first units to send) is checked once
+  // three other units are present: each unvetted stored cloud against the others, evicted if outvoted.
+  void vet_infrastructure();
+  void evict_outvoted(std::size_t slot);
+  // Active trusted sources other than `slot` (the units an infrastructure cloud is checked against).
+  std::uint32_t other_trusted(std::size_t slot) const;
   // Drops candidate points near a trusted source's point (agent_fill_cell); returns how many.
   std::uint32_t drop_covered_by_trusted(std::size_t slot);
   // Slot of the active source with this id, else kMaxMapSources.
