@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "host_sim/common/text_file.hpp"
+#include "host_sim/recording/manifest_rewrite.hpp"
 #include "host_sim/recording/pose_io.hpp"
 #include "host_sim/recording/recording_reader.hpp"
 
@@ -11,8 +12,6 @@ namespace v2xloc::sim {
 namespace {
 
 namespace fs = std::filesystem;
-
-constexpr std::size_t kMaxManifestBytes = 64u << 20;  // as the reader's cap
 
 // gnss_vehicle.log -> gnss_vehicle_layout2.log (same folder inside the recording).
 std::string converted_name(const std::string& original) {
@@ -28,31 +27,19 @@ bool write_log(const std::string& path, const std::vector<CandumpRecord>& record
   return write_text_file(path, text, error);
 }
 
-// The manifest names the converted log; written to a temporary file and renamed over the old one.
-bool rewrite_manifest(const std::string& dir, const std::string& original, const CanLogUpgrade& result,
-                      std::string& error) {
-  const std::string path = dir + "/manifest.json";
-  std::string text;
-  if (!read_text_file(path, kMaxManifestBytes, text, error)) return false;
-  Json m = Json::parse(text, nullptr, false);
-  if (m.is_discarded() || !m.is_object() || !m.contains("files") || !m["files"].is_object()) {
-    error = path + ": not the manifest the reader accepted";
-    return false;
-  }
-  m["files"]["can_log"] = result.log_file;
-  Json& can = m["can_log"];
-  if (!can.is_object()) can = Json::object();
-  can["file"] = result.log_file;
-  can["frames"] = result.frames;
-  can["gnss"] = kCanLayoutGnssFrames;
-  can["layout_version"] = kCanLayoutVersion;
-  can["converted_from"] = original;
-  const std::string tmp = path + ".tmp";
-  if (!write_text_file(tmp, m.dump(2) + "\n", error)) return false;
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) error = "cannot replace " + path + ": " + ec.message();
-  return !ec;
+// The manifest names the converted log.
+bool name_converted_log(const std::string& dir, const std::string& original, const CanLogUpgrade& result,
+                        std::string& error) {
+  return rewrite_manifest(dir, [&](Json& m) {
+    m["files"]["can_log"] = result.log_file;
+    Json& can = m["can_log"];
+    if (!can.is_object()) can = Json::object();
+    can["file"] = result.log_file;
+    can["frames"] = result.frames;
+    can["gnss"] = kCanLayoutGnssFrames;
+    can["layout_version"] = kCanLayoutVersion;
+    can["converted_from"] = original;
+  }, error);
 }
 
 }  // namespace
@@ -76,7 +63,7 @@ bool upgrade_can_log(const std::string& dir, CanLogUpgrade& result, std::string&
   if (!reader.can_records(records, error, &result.conversion)) return false;
   result.log_file = converted_name(original);
   result.frames = records.size();
-  return write_log(dir + "/" + result.log_file, records, error) && rewrite_manifest(dir, original, result, error);
+  return write_log(dir + "/" + result.log_file, records, error) && name_converted_log(dir, original, result, error);
 }
 
 }  // namespace v2xloc::sim

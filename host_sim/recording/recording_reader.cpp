@@ -16,7 +16,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr std::size_t kMaxManifestBytes = 64u << 20;  // ours are ~100 kB even with 1000s of map clouds
 constexpr std::size_t kMaxPathChars = 1024;
 constexpr std::int64_t kMaxCloudPoints = 100'000'000;
 constexpr std::size_t kMaxCanLogLines = 100'000'000;

@@ -44,6 +44,10 @@ struct CanLogFrame {
   std::uint8_t data[8] = {};
 };
 
+// Largest manifest the reader (and the tools rewriting one) accept; ours are ~100 kB even with
+// 1000s of map clouds.
+inline constexpr std::size_t kMaxManifestBytes = 64u << 20;
+
 class RecordingReader {
  public:
   bool open(const std::string& dir, std::string& error);

@@ -57,6 +57,24 @@ bool sim_signer(const std::string& kind, const std::string& sensor, SimSigner& o
   return true;
 }
 
+std::vector<SimSigner> recording_signers(const RecordingReader& reader) {
+  std::vector<SimSigner> signers;
+  for (const MapCloudInfo& c : reader.map_clouds()) {
+    bool known = false;
+    for (const SimSigner& s : signers) known = known || s.sensor == c.sensor;
+    SimSigner signer;
+    if (!known && sim_signer(c.kind, c.sensor, signer)) signers.push_back(signer);
+  }
+  return signers;
+}
+
+bool recording_trust_list(const RecordingReader& reader, const std::vector<SimSigner>& signers,
+                          trust::TrustList& out, std::string& error) {
+  if (!reader.trust_list_path().empty()) return load_trust_list(reader.trust_list_path(), out, error);
+  out = trust_list_of(signers);
+  return true;
+}
+
 SimSigner sim_unlisted_signer(std::uint32_t sender_id) {
   SimSigner s;
   s.sensor = "rogue_" + std::to_string(sender_id);

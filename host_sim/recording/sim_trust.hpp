@@ -13,6 +13,7 @@
 #include <Eigen/Geometry>
 
 #include "firmware/trust/trust_list.hpp"
+#include "host_sim/recording/recording_reader.hpp"
 
 namespace v2xloc::sim {
 
@@ -38,6 +39,12 @@ bool sim_signer(const std::string& kind, const std::string& sensor, SimSigner& o
 // A signer whose key no trust list names (the rogue of the fault injection).
 SimSigner sim_unlisted_signer(std::uint32_t sender_id);
 trust::TrustList trust_list_of(const std::vector<SimSigner>& signers);
+// One signer per map-cloud sensor of a recording, in order of first appearance (unknown names skipped).
+std::vector<SimSigner> recording_signers(const RecordingReader& reader);
+// The recording's provisioned list: its trust-list file, or (recordings made before the file) the
+// list of its map-cloud sensors' signers.
+bool recording_trust_list(const RecordingReader& reader, const std::vector<SimSigner>& signers,
+                          trust::TrustList& out, std::string& error);
 std::string trust_list_text(const trust::TrustList& list);
 // Reads and parses a trust-list file; false + error (with line) on failure.
 bool load_trust_list(const std::string& path, trust::TrustList& out, std::string& error);

@@ -49,18 +49,9 @@ bool EventStream::open(const RecordingReader& reader, const EventStreamConfig& c
       error = "map cloud with unknown sensor name: " + c.sensor + " (" + c.kind + ")";
       return false;
     }
-    bool known = false;
-    for (const SimSigner& s : signers_) known = known || s.sensor == c.sensor;
-    SimSigner signer;
-    if (!known && sim_signer(c.kind, c.sensor, signer)) signers_.push_back(signer);
   }
-  // The provisioned list: the recording's file, or (older recordings) derived from the sensors.
-  const std::string trust_path = reader.trust_list_path();
-  if (!trust_path.empty()) {
-    if (!load_trust_list(trust_path, trust_list_, error)) return false;
-  } else {
-    trust_list_ = trust_list_of(signers_);
-  }
+  signers_ = recording_signers(reader);
+  if (!recording_trust_list(reader, signers_, trust_list_, error)) return false;
   faults_.configure(config.faults);
   sign_shares_ = config.sign_map_shares;
   return true;
