@@ -5,20 +5,16 @@
 #include "host_sim/common/text_file.hpp"
 #include "host_sim/recording/can_log_upgrade.hpp"
 #include "host_sim/recording/recording_reader.hpp"
+#include "recording_dir_test.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cstring>
-#include <filesystem>
 #include <string>
 #include <vector>
 
-#include <unistd.h>
-
 namespace v2xloc::sim {
 namespace {
-
-namespace fs = std::filesystem;
 
 // Two layout-1 fixes: position (lat 48.1374123, lon 11.5755456; then 48.1374200, 11.5755500),
 // status, time + DOP (week 2290, 1234.5 s; hdop 1.2, pdop 1.9), as the recorder wrote them then.
@@ -30,43 +26,15 @@ constexpr const char* kLegacyLog =
     "(1700000000.200000) can0 131#855BD2047F90182B\n"
     "(1700000000.200000) can0 132#ACD61200F2080C13\n";
 
-class CanLogLayout : public ::testing::Test {
+class CanLogLayout : public test::RecordingDirTest {
  protected:
   void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::path(V2XLOC_BINARY_DIR) / "test_tmp" / "can_upgrade" / (std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    write("ground_truth.tum", "0 0 0 0 0 0 0 1\n");
-    write("ground_truth_100hz.tum", "0 0 0 0 0 0 0 1\n0.01 0.1 0 0 0 0 0 1\n");
+    make_recording("can_upgrade");
     write("can.log", kLegacyLog);
-    m_ = {{"format", "v2xloc-recording"},
-          {"scenario", {{"id", 0}}},
-          {"permutation", "2_infra"},
-          {"frame_rate_hz", 10.0},
-          {"frame_count", 1},
-          {"time_origin_unix_s", 1700000000.0},
-          {"geodetic_origin", {{"lat_deg", 48.1}, {"lon_deg", 11.5}, {"alt_m", 520.0}}},
-          {"files",
-           {{"ego_scan_pattern", "ego_lidar/%06d.pcd"},
-            {"ground_truth", "ground_truth.tum"},
-            {"ground_truth_100hz", "ground_truth_100hz.tum"},
-            {"can_log", "can.log"}}},
-          {"sensors", Json::array({{{"name", "ego_lidar"}, {"mount_in_body", Json::array({0, 0, 1.9, 0, 0, 0, 1})}}})},
-          {"map_clouds", {{"clouds", Json::array()}}},
-          {"can_log", {{"file", "can.log"}, {"frames", 6}}}};
+    m_["files"]["can_log"] = "can.log";
+    m_["can_log"] = {{"file", "can.log"}, {"frames", 6}};
   }
-  void TearDown() override { fs::remove_all(dir_); }
 
-  void write(const std::string& rel, const std::string& text) {
-    std::string err;
-    ASSERT_TRUE(write_text_file((dir_ / rel).string(), text, err)) << err;
-  }
-  std::string read(const std::string& rel) {
-    std::string text, err;
-    EXPECT_TRUE(read_text_file((dir_ / rel).string(), 1u << 20, text, err)) << err;
-    return text;
-  }
   std::string open_error() {
     write("manifest.json", m_.dump(2));
     std::string err;
@@ -79,8 +47,6 @@ class CanLogLayout : public ::testing::Test {
     return out;
   }
 
-  fs::path dir_;
-  Json m_;
   RecordingReader reader_;
 };
 

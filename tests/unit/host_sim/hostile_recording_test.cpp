@@ -4,6 +4,7 @@
 #include "host_sim/cloud_io/pcd.hpp"
 #include "host_sim/common/text_file.hpp"
 #include "host_sim/recording/recording_reader.hpp"
+#include "recording_dir_test.hpp"
 
 #include <gtest/gtest.h>
 
@@ -22,12 +23,10 @@ namespace fs = std::filesystem;
 Json pose(double z) { return Json::array({0.0, 0.0, z, 0.0, 0.0, 0.0, 1.0}); }
 
 // Two frames, one infra map cloud, a CAN log: everything RecordingReader::open reads.
-class HostileRecording : public ::testing::Test {
+class HostileRecording : public test::RecordingDirTest {
  protected:
   void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::path(V2XLOC_BINARY_DIR) / "test_tmp" / "hostile" / (std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
+    make_recording("hostile", 2);
     fs::create_directories(dir_ / "ego_lidar");
     fs::create_directories(dir_ / "infra");
     cloud_io::PointCloud cloud;
@@ -40,36 +39,18 @@ class HostileRecording : public ::testing::Test {
     write("ground_truth.tum", "# t x y z qx qy qz qw\n0 0 0 0 0 0 0 1\n0.1 1 0 0 0 0 0 1\n");
     write("ground_truth_100hz.tum", "0 0 0 0 0 0 0 1\n0.01 0.1 0 0 0 0 0 1\n0.02 0.2 0 0 0 0 0 1\n");
     write("can.log", "(1700000000.050000) can0 120#0000000000000000\n(1700000000.100000) can0 18FF0001#01\n");
-    m_ = {{"format", "v2xloc-recording"},
-          {"scenario", {{"id", 0}}},
-          {"permutation", "2_infra"},
-          {"frame_rate_hz", 10.0},
-          {"frame_count", 2},
-          {"time_origin_unix_s", 1700000000.0},
-          {"geodetic_origin", {{"lat_deg", 48.1}, {"lon_deg", 11.5}, {"alt_m", 520.0}}},
-          {"files",
-           {{"ego_scan_pattern", "ego_lidar/%06d.pcd"},
-            {"ground_truth", "ground_truth.tum"},
-            {"ground_truth_100hz", "ground_truth_100hz.tum"},
-            {"can_log", "can.log"}}},
-          {"sensors",
-           Json::array({{{"name", "ego_lidar"}, {"carrier", "ego"}, {"mount_in_body", pose(1.9)}},
-                        {{"name", "infra_0"}, {"carrier", "infrastructure"}, {"surveyed_pose_enu", pose(5)}}})},
-          {"map_clouds",
-           {{"clouds", Json::array({{{"sensor", "infra_0"},
-                                     {"kind", "infra"},
-                                     {"stamp_s", 0.0},
-                                     {"file", "infra/000000.pcd"},
-                                     {"points", 3},
-                                     {"sensor_pose_enu", pose(5)},
-                                     {"true_sensor_pose_enu", pose(5)}}})}}}};
+    m_["files"]["can_log"] = "can.log";
+    m_["sensors"] = Json::array({{{"name", "ego_lidar"}, {"carrier", "ego"}, {"mount_in_body", pose(1.9)}},
+                                 {{"name", "infra_0"}, {"carrier", "infrastructure"}, {"surveyed_pose_enu", pose(5)}}});
+    m_["map_clouds"]["clouds"] = Json::array({{{"sensor", "infra_0"},
+                                               {"kind", "infra"},
+                                               {"stamp_s", 0.0},
+                                               {"file", "infra/000000.pcd"},
+                                               {"points", 3},
+                                               {"sensor_pose_enu", pose(5)},
+                                               {"true_sensor_pose_enu", pose(5)}}});
   }
-  void TearDown() override { fs::remove_all(dir_); }
 
-  void write(const std::string& rel, const std::string& text) {
-    std::string err;
-    ASSERT_TRUE(write_text_file((dir_ / rel).string(), text, err)) << err;
-  }
   // Writes the manifest (or raw text) and returns open()'s error, "" when it opened.
   std::string open_error(const std::string& raw = "") {
     write("manifest.json", raw.empty() ? m_.dump(2) : raw);
@@ -81,8 +62,6 @@ class HostileRecording : public ::testing::Test {
     EXPECT_NE(err.find(what), std::string::npos) << "error: '" << err << "' manifest: " << m_.dump();
   }
 
-  fs::path dir_;
-  Json m_;
   RecordingReader reader_;
 };
 

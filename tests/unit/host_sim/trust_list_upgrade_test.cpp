@@ -6,45 +6,22 @@
 #include "host_sim/recording/pose_io.hpp"
 #include "host_sim/recording/sim_trust.hpp"
 #include "host_sim/recording/trust_list_upgrade.hpp"
+#include "recording_dir_test.hpp"
 
 #include <gtest/gtest.h>
 
-#include <filesystem>
 #include <string>
-
-#include <unistd.h>
 
 namespace v2xloc::sim {
 namespace {
 
-namespace fs = std::filesystem;
-
-class TrustListUpgradeTest : public ::testing::Test {
+class TrustListUpgradeTest : public test::RecordingDirTest {
  protected:
   void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::path(V2XLOC_BINARY_DIR) / "test_tmp" / "trust_upgrade" / (std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    write("ground_truth.tum", "0 0 0 0 0 0 0 1\n");
-    write("ground_truth_100hz.tum", "0 0 0 0 0 0 0 1\n0.01 0.1 0 0 0 0 0 1\n");
+    make_recording("trust_upgrade");
     survey_ = Eigen::Translation3d(9.5, -3.0, 5.0) * Eigen::AngleAxisd(2.3, Eigen::Vector3d::UnitZ());
-    m_ = {{"format", "v2xloc-recording"},
-          {"scenario", {{"id", 0}}},
-          {"permutation", "2_infra"},
-          {"frame_rate_hz", 10.0},
-          {"frame_count", 1},
-          {"time_origin_unix_s", 1700000000.0},
-          {"geodetic_origin", {{"lat_deg", 48.1}, {"lon_deg", 11.5}, {"alt_m", 520.0}}},
-          {"files",
-           {{"ego_scan_pattern", "ego_lidar/%06d.pcd"},
-            {"ground_truth", "ground_truth.tum"},
-            {"ground_truth_100hz", "ground_truth_100hz.tum"},
-            {"trust_list", "trust_list.txt"}}},
-          {"sensors", Json::array({{{"name", "ego_lidar"}, {"mount_in_body", Json::array({0, 0, 1.9, 0, 0, 0, 1})}},
-                                   {{"name", "infra_2"}, {"carrier", "infrastructure"},
-                                    {"surveyed_pose_enu", pose_to_json(survey_)}}})},
-          {"map_clouds", {{"clouds", Json::array()}}}};
+    m_["files"]["trust_list"] = "trust_list.txt";
+    m_["sensors"].push_back({{"name", "infra_2"}, {"carrier", "infrastructure"}, {"surveyed_pose_enu", pose_to_json(survey_)}});
     write("manifest.json", m_.dump(2));
     SimSigner infra, agent;
     ASSERT_TRUE(sim_signer("infra", "infra_2", infra));
@@ -52,20 +29,7 @@ class TrustListUpgradeTest : public ::testing::Test {
     old_text_ = trust_list_text(trust_list_of({infra, agent}));
     write("trust_list.txt", old_text_);
   }
-  void TearDown() override { fs::remove_all(dir_); }
 
-  void write(const std::string& rel, const std::string& text) {
-    std::string err;
-    ASSERT_TRUE(write_text_file((dir_ / rel).string(), text, err)) << err;
-  }
-  std::string read(const std::string& rel) {
-    std::string text, err;
-    EXPECT_TRUE(read_text_file((dir_ / rel).string(), 1u << 20, text, err)) << err;
-    return text;
-  }
-
-  fs::path dir_;
-  Json m_;
   Eigen::Isometry3d survey_;
   std::string old_text_;
 };
