@@ -17,10 +17,12 @@ MapFusion::MapFusion(const MapFusionParams& params) : params_(params) {}
 void MapFusion::clear() {
   for (MapSourceInfo& s : sources_) s = MapSourceInfo{};
   num_points_ = 0;
+  cells_.clear();
   ++revision_;
 }
 
 void MapFusion::remove_source_points(std::size_t slot) {
+  if (sources_[slot].active && sources_[slot].trusted) mark_source_cells(slot, false, 0);
   std::size_t n = 0;  // stable compaction keeps the other sources' order (determinism)
   for (std::size_t i = 0; i < num_points_; ++i) {
     if (point_source_[i] == slot) continue;
@@ -32,90 +34,63 @@ void MapFusion::remove_source_points(std::size_t slot) {
   sources_[slot].points = 0;
 }
 
-bool MapFusion::cell_key(const Vec3f& p, double cell, std::int32_t level,
-                         std::int32_t key[3]) const {
-  for (int i = 0; i < 3; ++i) {
-    const double q = static_cast<double>(p(i)) / cell;
-    if (!(q > -268435456.0 && q < 268435456.0)) return false;  // 2^28: z keeps 2 level bits
-    key[i] = det::floor_to_int(q);
-    if (key[i] == -268435456) return false;  // floor(q) must stay above -2^28 as well
+SourceCells::Mask MapFusion::trusted_bits(std::size_t slot) const {
+  SourceCells::Mask bits = 0;
+  for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
+    if (s != slot && sources_[s].active && sources_[s].trusted) bits = static_cast<SourceCells::Mask>(bits | (1u << s));
   }
-  key[2] = key[2] * 4 + level;  // two grids share the table: level in the low bits of z
-  return true;
+  return bits;
 }
 
-bool MapFusion::mark(const std::int32_t key[3]) {
-  return linear_probe(spatial_hash(key), kSlots, kMaxProbes, [&](std::size_t slot) {
-           Cell& c = cells_[slot];
-           if (c.stamp != stamp_) {
-             c.key[0] = key[0];
-             c.key[1] = key[1];
-             c.key[2] = key[2];
-             c.stamp = stamp_;
-             return true;
-           }
-           return c.key[0] == key[0] && c.key[1] == key[1] && c.key[2] == key[2];
-         }).stopped;
+void MapFusion::mark_source_cells(std::size_t slot, bool set, std::size_t first) {
+  const double cells[3] = {0.5 * params_.inlier_distance, params_.overlap_cell, params_.agent_fill_cell};
+  const auto bit = static_cast<SourceCells::Mask>(1u << slot);
+  const std::uint64_t dropped_before = cells_.dropped();
+  for (std::size_t i = first; i < num_points_; ++i) {
+    if (point_source_[i] != slot) continue;
+    for (std::int32_t level = kInlierLevel; level <= kFillLevel; ++level) {
+      std::int32_t key[3];
+      if (!(cells[level] > 0.0) || !SourceCells::cell_key(points_[i], cells[level], level, key)) continue;
+      if (set) cells_.add(key, bit);
+      else cells_.remove(key, bit);
+    }
+  }
+  counters_.reference_cells_dropped += cells_.dropped() - dropped_before;
 }
 
-bool MapFusion::occupied(const std::int32_t key[3]) const {
-  bool found = false;
-  linear_probe(spatial_hash(key), kSlots, kMaxProbes, [&](std::size_t slot) {
-    const Cell& c = cells_[slot];
-    if (c.stamp != stamp_) return true;
-    found = c.key[0] == key[0] && c.key[1] == key[1] && c.key[2] == key[2];
-    return found;
-  });
-  return found;
-}
-
-bool MapFusion::occupied_around(const Vec3f& p, double cell, std::int32_t level) const {
-  std::int32_t key[3];
-  if (!cell_key(p, cell, level, key)) return false;
-  for (int dx = -1; dx <= 1; ++dx)
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dz = -1; dz <= 1; ++dz) {
-        const std::int32_t k[3] = {key[0] + dx, key[1] + dy, key[2] + 4 * dz};
-        if (occupied(k)) return true;
-      }
-  return false;
-}
-
-// Fresh table generation: marks from earlier calls become empty without clearing.
-void MapFusion::new_cell_generation() {
-  if (++stamp_ == 0) {
-    for (Cell& c : cells_) c.stamp = 0;
-    stamp_ = 1;
+// Drops the emptied cells once they crowd the table: every surveyed source marked again.
+void MapFusion::rebuild_cells_if_crowded() {
+  if (!cells_.needs_rebuild()) return;
+  cells_.clear();
+  for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
+    if (sources_[s].active && sources_[s].trusted) mark_source_cells(s, true, 0);
   }
 }
 
-double MapFusion::consistency(std::size_t slot, std::uint32_t& overlap_points, double& best_probe) {
+double MapFusion::consistency(std::size_t slot, double margin, std::uint32_t& overlap_points,
+                              double& best_probe) {
   overlap_points = 0;
   best_probe = 0.0;
-  new_cell_generation();
   // Fine cells of size inlier_distance / 2: a candidate with another source's point in its 27
   // neighbour cells has one within ~0.87 * inlier_distance * ... (<= 1.5 cells per axis).
   // The reference is the surveyed infrastructure only: agents never vouch for each other.
   const double fine = 0.5 * params_.inlier_distance;
-  for (std::size_t i = 0; i < num_points_; ++i) {
-    if (point_source_[i] == slot || !sources_[point_source_[i]].trusted) continue;
-    std::int32_t key[3];
-    if (cell_key(points_[i], fine, 0, key)) mark(key);
-    if (cell_key(points_[i], params_.overlap_cell, 1, key)) mark(key);
-  }
+  const SourceCells::Mask reference = trusted_bits(slot);
   // An even subsample of the candidate; the overlap count is scaled back to the whole cloud.
   const std::size_t cap = std::min<std::size_t>(
       params_.max_consistency_points > 0 ? params_.max_consistency_points : overlap_.capacity(), overlap_.capacity());
   const std::size_t stride = std::max<std::size_t>(1, (candidate_.size() + cap - 1) / cap);
   overlap_.clear();
   std::uint32_t inliers = 0;
-  for (std::size_t i = 0; i < candidate_.size(); i += stride) {
-    if (!occupied_around(candidate_[i], params_.overlap_cell, 1)) continue;  // outside the others' region
+  for (std::size_t i = 0; i < candidate_.size() && reference != 0; i += stride) {
+    if (!cells_.any_around(candidate_[i], params_.overlap_cell, kOverlapLevel, reference)) continue;  // outside the others' region
     overlap_.push_back(static_cast<std::uint32_t>(i));  // <= cap samples: never full
-    if (occupied_around(candidate_[i], fine, 0)) ++inliers;
+    if (cells_.any_around(candidate_[i], fine, kInlierLevel, reference)) ++inliers;
   }
   overlap_points = static_cast<std::uint32_t>(overlap_.size() * stride);
   if (overlap_.empty()) return 1.0;
+  const double fitness = static_cast<double>(inliers) / static_cast<double>(overlap_.size());
+  if (overlap_points < params_.min_overlap_points) return fitness;  // no verdict: no probes
   // Shift probes over an even subsample of those (the same points for every probe).
   const float d = static_cast<float>(params_.probe_step);
   const Vec3f probes[] = {{d, 0, 0},  {-d, 0, 0}, {0, d, 0},      {0, -d, 0},      {d, d, 0},  {d, -d, 0},
@@ -123,16 +98,23 @@ double MapFusion::consistency(std::size_t slot, std::uint32_t& overlap_points, d
   const std::size_t n = overlap_.size();
   const std::size_t probe_stride =
       params_.max_probe_points > 0 ? (n + params_.max_probe_points - 1) / params_.max_probe_points : 1;
+  const auto total = static_cast<std::uint32_t>((n + probe_stride - 1) / probe_stride);
+  const double beat = fitness + margin;  // the verdict: does any probe score above this?
   for (const Vec3f& o : probes) {
-    std::uint32_t counted = 0, hits = 0;
-    for (std::size_t k = 0; k < n; k += probe_stride) {
-      ++counted;
-      if (occupied_around(candidate_[overlap_[k]] + o, fine, 0)) ++hits;
+    std::uint32_t hits = 0, misses = 0;
+    bool can_beat = true;
+    for (std::size_t k = 0; k < n && can_beat; k += probe_stride) {
+      if (cells_.any_around(candidate_[overlap_[k]] + o, fine, kInlierLevel, reference)) {
+        ++hits;
+      } else {
+        ++misses;  // even if every remaining point hits, the probe scores (total - misses) / total
+        can_beat = static_cast<double>(total - misses) / total > beat;
+      }
     }
-    const double f = static_cast<double>(hits) / counted;
+    const double f = static_cast<double>(hits) / total;  // exact when the probe ran to the end
     if (f > best_probe) best_probe = f;
   }
-  return static_cast<double>(inliers) / static_cast<double>(n);
+  return fitness;
 }
 
 std::uint32_t MapFusion::other_trusted(std::size_t slot) const {
@@ -142,18 +124,11 @@ std::uint32_t MapFusion::other_trusted(std::size_t slot) const {
 }
 
 std::uint32_t MapFusion::drop_covered_by_trusted(std::size_t slot) {
-  new_cell_generation();
-  bool any = false;
-  for (std::size_t i = 0; i < num_points_; ++i) {
-    const std::size_t src = point_source_[i];
-    if (src == slot || !sources_[src].trusted) continue;
-    std::int32_t key[3];
-    if (cell_key(points_[i], params_.agent_fill_cell, 2, key)) any = mark(key) || any;
-  }
-  if (!any) return 0;
+  const SourceCells::Mask reference = trusted_bits(slot);
+  if (reference == 0) return 0;
   std::size_t kept = 0;
   for (std::size_t k = 0; k < candidate_.size(); ++k) {
-    if (!occupied_around(candidate_[k], params_.agent_fill_cell, 2)) candidate_[kept++] = candidate_[k];
+    if (!cells_.any_around(candidate_[k], params_.agent_fill_cell, kFillLevel, reference)) candidate_[kept++] = candidate_[k];
   }
   const auto dropped = static_cast<std::uint32_t>(candidate_.size() - kept);
   candidate_.resize(kept);
@@ -218,11 +193,11 @@ bool MapFusion::passes_consistency(std::size_t own_slot, bool trusted, MapInsert
   // their absolute fitness is low even for exact poses (different faces of the buildings), so
   // only the shift test applies, and without overlap a surveyed unit is accepted.
   // With two or more other units the quorum rule applies (map_fusion.hpp: infra_quorum_*).
-  r.consistency_fitness = consistency(own_slot, r.overlap_points, r.best_probe_fitness);
-  const bool checkable = r.overlap_points >= params_.min_overlap_points;
   const std::uint32_t others = trusted ? other_trusted(own_slot) : 0;
   const bool quorum = trusted && others >= 2;
   const double margin = !trusted ? params_.probe_margin : quorum ? params_.infra_quorum_margin : params_.infra_probe_margin;
+  r.consistency_fitness = consistency(own_slot, margin, r.overlap_points, r.best_probe_fitness);
+  const bool checkable = r.overlap_points >= params_.min_overlap_points;
   const bool shifted = checkable && r.best_probe_fitness > r.consistency_fitness + margin;
   const double floor = !trusted ? params_.min_fitness : others >= 3 ? params_.infra_quorum_min_fitness : 0.0;
   if (!trusted && !checkable) {
@@ -243,7 +218,8 @@ bool MapFusion::passes_consistency(std::size_t own_slot, bool trusted, MapInsert
   return true;
 }
 
-std::uint32_t MapFusion::store_candidate(std::size_t slot, MapInsertResult& r) {
+std::uint32_t MapFusion::store_candidate(std::size_t slot, bool trusted, MapInsertResult& r) {
+  const std::size_t first = num_points_;
   std::uint32_t stored = 0;
   for (const Vec3f& p : candidate_) {
     if (num_points_ == config::kMaxMapPoints) {
@@ -255,6 +231,7 @@ std::uint32_t MapFusion::store_candidate(std::size_t slot, MapInsertResult& r) {
     ++num_points_;
     ++stored;
   }
+  if (trusted) mark_source_cells(slot, true, first);  // the reference cells follow the surveyed points
   return stored;
 }
 
@@ -298,7 +275,7 @@ MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
 
   if (known || displace) remove_source_points(slot);
   if (displace) ++counters_.sources_evicted_slot;
-  const std::uint32_t stored = store_candidate(slot, r);
+  const std::uint32_t stored = store_candidate(slot, trusted, r);
   counters_.points_dropped_capacity += r.capacity_dropped;
   MapSourceInfo& info = sources_[slot];
   info.id = source_id;
@@ -308,6 +285,7 @@ MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
   info.active = true;
   info.trusted = trusted;
   info.vetted = r.quorum_checked;
+  rebuild_cells_if_crowded();  // after the slot's flags are set: a rebuild marks it too
   r.stored_points = stored;
   r.status = known ? MapInsertStatus::kReplaced : MapInsertStatus::kInserted;
   if (known) ++counters_.replaced;

@@ -84,9 +84,13 @@ inline constexpr std::uint32_t kEkfMaxPredictSubsteps = 100;   // per prediction
 inline constexpr std::size_t kOdometryHashSlots = kEmbeddedProfile ? 16384 : 131072;
 inline constexpr std::size_t kOdometryMaxPointsPerVoxel = 20;
 inline constexpr std::uint32_t kOdometryMaxIterations = 50;
-// Map fusion: voxel hash slots for merging / consistency checks (power of two, >= 2x points).
+// Map fusion: voxel hash slots for merging clouds (power of two, >= 2x points).
 inline constexpr std::size_t kMapConsistencyPoints = 4096;  // candidate points a consistency check samples
 inline constexpr std::size_t kMapFusionHashSlots = kEmbeddedProfile ? 16384 : 262144;
+// Map fusion's consistency reference (localization/source_cells.hpp): cells of the surveyed
+// sources' points on three grids, ~1.9 cells per point (measured, four units), rebuilt once live
+// and emptied cells fill half the slots (~every 60 frames on the 4-unit recordings). 16 B each.
+inline constexpr std::size_t kMapReferenceCellSlots = kEmbeddedProfile ? 65536 : 262144;
 
 // ---- Geodesy --------------------------------------------------------------------------------
 // Bowring's ECEF->geodetic iteration converges to 1e-14 rad in 2-3 steps for |h| < 1e5 m.

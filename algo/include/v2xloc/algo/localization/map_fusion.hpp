@@ -10,11 +10,12 @@
 //   - consistency hook: before a cloud is accepted, its overlap with the other sources is measured
 //     (fraction of its points with another source's point nearby, over the points in the region
 //     the others cover); a source below min_fitness with enough overlap is rejected and counted
-//     (a mis-calibrated, spoofed or malicious sender).
+//     (a mis-calibrated, spoofed or malicious sender). The surveyed sources' cells are kept
+//     between inserts (source_cells.hpp), so a check only looks cells up.
 // extract() merges all sources on one voxel grid (centroids, deterministic order) for FPFH /
 // registration; normals come from the shared normals stage (normals.hpp) over the extracted
 // points: it needs the k-d tree the ICP target builds anyway, so the map does not duplicate it.
-// Storage lives in the object (static storage only): ~9 MB host, ~0.8 MB EMBEDDED.
+// Storage lives in the object (static storage only): ~17 MB host, ~1.9 MB EMBEDDED (v2xloc-info).
 #pragma once
 
 #include <cstddef>
@@ -25,6 +26,7 @@
 #include "v2xloc/algo/core/config.hpp"
 #include "v2xloc/algo/core/types.hpp"
 #include "v2xloc/algo/localization/pose_types.hpp"
+#include "v2xloc/algo/localization/source_cells.hpp"
 #include "v2xloc/algo/registration/voxel_downsample.hpp"
 
 namespace v2xloc {
@@ -129,6 +131,7 @@ struct MapFusionCounters {
   std::uint64_t points_dropped_capacity = 0;
   std::uint64_t non_finite_dropped = 0;
   std::uint64_t agent_points_covered = 0;   // agent points dropped where infrastructure sees
+  std::uint64_t reference_cells_dropped = 0;  // reference cells not recorded (hash probes exhausted)
 };
 
 struct MapExtractResult {
@@ -167,24 +170,24 @@ class MapFusion {
   const MapFusionParams& params() const { return params_; }
 
  private:
-  struct Cell {
-    std::int32_t key[3];
-    std::uint32_t stamp;  // occupied iff stamp == stamp_ (no clearing between uses)
-  };
-  static constexpr std::size_t kSlots = config::kMapFusionHashSlots;
-  static_assert((kSlots & (kSlots - 1)) == 0, "hash slots must be a power of two");
+  // Grids of the consistency reference (SourceCells levels): inlier cells, overlap region, agent fill.
+  enum CellLevel : std::int32_t { kInlierLevel = 0, kOverlapLevel = 1, kFillLevel = 2 };
   static_assert(config::kMaxMapSources <= 255, "source slot stored in a byte");
 
   void remove_source_points(std::size_t slot);
-  bool cell_key(const Vec3f& p, double cell, std::int32_t level, std::int32_t key[3]) const;
-  void new_cell_generation();  // empties the cell table (O(1) except on stamp wrap-around)
-  bool mark(const std::int32_t key[3]);
-  bool occupied(const std::int32_t key[3]) const;
-  bool occupied_around(const Vec3f& p, double cell, std::int32_t level) const;
+  // Sets or clears the source's bit in the reference cells of its stored points (surveyed sources
+  // only: the reference is the infrastructure); rebuilds the cells when they need it.
+  // Points before `first` are not looked at (a stored cloud's points are appended at the end).
+  void mark_source_cells(std::size_t slot, bool set, std::size_t first);
+  void rebuild_cells_if_crowded();
+  // Bits of the active surveyed sources other than `slot`: the reference a cloud is checked against.
+  SourceCells::Mask trusted_bits(std::size_t slot) const;
   // Fraction of candidate points near other sources' points (see header), excluding `slot`;
   // only trusted (infrastructure) sources are the reference. best_probe: the best fitness of the
-  // candidate displaced by the shift probes.
-  double consistency(std::size_t slot, std::uint32_t& overlap_points, double& best_probe);
+  // candidate displaced by the shift probes; a probe stops once it cannot beat the cloud's own
+  // fitness by `margin` (the verdict needs no more), so best_probe is exact when it beats it and a
+  // lower bound otherwise. No probes run when the overlap is below min_overlap_points.
+  double consistency(std::size_t slot, double margin, std::uint32_t& overlap_points, double& best_probe);
   // Infrastructure accepted before the full quorum existed (the first units to send) is checked once
   // three other units are present: each unvetted stored cloud against the others, evicted if outvoted.
   void vet_infrastructure();
@@ -203,8 +206,9 @@ class MapFusion {
   // Consistency verdict on candidate_ against the other sources; false (status and counter
   // set in r) when the cloud is held back or rejected.
   bool passes_consistency(std::size_t own_slot, bool trusted, MapInsertResult& r);
-  // Appends candidate_ under `slot` up to the map capacity (overflow counted in r); returns how many.
-  std::uint32_t store_candidate(std::size_t slot, MapInsertResult& r);
+  // Appends candidate_ under `slot` up to the map capacity (overflow counted in r), and a
+  // surveyed source's points to the reference cells; returns how many.
+  std::uint32_t store_candidate(std::size_t slot, bool trusted, MapInsertResult& r);
 
   MapFusionParams params_;
   MapSourceInfo sources_[config::kMaxMapSources];
@@ -218,8 +222,7 @@ class MapFusion {
   FixedVector<Vec3f, config::kMaxMapPoints> candidate_;
   FixedVector<std::uint32_t, config::kMapConsistencyPoints> overlap_;  // sampled candidate indices
   VoxelDownsampleStorage<config::kMapFusionHashSlots, config::kMaxMapPoints> downsample_;
-  Cell cells_[kSlots] = {};
-  std::uint32_t stamp_ = 0;
+  SourceCells cells_;
 };
 
 }  // namespace v2xloc

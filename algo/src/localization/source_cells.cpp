@@ -1,0 +1,84 @@
+#include "v2xloc/algo/localization/source_cells.hpp"
+
+#include "v2xloc/algo/core/det_math.hpp"
+#include "v2xloc/algo/core/spatial_hash.hpp"
+
+namespace v2xloc {
+
+namespace {
+constexpr auto kMaxProbes = static_cast<std::uint32_t>(config::kVoxelMaxProbes);
+}  // namespace
+
+bool SourceCells::cell_key(const Vec3f& p, double cell, std::int32_t level, std::int32_t key[3]) {
+  for (int i = 0; i < 3; ++i) {
+    const double q = static_cast<double>(p(i)) / cell;
+    if (!(q > -268435456.0 && q < 268435456.0)) return false;  // 2^28: z keeps 2 level bits
+    key[i] = det::floor_to_int(q);
+    if (key[i] == -268435456) return false;  // floor(q) must stay above -2^28 as well
+  }
+  key[2] = key[2] * 4 + level;
+  return true;
+}
+
+void SourceCells::clear() {
+  for (Cell& c : cells_) c = Cell{};
+  used_ = 0;
+}
+
+std::size_t SourceCells::find(const std::int32_t key[3]) const {
+  std::size_t found = kSlots;
+  linear_probe(spatial_hash(key), kSlots, kMaxProbes, [&](std::size_t slot) {
+    const Cell& c = cells_[slot];
+    if (!c.used) return true;
+    if (c.key[0] == key[0] && c.key[1] == key[1] && c.key[2] == key[2]) {
+      found = slot;
+      return true;
+    }
+    return false;
+  });
+  return found;
+}
+
+bool SourceCells::add(const std::int32_t key[3], Mask bits) {
+  const ProbeResult r = linear_probe(spatial_hash(key), kSlots, kMaxProbes, [&](std::size_t slot) {
+    Cell& c = cells_[slot];
+    if (!c.used) {
+      c.key[0] = key[0];
+      c.key[1] = key[1];
+      c.key[2] = key[2];
+      c.used = 1;
+      c.bits = 0;
+      ++used_;
+    } else if (!(c.key[0] == key[0] && c.key[1] == key[1] && c.key[2] == key[2])) {
+      return false;
+    }
+    c.bits = static_cast<Mask>(c.bits | bits);
+    return true;
+  });
+  if (!r.stopped) ++dropped_;
+  return r.stopped;
+}
+
+void SourceCells::remove(const std::int32_t key[3], Mask bits) {
+  const std::size_t slot = find(key);
+  if (slot < kSlots) cells_[slot].bits = static_cast<Mask>(cells_[slot].bits & ~bits);
+}
+
+SourceCells::Mask SourceCells::bits(const std::int32_t key[3]) const {
+  const std::size_t slot = find(key);
+  return slot < kSlots ? cells_[slot].bits : Mask{0};
+}
+
+bool SourceCells::any_around(const Vec3f& p, double cell, std::int32_t level, Mask allowed) const {
+  std::int32_t key[3];
+  if (!cell_key(p, cell, level, key)) return false;
+  for (int dx = -1; dx <= 1; ++dx)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dz = -1; dz <= 1; ++dz) {
+        const std::int32_t k[3] = {key[0] + dx, key[1] + dy, key[2] + 4 * dz};
+        if (bits(k) & allowed) return true;
+      }
+  return false;
+}
+
+}  // namespace v2xloc
