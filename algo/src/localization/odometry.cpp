@@ -137,6 +137,7 @@ void LidarOdometry::build_coarse_frame(OdometryResult& r) {
   frame_coarse_.clear();
   const double cv = 1.5 * params_.voxel_size;
   std::size_t voxels = 0;
+  std::uint32_t last = kNone;  // consecutive fine points usually share a coarse voxel
   for (const Vec3f& pf : frame_fine_) {
     const Vec3d p = pf.cast<double>();
     std::int32_t key[3];
@@ -147,7 +148,9 @@ void LidarOdometry::build_coarse_frame(OdometryResult& r) {
       key[a] = ok ? det::floor_to_int(q) : 0;
       ok = ok && key[a] != -1073741824;
     }
-    std::uint32_t v = ok ? find_coarse(key) : kNone;
+    const bool same = ok && last != kNone && coarse_[last].key[0] == key[0] && coarse_[last].key[1] == key[1] &&
+                      coarse_[last].key[2] == key[2];
+    std::uint32_t v = same ? last : (ok ? find_coarse(key) : kNone);
     if (ok && v == kNone && voxels < kMaxCoarse) {
       const ProbeResult probe = linear_probe(spatial_hash(key), kCoarseSlots, kMaxProbes,
                                              [&](std::size_t slot) { return coarse_slots_[slot] == 0; });
@@ -163,10 +166,17 @@ void LidarOdometry::build_coarse_frame(OdometryResult& r) {
       ++r.points_dropped_capacity;
       continue;
     }
+    last = v;
     CoarseVoxel& c = coarse_[v];
     ++c.count;
     c.sum += p;
-    c.outer += p * p.transpose();
+    // The upper triangle of p p^T (p_i p_j == p_j p_i bit for bit: the full matrix adds nothing).
+    c.outer[0] += p.x() * p.x();
+    c.outer[1] += p.x() * p.y();
+    c.outer[2] += p.x() * p.z();
+    c.outer[3] += p.y() * p.y();
+    c.outer[4] += p.y() * p.z();
+    c.outer[5] += p.z() * p.z();
   }
   for (std::size_t v = 0; v < voxels; ++v) {
     const CoarseVoxel& c = coarse_[v];
@@ -196,7 +206,7 @@ Vec3f LidarOdometry::coarse_normal(const Vec3d& mean, const std::int32_t key[3],
   std::int32_t side[3];
   for (int a = 0; a < 3; ++a) side[a] = mean(a) / cv - key[a] < 0.5 ? -1 : 1;
   Vec3d sum = Vec3d::Zero();
-  Mat3d outer = Mat3d::Zero();
+  double outer[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
   std::uint32_t n = 0;
   for (int corner = 0; corner < 8; ++corner) {
     const std::int32_t k[3] = {key[0] + ((corner & 1) ? side[0] : 0), key[1] + ((corner & 2) ? side[1] : 0),
@@ -204,12 +214,14 @@ Vec3f LidarOdometry::coarse_normal(const Vec3d& mean, const std::int32_t key[3],
     const std::uint32_t v = find_coarse(k);
     if (v == kNone) continue;
     sum += coarse_[v].sum;
-    outer += coarse_[v].outer;
+    for (int e = 0; e < 6; ++e) outer[e] += coarse_[v].outer[e];
     n += coarse_[v].count;
   }
   if (n < params_.normal_min_points) return Vec3f::Zero();  // no plane to speak of: not used
   const Vec3d centroid = sum / static_cast<double>(n);
-  const Mat3d cov = outer / static_cast<double>(n) - centroid * centroid.transpose();
+  Mat3d moments;
+  moments << outer[0], outer[1], outer[2], outer[1], outer[3], outer[4], outer[2], outer[4], outer[5];
+  const Mat3d cov = moments / static_cast<double>(n) - centroid * centroid.transpose();
   Vec3d lambda;
   Mat3d vectors;
   symmetric_eigen3(cov, lambda, vectors);

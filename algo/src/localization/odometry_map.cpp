@@ -1,6 +1,8 @@
 #include "v2xloc/algo/localization/odometry_map.hpp"
 
 #include <algorithm>
+#include <cstring>
+#include <type_traits>
 
 #include "v2xloc/algo/core/det_math.hpp"
 #include "v2xloc/algo/core/spatial_hash.hpp"
@@ -59,7 +61,9 @@ std::uint32_t OdometryVoxelMap::find_voxel(const std::int32_t key[3]) const {
   return found;
 }
 
-std::span<const Vec3f> OdometryVoxelMap::voxel_points(const std::int32_t key[3]) const {
+static_assert(std::is_trivially_copyable_v<MapPoint> && sizeof(MapPoint) == 3 * sizeof(float));
+
+std::span<const MapPoint> OdometryVoxelMap::voxel_points(const std::int32_t key[3]) const {
   const std::uint32_t v = find_voxel(key);
   if (v == kNone) return {};
   const Voxel& vx = voxels_[active_][v];
@@ -107,7 +111,7 @@ bool OdometryVoxelMap::nearest(const Vec3d& p, double max_d2, Vec3d& q, double& 
                           gap2[1] + gap2[2],
                           (gap2[0] + gap2[1]) + gap2[2]};
   d2 = max_d2;
-  const Vec3f* best = nullptr;
+  const MapPoint* best = nullptr;
   for (int c = 0; c < 8; ++c) {
     if (box2[c] * 0.999 >= d2) continue;  // 0.1 % slack: voxel keys are floors of rounded quotients
     const int corner = kCornerOrder[c];
@@ -117,7 +121,7 @@ bool OdometryVoxelMap::nearest(const Vec3d& p, double max_d2, Vec3d& q, double& 
     if (v != kNone) scan_voxel(voxels_[active_][v], p, d2, best);
   }
   if (best == nullptr) return false;
-  q = best->cast<double>();
+  q = Vec3d(best->x, best->y, best->z);
   return true;
 }
 
@@ -125,7 +129,7 @@ bool OdometryVoxelMap::nearest(const Vec3d& p, double max_d2, Vec3d& q, double& 
 // squaredNorm does (its unrolled sum halves the vector); dx^2 and the box's gaps are lower bounds
 // of that sum in floating point too (rounding is monotone), so every skip below only drops
 // points with d >= d2: the same result as scanning them all.
-void OdometryVoxelMap::scan_voxel(const Voxel& vx, const Vec3d& p, double& d2, const Vec3f*& best) const {
+void OdometryVoxelMap::scan_voxel(const Voxel& vx, const Vec3d& p, double& d2, const MapPoint*& best) const {
   double box[3];
   for (int a = 0; a < 3; ++a) {
     const double below = static_cast<double>(vx.lo[a]) - p(a);
@@ -133,13 +137,13 @@ void OdometryVoxelMap::scan_voxel(const Voxel& vx, const Vec3d& p, double& d2, c
     box[a] = below > 0.0 ? below : (above > 0.0 ? above : 0.0);
   }
   if (box[0] * box[0] + (box[1] * box[1] + box[2] * box[2]) >= d2) return;
-  const Vec3f* pts = map_[active_] + vx.begin;
+  const MapPoint* pts = map_[active_] + vx.begin;
   for (std::uint32_t i = 0; i < vx.count; ++i) {  // count <= max_per_voxel_
-    const double dx = static_cast<double>(pts[i].x()) - p.x();
+    const double dx = static_cast<double>(pts[i].x) - p.x();
     const double dx2 = dx * dx;
     if (dx2 >= d2) continue;
-    const double dy = static_cast<double>(pts[i].y()) - p.y();
-    const double dz = static_cast<double>(pts[i].z()) - p.z();
+    const double dy = static_cast<double>(pts[i].y) - p.y();
+    const double dz = static_cast<double>(pts[i].z) - p.z();
     const double d = dx2 + (dy * dy + dz * dz);
     if (d < d2) {
       d2 = d;
@@ -186,6 +190,7 @@ void OdometryVoxelMap::update(std::span<const Vec3f> frame, const Mat4d& pose, d
   const int next = 1 - active_;
   std::uint32_t cursor = 0;
   std::size_t kept = 0;
+  Run run;  // consecutive kept voxels without new points: one copy
   for (std::size_t v = 0; v < num_voxels_; ++v) {
     Voxel& vx = voxels_[active_][v];
     const Vec3d centre((vx.key[0] + 0.5) * voxel_size_, (vx.key[1] + 0.5) * voxel_size_,
@@ -199,20 +204,23 @@ void OdometryVoxelMap::update(std::span<const Vec3f> frame, const Mat4d& pose, d
     out = vx;
     out.begin = cursor;
     out.pending = 0;
-    const Vec3f* from = map_[active_] + vx.begin;
-    Vec3f* to = map_[next] + cursor;
-    for (std::uint32_t i = 0; i < vx.count; ++i) to[i] = from[i];
+    if (run.from + run.count != vx.begin || run.to + run.count != cursor) {
+      copy_run(run, next);
+      run = Run{vx.begin, cursor, 0};
+    }
+    run.count += vx.count;
     cursor += vx.count + vx.pending;
     vx.begin = static_cast<std::uint32_t>(kept);  // old index -> new index, for step 3
     ++kept;
   }
+  copy_run(run, next);
   // 3. Append the new points in input order.
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint32_t v = frame_voxel_[i];
     if (v == kNone || voxels_[active_][v].pending == kNone) continue;
     Voxel& out = voxels_[next][voxels_[active_][v].begin];
     const Vec3f m = transform(pose, frame[i]).cast<float>();
-    map_[next][out.begin + out.count] = m;
+    map_[next][out.begin + out.count] = MapPoint{m.x(), m.y(), m.z()};
     ++out.count;
     for (int a = 0; a < 3; ++a) {
       out.lo[a] = std::min(out.lo[a], m[a]);
@@ -227,6 +235,10 @@ void OdometryVoxelMap::update(std::span<const Vec3f> frame, const Mat4d& pose, d
   num_voxels_ = kept;
   num_points_ = cursor;
   if (reindex) rebuild_index();
+}
+
+void OdometryVoxelMap::copy_run(const Run& run, int next) {
+  if (run.count > 0) std::memcpy(map_[next] + run.to, map_[active_] + run.from, run.count * sizeof(MapPoint));
 }
 
 void OdometryVoxelMap::rebuild_index() {

@@ -37,8 +37,8 @@ bool reference_nearest(const OdometryVoxelMap& map, double voxel, const Vec3d& p
     if (box2 * 0.999 >= d2) continue;
     const std::int32_t k[3] = {key[0] + ((corner & 1) ? side[0] : 0), key[1] + ((corner & 2) ? side[1] : 0),
                                key[2] + ((corner & 4) ? side[2] : 0)};
-    for (const Vec3f& mf : map.voxel_points(k)) {
-      const Vec3d m = mf.cast<double>();
+    for (const MapPoint& mf : map.voxel_points(k)) {
+      const Vec3d m(mf.x, mf.y, mf.z);
       const double d = (m - p).squaredNorm();
       if (d < d2) {
         d2 = d;
@@ -111,10 +111,10 @@ TEST(OdometryVoxelMap, EveryPointReachableAfterIncrementalUpdates) {
     pose(1, 3) = 2.0 * frame;
     map.update(scan, pose, 9.0, dropped, evicted);
     std::size_t total = 0;
-    for (const Vec3f& m : map.points()) {
+    for (const MapPoint& m : map.points()) {
       Vec3d q;
       double d2 = 1.0;
-      ASSERT_TRUE(map.nearest(m.cast<double>(), 1e-6, q, d2));
+      ASSERT_TRUE(map.nearest(Vec3d(m.x, m.y, m.z), 1e-6, q, d2));
       EXPECT_EQ(d2, 0.0);
       ++total;
     }

@@ -96,7 +96,7 @@ class LidarOdometry {
   // The arithmetic stays on the 4x4 (pose_types.hpp); these label the same 16 doubles.
   Pose3d pose() const { return Pose3d(pose_); }
   Pose3d last_delta() const { return Pose3d(delta_); }
-  std::span<const Vec3f> map_points() const { return map_.points(); }
+  std::span<const MapPoint> map_points() const { return map_.points(); }
   std::size_t map_voxel_count() const { return map_.voxel_count(); }
   const OdometryParams& params() const { return params_; }
 
@@ -133,7 +133,7 @@ class LidarOdometry {
     std::uint32_t count = 0;
     std::uint32_t slot = 0;
     Vec3d sum = Vec3d::Zero();
-    Mat3d outer = Mat3d::Zero();
+    double outer[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};  // sum of p p^T: xx, xy, xz, yy, yz, zz
   };
   static constexpr std::size_t kMaxCoarse = config::kMaxDownsampledPoints;
   static constexpr std::size_t kCoarseSlots = 2 * config::kMaxDownsampledPoints;

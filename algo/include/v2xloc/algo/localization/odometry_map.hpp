@@ -5,7 +5,8 @@
 // Per voxel the bounding box of its points is kept: a query skips the voxel's points when the box
 // is already farther than the best match (exact: distances are monotone in each coordinate gap).
 // The index is rebuilt only in frames that evict a voxel (voxel indices change only then).
-// Storage: points and voxels double-buffered for compaction; static storage only (no heap).
+// Storage: points and voxels double-buffered for compaction (runs of unchanged voxels are copied
+// with one memcpy); static storage only (no heap).
 #pragma once
 
 #include <cstddef>
@@ -16,6 +17,11 @@
 #include "v2xloc/algo/core/types.hpp"
 
 namespace v2xloc {
+
+// A map point: plain floats, so compaction copies whole runs of them with memcpy.
+struct MapPoint {
+  float x, y, z;
+};
 
 class OdometryVoxelMap {
  public:
@@ -35,12 +41,12 @@ class OdometryVoxelMap {
   void update(std::span<const Vec3f> frame, const Mat4d& pose, double max_range, std::uint32_t& dropped,
               std::uint32_t& evicted);
 
-  std::span<const Vec3f> points() const { return {map_[active_], num_points_}; }
+  std::span<const MapPoint> points() const { return {map_[active_], num_points_}; }
   std::size_t voxel_count() const { return num_voxels_; }
   // floor(p / v) per axis; false outside |key| < 2^30.
   bool voxel_key(const Vec3d& p, std::int32_t key[3]) const;
   // Points of the voxel with this key (empty if there is none), in insertion order.
-  std::span<const Vec3f> voxel_points(const std::int32_t key[3]) const;
+  std::span<const MapPoint> voxel_points(const std::int32_t key[3]) const;
 
  private:
   struct Voxel {
@@ -60,12 +66,16 @@ class OdometryVoxelMap {
   bool voxel_key(const Vec3d& p, std::int32_t key[3], double quotient[3]) const;
   std::uint32_t find_voxel(const std::int32_t key[3]) const;  // index or kNone
   std::uint32_t insert_voxel(const std::int32_t key[3]);      // index or kNone (full)
-  void scan_voxel(const Voxel& vx, const Vec3d& p, double& d2, const Vec3f*& best) const;
+  void scan_voxel(const Voxel& vx, const Vec3d& p, double& d2, const MapPoint*& best) const;
+  struct Run {  // map_[active_][from, + count) -> map_[next][to, + count)
+    std::uint32_t from = 0, to = 0, count = 0;
+  };
+  void copy_run(const Run& run, int next);
   void rebuild_index();
 
   double voxel_size_ = 1.0;
   std::uint32_t max_per_voxel_ = 20;
-  Vec3f map_[2][kMaxPoints];
+  MapPoint map_[2][kMaxPoints];
   Voxel voxels_[2][kMaxPoints];
   std::uint32_t slots_[kSlots] = {};  // voxel index + 1, 0 = empty
   int active_ = 0;
