@@ -25,7 +25,7 @@ void OdometryVoxelMap::configure(double voxel_size, std::uint32_t max_points_per
 }
 
 void OdometryVoxelMap::clear() {
-  for (std::size_t i = 0; i < num_voxels_; ++i) slots_[voxels_[active_][i].slot] = 0;
+  for (std::size_t i = 0; i < num_voxels_; ++i) slots_[voxels_[i].slot] = 0;
   num_points_ = 0;
   num_voxels_ = 0;
 }
@@ -51,7 +51,7 @@ std::uint32_t OdometryVoxelMap::find_voxel(const std::int32_t key[3]) const {
   linear_probe(spatial_hash(key), kSlots, kMaxProbes, [&](std::size_t slot) {
     const std::uint32_t v = slots_[slot];
     if (v == 0) return true;
-    const Voxel& vx = voxels_[active_][v - 1];
+    const Voxel& vx = voxels_[v - 1];
     if (vx.key[0] == key[0] && vx.key[1] == key[1] && vx.key[2] == key[2]) {
       found = v - 1;
       return true;
@@ -66,7 +66,7 @@ static_assert(std::is_trivially_copyable_v<MapPoint> && sizeof(MapPoint) == 3 * 
 std::span<const MapPoint> OdometryVoxelMap::voxel_points(const std::int32_t key[3]) const {
   const std::uint32_t v = find_voxel(key);
   if (v == kNone) return {};
-  const Voxel& vx = voxels_[active_][v];
+  const Voxel& vx = voxels_[v];
   return {map_[active_] + vx.begin, vx.count};
 }
 
@@ -75,7 +75,7 @@ std::uint32_t OdometryVoxelMap::insert_voxel(const std::int32_t key[3]) {
   const ProbeResult probe = linear_probe(spatial_hash(key), kSlots, kMaxProbes,
                                          [&](std::size_t slot) { return slots_[slot] == 0; });
   if (!probe.stopped) return kNone;
-  Voxel& vx = voxels_[active_][num_voxels_];
+  Voxel& vx = voxels_[num_voxels_];
   vx = Voxel{{key[0], key[1], key[2]}, 0, 0, 0, static_cast<std::uint32_t>(probe.slot),
              {INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
   slots_[probe.slot] = static_cast<std::uint32_t>(++num_voxels_);
@@ -118,7 +118,7 @@ bool OdometryVoxelMap::nearest(const Vec3d& p, double max_d2, Vec3d& q, double& 
     const std::int32_t k[3] = {key[0] + ((corner & 1) ? side[0] : 0), key[1] + ((corner & 2) ? side[1] : 0),
                                key[2] + ((corner & 4) ? side[2] : 0)};
     const std::uint32_t v = find_voxel(k);
-    if (v != kNone) scan_voxel(voxels_[active_][v], p, d2, best);
+    if (v != kNone) scan_voxel(voxels_[v], p, d2, best);
   }
   if (best == nullptr) return false;
   q = Vec3d(best->x, best->y, best->z);
@@ -173,7 +173,7 @@ void OdometryVoxelMap::update(std::span<const Vec3f> frame, const Mat4d& pose, d
       ++dropped;
       continue;
     }
-    Voxel& vx = voxels_[active_][v];
+    Voxel& vx = voxels_[v];
     if (vx.count + vx.pending >= max_per_voxel_) continue;  // voxel full: normal, not a drop
     if (total == kMaxPoints) {
       ++dropped;
@@ -192,15 +192,16 @@ void OdometryVoxelMap::update(std::span<const Vec3f> frame, const Mat4d& pose, d
   std::size_t kept = 0;
   Run run;  // consecutive kept voxels without new points: one copy
   for (std::size_t v = 0; v < num_voxels_; ++v) {
-    Voxel& vx = voxels_[active_][v];
+    const Voxel vx = voxels_[v];  // compacted in place: kept <= v
     const Vec3d centre((vx.key[0] + 0.5) * voxel_size_, (vx.key[1] + 0.5) * voxel_size_,
                        (vx.key[2] + 0.5) * voxel_size_);
     if ((centre - origin).squaredNorm() > r2 || vx.count + vx.pending == 0) {
       ++evicted;
-      vx.pending = kNone;  // marks the voxel dropped for step 3
+      slots_[vx.slot] = 0;  // the index is rebuilt below
+      remap_[v] = kNone;
       continue;
     }
-    Voxel& out = voxels_[next][kept];
+    Voxel& out = voxels_[kept];
     out = vx;
     out.begin = cursor;
     out.pending = 0;
@@ -210,15 +211,15 @@ void OdometryVoxelMap::update(std::span<const Vec3f> frame, const Mat4d& pose, d
     }
     run.count += vx.count;
     cursor += vx.count + vx.pending;
-    vx.begin = static_cast<std::uint32_t>(kept);  // old index -> new index, for step 3
+    remap_[v] = static_cast<std::uint32_t>(kept);
     ++kept;
   }
   copy_run(run, next);
   // 3. Append the new points in input order.
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint32_t v = frame_voxel_[i];
-    if (v == kNone || voxels_[active_][v].pending == kNone) continue;
-    Voxel& out = voxels_[next][voxels_[active_][v].begin];
+    if (v == kNone || remap_[v] == kNone) continue;
+    Voxel& out = voxels_[remap_[v]];
     const Vec3f m = transform(pose, frame[i]).cast<float>();
     map_[next][out.begin + out.count] = MapPoint{m.x(), m.y(), m.z()};
     ++out.count;
@@ -227,14 +228,15 @@ void OdometryVoxelMap::update(std::span<const Vec3f> frame, const Mat4d& pose, d
       out.hi[a] = std::max(out.hi[a], m[a]);
     }
   }
+  // Voxel indices changed only if one went: then the index is rebuilt over the kept voxels.
   const bool reindex = kept != num_voxels_;
-  if (reindex) {
-    for (std::size_t v = 0; v < num_voxels_; ++v) slots_[voxels_[active_][v].slot] = 0;
-  }
   active_ = next;
   num_voxels_ = kept;
   num_points_ = cursor;
-  if (reindex) rebuild_index();
+  if (reindex) {
+    for (std::size_t v = 0; v < num_voxels_; ++v) slots_[voxels_[v].slot] = 0;
+    rebuild_index();
+  }
 }
 
 void OdometryVoxelMap::copy_run(const Run& run, int next) {
@@ -243,7 +245,7 @@ void OdometryVoxelMap::copy_run(const Run& run, int next) {
 
 void OdometryVoxelMap::rebuild_index() {
   for (std::size_t v = 0; v < num_voxels_; ++v) {
-    Voxel& vx = voxels_[active_][v];
+    Voxel& vx = voxels_[v];
     // The table holds at most kMaxPoints <= kSlots voxels; probing beyond the cap would only
     // happen for a pathological key set and then the voxel is unreachable (still counted in map).
     const ProbeResult probe = linear_probe(spatial_hash(vx.key), kSlots, kMaxProbes,

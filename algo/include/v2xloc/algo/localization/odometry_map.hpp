@@ -5,8 +5,8 @@
 // Per voxel the bounding box of its points is kept: a query skips the voxel's points when the box
 // is already farther than the best match (exact: distances are monotone in each coordinate gap).
 // The index is rebuilt only in frames that evict a voxel (voxel indices change only then).
-// Storage: points and voxels double-buffered for compaction (runs of unchanged voxels are copied
-// with one memcpy); static storage only (no heap).
+// Storage: points double-buffered for compaction (runs of unchanged voxels are copied with one
+// memcpy), voxels compacted in place; static storage only (no heap).
 #pragma once
 
 #include <cstddef>
@@ -76,7 +76,8 @@ class OdometryVoxelMap {
   double voxel_size_ = 1.0;
   std::uint32_t max_per_voxel_ = 20;
   MapPoint map_[2][kMaxPoints];
-  Voxel voxels_[2][kMaxPoints];
+  Voxel voxels_[kMaxPoints];         // compacted in place
+  std::uint32_t remap_[kMaxPoints];  // update(): old voxel index -> new (kNone: evicted)
   std::uint32_t slots_[kSlots] = {};  // voxel index + 1, 0 = empty
   int active_ = 0;
   std::size_t num_points_ = 0;
