@@ -28,103 +28,18 @@ void LidarOdometry::configure(const OdometryParams& params) {
   if (params_.max_points_per_voxel == 0) params_.max_points_per_voxel = 1;
   if (params_.max_iterations > config::kOdometryMaxIterations)
     params_.max_iterations = config::kOdometryMaxIterations;
+  map_.configure(params_.voxel_size, params_.max_points_per_voxel);
   reset();
 }
 
 void LidarOdometry::reset(const Pose3d& initial) {
-  for (std::size_t i = 0; i < num_voxels_; ++i) slots_[voxels_[active_][i].slot] = 0;
+  map_.clear();
   pose_ = initial.matrix();
   delta_ = Mat4d::Identity();
   last_deviation_ = Mat4d::Identity();
   first_frame_ = true;
   deviation_sse_ = 0.0;
   deviation_samples_ = 0;
-  map_points_ = 0;
-  num_voxels_ = 0;
-}
-
-bool LidarOdometry::voxel_key(const Vec3d& p, std::int32_t key[3]) const {
-  for (int i = 0; i < 3; ++i) {
-    const double q = p(i) / params_.voxel_size;
-    if (!(q > -1073741824.0 && q < 1073741824.0)) return false;  // |key| < 2^30
-    key[i] = det::floor_to_int(q);  // libm's floor is a call on baseline x86-64
-    if (key[i] == -1073741824) return false;
-  }
-  return true;
-}
-
-std::uint32_t LidarOdometry::find_voxel(const std::int32_t key[3]) const {
-  std::uint32_t found = kNone;
-  linear_probe(spatial_hash(key), kSlots, kMaxProbes, [&](std::size_t slot) {
-    const std::uint32_t v = slots_[slot];
-    if (v == 0) return true;
-    const Voxel& vx = voxels_[active_][v - 1];
-    if (vx.key[0] == key[0] && vx.key[1] == key[1] && vx.key[2] == key[2]) {
-      found = v - 1;
-      return true;
-    }
-    return false;
-  });
-  return found;
-}
-
-std::uint32_t LidarOdometry::insert_voxel(const std::int32_t key[3]) {
-  if (num_voxels_ == kMaxPoints) return kNone;
-  const ProbeResult probe = linear_probe(spatial_hash(key), kSlots, kMaxProbes,
-                                         [&](std::size_t slot) { return slots_[slot] == 0; });
-  if (!probe.stopped) return kNone;
-  Voxel& vx = voxels_[active_][num_voxels_];
-  vx.key[0] = key[0];
-  vx.key[1] = key[1];
-  vx.key[2] = key[2];
-  vx.begin = 0;
-  vx.count = 0;
-  vx.pending = 0;
-  vx.slot = static_cast<std::uint32_t>(probe.slot);
-  slots_[probe.slot] = static_cast<std::uint32_t>(++num_voxels_);
-  return static_cast<std::uint32_t>(num_voxels_ - 1);
-}
-
-// The nearest map point among the 2 x 2 x 2 voxels around p (its own and, per axis, the
-// neighbour on the side p lies in): exact for every point within half a voxel of p, which
-// covers the tracking threshold tau; 8 voxel lookups instead of KISS-ICP's 27. A neighbour
-// voxel whose box lies farther than the best match so far is skipped: it cannot hold a closer
-// point (same result, ~3x fewer lookups and distances at the usual tau of a few decimetres).
-bool LidarOdometry::nearest(const Vec3d& p, double max_d2, Vec3d& q, double& d2) const {
-  std::int32_t key[3];
-  if (!voxel_key(p, key)) return false;
-  std::int32_t side[3];
-  double gap2[3];  // squared distance from p to the neighbour voxel's face, per axis
-  for (int a = 0; a < 3; ++a) {
-    const double frac = p(a) / params_.voxel_size - key[a];
-    side[a] = frac < 0.5 ? -1 : 1;
-    const double gap = (side[a] < 0 ? frac : 1.0 - frac) * params_.voxel_size;
-    gap2[a] = gap * gap;
-  }
-  bool found = false;
-  d2 = max_d2;
-  const Vec3f* pts = map_[active_];
-  static constexpr int kCornerOrder[8] = {0, 1, 2, 4, 3, 5, 6, 7};  // own voxel, faces, edges, corner
-  for (const int corner : kCornerOrder) {
-    double box2 = 0.0;
-    for (int a = 0; a < 3; ++a) box2 += (corner & (1 << a)) ? gap2[a] : 0.0;
-    if (box2 * 0.999 >= d2) continue;  // 0.1 % slack: voxel keys are floors of rounded quotients
-    const std::int32_t k[3] = {key[0] + ((corner & 1) ? side[0] : 0), key[1] + ((corner & 2) ? side[1] : 0),
-                               key[2] + ((corner & 4) ? side[2] : 0)};
-    const std::uint32_t v = find_voxel(k);
-    if (v == kNone) continue;
-    const Voxel& vx = voxels_[active_][v];
-    for (std::uint32_t i = 0; i < vx.count; ++i) {
-      const Vec3d m = pts[vx.begin + i].cast<double>();
-      const double d = (m - p).squaredNorm();
-      if (d < d2) {
-        d2 = d;
-        q = m;
-        found = true;
-      }
-    }
-  }
-  return found;
 }
 
 double LidarOdometry::model_sigma() const {
@@ -177,7 +92,7 @@ OdometryResult LidarOdometry::register_fine(const Mat4d* predicted_delta, Odomet
   }
   if (first_frame_) {
     first_frame_ = false;
-    update_map(pose_, r);
+    map_.update(frame_fine_.span(), pose_, params_.max_range, r.points_dropped_capacity, r.voxels_evicted);
     r.status = OdometryStatus::kFirstFrame;
     return finish_frame(r);
   }
@@ -188,15 +103,15 @@ OdometryResult LidarOdometry::register_fine(const Mat4d* predicted_delta, Odomet
   last_deviation_ = se3_inverse(prediction) * T;
   delta_ = se3_inverse(pose_) * T;
   pose_ = T;
-  update_map(pose_, r);
+  map_.update(frame_fine_.span(), pose_, params_.max_range, r.points_dropped_capacity, r.voxels_evicted);
   return finish_frame(r);
 }
 
 OdometryResult LidarOdometry::finish_frame(OdometryResult& r) const {
   r.pose = Pose3d(pose_);
   r.delta = Pose3d(delta_);
-  r.map_points = static_cast<std::uint32_t>(map_points_);
-  r.map_voxels = static_cast<std::uint32_t>(num_voxels_);
+  r.map_points = static_cast<std::uint32_t>(map_.points().size());
+  r.map_voxels = static_cast<std::uint32_t>(map_.voxel_count());
   return r;
 }
 
@@ -222,6 +137,7 @@ void LidarOdometry::build_coarse_frame(OdometryResult& r) {
   frame_coarse_.clear();
   const double cv = 1.5 * params_.voxel_size;
   std::size_t voxels = 0;
+  std::uint32_t last = kNone;  // consecutive fine points usually share a coarse voxel
   for (const Vec3f& pf : frame_fine_) {
     const Vec3d p = pf.cast<double>();
     std::int32_t key[3];
@@ -232,7 +148,9 @@ void LidarOdometry::build_coarse_frame(OdometryResult& r) {
       key[a] = ok ? det::floor_to_int(q) : 0;
       ok = ok && key[a] != -1073741824;
     }
-    std::uint32_t v = ok ? find_coarse(key) : kNone;
+    const bool same = ok && last != kNone && coarse_[last].key[0] == key[0] && coarse_[last].key[1] == key[1] &&
+                      coarse_[last].key[2] == key[2];
+    std::uint32_t v = same ? last : (ok ? find_coarse(key) : kNone);
     if (ok && v == kNone && voxels < kMaxCoarse) {
       const ProbeResult probe = linear_probe(spatial_hash(key), kCoarseSlots, kMaxProbes,
                                              [&](std::size_t slot) { return coarse_slots_[slot] == 0; });
@@ -248,10 +166,17 @@ void LidarOdometry::build_coarse_frame(OdometryResult& r) {
       ++r.points_dropped_capacity;
       continue;
     }
+    last = v;
     CoarseVoxel& c = coarse_[v];
     ++c.count;
     c.sum += p;
-    c.outer += p * p.transpose();
+    // The upper triangle of p p^T (p_i p_j == p_j p_i bit for bit: the full matrix adds nothing).
+    c.outer[0] += p.x() * p.x();
+    c.outer[1] += p.x() * p.y();
+    c.outer[2] += p.x() * p.z();
+    c.outer[3] += p.y() * p.y();
+    c.outer[4] += p.y() * p.z();
+    c.outer[5] += p.z() * p.z();
   }
   for (std::size_t v = 0; v < voxels; ++v) {
     const CoarseVoxel& c = coarse_[v];
@@ -281,7 +206,7 @@ Vec3f LidarOdometry::coarse_normal(const Vec3d& mean, const std::int32_t key[3],
   std::int32_t side[3];
   for (int a = 0; a < 3; ++a) side[a] = mean(a) / cv - key[a] < 0.5 ? -1 : 1;
   Vec3d sum = Vec3d::Zero();
-  Mat3d outer = Mat3d::Zero();
+  double outer[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
   std::uint32_t n = 0;
   for (int corner = 0; corner < 8; ++corner) {
     const std::int32_t k[3] = {key[0] + ((corner & 1) ? side[0] : 0), key[1] + ((corner & 2) ? side[1] : 0),
@@ -289,12 +214,14 @@ Vec3f LidarOdometry::coarse_normal(const Vec3d& mean, const std::int32_t key[3],
     const std::uint32_t v = find_coarse(k);
     if (v == kNone) continue;
     sum += coarse_[v].sum;
-    outer += coarse_[v].outer;
+    for (int e = 0; e < 6; ++e) outer[e] += coarse_[v].outer[e];
     n += coarse_[v].count;
   }
   if (n < params_.normal_min_points) return Vec3f::Zero();  // no plane to speak of: not used
   const Vec3d centroid = sum / static_cast<double>(n);
-  const Mat3d cov = outer / static_cast<double>(n) - centroid * centroid.transpose();
+  Mat3d moments;
+  moments << outer[0], outer[1], outer[2], outer[1], outer[3], outer[4], outer[2], outer[4], outer[5];
+  const Mat3d cov = moments / static_cast<double>(n) - centroid * centroid.transpose();
   Vec3d lambda;
   Mat3d vectors;
   symmetric_eigen3(cov, lambda, vectors);
@@ -315,14 +242,17 @@ Mat4d LidarOdometry::align(const Mat4d& prediction, OdometryResult& r) const {
     std::uint32_t matches = 0;
     const Mat3d R = T.topLeftCorner<3, 3>();
     for (std::size_t i = 0; i < frame_coarse_.size(); ++i) {
+      Vec3d n = Vec3d::Zero();
+      if (params_.point_to_plane) {
+        n = R * coarse_normals_[i].cast<double>();
+        if (n.squaredNorm() < 0.5) continue;  // no normal (isolated point): no search either
+      }
       const Vec3d p = transform(T, frame_coarse_[i]);
       Vec3d q;
       double d2;
-      if (!nearest(p, tau * tau, q, d2)) continue;
+      if (!map_.nearest(p, tau * tau, q, d2)) continue;
       const Vec3d res = p - q;
       if (params_.point_to_plane) {
-        const Vec3d n = R * coarse_normals_[i].cast<double>();
-        if (n.squaredNorm() < 0.5) continue;  // no normal (isolated point)
         const double e = n.dot(res);
         const double denom = k2 + e * e;
         const double w = k2 / (denom * denom) * k2;
@@ -370,92 +300,6 @@ Mat4d LidarOdometry::align(const Mat4d& prediction, OdometryResult& r) const {
     }
   }
   return T;
-}
-
-void LidarOdometry::update_map(const Mat4d& pose, OdometryResult& r) {
-  const std::uint32_t max_per_voxel = params_.max_points_per_voxel;
-  // 1. Assign each new point to a voxel (existing or new), bounded by the per-voxel and total
-  //    capacities.
-  std::size_t total = map_points_;
-  for (std::size_t i = 0; i < frame_fine_.size(); ++i) {
-    fine_voxel_[i] = kNone;
-    const Vec3d p = transform(pose, frame_fine_[i]);
-    std::int32_t key[3];
-    if (!voxel_key(p, key)) {
-      ++r.points_dropped_capacity;
-      continue;
-    }
-    std::uint32_t v = find_voxel(key);
-    if (v == kNone) v = insert_voxel(key);
-    if (v == kNone) {
-      ++r.points_dropped_capacity;
-      continue;
-    }
-    Voxel& vx = voxels_[active_][v];
-    if (vx.count + vx.pending >= max_per_voxel) continue;  // voxel full: normal, not a drop
-    if (total == kMaxPoints) {
-      ++r.points_dropped_capacity;
-      continue;
-    }
-    ++vx.pending;
-    ++total;
-    fine_voxel_[i] = v;
-  }
-  // 2. Compact into the other buffer, evicting voxels whose centre is beyond max_range.
-  const Vec3d origin = pose.topRightCorner<3, 1>();
-  const double r2 = params_.max_range * params_.max_range;
-  const int next = 1 - active_;
-  std::uint32_t cursor = 0;
-  std::size_t kept = 0;
-  for (std::size_t v = 0; v < num_voxels_; ++v) {
-    Voxel& vx = voxels_[active_][v];
-    slots_[vx.slot] = 0;
-    const Vec3d centre((vx.key[0] + 0.5) * params_.voxel_size,
-                       (vx.key[1] + 0.5) * params_.voxel_size,
-                       (vx.key[2] + 0.5) * params_.voxel_size);
-    const bool evict = (centre - origin).squaredNorm() > r2 || vx.count + vx.pending == 0;
-    if (evict) {
-      ++r.voxels_evicted;
-      vx.pending = kNone;  // marks the voxel dropped for step 3
-      continue;
-    }
-    Voxel& out = voxels_[next][kept];
-    out = vx;
-    out.begin = cursor;
-    for (std::uint32_t i = 0; i < vx.count; ++i) map_[next][cursor + i] = map_[active_][vx.begin + i];
-    cursor += vx.count + vx.pending;
-    out.pending = 0;
-    vx.begin = static_cast<std::uint32_t>(kept);  // old index -> new index, for step 3
-    ++kept;
-  }
-  // 3. Append the new points in input order.
-  for (std::size_t i = 0; i < frame_fine_.size(); ++i) {
-    const std::uint32_t v = fine_voxel_[i];
-    if (v == kNone || voxels_[active_][v].pending == kNone) continue;
-    Voxel& out = voxels_[next][voxels_[active_][v].begin];
-    map_[next][out.begin + out.count] = transform(pose, frame_fine_[i]).cast<float>();
-    ++out.count;
-  }
-  active_ = next;
-  num_voxels_ = kept;
-  map_points_ = cursor;
-  rebuild_index();
-}
-
-void LidarOdometry::rebuild_index() {
-  for (std::size_t v = 0; v < num_voxels_; ++v) {
-    Voxel& vx = voxels_[active_][v];
-    // The table holds at most kMaxPoints <= kSlots voxels; probing beyond the cap would only
-    // happen for a pathological key set and then the voxel is unreachable (still counted in map).
-    const ProbeResult probe = linear_probe(spatial_hash(vx.key), kSlots, kMaxProbes,
-                                           [&](std::size_t slot) { return slots_[slot] == 0; });
-    if (probe.stopped) {
-      slots_[probe.slot] = static_cast<std::uint32_t>(v + 1);
-      vx.slot = static_cast<std::uint32_t>(probe.slot);
-    } else {
-      vx.slot = 0;  // unreachable voxel; slot 0 cleared harmlessly
-    }
-  }
 }
 
 }  // namespace v2xloc

@@ -31,13 +31,12 @@ ScanIngest::Accumulator* ScanIngest::find_or_add(const std::int32_t key[3]) {
   return found;
 }
 
-ScanIngestResult ScanIngest::run(std::span<const Vec3f> points, std::span<const float> times,
-                                 const Mat4d* delta_lidar, const ScanIngestParams& params) {
-  ScanIngestResult r;
-  r.input_points = static_cast<std::uint32_t>(points.size());
-  count_ = 0;
-  if (!(params.voxel > 0.0f) || !std::isfinite(params.voxel)) return r;
-  const bool has_times = times.size() == points.size() && !points.empty();
+// One pass over the returns (see the header), specialised on whether times are given. The
+// finite and range tests share one comparison on the fast path (NaN and Inf fail it); a return
+// failing it is classified in the order of the full tests.
+template <bool kTimes>
+void ScanIngest::accumulate(std::span<const Vec3f> points, const float* times, const ScanIngestParams& params,
+                            ScanIngestResult& r) {
   const float min2 = params.min_range * params.min_range;
   const float max2 = params.max_range * params.max_range;
   const float inv = 1.0f / params.voxel;  // keys stay within +-max_range / voxel: no overflow
@@ -45,14 +44,17 @@ ScanIngestResult ScanIngest::run(std::span<const Vec3f> points, std::span<const 
   std::int32_t last_key[3] = {0, 0, 0};
   for (std::size_t i = 0; i < points.size(); ++i) {
     const Vec3f& p = points[i];
-    if (!is_finite_point(p) || (has_times && !std::isfinite(times[i]))) {
-      ++r.non_finite_dropped;
-      continue;
-    }
+    const float t = kTimes ? times[i] : 0.0f;
     const float r2 = p.squaredNorm();
-    if (r2 < min2 || r2 > max2) {
-      ++r.range_dropped;
-      continue;
+    if (!(r2 >= min2 && r2 <= max2) || (kTimes && !std::isfinite(t))) {
+      if (!is_finite_point(p) || (kTimes && !std::isfinite(t))) {
+        ++r.non_finite_dropped;
+        continue;
+      }
+      if (r2 < min2 || r2 > max2) {
+        ++r.range_dropped;
+        continue;
+      }
     }
     const std::int32_t key[3] = {det::floor_to_int(p.x() * inv), det::floor_to_int(p.y() * inv),
                                  det::floor_to_int(p.z() * inv)};
@@ -68,7 +70,21 @@ ScanIngestResult ScanIngest::run(std::span<const Vec3f> points, std::span<const 
     }
     ++a->count;
     for (int k = 0; k < 3; ++k) a->sum[k] += p[k];
-    a->time_sum += has_times ? times[i] : 0.0f;
+    a->time_sum += t;
+  }
+}
+
+ScanIngestResult ScanIngest::run(std::span<const Vec3f> points, std::span<const float> times,
+                                 const Mat4d* delta_lidar, const ScanIngestParams& params) {
+  ScanIngestResult r;
+  r.input_points = static_cast<std::uint32_t>(points.size());
+  count_ = 0;
+  if (!(params.voxel > 0.0f) || !std::isfinite(params.voxel)) return r;
+  const bool has_times = times.size() == points.size() && !points.empty();
+  if (has_times) {
+    accumulate<true>(points, times.data(), params, r);
+  } else {
+    accumulate<false>(points, nullptr, params, r);
   }
   for (std::size_t v = 0; v < count_; ++v) {
     const Accumulator& a = voxels_[v];

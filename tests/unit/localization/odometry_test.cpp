@@ -43,7 +43,7 @@ TEST(LidarOdometry, MapEvictsVoxelsBeyondRange) {
   odom.reset(Pose3d(far));
   odom.register_frame(scan);
   EXPECT_GT(before, 0u);
-  for (const Vec3f& m : odom.map_points()) EXPECT_GT(m.x(), 80.0f);
+  for (const MapPoint& m : odom.map_points()) EXPECT_GT(m.x, 80.0f);
 }
 
 }  // namespace

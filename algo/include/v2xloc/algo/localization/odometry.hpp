@@ -29,6 +29,7 @@
 #include "v2xloc/algo/search/kdtree.hpp"
 #include "v2xloc/algo/core/config.hpp"
 #include "v2xloc/algo/core/types.hpp"
+#include "v2xloc/algo/localization/odometry_map.hpp"
 #include "v2xloc/algo/localization/pose_types.hpp"
 #include "v2xloc/algo/registration/voxel_downsample.hpp"
 
@@ -95,26 +96,11 @@ class LidarOdometry {
   // The arithmetic stays on the 4x4 (pose_types.hpp); these label the same 16 doubles.
   Pose3d pose() const { return Pose3d(pose_); }
   Pose3d last_delta() const { return Pose3d(delta_); }
-  std::span<const Vec3f> map_points() const { return {map_[active_], map_points_}; }
-  std::size_t map_voxel_count() const { return num_voxels_; }
+  std::span<const MapPoint> map_points() const { return map_.points(); }
+  std::size_t map_voxel_count() const { return map_.voxel_count(); }
   const OdometryParams& params() const { return params_; }
 
  private:
-  struct Voxel {
-    std::int32_t key[3];
-    std::uint32_t begin;
-    std::uint32_t count;
-    std::uint32_t pending;  // points to append this frame
-    std::uint32_t slot;     // hash slot (cleared when the index is rebuilt)
-  };
-  static constexpr std::size_t kMaxPoints = config::kOdometryMapPoints;
-  static constexpr std::size_t kSlots = config::kOdometryHashSlots;
-  static_assert((kSlots & (kSlots - 1)) == 0, "hash slots must be a power of two");
-
-  bool voxel_key(const Vec3d& p, std::int32_t key[3]) const;
-  std::uint32_t find_voxel(const std::int32_t key[3]) const;  // index or kNone
-  std::uint32_t insert_voxel(const std::int32_t key[3]);      // index or kNone (full)
-  bool nearest(const Vec3d& p, double max_d2, Vec3d& q, double& d2) const;
   void keep_in_range(std::span<const Vec3f> points, BoundedVector<Vec3f>& out, OdometryResult& r) const;
   OdometryResult register_fine(const Mat4d* predicted_delta, OdometryResult& r);
   OdometryResult finish_frame(OdometryResult& r) const;
@@ -123,8 +109,6 @@ class LidarOdometry {
   std::uint32_t find_coarse(const std::int32_t key[3]) const;
   Vec3f coarse_normal(const Vec3d& mean, const std::int32_t key[3], double cv) const;
   Mat4d align(const Mat4d& prediction, OdometryResult& r) const;
-  void update_map(const Mat4d& pose, OdometryResult& r);
-  void rebuild_index();
   double model_sigma() const;
 
   static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
@@ -136,27 +120,20 @@ class LidarOdometry {
   double deviation_sse_ = 0.0;
   std::uint64_t deviation_samples_ = 0;
 
-  // Local map: points of voxel i are map_[active_][voxels_[active_][i].begin, + count).
-  Vec3f map_[2][kMaxPoints];
-  Voxel voxels_[2][kMaxPoints];
-  std::uint32_t slots_[kSlots] = {};  // voxel index + 1, 0 = empty
-  int active_ = 0;
-  std::size_t map_points_ = 0;
-  std::size_t num_voxels_ = 0;
+  OdometryVoxelMap map_;  // the local map (odometry_map.hpp)
 
   // Per-frame buffers.
   VoxelDownsampleStorage<config::kVoxelHashSlots, config::kMaxDownsampledPoints> downsample_;
   FixedVector<Vec3f, config::kMaxScanPoints> in_range_;
   FixedVector<Vec3f, config::kMaxDownsampledPoints> frame_fine_;
   FixedVector<Vec3f, config::kMaxDownsampledPoints> frame_coarse_;
-  std::uint32_t fine_voxel_[config::kMaxDownsampledPoints];
   // 1.5 v voxels of this frame with the moments of their fine points (source normals).
   struct CoarseVoxel {
     std::int32_t key[3] = {0, 0, 0};
     std::uint32_t count = 0;
     std::uint32_t slot = 0;
     Vec3d sum = Vec3d::Zero();
-    Mat3d outer = Mat3d::Zero();
+    double outer[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};  // sum of p p^T: xx, xy, xz, yy, yz, zz
   };
   static constexpr std::size_t kMaxCoarse = config::kMaxDownsampledPoints;
   static constexpr std::size_t kCoarseSlots = 2 * config::kMaxDownsampledPoints;

@@ -53,6 +53,9 @@ class ScanIngest {
     double time_sum;
   };
   Accumulator* find_or_add(const std::int32_t key[3]);
+  template <bool kTimes>
+  void accumulate(std::span<const Vec3f> points, const float* times, const ScanIngestParams& params,
+                  ScanIngestResult& r);
 
   Accumulator voxels_[kMaxVoxels];
   std::uint32_t slots_[kSlots] = {};  // voxel index + 1, 0 = empty

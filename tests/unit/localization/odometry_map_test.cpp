@@ -1,0 +1,127 @@
+// The odometry's voxel map: its pruned nearest-neighbour query returns bit for bit what the
+// plain scan of the 2 x 2 x 2 voxels (the odometry's search before the pruning) returns, and the
+// incremental index finds every voxel after updates with and without evictions.
+#include "v2xloc/algo/localization/odometry_map.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <random>
+#include <vector>
+
+#include "v2xloc/algo/core/rigid_motion.hpp"
+
+namespace v2xloc {
+namespace {
+
+// The search as the odometry ran it before the bounding boxes: every point of every visited
+// voxel, distance by Eigen's squaredNorm.
+bool reference_nearest(const OdometryVoxelMap& map, double voxel, const Vec3d& p, double max_d2, Vec3d& q,
+                       double& d2) {
+  std::int32_t key[3];
+  if (!map.voxel_key(p, key)) return false;
+  std::int32_t side[3];
+  double gap2[3];
+  for (int a = 0; a < 3; ++a) {
+    const double frac = p(a) / voxel - key[a];
+    side[a] = frac < 0.5 ? -1 : 1;
+    const double gap = (side[a] < 0 ? frac : 1.0 - frac) * voxel;
+    gap2[a] = gap * gap;
+  }
+  bool found = false;
+  d2 = max_d2;
+  static constexpr int kCornerOrder[8] = {0, 1, 2, 4, 3, 5, 6, 7};
+  for (const int corner : kCornerOrder) {
+    double box2 = 0.0;
+    for (int a = 0; a < 3; ++a) box2 += (corner & (1 << a)) ? gap2[a] : 0.0;
+    if (box2 * 0.999 >= d2) continue;
+    const std::int32_t k[3] = {key[0] + ((corner & 1) ? side[0] : 0), key[1] + ((corner & 2) ? side[1] : 0),
+                               key[2] + ((corner & 4) ? side[2] : 0)};
+    for (const MapPoint& mf : map.voxel_points(k)) {
+      const Vec3d m(mf.x, mf.y, mf.z);
+      const double d = (m - p).squaredNorm();
+      if (d < d2) {
+        d2 = d;
+        q = m;
+        found = true;
+      }
+    }
+  }
+  return found;
+}
+
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+// Scans of a ground plane, a wall and scattered clutter around the sensor, some exact
+// duplicates (ties), moved along x frame by frame; queries near and off the map.
+TEST(OdometryVoxelMap, PrunedNearestMatchesPlainScanBitForBit) {
+  static OdometryVoxelMap map;
+  const double voxel = 1.0;
+  map.configure(voxel, 20);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-12.0f, 12.0f), small(-0.05f, 0.05f);
+  std::uint32_t dropped = 0, evicted = 0;
+  std::size_t compared = 0, found = 0;
+  for (int frame = 0; frame < 12; ++frame) {
+    std::vector<Vec3f> scan;
+    for (int i = 0; i < 3000; ++i) {
+      const float x = u(rng), y = u(rng);
+      switch (i % 4) {
+        case 0: scan.emplace_back(x, y, -1.7f + small(rng)); break;            // ground
+        case 1: scan.emplace_back(x, 6.0f + small(rng), 0.3f * y); break;     // wall
+        case 2: scan.emplace_back(x, y, 0.2f * u(rng)); break;                // clutter
+        default: scan.push_back(scan[scan.size() - 1 - (i % 3)]); break;      // duplicate
+      }
+    }
+    Mat4d pose = Mat4d::Identity();
+    pose(0, 3) = 1.3 * frame;
+    pose.topLeftCorner<3, 3>() = so3_exp(Vec3d(0.0, 0.0, 0.05 * frame));
+    map.update(scan, pose, 15.0, dropped, evicted);
+    for (int i = 0; i < 2000; ++i) {
+      const Vec3d p(pose(0, 3) + u(rng), u(rng), -1.7 + 0.1 * u(rng));
+      const double max_d2 = (i % 3 == 0) ? 4.0 : 0.04 * (1 + i % 7);
+      Vec3d q_new(0, 0, 0), q_ref(0, 0, 0);
+      double d_new = 0.0, d_ref = 0.0;
+      const bool f_new = map.nearest(p, max_d2, q_new, d_new);
+      const bool f_ref = reference_nearest(map, voxel, p, max_d2, q_ref, d_ref);
+      ASSERT_EQ(f_new, f_ref) << "frame " << frame << " query " << i;
+      ++compared;
+      if (!f_ref) continue;
+      ++found;
+      ASSERT_TRUE(same_bits(d_new, d_ref)) << d_new << " vs " << d_ref;
+      for (int a = 0; a < 3; ++a) ASSERT_TRUE(same_bits(q_new(a), q_ref(a)));
+    }
+  }
+  EXPECT_GT(evicted, 0u);  // the index was rebuilt at least once
+  EXPECT_GT(found, compared / 4);
+  EXPECT_EQ(dropped, 0u);
+}
+
+// Every stored point is found in the voxel of its key, and nearest() finds a point itself.
+TEST(OdometryVoxelMap, EveryPointReachableAfterIncrementalUpdates) {
+  static OdometryVoxelMap map;
+  map.configure(0.5, 5);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(-8.0f, 8.0f);
+  std::uint32_t dropped = 0, evicted = 0;
+  for (int frame = 0; frame < 6; ++frame) {
+    std::vector<Vec3f> scan;
+    for (int i = 0; i < 1500; ++i) scan.emplace_back(u(rng), u(rng), 0.5f * u(rng));
+    Mat4d pose = Mat4d::Identity();
+    pose(1, 3) = 2.0 * frame;
+    map.update(scan, pose, 9.0, dropped, evicted);
+    std::size_t total = 0;
+    for (const MapPoint& m : map.points()) {
+      Vec3d q;
+      double d2 = 1.0;
+      ASSERT_TRUE(map.nearest(Vec3d(m.x, m.y, m.z), 1e-6, q, d2));
+      EXPECT_EQ(d2, 0.0);
+      ++total;
+    }
+    EXPECT_EQ(total, map.points().size());
+  }
+  EXPECT_GT(evicted, 0u);
+}
+
+}  // namespace
+}  // namespace v2xloc
