@@ -155,9 +155,9 @@ struct LocalizerParams {
     p.method = IcpMethod::kPointToPlane;
     p.max_correspondence_distance = 1.0;  // [m] tracking gate around the EKF prediction
     p.criteria.max_iterations = 20;       // [iterations] cap (one nearest-neighbour pass each)
-    // [-] stop once an iteration changes the fitness by < 1e-5 and the RMSE by < 10 um (TUNING.md)
-    p.criteria.relative_fitness = 1e-5;
-    p.criteria.relative_rmse = 1e-5;      // [m]
+    // [-] stop once an iteration changes the fitness by < 1e-3 and the RMSE by < 1 mm (TUNING.md)
+    p.criteria.relative_fitness = 1e-3;
+    p.criteria.relative_rmse = 1e-3;      // [m]
     p.kernel.type = RobustKernelType::kTukey;
     p.kernel.scale = 0.3;                 // [m] Tukey scale: residuals beyond it weigh nothing
     return p;
@@ -204,6 +204,8 @@ struct LocalizerParams {
     p.score_distance = 2.0;         // [m] score hit radius: half the grid cell's diagonal (TUNING.md)
     p.max_conflicts = 0.12;         // [0-1] ray conflict ratio above which a pose is no candidate (TUNING.md)
     p.fine_icp = default_icp();
+    p.fine_icp.criteria.relative_fitness = 1e-5;  // [-] the search's candidates are compared on
+    p.fine_icp.criteria.relative_rmse = 1e-5;     // [m] their converged fitness: converge fully
     return p;
   }
 };
