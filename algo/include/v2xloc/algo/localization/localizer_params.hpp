@@ -147,7 +147,7 @@ struct LocalizerParams {
 
   static OdometryParams default_odometry() {
     OdometryParams p;
-    p.convergence = 5e-4;  // [m, rad] |d xi| stop; 1e-4 ran ~2 more iterations for nothing (TUNING.md)
+    p.convergence = 1e-3;  // [m, rad] |d xi| stop; 1e-4 ran ~2 more iterations for nothing (TUNING.md)
     return p;
   }
   static IcpParams default_icp() {
