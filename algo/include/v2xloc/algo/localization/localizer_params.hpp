@@ -35,7 +35,7 @@ struct LocalizerParams {
 
   // ---- Reference map ----
   MapFusionParams map{};              // fused infrastructure + agent clouds (map_fusion.hpp)
-  double map_refresh_period = 0.5;    // [s] rebuild map points / normals / tree at most this often
+  double map_refresh_period = 1.0;    // [s] rebuild map points / normals / tree at most this often (TUNING.md)
   float map_normal_radius = 0.6f;     // [m] normal estimation radius on the map (3 map voxels)
   std::uint32_t map_min_points = 100; // [points] a map with fewer is not registered against
   // [points/period] a map rebuild runs beside the registration, one step per period (extract,
