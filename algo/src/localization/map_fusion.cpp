@@ -28,6 +28,7 @@ void MapFusion::remove_source_points(std::size_t slot) {
     if (point_source_[i] == slot) continue;
     points_[n] = points_[i];
     point_source_[n] = point_source_[i];
+    for (int c = 0; c < 3; ++c) point_cells_[n][c] = point_cells_[i][c];
     ++n;
   }
   num_points_ = n;
@@ -43,16 +44,22 @@ SourceCells::Mask MapFusion::trusted_bits(std::size_t slot) const {
 }
 
 void MapFusion::mark_source_cells(std::size_t slot, bool set, std::size_t first) {
-  const double cells[3] = {0.5 * params_.inlier_distance, params_.overlap_cell, params_.agent_fill_cell};
   const auto bit = static_cast<SourceCells::Mask>(1u << slot);
+  if (!set) {  // the slots the points were marked in: no keys to recompute
+    for (std::size_t i = first; i < num_points_; ++i) {
+      if (point_source_[i] != slot) continue;
+      for (std::uint32_t c : point_cells_[i]) cells_.remove_at(c, bit);
+    }
+    return;
+  }
+  const double cells[3] = {0.5 * params_.inlier_distance, params_.overlap_cell, params_.agent_fill_cell};
   const std::uint64_t dropped_before = cells_.dropped();
   for (std::size_t i = first; i < num_points_; ++i) {
     if (point_source_[i] != slot) continue;
     for (std::int32_t level = kInlierLevel; level <= kFillLevel; ++level) {
       std::int32_t key[3];
-      if (!(cells[level] > 0.0) || !SourceCells::cell_key(points_[i], cells[level], level, key)) continue;
-      if (set) cells_.add(key, bit);
-      else cells_.remove(key, bit);
+      const bool keyed = cells[level] > 0.0 && SourceCells::cell_key(points_[i], cells[level], level, key);
+      point_cells_[i][level] = keyed ? cells_.add(key, bit) : SourceCells::kNoCell;
     }
   }
   counters_.reference_cells_dropped += cells_.dropped() - dropped_before;

@@ -39,7 +39,7 @@ std::size_t SourceCells::find(const std::int32_t key[3]) const {
   return found;
 }
 
-bool SourceCells::add(const std::int32_t key[3], Mask bits) {
+std::uint32_t SourceCells::add(const std::int32_t key[3], Mask bits) {
   const ProbeResult r = linear_probe(spatial_hash(key), kSlots, kMaxProbes, [&](std::size_t slot) {
     Cell& c = cells_[slot];
     if (!c.used) {
@@ -56,7 +56,7 @@ bool SourceCells::add(const std::int32_t key[3], Mask bits) {
     return true;
   });
   if (!r.stopped) ++dropped_;
-  return r.stopped;
+  return r.stopped ? static_cast<std::uint32_t>(r.slot) : kNoCell;
 }
 
 void SourceCells::remove(const std::int32_t key[3], Mask bits) {

@@ -48,7 +48,7 @@ TEST(SourceCells, AnyAroundMatchesBruteForceThroughAddsAndRemoves) {
     for (const Stored& s : stored) {
       std::int32_t key[3];
       if (s.source != source || !SourceCells::cell_key(s.p, cell, 0, key)) continue;
-      if (set) ASSERT_TRUE(cells.add(key, static_cast<SourceCells::Mask>(1u << source)));
+      if (set) ASSERT_NE(cells.add(key, static_cast<SourceCells::Mask>(1u << source)), SourceCells::kNoCell);
       else cells.remove(key, static_cast<SourceCells::Mask>(1u << source));
     }
   };
@@ -77,12 +77,16 @@ TEST(SourceCells, LevelsShareTheTableWithoutMixing) {
   SourceCells& cells = fresh_cells();
   std::int32_t key[3];
   ASSERT_TRUE(SourceCells::cell_key(Vec3f(1.0f, 1.0f, 1.0f), 2.0, 1, key));
-  ASSERT_TRUE(cells.add(key, 0x1));
+  const std::uint32_t slot = cells.add(key, 0x1);
+  ASSERT_NE(slot, SourceCells::kNoCell);
   EXPECT_TRUE(cells.any_around(Vec3f(1.0f, 1.0f, 1.0f), 2.0, 1, 0x1));
   EXPECT_FALSE(cells.any_around(Vec3f(1.0f, 1.0f, 1.0f), 2.0, 0, 0x1));  // same key, other level
   EXPECT_FALSE(cells.any_around(Vec3f(1.0f, 1.0f, 1.0f), 2.0, 1, 0x2));  // other source
-  cells.remove(key, 0x1);
+  cells.remove_at(slot, 0x1);
   EXPECT_FALSE(cells.any_around(Vec3f(1.0f, 1.0f, 1.0f), 2.0, 1, 0x1));
+  ASSERT_EQ(cells.add(key, 0x2), slot);  // a cell keeps its slot
+  cells.remove(key, 0x2);
+  EXPECT_EQ(cells.bits(key), 0u);
   EXPECT_EQ(cells.used_cells(), 1u);  // an emptied cell stays in its chain until a rebuild
 }
 
@@ -98,7 +102,7 @@ TEST(SourceCells, HalfFullAsksTheOwnerForARebuild) {
   std::size_t added = 0, attempts = 0;
   for (std::int32_t x = 0; added < SourceCells::kSlots / 2; ++x, ++attempts) {
     const std::int32_t key[3] = {x, 3 * x, 0};  // a line of cells: the hash clusters them
-    if (cells.add(key, 0x1)) ++added;
+    if (cells.add(key, 0x1) != SourceCells::kNoCell) ++added;
   }
   EXPECT_TRUE(cells.needs_rebuild());
   EXPECT_EQ(cells.used_cells(), added);

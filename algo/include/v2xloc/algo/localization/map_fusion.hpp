@@ -176,7 +176,8 @@ class MapFusion {
 
   void remove_source_points(std::size_t slot);
   // Sets or clears the source's bit in the reference cells of its stored points (surveyed sources
-  // only: the reference is the infrastructure); rebuilds the cells when they need it.
+  // only: the reference is the infrastructure). Setting records each point's cell slots, so
+  // clearing recomputes no keys.
   // Points before `first` are not looked at (a stored cloud's points are appended at the end).
   void mark_source_cells(std::size_t slot, bool set, std::size_t first);
   void rebuild_cells_if_crowded();
@@ -214,6 +215,7 @@ class MapFusion {
   MapSourceInfo sources_[config::kMaxMapSources];
   Vec3f points_[config::kMaxMapPoints];
   std::uint8_t point_source_[config::kMaxMapPoints];
+  std::uint32_t point_cells_[config::kMaxMapPoints][3];  // surveyed points: their reference cells' slots
   std::size_t num_points_ = 0;
   std::uint64_t revision_ = 0;
   MapFusionCounters counters_;

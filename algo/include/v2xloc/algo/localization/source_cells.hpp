@@ -28,11 +28,18 @@ class SourceCells {
   // a key (|p / cell| >= 2^28, or non-finite).
   static bool cell_key(const Vec3f& p, double cell, std::int32_t level, std::int32_t key[3]);
 
+  static constexpr std::uint32_t kNoCell = 0xFFFFFFFFu;
+
   void clear();
-  // Sets `bits` in the cell of key (adds the cell). False when no slot was found (counted).
-  bool add(const std::int32_t key[3], Mask bits);
+  // Sets `bits` in the cell of key (adds the cell); returns its slot, or kNoCell when no slot was
+  // found (counted). The slot stays the cell's until clear(): the owner may keep it for remove_at.
+  std::uint32_t add(const std::int32_t key[3], Mask bits);
   // Clears `bits` in the cell of key, if present.
   void remove(const std::int32_t key[3], Mask bits);
+  // The same for a slot add() returned (kNoCell: nothing).
+  void remove_at(std::uint32_t slot, Mask bits) {
+    if (slot < kSlots) cells_[slot].bits = static_cast<Mask>(cells_[slot].bits & ~bits);
+  }
   // Bits of the cell (0 when absent).
   Mask bits(const std::int32_t key[3]) const;
   // Any of `allowed` in the 27 cells around p's cell on that grid.
