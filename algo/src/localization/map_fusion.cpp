@@ -207,9 +207,15 @@ bool MapFusion::passes_consistency(std::size_t own_slot, bool trusted, MapInsert
   const bool checkable = r.overlap_points >= params_.min_overlap_points;
   const bool shifted = checkable && r.best_probe_fitness > r.consistency_fitness + margin;
   const double floor = !trusted ? params_.min_fitness : others >= 3 ? params_.infra_quorum_min_fitness : 0.0;
-  if (!trusted && !checkable) {
+  // Too little overlap to be checked: an agent always, an infrastructure unit once two or more
+  // others form a quorum it should share the scene with (a cloud moved out of all overlap, e.g.
+  // points shifted 200 m under a true pose, would otherwise pass unchecked). A unit held back by
+  // the quorum loses its stored cloud as an outvoted one does.
+  if (!checkable && (!trusted || quorum)) {
     r.status = MapInsertStatus::kHeldBack;
     ++counters_.held_back;
+    if (quorum) ++counters_.infra_unchecked;
+    r.outvoted = quorum;
     return false;
   }
   if (shifted || (checkable && r.consistency_fitness < floor)) {  // agents here are checkable

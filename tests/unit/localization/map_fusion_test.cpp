@@ -241,6 +241,36 @@ TEST(MapFusion, ShiftedInfrastructureOutvotedByThreeUnitsNotByOne) {
   }
 }
 
+// A unit whose points are moved out of all overlap (200 m under its true pose) cannot be scored:
+// facing two or more other units it is held back (its older cloud evicted, counted), and a rogue
+// that sent first is evicted once three genuine units are there to vet it. Against one other unit
+// it is accepted: two units cannot tell which of them is out of place.
+TEST(MapFusion, InfrastructureOutOfAllOverlapHeldBackByAQuorum) {
+  const auto scene = corner_scene();
+  const Mat4d units[] = {sensor_pose(12.0, 12.0, 2.0), sensor_pose(-3.0, 12.0, 1.2), sensor_pose(12.0, -3.0, 2.6),
+                         sensor_pose(-4.0, -4.0, 0.8)};
+  std::vector<Vec3d> far = scene;
+  for (Vec3d& p : far) p.x() += 200.0;
+  for (const std::size_t others : {std::size_t{1}, std::size_t{2}, std::size_t{3}}) {
+    MapFusion& map = fresh_map();
+    for (std::size_t k = 0; k < others; ++k)
+      ASSERT_EQ(map.insert(static_cast<std::uint32_t>(1 + k), 1.0, Pose3d(units[k]), in_sensor_frame(scene, units[k]), true).status,
+                MapInsertStatus::kInserted);
+    const MapInsertResult r = map.insert(9, 1.0, Pose3d(units[3]), in_sensor_frame(far, units[3]), true);
+    EXPECT_EQ(r.overlap_points, 0u);
+    EXPECT_EQ(r.status, others >= 2 ? MapInsertStatus::kHeldBack : MapInsertStatus::kInserted) << others;
+    EXPECT_EQ(map.counters().infra_unchecked, others >= 2 ? 1u : 0u);
+  }
+  MapFusion& map = fresh_map();  // the rogue first: accepted, then vetted out by three genuine units
+  ASSERT_EQ(map.insert(9, 1.0, Pose3d(units[3]), in_sensor_frame(far, units[3]), true).status, MapInsertStatus::kInserted);
+  for (std::size_t k = 0; k < 3; ++k)
+    EXPECT_EQ(map.insert(static_cast<std::uint32_t>(1 + k), 1.0, Pose3d(units[k]), in_sensor_frame(scene, units[k]), true).status,
+              MapInsertStatus::kInserted)
+        << k;
+  EXPECT_EQ(map.counters().infra_evicted, 1u);
+  for (const MapSourceInfo& s : map.sources()) EXPECT_FALSE(s.active && s.id == 9);
+}
+
 // The first unit to send is checked against nothing: a rogue that arrives first is accepted, the
 // genuine units after it are not rejected for disagreeing with it, and once three other units are
 // present its stored cloud is vetted against them and evicted; its next cloud is outvoted.

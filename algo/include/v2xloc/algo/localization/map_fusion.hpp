@@ -90,7 +90,7 @@ enum class MapInsertStatus : std::uint8_t {
   kNoSourceSlot,        // kMaxMapSources newer sources present
   kRejectedInconsistent,
   kInvalidInput,        // non-finite pose or time
-  kHeldBack,            // agent cloud with too little overlap with infrastructure to be checked
+  kHeldBack,            // too little overlap to be checked: an agent, or infrastructure facing a quorum
 };
 
 struct MapInsertResult {
@@ -103,7 +103,7 @@ struct MapInsertResult {
   std::uint32_t covered_dropped = 0;    // agent points where the infrastructure already sees
   double consistency_fitness = 1.0;     // inliers / overlap_points (1 when no verdict)
   double best_probe_fitness = 0.0;      // best fitness of the shifted probes (shift check)
-  bool outvoted = false;                // infrastructure rejected by the quorum: its stored cloud evicted too
+  bool outvoted = false;                // infrastructure rejected or held back by the quorum: its stored cloud evicted too
   bool quorum_checked = false;          // infrastructure checked by the full rule (>= 3 other units)
 };
 
@@ -125,7 +125,8 @@ struct MapFusionCounters {
   std::uint64_t rejected_inconsistent = 0;  // low fitness or fits better shifted
   std::uint64_t infra_outvoted = 0;         // of those: infrastructure rejected by the quorum rule
   std::uint64_t infra_evicted = 0;          // outvoted units' stored clouds removed with them
-  std::uint64_t held_back = 0;              // agent clouds that could not be checked
+  std::uint64_t held_back = 0;              // clouds that could not be checked (agents, infrastructure)
+  std::uint64_t infra_unchecked = 0;        // of those: infrastructure with >= 2 other units present
   std::uint64_t sources_evicted_age = 0;
   std::uint64_t sources_evicted_slot = 0;   // oldest source displaced by a new one
   std::uint64_t points_dropped_capacity = 0;
