@@ -59,11 +59,6 @@ std::uint32_t SourceCells::add(const std::int32_t key[3], Mask bits) {
   return r.stopped ? static_cast<std::uint32_t>(r.slot) : kNoCell;
 }
 
-void SourceCells::remove(const std::int32_t key[3], Mask bits) {
-  const std::size_t slot = find(key);
-  if (slot < kSlots) cells_[slot].bits = static_cast<Mask>(cells_[slot].bits & ~bits);
-}
-
 SourceCells::Mask SourceCells::bits(const std::int32_t key[3]) const {
   const std::size_t slot = find(key);
   return slot < kSlots ? cells_[slot].bits : Mask{0};

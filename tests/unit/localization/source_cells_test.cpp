@@ -44,16 +44,15 @@ TEST(SourceCells, AnyAroundMatchesBruteForceThroughAddsAndRemoves) {
   const double cell = 0.15;
   std::vector<Stored> stored;
   for (int i = 0; i < 600; ++i) stored.push_back({Vec3f(coord(rng), coord(rng), coord(rng) * 0.3f), i % 4});
-  auto mark = [&](int source, bool set) {
-    for (const Stored& s : stored) {
-      std::int32_t key[3];
-      if (s.source != source || !SourceCells::cell_key(s.p, cell, 0, key)) continue;
-      if (set) ASSERT_NE(cells.add(key, static_cast<SourceCells::Mask>(1u << source)), SourceCells::kNoCell);
-      else cells.remove(key, static_cast<SourceCells::Mask>(1u << source));
-    }
-  };
-  for (int s = 0; s < 4; ++s) mark(s, true);
-  mark(2, false);  // source 2 leaves: its bits go, its points no longer count
+  std::vector<std::uint32_t> slot_of(stored.size(), SourceCells::kNoCell);
+  for (std::size_t i = 0; i < stored.size(); ++i) {
+    std::int32_t key[3];
+    if (!SourceCells::cell_key(stored[i].p, cell, 0, key)) continue;
+    slot_of[i] = cells.add(key, static_cast<SourceCells::Mask>(1u << stored[i].source));
+    ASSERT_NE(slot_of[i], SourceCells::kNoCell);
+  }
+  for (std::size_t i = 0; i < stored.size(); ++i)  // source 2 leaves: its bits go, its points no longer count
+    if (stored[i].source == 2) cells.remove_at(slot_of[i], 0x4);
   std::vector<Stored> live;
   for (const Stored& s : stored)
     if (s.source != 2) live.push_back(s);
@@ -85,7 +84,7 @@ TEST(SourceCells, LevelsShareTheTableWithoutMixing) {
   cells.remove_at(slot, 0x1);
   EXPECT_FALSE(cells.any_around(Vec3f(1.0f, 1.0f, 1.0f), 2.0, 1, 0x1));
   ASSERT_EQ(cells.add(key, 0x2), slot);  // a cell keeps its slot
-  cells.remove(key, 0x2);
+  cells.remove_at(slot, 0x2);
   EXPECT_EQ(cells.bits(key), 0u);
   EXPECT_EQ(cells.used_cells(), 1u);  // an emptied cell stays in its chain until a rebuild
 }

@@ -34,9 +34,7 @@ class SourceCells {
   // Sets `bits` in the cell of key (adds the cell); returns its slot, or kNoCell when no slot was
   // found (counted). The slot stays the cell's until clear(): the owner may keep it for remove_at.
   std::uint32_t add(const std::int32_t key[3], Mask bits);
-  // Clears `bits` in the cell of key, if present.
-  void remove(const std::int32_t key[3], Mask bits);
-  // The same for a slot add() returned (kNoCell: nothing).
+  // Clears `bits` in the cell at a slot add() returned (kNoCell: nothing).
   void remove_at(std::uint32_t slot, Mask bits) {
     if (slot < kSlots) cells_[slot].bits = static_cast<Mask>(cells_[slot].bits & ~bits);
   }
