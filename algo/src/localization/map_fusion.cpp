@@ -22,7 +22,7 @@ void MapFusion::clear() {
 }
 
 void MapFusion::remove_source_points(std::size_t slot) {
-  if (sources_[slot].active && sources_[slot].trusted) mark_source_cells(slot, false, 0);
+  if (sources_[slot].active && sources_[slot].trusted) clear_source_cells(slot);
   std::size_t n = 0;  // stable compaction keeps the other sources' order (determinism)
   for (std::size_t i = 0; i < num_points_; ++i) {
     if (point_source_[i] == slot) continue;
@@ -43,16 +43,9 @@ SourceCells::Mask MapFusion::trusted_bits(std::size_t slot) const {
   return bits;
 }
 
-void MapFusion::mark_source_cells(std::size_t slot, bool set, std::size_t first) {
-  const auto bit = static_cast<SourceCells::Mask>(1u << slot);
-  if (!set) {  // the slots the points were marked in: no keys to recompute
-    for (std::size_t i = first; i < num_points_; ++i) {
-      if (point_source_[i] != slot) continue;
-      for (std::uint32_t c : point_cells_[i]) cells_.remove_at(c, bit);
-    }
-    return;
-  }
+void MapFusion::mark_source_cells(std::size_t slot, std::size_t first) {
   const double cells[3] = {0.5 * params_.inlier_distance, params_.overlap_cell, params_.agent_fill_cell};
+  const auto bit = static_cast<SourceCells::Mask>(1u << slot);
   const std::uint64_t dropped_before = cells_.dropped();
   for (std::size_t i = first; i < num_points_; ++i) {
     if (point_source_[i] != slot) continue;
@@ -65,12 +58,20 @@ void MapFusion::mark_source_cells(std::size_t slot, bool set, std::size_t first)
   counters_.reference_cells_dropped += cells_.dropped() - dropped_before;
 }
 
+void MapFusion::clear_source_cells(std::size_t slot) {
+  const auto bit = static_cast<SourceCells::Mask>(1u << slot);
+  for (std::size_t i = 0; i < num_points_; ++i) {
+    if (point_source_[i] != slot) continue;
+    for (std::uint32_t c : point_cells_[i]) cells_.remove_at(c, bit);
+  }
+}
+
 // Drops the emptied cells once they crowd the table: every surveyed source marked again.
 void MapFusion::rebuild_cells_if_crowded() {
   if (!cells_.needs_rebuild()) return;
   cells_.clear();
   for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
-    if (sources_[s].active && sources_[s].trusted) mark_source_cells(s, true, 0);
+    if (sources_[s].active && sources_[s].trusted) mark_source_cells(s, 0);
   }
 }
 
@@ -244,7 +245,7 @@ std::uint32_t MapFusion::store_candidate(std::size_t slot, bool trusted, MapInse
     ++num_points_;
     ++stored;
   }
-  if (trusted) mark_source_cells(slot, true, first);  // the reference cells follow the surveyed points
+  if (trusted) mark_source_cells(slot, first);  // the reference cells follow the surveyed points
   return stored;
 }
 

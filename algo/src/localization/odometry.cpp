@@ -188,18 +188,7 @@ void LidarOdometry::build_coarse_frame(OdometryResult& r) {
 }
 
 std::uint32_t LidarOdometry::find_coarse(const std::int32_t key[3]) const {
-  std::uint32_t found = kNone;
-  linear_probe(spatial_hash(key), kCoarseSlots, kMaxProbes, [&](std::size_t slot) {
-    const std::uint32_t v = coarse_slots_[slot];
-    if (v == 0) return true;
-    const CoarseVoxel& c = coarse_[v - 1];
-    if (c.key[0] == key[0] && c.key[1] == key[1] && c.key[2] == key[2]) {
-      found = v - 1;
-      return true;
-    }
-    return false;
-  });
-  return found;
+  return find_indexed(coarse_slots_, kCoarseSlots, kMaxProbes, coarse_, key);
 }
 
 Vec3f LidarOdometry::coarse_normal(const Vec3d& mean, const std::int32_t key[3], double cv) const {

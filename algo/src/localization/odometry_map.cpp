@@ -47,18 +47,7 @@ bool OdometryVoxelMap::voxel_key(const Vec3d& p, std::int32_t key[3], double quo
 }
 
 std::uint32_t OdometryVoxelMap::find_voxel(const std::int32_t key[3]) const {
-  std::uint32_t found = kNone;
-  linear_probe(spatial_hash(key), kSlots, kMaxProbes, [&](std::size_t slot) {
-    const std::uint32_t v = slots_[slot];
-    if (v == 0) return true;
-    const Voxel& vx = voxels_[v - 1];
-    if (vx.key[0] == key[0] && vx.key[1] == key[1] && vx.key[2] == key[2]) {
-      found = v - 1;
-      return true;
-    }
-    return false;
-  });
-  return found;
+  return find_indexed(slots_, kSlots, kMaxProbes, voxels_, key);
 }
 
 static_assert(std::is_trivially_copyable_v<MapPoint> && sizeof(MapPoint) == 3 * sizeof(float));

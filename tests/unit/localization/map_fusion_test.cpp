@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <random>
 #include <vector>
 
@@ -37,6 +38,25 @@ Mat4d sensor_pose(double x, double y, double yaw) {
   T(1, 3) = y;
   T(2, 3) = 3.0;
   return T;
+}
+
+// Four infrastructure units around the corner scene (ids 1..3 genuine, the last one the suspect).
+std::array<Mat4d, 4> intersection_units() {
+  return {sensor_pose(12.0, 12.0, 2.0), sensor_pose(-3.0, 12.0, 1.2), sensor_pose(12.0, -3.0, 2.6),
+          sensor_pose(-4.0, -4.0, 0.8)};
+}
+
+// Genuine unit k (id 1 + k) sends its view of the scene at t = 1 s.
+MapInsertStatus insert_genuine_unit(MapFusion& map, const std::vector<Vec3d>& scene, const std::array<Mat4d, 4>& units,
+                                    std::size_t k) {
+  return map.insert(static_cast<std::uint32_t>(1 + k), 1.0, Pose3d(units[k]), in_sensor_frame(scene, units[k]), true).status;
+}
+
+// The scene with every point moved along x (points moved, declared sensor pose kept).
+std::vector<Vec3d> moved_along_x(const std::vector<Vec3d>& scene, double dx) {
+  std::vector<Vec3d> moved = scene;
+  for (Vec3d& p : moved) p.x() += dx;
+  return moved;
 }
 
 MapFusion& fresh_map(const MapFusionParams& p = {}) {
@@ -219,17 +239,12 @@ TEST(MapFusion, ShiftedAgentRejectedAndUncheckableAgentHeldBack) {
 // it is not (two units cannot outvote each other: a 3 m shift leaves no peak to compare).
 TEST(MapFusion, ShiftedInfrastructureOutvotedByThreeUnitsNotByOne) {
   const auto scene = corner_scene();
-  const Mat4d units[] = {sensor_pose(12.0, 12.0, 2.0), sensor_pose(-3.0, 12.0, 1.2), sensor_pose(12.0, -3.0, 2.6),
-                         sensor_pose(-4.0, -4.0, 0.8)};
+  const auto units = intersection_units();
   for (const double shift : {0.0, 0.25, 3.0}) {
     for (const std::size_t others : {std::size_t{1}, std::size_t{3}}) {
       MapFusion& map = fresh_map();
-      for (std::size_t k = 0; k < others; ++k) {
-        ASSERT_EQ(map.insert(static_cast<std::uint32_t>(1 + k), 1.0, Pose3d(units[k]), in_sensor_frame(scene, units[k]), true).status,
-                  MapInsertStatus::kInserted);
-      }
-      std::vector<Vec3d> moved = scene;
-      for (Vec3d& p : moved) p.x() += shift;  // the points move, the declared pose does not
+      for (std::size_t k = 0; k < others; ++k) ASSERT_EQ(insert_genuine_unit(map, scene, units, k), MapInsertStatus::kInserted);
+      const std::vector<Vec3d> moved = moved_along_x(scene, shift);
       const MapInsertResult r = map.insert(9, 1.0, Pose3d(units[3]), in_sensor_frame(moved, units[3]), true);
       const bool outvoted = shift > 0.0 && others == 3;
       EXPECT_EQ(r.status, outvoted ? MapInsertStatus::kRejectedInconsistent : MapInsertStatus::kInserted)
@@ -247,15 +262,11 @@ TEST(MapFusion, ShiftedInfrastructureOutvotedByThreeUnitsNotByOne) {
 // it is accepted: two units cannot tell which of them is out of place.
 TEST(MapFusion, InfrastructureOutOfAllOverlapHeldBackByAQuorum) {
   const auto scene = corner_scene();
-  const Mat4d units[] = {sensor_pose(12.0, 12.0, 2.0), sensor_pose(-3.0, 12.0, 1.2), sensor_pose(12.0, -3.0, 2.6),
-                         sensor_pose(-4.0, -4.0, 0.8)};
-  std::vector<Vec3d> far = scene;
-  for (Vec3d& p : far) p.x() += 200.0;
+  const auto units = intersection_units();
+  const std::vector<Vec3d> far = moved_along_x(scene, 200.0);
   for (const std::size_t others : {std::size_t{1}, std::size_t{2}, std::size_t{3}}) {
     MapFusion& map = fresh_map();
-    for (std::size_t k = 0; k < others; ++k)
-      ASSERT_EQ(map.insert(static_cast<std::uint32_t>(1 + k), 1.0, Pose3d(units[k]), in_sensor_frame(scene, units[k]), true).status,
-                MapInsertStatus::kInserted);
+    for (std::size_t k = 0; k < others; ++k) ASSERT_EQ(insert_genuine_unit(map, scene, units, k), MapInsertStatus::kInserted);
     const MapInsertResult r = map.insert(9, 1.0, Pose3d(units[3]), in_sensor_frame(far, units[3]), true);
     EXPECT_EQ(r.overlap_points, 0u);
     EXPECT_EQ(r.status, others >= 2 ? MapInsertStatus::kHeldBack : MapInsertStatus::kInserted) << others;
@@ -263,10 +274,7 @@ TEST(MapFusion, InfrastructureOutOfAllOverlapHeldBackByAQuorum) {
   }
   MapFusion& map = fresh_map();  // the rogue first: accepted, then vetted out by three genuine units
   ASSERT_EQ(map.insert(9, 1.0, Pose3d(units[3]), in_sensor_frame(far, units[3]), true).status, MapInsertStatus::kInserted);
-  for (std::size_t k = 0; k < 3; ++k)
-    EXPECT_EQ(map.insert(static_cast<std::uint32_t>(1 + k), 1.0, Pose3d(units[k]), in_sensor_frame(scene, units[k]), true).status,
-              MapInsertStatus::kInserted)
-        << k;
+  for (std::size_t k = 0; k < 3; ++k) EXPECT_EQ(insert_genuine_unit(map, scene, units, k), MapInsertStatus::kInserted) << k;
   EXPECT_EQ(map.counters().infra_evicted, 1u);
   for (const MapSourceInfo& s : map.sources()) EXPECT_FALSE(s.active && s.id == 9);
 }
@@ -276,17 +284,11 @@ TEST(MapFusion, InfrastructureOutOfAllOverlapHeldBackByAQuorum) {
 // present its stored cloud is vetted against them and evicted; its next cloud is outvoted.
 TEST(MapFusion, RogueArrivingFirstIsEvictedOnceOutvoted) {
   const auto scene = corner_scene();
-  const Mat4d units[] = {sensor_pose(12.0, 12.0, 2.0), sensor_pose(-3.0, 12.0, 1.2), sensor_pose(12.0, -3.0, 2.6),
-                         sensor_pose(-4.0, -4.0, 0.8)};
-  std::vector<Vec3d> moved = scene;
-  for (Vec3d& p : moved) p.x() += 3.0;
+  const auto units = intersection_units();
+  const std::vector<Vec3d> moved = moved_along_x(scene, 3.0);
   MapFusion& map = fresh_map();
   ASSERT_EQ(map.insert(9, 1.0, Pose3d(units[3]), in_sensor_frame(moved, units[3]), true).status, MapInsertStatus::kInserted);
-  for (std::size_t k = 0; k < 3; ++k) {
-    EXPECT_EQ(map.insert(static_cast<std::uint32_t>(1 + k), 1.0, Pose3d(units[k]), in_sensor_frame(scene, units[k]), true).status,
-              MapInsertStatus::kInserted)
-        << k;
-  }
+  for (std::size_t k = 0; k < 3; ++k) EXPECT_EQ(insert_genuine_unit(map, scene, units, k), MapInsertStatus::kInserted) << k;
   EXPECT_EQ(map.counters().infra_evicted, 1u);
   std::uint32_t genuine = 0;
   for (const MapSourceInfo& s : map.sources()) {

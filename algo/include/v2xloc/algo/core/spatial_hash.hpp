@@ -47,4 +47,25 @@ ProbeResult linear_probe(std::uint32_t hash, std::size_t num_slots, std::uint32_
   return r;
 }
 
+// Tables whose slots hold an item index + 1 (0 = empty) over items that carry their `key[3]`
+// (the odometry's map voxels and coarse frame voxels): the index of the item with this key, or
+// kNoItem when a probe reaches an empty slot or max_probes first.
+inline constexpr std::uint32_t kNoItem = 0xFFFFFFFFu;
+template <class Item>
+std::uint32_t find_indexed(const std::uint32_t* slots, std::size_t num_slots, std::uint32_t max_probes,
+                           const Item* items, const std::int32_t key[3]) {
+  std::uint32_t found = kNoItem;
+  linear_probe(spatial_hash(key), num_slots, max_probes, [&](std::size_t slot) {
+    const std::uint32_t v = slots[slot];
+    if (v == 0) return true;
+    const Item& item = items[v - 1];
+    if (item.key[0] == key[0] && item.key[1] == key[1] && item.key[2] == key[2]) {
+      found = v - 1;
+      return true;
+    }
+    return false;
+  });
+  return found;
+}
+
 }  // namespace v2xloc

@@ -176,11 +176,12 @@ class MapFusion {
   static_assert(config::kMaxMapSources <= 255, "source slot stored in a byte");
 
   void remove_source_points(std::size_t slot);
-  // Sets or clears the source's bit in the reference cells of its stored points (surveyed sources
-  // only: the reference is the infrastructure). Setting records each point's cell slots, so
-  // clearing recomputes no keys.
-  // Points before `first` are not looked at (a stored cloud's points are appended at the end).
-  void mark_source_cells(std::size_t slot, bool set, std::size_t first);
+  // Sets the source's bit in the reference cells of its stored points from index `first` on (a
+  // stored cloud is appended at the end) and records each point's cell slots; surveyed sources
+  // only: the reference is the infrastructure.
+  void mark_source_cells(std::size_t slot, std::size_t first);
+  // Clears the source's bit through the recorded slots (no keys recomputed).
+  void clear_source_cells(std::size_t slot);
   void rebuild_cells_if_crowded();
   // Bits of the active surveyed sources other than `slot`: the reference a cloud is checked against.
   SourceCells::Mask trusted_bits(std::size_t slot) const;
