@@ -78,6 +78,7 @@ void FirmwareApp::apply_cloud(const DecodedCloud& decoded) {
       case MapInsertStatus::kHeldBack: ++counters_.map_held_back; break;
       case MapInsertStatus::kNoSourceSlot: ++counters_.map_no_slot; break;
       case MapInsertStatus::kStale: ++counters_.map_stale; break;
+      case MapInsertStatus::kPaced: ++counters_.map_paced; break;
       default: break;
     }
   } else if (decoded.kind == CloudKind::kEgoScan) {
@@ -172,7 +173,7 @@ void FirmwareApp::close_period(bool ego_link) {
   // Period boundary: shares waiting for their signature check are verified now (at most
   // kMaxSignatureVerificationsPerPeriod) and reach map fusion before this scan.
   for (std::size_t k = 0; k < kMaxSignatureVerificationsPerPeriod; ++k) {
-    const DecodedCloud share = decoder_.next_verified_share();
+    const DecodedCloud share = decoder_.next_verified_share(&localizer_);
     if (share.kind == CloudKind::kNone) break;
     apply_cloud(share);
   }

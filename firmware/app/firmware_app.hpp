@@ -60,6 +60,7 @@ struct FirmwareCounters {
   std::uint64_t map_held_back = 0;       // agent shares with too little overlap to be checked
   std::uint64_t map_no_slot = 0;         // per-role source cap reached
   std::uint64_t map_stale = 0;           // not newer than the source's stored cloud
+  std::uint64_t map_paced = 0;           // not fused: the source's stored cloud is recent (map_cloud_interval)
   std::uint64_t ego_frames_held = 0;     // ego scans refused for their time: last pose published again
   std::uint64_t led_changes = 0;
 };

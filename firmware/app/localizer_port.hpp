@@ -5,14 +5,17 @@
 // on_ego_scan) without copying: the localizer object itself stays a static owned by main.
 #pragma once
 
+#include "firmware/wire/input_decoder.hpp"
 #include "v2xloc/algo/core/geodesy.hpp"
 #include "v2xloc/algo/localization/localizer.hpp"
 #include "v2xloc/algo/localization/map_fusion.hpp"
 
 namespace v2xloc::firmware {
 
-class LocalizerPort {
+// Also the decoder's MapShareWanted: shares the map would not fuse skip their signature check.
+class LocalizerPort : public MapShareWanted {
  public:
+  bool wants(std::uint32_t /*source_id*/, double /*t*/) const override { return true; }
   virtual void on_vehicle(const VehicleInput& input) = 0;
   virtual void on_gnss(const GnssInput& input) = 0;
   virtual MapInsertResult on_map_cloud(const MapCloudInput& input) = 0;
@@ -29,6 +32,7 @@ class LocalizerAdapter final : public LocalizerPort {
   void on_vehicle(const VehicleInput& input) override { localizer_.on_vehicle(input); }
   void on_gnss(const GnssInput& input) override { localizer_.on_gnss(input); }
   MapInsertResult on_map_cloud(const MapCloudInput& input) override { return localizer_.on_map_cloud(input); }
+  bool wants(std::uint32_t source_id, double t) const override { return localizer_.wants_map_cloud(source_id, t); }
   const LocalizerFrameOutput& on_ego_scan(const EgoScanInput& input) override {
     return localizer_.on_ego_scan(input);
   }

@@ -102,10 +102,11 @@ void print_counters(const FirmwareApp& app) {
               (unsigned long long)d.can_repeated, (unsigned long long)d.can_counter_gaps,
               (unsigned long long)d.gnss_position_dropped, (unsigned long long)c.gnss_time_rejected);
   std::printf("v2xloc-firmware: map fusion of trusted shares: inconsistent %llu (infrastructure %llu) held_back %llu"
-              " no_slot %llu stale %llu\n",
+              " no_slot %llu stale %llu; paced (not needed, source's last recent) %llu before and %llu after the signature check\n",
               (unsigned long long)c.map_inconsistent, (unsigned long long)c.map_infra_inconsistent,
               (unsigned long long)c.map_held_back,
-              (unsigned long long)c.map_no_slot, (unsigned long long)c.map_stale);
+              (unsigned long long)c.map_no_slot, (unsigned long long)c.map_stale,
+              (unsigned long long)d.shares_paced, (unsigned long long)c.map_paced);
   std::printf("v2xloc-firmware: reassembly fragments %llu frames %llu duplicates %llu stale %llu timed_out %llu evicted %llu"
               " bad_crc %llu truncated %llu malformed %llu over_capacity %llu\n",
               (unsigned long long)r.fragments_accepted, (unsigned long long)r.frames_completed,

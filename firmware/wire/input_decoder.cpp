@@ -311,7 +311,9 @@ DecodedCloud InputDecoder::decode_completed() {
   return kind(CloudKind::kEgoScan);
 }
 
-DecodedCloud InputDecoder::next_verified_share() {
+DecodedCloud InputDecoder::next_verified_share() { return next_verified_share(nullptr); }
+
+DecodedCloud InputDecoder::next_verified_share(const MapShareWanted* wanted) {
   DecodedCloud out;
   std::size_t at = 0;
   for (std::size_t k = 0; k < kShareVerifyQueueCapacity; ++k) {  // skips shares refused for their time
@@ -321,8 +323,11 @@ DecodedCloud InputDecoder::next_verified_share() {
       q.judged = true;
       q.judge_time_ns = period_time_ns_;
     }
-    if (verifier_.check_time(q.job, q.judge_time_ns).verdict == trust::ShareVerdict::kAccepted) break;
-    ++counters_.shares_untrusted;
+    const bool timely = verifier_.check_time(q.job, q.judge_time_ns).verdict == trust::ShareVerdict::kAccepted;
+    const trust::TrustList& list = verifier_.trust_list();
+    const bool known = q.job.signer_index < list.count;  // else complete() refuses it
+    if (timely && (wanted == nullptr || !known || wanted->wants(list.signers[q.job.signer_index].sender_id, q.t))) break;
+    ++(timely ? counters_.shares_paced : counters_.shares_untrusted);
     schedule_.refund();  // no ECDSA was spent on it
     if (k + 1 == kShareVerifyQueueCapacity) return out;
   }

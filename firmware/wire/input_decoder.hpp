@@ -71,6 +71,16 @@ struct DecodedCloud {
   bool gnss_used = false;         // kEgoScan: a GNSS fix was decoded since the previous ego scan (pose flag GnssUsed)
 };
 
+// Asked before a queued share's signature is verified: would the map fuse this source's cloud of
+// time t? The source id is the provisioned signer's, so a forged header cannot name another.
+class MapShareWanted {
+ public:
+  virtual bool wants(std::uint32_t source_id, double t) const = 0;
+
+ protected:
+  ~MapShareWanted() = default;
+};
+
 struct DecoderCounters {
   std::uint64_t can_frames = 0;
   std::uint64_t vehicle_inputs = 0;
@@ -87,6 +97,7 @@ struct DecoderCounters {
   std::uint64_t clouds_rejected = 0;     // complete but unusable (bad pose, wrong message type)
   std::uint64_t wrong_channel = 0;       // datagram type not allowed on the endpoint it came in on
   std::uint64_t shares_untrusted = 0;    // map shares the verifier refused (reasons: verifier counters)
+  std::uint64_t shares_paced = 0;        // admitted shares the map did not need (source's last is recent): not verified
   std::uint64_t shares_queued = 0;       // admitted shares put in the verification queue
   std::uint64_t shares_queue_dropped = 0;  // oldest waiting share dropped: queue full
   std::uint64_t signature_verifications = 0;  // ECDSA verifications run (<= kMax.. per period)
@@ -132,6 +143,9 @@ class InputDecoder {
   // scan, so verified shares reach map fusion before the scan. Points stay valid until the next
   // call of decode_completed() or next_verified_share().
   DecodedCloud next_verified_share();
+  // The same, asking `wanted` (nullptr: all) whether the localizer would fuse the share before
+  // its signature is verified: a share it would not (kPaced) costs no ECDSA (counted, not returned).
+  DecodedCloud next_verified_share(const MapShareWanted* wanted);
   // Opens a verification period at local_time_ns (decode_completed() does this for ego scans).
   void begin_verification_period(std::int64_t local_time_ns);
   void begin_verification_period() { begin_verification_period(completed_local_time_ns_); }

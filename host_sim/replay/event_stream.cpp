@@ -295,6 +295,15 @@ bool EventStream::next_frame(int i, std::vector<WireEvent>& out, std::string& er
   return true;
 }
 
+namespace {
+// The firmware asks its localizer before verifying a share (firmware/app/localizer_port.hpp).
+struct LocalizerWants final : firmware::MapShareWanted {
+  explicit LocalizerWants(const Localizer& l) : localizer(l) {}
+  bool wants(std::uint32_t source_id, double t) const override { return localizer.wants_map_cloud(source_id, t); }
+  const Localizer& localizer;
+};
+}  // namespace
+
 bool WireEventDecoder::feed(const WireEvent& event, DecodedFrame& frame) {
   const std::int64_t disciplined_ns = decoder_.epoch_ns() + event.time_ns;
   if (event.kind == WireEvent::Kind::kCan) {
@@ -310,7 +319,8 @@ bool WireEventDecoder::feed(const WireEvent& event, DecodedFrame& frame) {
     if (decoded.kind == firmware::CloudKind::kEgoScan || decoded.kind == firmware::CloudKind::kEgoRejected) {
       // As the firmware: at the period boundary, the shares waiting for verification first.
       for (std::size_t k = 0; k < firmware::kMaxSignatureVerificationsPerPeriod; ++k) {
-        const firmware::DecodedCloud share = decoder_.next_verified_share();
+        const LocalizerWants wanted(localizer_);
+        const firmware::DecodedCloud share = decoder_.next_verified_share(&wanted);
         if (share.kind == firmware::CloudKind::kNone) break;
         if (share.kind == firmware::CloudKind::kMapCloud) localizer_.on_map_cloud(share.map);
       }

@@ -54,6 +54,7 @@ struct RunStats {
   std::size_t can_decode_errors = 0;
   std::size_t map_clouds = 0;
   std::size_t map_clouds_rejected = 0;
+  std::size_t map_clouds_paced = 0;     // not handed to the map: the source's stored cloud is recent (map_cloud_interval)
   std::size_t map_clouds_dropped = 0;    // waited beyond the share queue (the firmware's schedule)
   std::vector<StageMs> period_stage_ms;  // one per frame when RunOptions::timing
 };

@@ -54,7 +54,11 @@ void Localizer::on_gnss(const GnssInput& in) {
   if (filter_.on_gnss(in.t, gnss_.enu, in.h_acc, in.v_acc) == GnssFusion::kDiverged) lose_track();
 }
 
-MapInsertResult Localizer::on_map_cloud(const MapCloudInput& in) { return map_.insert(in); }
+MapInsertResult Localizer::on_map_cloud(const MapCloudInput& in) {
+  const MapInsertResult r = map_.insert(in);
+  if (r.status == MapInsertStatus::kPaced) ++counters_.map_clouds_paced;
+  return r;
+}
 
 const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
   output_ = {};

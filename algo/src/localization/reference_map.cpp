@@ -18,7 +18,21 @@ void ReferenceMap::configure(const LocalizerParams& params) {
   ready_ = false;
 }
 
+bool ReferenceMap::wants(std::uint32_t source_id, double t) const {
+  for (const MapSourceInfo& s : fusion_.sources()) {
+    // Not newer at all: fusion refuses it as stale (and counts it), at no cost.
+    if (s.active && s.id == source_id) return !(t > s.timestamp) || !(t - s.timestamp < params_.map_cloud_interval);
+  }
+  return true;
+}
+
 MapInsertResult ReferenceMap::insert(const MapCloudInput& in) {
+  if (!wants(in.source_id, in.t)) {
+    MapInsertResult r;
+    r.status = MapInsertStatus::kPaced;
+    r.input_points = static_cast<std::uint32_t>(in.points.size());
+    return r;
+  }
   return fusion_.insert(in.source_id, in.t, in.world_T_sensor, in.points, !in.is_agent);
 }
 

@@ -470,6 +470,47 @@ TEST(InputDecoder, SignatureChecksAreBoundedPerPeriodAndQueued) {
   EXPECT_EQ(dec->counters().shares_untrusted, 1u);
 }
 
+// Shares the map would not fuse (the localizer paces each source, reference_map.hpp) are skipped
+// before their signature check: no ECDSA spent, counted, and the period's budget goes to the next.
+TEST(InputDecoder, SharesTheMapDoesNotWantCostNoSignatureCheck) {
+  struct EverySecondSender final : MapShareWanted {
+    bool wants(std::uint32_t source_id, double t) const override {
+      EXPECT_DOUBLE_EQ(t, 0.5);
+      return (source_id - kInfraSenderBase) % 2 == 0;
+    }
+  };
+  auto dec = std::make_unique<InputDecoder>(kEpoch);
+  trust::TrustList list;
+  constexpr std::uint32_t kSources = 4;
+  for (std::uint32_t k = 0; k < kSources; ++k) test::add_signer(list, kInfraSenderBase + k, trust::SignerRole::kInfrastructure);
+  dec->provision_trust(list);
+  const std::vector<float> xyz = ramp_points(100);
+  for (std::uint32_t k = 0; k < kSources; ++k) {
+    const std::uint32_t sender = kInfraSenderBase + k;
+    const auto frags = fragment_cloud(protocol::CloudMessageType::kMapShare, sender, 0, 500'000'000, xyz, {});
+    dec->on_datagram(test::sign_share(frags, sender, kEpoch + 500'000'000), 500'000'000);
+    bool done = false;
+    for (const auto& f : frags) done = dec->on_datagram(f, 500'000'000);
+    ASSERT_TRUE(done);
+    ASSERT_EQ(dec->decode_completed().kind, CloudKind::kMapQueued) << k;
+  }
+  const auto ego = fragment_cloud(protocol::CloudMessageType::kEgoScan, kEgoSenderId, 1, 600'000'000, ramp_points(50), {});
+  for (const auto& f : ego) dec->on_datagram(f, 600'000'000);
+  ASSERT_EQ(dec->decode_completed().kind, CloudKind::kEgoScan);
+  const EverySecondSender wanted;
+  std::vector<std::uint32_t> fused;
+  for (std::size_t guard = 0; guard < 10; ++guard) {
+    const DecodedCloud share = dec->next_verified_share(&wanted);
+    if (share.kind == CloudKind::kNone) break;
+    ASSERT_EQ(share.kind, CloudKind::kMapCloud);
+    fused.push_back(share.map.source_id);
+  }
+  EXPECT_EQ(fused, (std::vector<std::uint32_t>{kInfraSenderBase, kInfraSenderBase + 2}));
+  EXPECT_EQ(dec->counters().shares_paced, 1u);
+  EXPECT_EQ(dec->counters().signature_verifications, 2u);
+  EXPECT_EQ(dec->shares_waiting(), 1u) << "the budget is spent: the last share waits for the next period";
+}
+
 TEST(InputDecoder, EgoScanFromAnotherSenderIsRejectedAndCounted) {
   auto dec = std::make_unique<InputDecoder>(kEpoch);
   test::DecodedLog decoded;

@@ -47,6 +47,9 @@ class Localizer {
   void on_vehicle(const VehicleInput& input);
   void on_gnss(const GnssInput& input);
   MapInsertResult on_map_cloud(const MapCloudInput& input);
+  // False when on_map_cloud would not fuse a cloud of this source and time (kPaced: the source's
+  // stored cloud is recent, reference_map.hpp); lets the caller skip the share's signature check.
+  bool wants_map_cloud(std::uint32_t source_id, double t) const { return map_.wants(source_id, t); }
   // Processes one ego frame; the returned reference stays valid until the next call.
   const LocalizerFrameOutput& on_ego_scan(const EgoScanInput& input);
 

@@ -36,6 +36,11 @@ struct LocalizerParams {
   // ---- Reference map ----
   MapFusionParams map{};              // fused infrastructure + agent clouds (map_fusion.hpp)
   double map_refresh_period = 1.0;    // [s] rebuild map points / normals / tree at most this often (TUNING.md)
+  // [s] a source's cloud is fused at most this often (0: every cloud). The map is rebuilt at most
+  // every map_refresh_period and takes each source's latest cloud, so of a 2 Hz source's clouds
+  // only every other one would ever reach a rebuild; checking and storing the others is wasted
+  // (TUNING.md). Just under the refresh period so a 1 Hz share with jitter is never skipped.
+  double map_cloud_interval = 0.9;
   float map_normal_radius = 0.6f;     // [m] normal estimation radius on the map (3 map voxels)
   std::uint32_t map_min_points = 100; // [points] a map with fewer is not registered against
   // [points/period] a map rebuild runs beside the registration, one step per period (extract,

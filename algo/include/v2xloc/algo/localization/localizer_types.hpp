@@ -117,6 +117,7 @@ struct LocalizerCounters {
   std::uint32_t registrations_fused = 0;       // main EKF
   std::uint32_t registrations_gate_rejected = 0;
   std::uint32_t map_rebuilds = 0;
+  std::uint32_t map_clouds_paced = 0;          // clouds not fused: their source's last is recent (map_cloud_interval)
   std::uint32_t map_normals_computed = 0;      // map normals computed on first use
   std::uint32_t map_normals_refused = 0;       // asked past the per-period cap: pair skipped
   std::uint32_t gnss_received = 0;

@@ -24,6 +24,10 @@ class ReferenceMap {
  public:
   void configure(const LocalizerParams& params);
 
+  // A cloud within map_cloud_interval of its source's stored cloud is not fused (kPaced): the
+  // next rebuild would take the source's later cloud anyway. wants() is that test alone, cheap
+  // and read-only, so a caller can skip a share's costlier checks (its signature) before insert.
+  bool wants(std::uint32_t source_id, double t) const;
   MapInsertResult insert(const MapCloudInput& in);
   // Expires old clouds and advances the target build; true when a rebuild finished this period.
   // normals: the map normals computed / refused (cap) in the period that ends here.
