@@ -27,12 +27,16 @@ void BasinAudit::configure(const LocalizerParams& params) {
 AuditOutcome BasinAudit::step(const AuditFrame& f, LocalizerCounters& counters) {
   // A search that outlived its track (frames without tracking in between) is dropped.
   if (running_ && f.frame - started_frame_ > params_.audit_max_frames) running_ = false;
+  // Periods that fused map clouds have spent their spare work: the audit is insurance, it waits
+  // (the frames it pauses count towards audit_max_frames).
   if (!running_) {
     if (params_.audit_period_frames == 0 || ++frames_since_audit_ < params_.audit_period_frames) return {};
+    if (f.map_busy) return {};  // due: starts in the next quiet period
     frames_since_audit_ = 0;
     f.probe(LocalizerStage::kAudit);
     start(f);
   } else {
+    if (f.map_busy) return {};
     f.probe(LocalizerStage::kAudit);
   }
   const std::uint64_t budget = params_.audit_queries_per_period > 0 ? params_.audit_queries_per_period : ~std::uint64_t{0};

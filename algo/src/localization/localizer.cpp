@@ -153,7 +153,8 @@ RegistrationResult Localizer::track(double t, const Mat4d& body_T_lidar) {
                             scan_.search_scan(),  scan_.stereo_cloud(),
                             map_.target(),        body_T_lidar.topRightCorner<3, 1>(),
                             icp_hints(),          probe_,
-                            frame_,               odom_T_body_};
+                            frame_,               odom_T_body_,
+                            map_.busy()};
   const TrackingOutcome o = tracking_.step(frame, counters_);
   output_.basin_audited = o.audit.audited;
   if (o.audit.switch_basin) {

@@ -16,6 +16,8 @@ void ReferenceMap::configure(const LocalizerParams& params) {
   revision_ = ~0ull;
   built_t_ = -1e300;
   ready_ = false;
+  clouds_this_period_ = 0;
+  busy_ = false;
 }
 
 bool ReferenceMap::wants(std::uint32_t source_id, double t) const {
@@ -33,6 +35,7 @@ MapInsertResult ReferenceMap::insert(const MapCloudInput& in) {
     r.input_points = static_cast<std::uint32_t>(in.points.size());
     return r;
   }
+  ++clouds_this_period_;
   return fusion_.insert(in.source_id, in.t, in.world_T_sensor, in.points, !in.is_agent);
 }
 
@@ -44,6 +47,8 @@ IcpTarget ReferenceMap::target() {
 
 bool ReferenceMap::refresh(double t, LazyNormalCounters& normals) {
   normals = targets_[active_].lazy.new_period(params_.map_normals_per_period);
+  busy_ = clouds_this_period_ > 0;
+  clouds_this_period_ = 0;
   fusion_.expire(t);
   // One build step per period while a map is in use; the first one is built at once.
   const std::uint32_t steps = ready_ ? 1u : kBuildSteps;
@@ -94,6 +99,9 @@ bool ReferenceMap::build_step(double t, bool& finished) {
     case BuildPhase::kIdle:
       if (fusion_.revision() == revision_) return false;
       if (ready_ && t - built_t_ < params_.map_refresh_period) return false;
+      // Sources send in bursts: the rebuild waits for the burst to end (all its clouds in one
+      // rebuild, none of its periods also extracting), but not forever.
+      if (ready_ && busy_ && t - built_t_ < params_.map_refresh_period + params_.map_refresh_quiet_wait) return false;
       fusion_.extract(next.points);
       build_revision_ = fusion_.revision();
       built_t_ = t;

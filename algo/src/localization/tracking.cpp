@@ -17,7 +17,7 @@ TrackingOutcome TrackingRegistration::step(const TrackingFrame& f, LocalizerCoun
   }
   if (result.ok()) {
     const AuditFrame audit{Pose3d(result.transform), f.scan, f.search_scan, f.map, f.sensor_in_body, f.icp_hints,
-                           f.probe, f.frame, f.odom_T_body};
+                           f.probe, f.frame, f.odom_T_body, f.map_busy};
     out.audit = audit_.step(audit, counters);
     if (out.audit.switch_basin) result.status = RegistrationStatus::kDidNotConverge;
   }

@@ -54,5 +54,49 @@ TEST(ReferenceMap, CloudsWithinTheIntervalOfTheSourcesLastArePaced) {
   EXPECT_EQ(map->insert(cloud(7, 1.01, points)).status, MapInsertStatus::kReplaced);
 }
 
+// refresh() closes a period: busy() tells whether clouds were fused since the previous one. A due
+// rebuild waits for a period without clouds (the end of a burst), at most map_refresh_quiet_wait.
+TEST(ReferenceMap, DueRebuildWaitsForAQuietPeriodButNotForever) {
+  auto map = std::make_unique<ReferenceMap>();
+  LocalizerParams params;
+  params.map_cloud_interval = 0.0;
+  params.map_refresh_period = 1.0;
+  params.map_refresh_quiet_wait = 0.5;
+  map->configure(params);
+  const std::vector<Vec3f> points = wall();
+  LazyNormalCounters normals;
+
+  ASSERT_EQ(map->insert(cloud(1, 0.0, points)).status, MapInsertStatus::kInserted);
+  EXPECT_TRUE(map->refresh(0.0, normals)) << "the first map is built at once";
+  EXPECT_TRUE(map->busy());
+  EXPECT_FALSE(map->refresh(0.1, normals));
+  EXPECT_FALSE(map->busy());
+
+  // Due at 1.0 s, but clouds keep arriving: no rebuild starts while they do ...
+  double t = 1.0;
+  for (; t < 1.35; t += 0.1) {
+    ASSERT_EQ(map->insert(cloud(1, t, points)).status, MapInsertStatus::kReplaced);
+    EXPECT_FALSE(map->refresh(t, normals)) << t;
+    EXPECT_TRUE(map->busy());
+  }
+  // ... the first quiet period starts it (extract, then the tree: finished a period later).
+  EXPECT_FALSE(map->refresh(t, normals));
+  EXPECT_FALSE(map->busy());
+  EXPECT_TRUE(map->refresh(t + 0.1, normals));
+
+  // A source sending every period: the rebuild starts once the wait is over (1.5 s after the last).
+  const double built = t;
+  bool rebuilt = false;
+  double finished_at = 0.0;
+  for (t = built + 0.2; t < built + 2.2 && !rebuilt; t += 0.1) {
+    ASSERT_EQ(map->insert(cloud(1, t, points)).status, MapInsertStatus::kReplaced);
+    rebuilt = map->refresh(t, normals);
+    finished_at = t;
+  }
+  EXPECT_TRUE(rebuilt);
+  EXPECT_GE(finished_at, built + 1.5);
+  EXPECT_LE(finished_at, built + 1.75);
+}
+
 }  // namespace
 }  // namespace v2xloc

@@ -29,6 +29,7 @@ struct AuditFrame {
   StageProbe probe{};                    // marks kAudit while it runs, then kTracking
   std::uint32_t frame = 0;               // localizer frame index
   Pose3d odom_T_body = Pose3d::Identity();  // this frame's odometry pose
+  bool map_busy = false;  // map clouds were fused this period: the audit waits for a quieter one
 };
 
 struct AuditOutcome {

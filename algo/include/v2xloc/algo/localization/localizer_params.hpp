@@ -36,6 +36,7 @@ struct LocalizerParams {
   // ---- Reference map ----
   MapFusionParams map{};              // fused infrastructure + agent clouds (map_fusion.hpp)
   double map_refresh_period = 1.0;    // [s] rebuild map points / normals / tree at most this often (TUNING.md)
+  double map_refresh_quiet_wait = 0.5;  // [s] a due rebuild waits this long at most for a period without new clouds
   // [s] a source's cloud is fused at most this often (0: every cloud). The map is rebuilt at most
   // every map_refresh_period and takes each source's latest cloud, so of a 2 Hz source's clouds
   // only every other one would ever reach a rebuild; checking and storing the others is wasted

@@ -34,6 +34,10 @@ class ReferenceMap {
   bool refresh(double t, LazyNormalCounters& normals);
 
   bool ready() const { return ready_; }  // the active target has at least map_min_points
+  // Clouds were fused in the period refresh() closed (arrived since the previous scan): its spare
+  // work is spent, so a due rebuild waits for a quiet period (at most map_refresh_quiet_wait) and
+  // so does the basin audit.
+  bool busy() const { return busy_; }
   IcpTarget target();  // non-const: its normals are computed as the registration asks for them
   std::span<const Vec3f> points() const { return targets_[active_].points.span(); }
   const MapFusion& fusion() const { return fusion_; }
@@ -66,6 +70,8 @@ class ReferenceMap {
   std::uint64_t revision_ = ~0ull;
   double built_t_ = -1e300;
   bool ready_ = false;
+  std::uint32_t clouds_this_period_ = 0;  // clouds handed to map fusion since the last refresh()
+  bool busy_ = false;
 };
 
 }  // namespace v2xloc

@@ -27,6 +27,7 @@ struct TrackingFrame {
   StageProbe probe{};
   std::uint32_t frame = 0;                  // localizer frame index
   Pose3d odom_T_body = Pose3d::Identity();  // this frame's odometry pose
+  bool map_busy = false;                    // map clouds were fused this period (reference_map.hpp)
 };
 
 struct TrackingOutcome {
