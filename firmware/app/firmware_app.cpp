@@ -1,5 +1,7 @@
 #include "firmware/app/firmware_app.hpp"
 
+#include <algorithm>
+
 #include <cmath>
 
 namespace v2xloc::firmware {
@@ -172,7 +174,8 @@ void FirmwareApp::close_period(bool ego_link) {
   if (ego_link) drain_link(hal_.clouds, false);
   // Period boundary: shares waiting for their signature check are verified now (at most
   // kMaxSignatureVerificationsPerPeriod) and reach map fusion before this scan.
-  for (std::size_t k = 0; k < kMaxSignatureVerificationsPerPeriod; ++k) {
+  const std::size_t shares = std::min<std::size_t>(kMaxSignatureVerificationsPerPeriod, localizer_.map_clouds_per_period());
+  for (std::size_t k = 0; k < shares; ++k) {
     const DecodedCloud share = decoder_.next_verified_share(&localizer_);
     if (share.kind == CloudKind::kNone) break;
     apply_cloud(share);

@@ -16,6 +16,8 @@ namespace v2xloc::firmware {
 class LocalizerPort : public MapShareWanted {
  public:
   bool wants(std::uint32_t /*source_id*/, double /*t*/) const override { return true; }
+  // Map shares to verify and fuse in the coming period (the schedule's cap applies as well).
+  virtual std::uint32_t map_clouds_per_period() const { return ~std::uint32_t{0}; }
   virtual void on_vehicle(const VehicleInput& input) = 0;
   virtual void on_gnss(const GnssInput& input) = 0;
   virtual MapInsertResult on_map_cloud(const MapCloudInput& input) = 0;
@@ -33,6 +35,7 @@ class LocalizerAdapter final : public LocalizerPort {
   void on_gnss(const GnssInput& input) override { localizer_.on_gnss(input); }
   MapInsertResult on_map_cloud(const MapCloudInput& input) override { return localizer_.on_map_cloud(input); }
   bool wants(std::uint32_t source_id, double t) const override { return localizer_.wants_map_cloud(source_id, t); }
+  std::uint32_t map_clouds_per_period() const override { return localizer_.map_clouds_per_period(); }
   const LocalizerFrameOutput& on_ego_scan(const EgoScanInput& input) override {
     return localizer_.on_ego_scan(input);
   }

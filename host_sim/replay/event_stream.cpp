@@ -318,7 +318,8 @@ bool WireEventDecoder::feed(const WireEvent& event, DecodedFrame& frame) {
     const firmware::DecodedCloud decoded = decoder_.decode_completed();
     if (decoded.kind == firmware::CloudKind::kEgoScan || decoded.kind == firmware::CloudKind::kEgoRejected) {
       // As the firmware: at the period boundary, the shares waiting for verification first.
-      for (std::size_t k = 0; k < firmware::kMaxSignatureVerificationsPerPeriod; ++k) {
+      const std::size_t shares = std::min<std::size_t>(firmware::kMaxSignatureVerificationsPerPeriod, localizer_.map_clouds_per_period());
+      for (std::size_t k = 0; k < shares; ++k) {
         const LocalizerWants wanted(localizer_);
         const firmware::DecodedCloud share = decoder_.next_verified_share(&wanted);
         if (share.kind == firmware::CloudKind::kNone) break;

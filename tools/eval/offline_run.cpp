@@ -185,7 +185,9 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
     schedule.begin_period();
     std::size_t slot = 0;
     // A share the map would not fuse (paced) costs the firmware no signature check: refunded.
-    for (std::size_t k = 0; k < firmware::kShareVerifyQueueCapacity && schedule.release(slot); ++k) {
+    const std::size_t shares = std::min<std::size_t>(firmware::kMaxSignatureVerificationsPerPeriod, localizer.map_clouds_per_period());
+    std::size_t shares_fused = 0;
+    for (std::size_t k = 0; k < firmware::kShareVerifyQueueCapacity && shares_fused < shares && schedule.release(slot); ++k) {
       const sim::MapCloudInfo& info = *waiting[slot].info;
       const cloud_io::PointCloud& cloud = waiting[slot].cloud;
       MapCloudInput in;
@@ -199,6 +201,7 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
       in.t = info.stamp;
       in.world_T_sensor = to_mat(info.sensor_pose);
       in.points = std::span<const Vec3f>(cloud.points.data(), cloud.points.size());
+      ++shares_fused;
       stages.mark(LocalizerStage::kMapInsert);
       const auto t0 = Clock::now();
       const MapInsertResult r = localizer.on_map_cloud(in);

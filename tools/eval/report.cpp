@@ -142,6 +142,14 @@ std::string format_json(const std::vector<RowReport>& rows) {
                        {"stages_ms", stages_json(t.worst_stages_ms)},
                        {"stages_median_ms", stages_json(t.median_stages_ms)}};
     }
+    const LocalizerCounters& c = r.stats.counters;  // in-process runs (the firmware path reports its own)
+    row["work"] = {{"map_clouds", r.stats.map_clouds},
+                   {"map_clouds_paced", r.stats.map_clouds_paced},
+                   {"map_clouds_rejected", r.stats.map_clouds_rejected},
+                   {"map_rebuilds", c.map_rebuilds},
+                   {"global_searches", c.global_searches},
+                   {"basin_audits", c.basin_audits},
+                   {"basin_switches", c.basin_switches}};
     row["unaligned"] = columns_json(r.metrics.unaligned);
     row["aligned"] = columns_json(r.metrics.aligned);
     out_rows.push_back(std::move(row));

@@ -27,19 +27,21 @@ void BasinAudit::configure(const LocalizerParams& params) {
 AuditOutcome BasinAudit::step(const AuditFrame& f, LocalizerCounters& counters) {
   // A search that outlived its track (frames without tracking in between) is dropped.
   if (running_ && f.frame - started_frame_ > params_.audit_max_frames) running_ = false;
-  // Periods that fused map clouds have spent their spare work: the audit is insurance, it waits
-  // (the frames it pauses count towards audit_max_frames).
+  // Periods that fused map clouds have spent part of their spare work: the audit is insurance, it
+  // takes a smaller quota there or waits (the frames it pauses count towards audit_max_frames).
+  const std::uint32_t quota = f.map_busy ? params_.audit_queries_per_busy_period : params_.audit_queries_per_period;
+  const bool paused = f.map_busy && quota == 0;
   if (!running_) {
     if (params_.audit_period_frames == 0 || ++frames_since_audit_ < params_.audit_period_frames) return {};
-    if (f.map_busy) return {};  // due: starts in the next quiet period
+    if (paused) return {};  // due: starts in the next quiet period
     frames_since_audit_ = 0;
     f.probe(LocalizerStage::kAudit);
     start(f);
   } else {
-    if (f.map_busy) return {};
+    if (paused) return {};
     f.probe(LocalizerStage::kAudit);
   }
-  const std::uint64_t budget = params_.audit_queries_per_period > 0 ? params_.audit_queries_per_period : ~std::uint64_t{0};
+  const std::uint64_t budget = quota > 0 ? quota : ~std::uint64_t{0};
   AuditOutcome out;
   if (job_.step(f.map, budget)) {
     running_ = false;

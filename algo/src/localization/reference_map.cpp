@@ -1,5 +1,7 @@
 #include "v2xloc/algo/localization/reference_map.hpp"
 
+#include <cmath>
+
 #include "v2xloc/algo/registration/normals.hpp"
 
 namespace v2xloc {
@@ -18,6 +20,7 @@ void ReferenceMap::configure(const LocalizerParams& params) {
   ready_ = false;
   clouds_this_period_ = 0;
   busy_ = false;
+  for (Attempt& a : attempts_) a = Attempt{};
 }
 
 bool ReferenceMap::wants(std::uint32_t source_id, double t) const {
@@ -25,7 +28,24 @@ bool ReferenceMap::wants(std::uint32_t source_id, double t) const {
     // Not newer at all: fusion refuses it as stale (and counts it), at no cost.
     if (s.active && s.id == source_id) return !(t > s.timestamp) || !(t - s.timestamp < params_.map_cloud_interval);
   }
+  for (const Attempt& a : attempts_) {
+    if (a.used && a.id == source_id) return !(t - a.t < params_.map_cloud_interval);  // older than the last: paced too
+  }
   return true;
+}
+
+void ReferenceMap::record_attempt(std::uint32_t source_id, double t) {
+  if (!std::isfinite(t)) return;
+  Attempt* slot = nullptr;
+  for (Attempt& a : attempts_) {
+    if (a.used && a.id == source_id) {
+      slot = &a;
+      break;
+    }
+    if (slot == nullptr || !a.used || (slot->used && a.t < slot->t)) slot = &a;  // a free one, else the oldest
+  }
+  if (slot->used && slot->id == source_id && !(t > slot->t)) return;
+  *slot = Attempt{source_id, t, true};
 }
 
 MapInsertResult ReferenceMap::insert(const MapCloudInput& in) {
@@ -36,6 +56,7 @@ MapInsertResult ReferenceMap::insert(const MapCloudInput& in) {
     return r;
   }
   ++clouds_this_period_;
+  record_attempt(in.source_id, in.t);
   return fusion_.insert(in.source_id, in.t, in.world_T_sensor, in.points, !in.is_agent);
 }
 

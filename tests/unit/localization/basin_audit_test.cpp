@@ -18,8 +18,8 @@ struct AuditMarks {
   }
 };
 
-// An audit is insurance: in a period that fused map clouds (map_busy) it neither starts nor
-// advances; it resumes in the next quiet period.
+// An audit is insurance: in a period that fused map clouds (map_busy) it takes the smaller busy
+// quota, or with none neither starts nor advances and resumes in the next quiet period.
 TEST(BasinAudit, WaitsOutPeriodsThatFusedMapClouds) {
   std::vector<Vec3f> map_points;
   for (int i = 0; i < 40; ++i)
@@ -41,6 +41,7 @@ TEST(BasinAudit, WaitsOutPeriodsThatFusedMapClouds) {
   LocalizerParams params;
   params.audit_period_frames = 1;
   params.audit_queries_per_period = 50;  // a job over many periods
+  params.audit_queries_per_busy_period = 0;
   auto audit = std::make_unique<BasinAudit>();
   audit->configure(params);
   AuditMarks marks;
@@ -70,6 +71,13 @@ TEST(BasinAudit, WaitsOutPeriodsThatFusedMapClouds) {
   f.frame = 5;
   audit->step(f, counters);
   EXPECT_EQ(marks.audit, 2) << "resumed";
+
+  params.audit_queries_per_busy_period = 25;  // busy periods advance it, by less
+  audit->configure(params);
+  f.map_busy = true;
+  f.frame = 6;
+  audit->step(f, counters);
+  EXPECT_EQ(marks.audit, 3) << "a busy quota: started in a busy period";
 }
 
 }  // namespace

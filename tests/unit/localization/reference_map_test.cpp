@@ -54,6 +54,33 @@ TEST(ReferenceMap, CloudsWithinTheIntervalOfTheSourcesLastArePaced) {
   EXPECT_EQ(map->insert(cloud(7, 1.01, points)).status, MapInsertStatus::kReplaced);
 }
 
+// A source whose clouds are refused (here an agent with no infrastructure to be checked against:
+// held back) is paced on its last attempt: one consistency check per interval, not one per share.
+TEST(ReferenceMap, RefusedSourcesArePacedOnTheirLastAttempt) {
+  auto map = std::make_unique<ReferenceMap>();
+  LocalizerParams params;
+  params.map_cloud_interval = 0.9;
+  map->configure(params);
+  const std::vector<Vec3f> points = wall();
+  MapCloudInput agent = cloud(40, 1.0, points);
+  agent.is_agent = true;
+  EXPECT_EQ(map->insert(agent).status, MapInsertStatus::kHeldBack);
+  EXPECT_FALSE(map->wants(40, 1.5));
+  EXPECT_FALSE(map->wants(40, 0.8)) << "older than its last attempt";
+  agent.t = 1.5;
+  EXPECT_EQ(map->insert(agent).status, MapInsertStatus::kPaced);
+  EXPECT_TRUE(map->wants(40, 2.0));
+  agent.t = 2.0;
+  EXPECT_EQ(map->insert(agent).status, MapInsertStatus::kHeldBack);
+  // Many other ids cannot make it forget a source for long: the table keeps the newest attempts.
+  for (std::uint32_t id = 100; id < 100 + 2 * config::kMaxMapSources - 1; ++id) {
+    MapCloudInput other = cloud(id, 2.1, points);
+    other.is_agent = true;
+    map->insert(other);
+  }
+  EXPECT_FALSE(map->wants(40, 2.5));
+}
+
 // refresh() closes a period: busy() tells whether clouds were fused since the previous one. A due
 // rebuild waits for a period without clouds (the end of a burst), at most map_refresh_quiet_wait.
 TEST(ReferenceMap, DueRebuildWaitsForAQuietPeriodButNotForever) {

@@ -50,6 +50,12 @@ class Localizer {
   // False when on_map_cloud would not fuse a cloud of this source and time (kPaced: the source's
   // stored cloud is recent, reference_map.hpp); lets the caller skip the share's signature check.
   bool wants_map_cloud(std::uint32_t source_id, double t) const { return map_.wants(source_id, t); }
+  // How many map clouds the next period should fuse at most (the caller's share schedule applies
+  // its own cap too): map_clouds_per_period_tracking while tracking, else no limit.
+  std::uint32_t map_clouds_per_period() const {
+    return filter_.can_track() && params_.map_clouds_per_period_tracking > 0 ? params_.map_clouds_per_period_tracking
+                                                                             : ~std::uint32_t{0};
+  }
   // Processes one ego frame; the returned reference stays valid until the next call.
   const LocalizerFrameOutput& on_ego_scan(const EgoScanInput& input);
 

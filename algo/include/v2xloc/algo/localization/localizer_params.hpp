@@ -36,6 +36,10 @@ struct LocalizerParams {
   // ---- Reference map ----
   MapFusionParams map{};              // fused infrastructure + agent clouds (map_fusion.hpp)
   double map_refresh_period = 1.0;    // [s] rebuild map points / normals / tree at most this often (TUNING.md)
+  // [clouds/period] map clouds the localizer takes per period while tracking (its caller's share
+  // schedule allows more at start-up, when the map is still being assembled; 0: no limit). One
+  // fused cloud is ~20 M instructions (TUNING.md "Quiet periods").
+  std::uint32_t map_clouds_per_period_tracking = 1;
   double map_refresh_quiet_wait = 0.5;  // [s] a due rebuild waits this long at most for a period without new clouds
   // [s] a source's cloud is fused at most this often (0: every cloud). The map is rebuilt at most
   // every map_refresh_period and takes each source's latest cloud, so of a 2 Hz source's clouds
@@ -53,7 +57,7 @@ struct LocalizerParams {
   std::uint32_t map_normals_per_period = 8192;
   // [point visits/period] the next map's k-d tree is built this much per period (a build
   // visits ~N log2(N / leaf) points; 0: at once)
-  std::uint32_t map_tree_work_per_period = 250000;
+  std::uint32_t map_tree_work_per_period = 125000;
   // [m] requested cell of the map's vicinity bitmap (search/proximity_grid.hpp; grows to fit the
   // map's box in config::kProximityGridWords): ICP queries it proves empty within the gate skip
   // the k-d tree (same matches); 0: off
@@ -106,7 +110,10 @@ struct LocalizerParams {
   // queries per tracked frame (0: the whole search in one frame); 7.5k: <= ~37 M a period, an
   // audit spans ~15 frames (15k: <= ~60 M; fused trajectories identical on the 12 recordings)
   std::uint32_t audit_queries_per_period = 7500;
-  std::uint32_t audit_max_frames = 40;    // [frames] a search not finished within this is dropped
+  // [queries/period] ... in a period that fused a map cloud (~20 M of its budget spent; 0: the
+  // audit pauses there). While tracking most periods fuse one (sources paced to ~1 Hz, one a period).
+  std::uint32_t audit_queries_per_busy_period = 3750;
+  std::uint32_t audit_max_frames = 60;    // [frames] a search not finished within this is dropped (it pauses in busy periods)
   std::uint32_t audit_refine_candidates = 10;  // [hypotheses] the audit refines (<= kPoseSearchRefine)
   double audit_switch_ratio = 1.15;       // [ratio] audit pose's tight fitness over tracked: switch
   double audit_full_switch_ratio = 1.15;  // [ratio] ... and again on the full scan after ICP: switch

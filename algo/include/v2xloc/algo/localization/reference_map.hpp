@@ -25,8 +25,11 @@ class ReferenceMap {
   void configure(const LocalizerParams& params);
 
   // A cloud within map_cloud_interval of its source's stored cloud is not fused (kPaced): the
-  // next rebuild would take the source's later cloud anyway. wants() is that test alone, cheap
-  // and read-only, so a caller can skip a share's costlier checks (its signature) before insert.
+  // next rebuild would take the source's later cloud anyway. A source without a stored cloud (its
+  // last one rejected or held back) is paced on its last attempt the same way, so a sender the
+  // consistency check keeps refusing costs one check per interval, not one per share. wants() is
+  // that test alone, cheap and read-only, so a caller can skip a share's costlier checks (its
+  // signature) before insert.
   bool wants(std::uint32_t source_id, double t) const;
   MapInsertResult insert(const MapCloudInput& in);
   // Expires old clouds and advances the target build; true when a rebuild finished this period.
@@ -71,6 +74,16 @@ class ReferenceMap {
   double built_t_ = -1e300;
   bool ready_ = false;
   std::uint32_t clouds_this_period_ = 0;  // clouds handed to map fusion since the last refresh()
+  // Last cloud time handed to map fusion per source id (pacing of sources with no stored cloud);
+  // full: the oldest entry gives way (pacing then fails open: more checks, never a lost cloud).
+  struct Attempt {
+    std::uint32_t id = 0;
+    double t = 0.0;
+    bool used = false;
+  };
+  static constexpr std::size_t kPacedSources = 2 * config::kMaxMapSources;
+  Attempt attempts_[kPacedSources]{};
+  void record_attempt(std::uint32_t source_id, double t);
   bool busy_ = false;
 };
 
