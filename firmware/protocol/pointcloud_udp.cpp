@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "firmware/protocol/crc32.hpp"
+#include "firmware/protocol/round_half_away.hpp"
 #include "hal/little_endian.hpp"
 
 namespace v2xloc::protocol {
@@ -112,22 +113,32 @@ std::size_t cloud_point_stride(std::uint16_t flags) {
 bool quantize_coordinate(float value_m, float scale_m, CoordWidth width, std::int32_t& out) {
   if (!std::isfinite(value_m)) return false;
   const double limit = width == CoordWidth::kInt16 ? kInt16Limit : kInt32Limit;
-  const double steps = std::round(static_cast<double>(value_m) / static_cast<double>(scale_m));
+  const double steps = round_half_away(static_cast<double>(value_m) / static_cast<double>(scale_m));
   if (!(steps <= limit && steps >= -limit)) return false;
   out = static_cast<std::int32_t>(steps);
   return true;
 }
 
+// value -> round(value / scale) never decreases as value grows (IEEE division and rounding are
+// monotonic) and is odd, so the accepted values form one interval [-m, m]. Bisect m over the bit
+// patterns of the non-negative floats, which are ordered as their values: 0 is always accepted,
+// infinity never.
+float largest_quantizable(float scale_m, CoordWidth width) {
+  std::uint32_t accepted = 0, refused = 0x7F800000u;
+  std::int32_t q = 0;
+  while (refused - accepted > 1) {
+    const std::uint32_t mid = accepted + (refused - accepted) / 2;
+    if (quantize_coordinate(std::bit_cast<float>(mid), scale_m, width, q)) {
+      accepted = mid;
+    } else {
+      refused = mid;
+    }
+  }
+  return std::bit_cast<float>(accepted);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Fragmenter
-
-bool PointCloudFragmenter::point_is_sendable(std::size_t i) const {
-  std::int32_t q = 0;
-  for (std::size_t axis = 0; axis < 3; ++axis) {
-    if (!quantize_coordinate(points_.xyz[3 * i + axis], info_.scale_m, info_.width, q)) return false;
-  }
-  return true;
-}
 
 CloudStatus PointCloudFragmenter::begin(const CloudFrameInfo& info, const CloudPointsView& points,
                                         std::size_t max_datagram_bytes) {
@@ -152,12 +163,14 @@ CloudStatus PointCloudFragmenter::begin(const CloudFrameInfo& info, const CloudP
   if (max_datagram_bytes > kMaxDatagramBytes) max_datagram_bytes = kMaxDatagramBytes;
   if (max_datagram_bytes < kHeaderBytes + kTrailerBytes + stride_) return CloudStatus::kBufferTooSmall;
 
+  // Counting needs only the range check (one compare per coordinate); next() quantizes each
+  // sent point once.
+  const float max_abs = largest_quantizable(info.scale_m, info.width);
   for (std::size_t i = 0; i < n; ++i) {
-    bool finite = true;
-    for (std::size_t axis = 0; axis < 3; ++axis) finite = finite && std::isfinite(points.xyz[3 * i + axis]);
-    if (!finite) {
+    const float* p = &points.xyz[3 * i];
+    if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]))) {
       ++dropped_non_finite_;
-    } else if (!point_is_sendable(i)) {
+    } else if (std::fabs(p[0]) > max_abs || std::fabs(p[1]) > max_abs || std::fabs(p[2]) > max_abs) {
       ++dropped_out_of_range_;
     } else {
       ++total_points_;
