@@ -7,9 +7,11 @@
 #include "host_sim/cloud_io/detail.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <type_traits>
 
 namespace v2xloc::cloud_io {
 namespace {
@@ -213,33 +215,37 @@ bool parse_header(std::span<const std::uint8_t> bytes, Header& h, std::string& e
   return true;
 }
 
-// Fills `out` from a getter value(point, field_index) -> double.
-template <typename Getter>
-void fill_cloud(const Header& h, std::size_t n, Getter&& value, PointCloud& out) {
+// Fills `out` one field at a time: column(field_index, dst, stride) writes the field's n values
+// as float to dst[0], dst[stride], ... (stride 3 for x y z and normals, 1 for the rest).
+template <typename Column>
+void fill_cloud_by_column(const Header& h, std::size_t n, Column&& column, PointCloud& out) {
+  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float));
   out.clear();
   out.points.resize(n);
   const int* rf = h.role_field;
-  for (std::size_t i = 0; i < n; ++i) {
-    out.points[i] = Eigen::Vector3f(static_cast<float>(value(i, rf[kX])),
-                                    static_cast<float>(value(i, rf[kY])),
-                                    static_cast<float>(value(i, rf[kZ])));
-  }
+  float* xyz = reinterpret_cast<float*>(out.points.data());
+  for (int axis = 0; axis < 3; ++axis) column(rf[kX + axis], xyz + axis, 3);
   if (rf[kIntensity] >= 0) {
     out.intensity.resize(n);
-    for (std::size_t i = 0; i < n; ++i) out.intensity[i] = static_cast<float>(value(i, rf[kIntensity]));
+    column(rf[kIntensity], out.intensity.data(), 1);
   }
   if (rf[kTime] >= 0) {
     out.time.resize(n);
-    for (std::size_t i = 0; i < n; ++i) out.time[i] = static_cast<float>(value(i, rf[kTime]));
+    column(rf[kTime], out.time.data(), 1);
   }
   if (rf[kNx] >= 0 && rf[kNy] >= 0 && rf[kNz] >= 0) {
     out.normals.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      out.normals[i] = Eigen::Vector3f(static_cast<float>(value(i, rf[kNx])),
-                                       static_cast<float>(value(i, rf[kNy])),
-                                       static_cast<float>(value(i, rf[kNz])));
-    }
+    float* normals = reinterpret_cast<float*>(out.normals.data());
+    for (int axis = 0; axis < 3; ++axis) column(rf[kNx + axis], normals + axis, 3);
   }
+}
+
+// Fills `out` from a getter value(point, field_index) -> double.
+template <typename Getter>
+void fill_cloud(const Header& h, std::size_t n, Getter&& value, PointCloud& out) {
+  fill_cloud_by_column(h, n, [&](int f, float* dst, std::size_t stride) {
+    for (std::size_t i = 0; i < n; ++i) dst[i * stride] = static_cast<float>(value(i, f));
+  }, out);
 }
 
 bool read_ascii(std::span<const std::uint8_t> bytes, const Header& h, PointCloud& out,
@@ -367,6 +373,23 @@ bool read_compressed(std::span<const std::uint8_t> bytes, const Header& h, Point
   return true;
 }
 
+// One field of the byte-plane layout as float: byte k of value e at planes[k * values + e], the
+// value scaled as the other readers' getters do (scale x stored, in double, then float).
+template <typename T>
+void unshuffle_column(const std::uint8_t* planes, std::size_t values, std::size_t count, double scale,
+                      std::size_t n, float* dst, std::size_t stride) {
+  using Bits = std::conditional_t<sizeof(T) == 1, std::uint8_t,
+               std::conditional_t<sizeof(T) == 2, std::uint16_t,
+               std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>>>;
+  for (std::size_t i = 0; i < n; ++i) {
+    Bits bits = 0;
+    for (std::size_t k = 0; k < sizeof(T); ++k) {
+      bits |= static_cast<Bits>(static_cast<Bits>(planes[k * values + i * count]) << (8 * k));
+    }
+    dst[i * stride] = static_cast<float>(scale * static_cast<double>(std::bit_cast<T>(bits)));
+  }
+}
+
 bool read_shuffled_zlib(std::span<const std::uint8_t> bytes, const Header& h, PointCloud& out,
                         std::string& error) {
   CompressedBlock b;
@@ -377,14 +400,25 @@ bool read_shuffled_zlib(std::span<const std::uint8_t> bytes, const Header& h, Po
   if (raw > 0 && zlib_decompress({b.data, b.compressed}, {planes.get(), raw}) != raw) {
     error = "corrupt zlib data in binary_shuffled_zlib block"; return false;
   }
-  // Value e of field f: byte k at (block start) + k * (values in the block) + e.
-  fill_cloud(h, static_cast<std::size_t>(h.points), [&](std::size_t i, int fi) {
+  // Field by field with the element type fixed per loop (a per-value type switch cost more than
+  // the inflate).
+  const std::size_t n = static_cast<std::size_t>(h.points);
+  fill_cloud_by_column(h, n, [&](int fi, float* dst, std::size_t stride) {
     const Field& f = h.fields[static_cast<std::size_t>(fi)];
     const std::uint8_t* block = planes.get() + h.points * f.byte_offset;
-    const std::size_t values = h.points * f.count;
-    std::uint8_t value[8];
-    for (std::size_t k = 0; k < f.size; ++k) value[k] = block[k * values + i * f.count];
-    return f.scale * detail::load_scalar(f.scalar, value);
+    const std::size_t values = n * f.count;
+    switch (f.scalar) {
+      case Scalar::kI8: return unshuffle_column<std::int8_t>(block, values, f.count, f.scale, n, dst, stride);
+      case Scalar::kU8: return unshuffle_column<std::uint8_t>(block, values, f.count, f.scale, n, dst, stride);
+      case Scalar::kI16: return unshuffle_column<std::int16_t>(block, values, f.count, f.scale, n, dst, stride);
+      case Scalar::kU16: return unshuffle_column<std::uint16_t>(block, values, f.count, f.scale, n, dst, stride);
+      case Scalar::kI32: return unshuffle_column<std::int32_t>(block, values, f.count, f.scale, n, dst, stride);
+      case Scalar::kU32: return unshuffle_column<std::uint32_t>(block, values, f.count, f.scale, n, dst, stride);
+      case Scalar::kI64: return unshuffle_column<std::int64_t>(block, values, f.count, f.scale, n, dst, stride);
+      case Scalar::kU64: return unshuffle_column<std::uint64_t>(block, values, f.count, f.scale, n, dst, stride);
+      case Scalar::kF32: return unshuffle_column<float>(block, values, f.count, f.scale, n, dst, stride);
+      case Scalar::kF64: return unshuffle_column<double>(block, values, f.count, f.scale, n, dst, stride);
+    }
   }, out);
   return true;
 }
