@@ -433,32 +433,44 @@ void PointCloudReassembler::open_slot(std::size_t index, const CloudFragmentHead
   for (std::size_t w = 0; w < bitmap_words(); ++w) storage_.bitmaps[index * bitmap_words() + w] = 0;
 }
 
+namespace {
+
+// One fragment's points, with the coordinate width a template parameter so the per-coordinate
+// loop has no branch on it (decoding was a tenth of the firmware's non-localizer time).
+template <bool Wide>
+void decode_fragment(const std::uint8_t* r, std::size_t count, std::uint16_t flags, double scale, float* xyz,
+                     std::uint8_t* intensity, std::uint16_t* time_ticks) {
+  const bool with_intensity = (flags & cloud_flags::kIntensity) != 0;
+  const bool with_time = (flags & cloud_flags::kPointTime) != 0;
+  for (std::size_t k = 0; k < count; ++k) {
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      const std::int32_t q = Wide ? static_cast<std::int32_t>(get_u32(r)) : static_cast<std::int16_t>(get_u16(r));
+      r += Wide ? 4 : 2;
+      xyz[3 * k + axis] = static_cast<float>(static_cast<double>(q) * scale);
+    }
+    if (with_intensity) intensity[k] = *r++;
+    if (with_time) {
+      time_ticks[k] = get_u16(r);
+      r += 2;
+    }
+  }
+}
+
+}  // namespace
+
 // Decodes straight into the slot; parse_cloud_fragment() guaranteed first + count <= total.
 void PointCloudReassembler::decode_points(std::size_t index, const CloudFragmentHeader& h,
                                           std::span<const std::uint8_t> payload) {
-  const std::size_t base = static_cast<std::size_t>(index) * storage_.max_points;
-  const std::size_t first = static_cast<std::size_t>(h.fragment_index) * h.points_per_fragment;
-  const bool wide = (h.flags & cloud_flags::kCoordsInt32) != 0;
+  const std::size_t first = static_cast<std::size_t>(index) * storage_.max_points +
+                            static_cast<std::size_t>(h.fragment_index) * h.points_per_fragment;
   const double scale = static_cast<double>(h.info.scale_m);
-  const std::uint8_t* r = payload.data();
-  for (std::size_t k = 0; k < h.points_in_fragment; ++k) {
-    const std::size_t dst = base + first + k;
-    for (std::size_t axis = 0; axis < 3; ++axis) {
-      std::int32_t q = 0;
-      if (wide) {
-        q = static_cast<std::int32_t>(get_u32(r));
-        r += 4;
-      } else {
-        q = static_cast<std::int16_t>(get_u16(r));
-        r += 2;
-      }
-      storage_.xyz[3 * dst + axis] = static_cast<float>(static_cast<double>(q) * scale);
-    }
-    if (h.flags & cloud_flags::kIntensity) storage_.intensity[dst] = *r++;
-    if (h.flags & cloud_flags::kPointTime) {
-      storage_.time_ticks[dst] = get_u16(r);
-      r += 2;
-    }
+  float* xyz = storage_.xyz.data() + 3 * first;
+  std::uint8_t* intensity = storage_.intensity.data() + first;
+  std::uint16_t* time_ticks = storage_.time_ticks.data() + first;
+  if (h.flags & cloud_flags::kCoordsInt32) {
+    decode_fragment<true>(payload.data(), h.points_in_fragment, h.flags, scale, xyz, intensity, time_ticks);
+  } else {
+    decode_fragment<false>(payload.data(), h.points_in_fragment, h.flags, scale, xyz, intensity, time_ticks);
   }
 }
 
