@@ -12,6 +12,7 @@
 #include <limits>
 #include <memory>
 #include <type_traits>
+#include <utility>
 
 namespace v2xloc::cloud_io {
 namespace {
@@ -373,19 +374,19 @@ bool read_compressed(std::span<const std::uint8_t> bytes, const Header& h, Point
   return true;
 }
 
-// One field of the byte-plane layout as float: byte k of value e at planes[k * values + e], the
-// value scaled as the other readers' getters do (scale x stored, in double, then float).
+// One single-valued field of the byte-plane layout as float: byte k of value i at
+// planes[k * n + i], the value scaled as the other readers' getters do (scale x stored, in double,
+// then float). The byte gather is unrolled at compile time.
 template <typename T>
-void unshuffle_column(const std::uint8_t* planes, std::size_t values, std::size_t count, double scale,
-                      std::size_t n, float* dst, std::size_t stride) {
+void unshuffle_column(const std::uint8_t* planes, std::size_t n, double scale, float* dst, std::size_t stride) {
   using Bits = std::conditional_t<sizeof(T) == 1, std::uint8_t,
                std::conditional_t<sizeof(T) == 2, std::uint16_t,
                std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>>>;
+  const auto gather = [&]<std::size_t... K>(std::size_t i, std::index_sequence<K...>) {
+    return static_cast<Bits>((Bits{0} | ... | static_cast<Bits>(static_cast<Bits>(planes[K * n + i]) << (8 * K))));
+  };
   for (std::size_t i = 0; i < n; ++i) {
-    Bits bits = 0;
-    for (std::size_t k = 0; k < sizeof(T); ++k) {
-      bits |= static_cast<Bits>(static_cast<Bits>(planes[k * values + i * count]) << (8 * k));
-    }
+    const Bits bits = gather(i, std::make_index_sequence<sizeof(T)>{});
     dst[i * stride] = static_cast<float>(scale * static_cast<double>(std::bit_cast<T>(bits)));
   }
 }
@@ -404,20 +405,19 @@ bool read_shuffled_zlib(std::span<const std::uint8_t> bytes, const Header& h, Po
   // the inflate).
   const std::size_t n = static_cast<std::size_t>(h.points);
   fill_cloud_by_column(h, n, [&](int fi, float* dst, std::size_t stride) {
-    const Field& f = h.fields[static_cast<std::size_t>(fi)];
+    const Field& f = h.fields[static_cast<std::size_t>(fi)];  // a role field: COUNT 1 (parse_header)
     const std::uint8_t* block = planes.get() + h.points * f.byte_offset;
-    const std::size_t values = n * f.count;
     switch (f.scalar) {
-      case Scalar::kI8: return unshuffle_column<std::int8_t>(block, values, f.count, f.scale, n, dst, stride);
-      case Scalar::kU8: return unshuffle_column<std::uint8_t>(block, values, f.count, f.scale, n, dst, stride);
-      case Scalar::kI16: return unshuffle_column<std::int16_t>(block, values, f.count, f.scale, n, dst, stride);
-      case Scalar::kU16: return unshuffle_column<std::uint16_t>(block, values, f.count, f.scale, n, dst, stride);
-      case Scalar::kI32: return unshuffle_column<std::int32_t>(block, values, f.count, f.scale, n, dst, stride);
-      case Scalar::kU32: return unshuffle_column<std::uint32_t>(block, values, f.count, f.scale, n, dst, stride);
-      case Scalar::kI64: return unshuffle_column<std::int64_t>(block, values, f.count, f.scale, n, dst, stride);
-      case Scalar::kU64: return unshuffle_column<std::uint64_t>(block, values, f.count, f.scale, n, dst, stride);
-      case Scalar::kF32: return unshuffle_column<float>(block, values, f.count, f.scale, n, dst, stride);
-      case Scalar::kF64: return unshuffle_column<double>(block, values, f.count, f.scale, n, dst, stride);
+      case Scalar::kI8: return unshuffle_column<std::int8_t>(block, n, f.scale, dst, stride);
+      case Scalar::kU8: return unshuffle_column<std::uint8_t>(block, n, f.scale, dst, stride);
+      case Scalar::kI16: return unshuffle_column<std::int16_t>(block, n, f.scale, dst, stride);
+      case Scalar::kU16: return unshuffle_column<std::uint16_t>(block, n, f.scale, dst, stride);
+      case Scalar::kI32: return unshuffle_column<std::int32_t>(block, n, f.scale, dst, stride);
+      case Scalar::kU32: return unshuffle_column<std::uint32_t>(block, n, f.scale, dst, stride);
+      case Scalar::kI64: return unshuffle_column<std::int64_t>(block, n, f.scale, dst, stride);
+      case Scalar::kU64: return unshuffle_column<std::uint64_t>(block, n, f.scale, dst, stride);
+      case Scalar::kF32: return unshuffle_column<float>(block, n, f.scale, dst, stride);
+      case Scalar::kF64: return unshuffle_column<double>(block, n, f.scale, dst, stride);
     }
   }, out);
   return true;
