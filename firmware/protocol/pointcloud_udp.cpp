@@ -165,7 +165,8 @@ CloudStatus PointCloudFragmenter::begin(const CloudFrameInfo& info, const CloudP
 
   // Counting needs only the range check (one compare per coordinate); next() quantizes each
   // sent point once.
-  const float max_abs = largest_quantizable(info.scale_m, info.width);
+  max_abs_ = largest_quantizable(info.scale_m, info.width);
+  const float max_abs = max_abs_;
   for (std::size_t i = 0; i < n; ++i) {
     const float* p = &points.xyz[3 * i];
     if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]))) {
@@ -210,20 +211,20 @@ CloudStatus PointCloudFragmenter::next(std::span<std::uint8_t> out, std::size_t&
   std::uint8_t* w = p + kHeaderBytes;
   const std::size_t n = points_.xyz.size() / 3;
   std::uint32_t packed = 0;
+  const double scale = static_cast<double>(info_.scale_m);
   while (packed < count && source_cursor_ < n) {
     const std::size_t i = source_cursor_++;
-    std::int32_t q[3];
-    bool ok = true;
+    const float* v = &points_.xyz[3 * i];
+    // Within [-max_abs_, max_abs_] (so finite) exactly when quantize_coordinate() accepts the
+    // coordinate, and then it returns this rounding. Other points were counted in begin().
+    if (!(std::fabs(v[0]) <= max_abs_ && std::fabs(v[1]) <= max_abs_ && std::fabs(v[2]) <= max_abs_)) continue;
     for (std::size_t axis = 0; axis < 3; ++axis) {
-      ok = ok && quantize_coordinate(points_.xyz[3 * i + axis], info_.scale_m, info_.width, q[axis]);
-    }
-    if (!ok) continue;  // counted in begin()
-    for (std::size_t axis = 0; axis < 3; ++axis) {
+      const auto q = static_cast<std::int32_t>(round_half_away_to_integer(static_cast<double>(v[axis]) / scale));
       if (info_.width == CoordWidth::kInt16) {
-        put_u16(w, static_cast<std::uint16_t>(static_cast<std::int16_t>(q[axis])));
+        put_u16(w, static_cast<std::uint16_t>(static_cast<std::int16_t>(q)));
         w += 2;
       } else {
-        put_u32(w, static_cast<std::uint32_t>(q[axis]));
+        put_u32(w, static_cast<std::uint32_t>(q));
         w += 4;
       }
     }

@@ -112,6 +112,7 @@ class PointCloudFragmenter {
   CloudPointsView points_{};
   std::uint16_t flags_ = 0;
   std::size_t stride_ = 0;
+  float max_abs_ = 0.0f;  // largest_quantizable() of the frame's scale and width
   std::size_t source_cursor_ = 0;
   std::uint32_t total_points_ = 0;
   std::uint16_t fragment_count_ = 0;

@@ -9,6 +9,7 @@
 #include <random>
 #include <vector>
 
+#include "cloud_test_util.hpp"
 #include "firmware/protocol/pointcloud_udp.hpp"
 #include "firmware/protocol/round_half_away.hpp"
 
@@ -78,6 +79,10 @@ TEST(LargestQuantizable, RangeCheckAgreesWithQuantizeCoordinate) {
       auto agrees = [&](float v) {
         const bool by_range = std::isfinite(v) && std::fabs(v) <= m;
         ASSERT_EQ(quantize_coordinate(v, scale, width, q), by_range) << v << " scale " << scale;
+        // The fragmenter's integer rounding of an accepted coordinate.
+        if (by_range) {
+          ASSERT_EQ(round_half_away_to_integer(static_cast<double>(v) / scale), q) << v;
+        }
       };
       // Both sides of the edge, both signs, then random bit patterns and random values near it.
       for (const float e : {m, std::nextafter(m, 0.0f), std::nextafter(m, 1e38f), 0.0f, 1e38f}) {
@@ -87,6 +92,59 @@ TEST(LargestQuantizable, RangeCheckAgreesWithQuantizeCoordinate) {
       for (int i = 0; i < 20000; ++i) {
         agrees(std::bit_cast<float>(static_cast<std::uint32_t>(rng())));
         agrees(m * std::uniform_real_distribution<float>(-1.01f, 1.01f)(rng));
+      }
+    }
+  }
+}
+
+// The payload bytes as the fragmenter wrote them before it quantized each point once: every
+// coordinate through std::round, a point sent only when all three fit.
+std::vector<std::uint8_t> reference_payload(const test::SyntheticCloud& c, float scale, CoordWidth width) {
+  const double limit = width == CoordWidth::kInt16 ? 32767.0 : 2147483647.0;
+  std::vector<std::uint8_t> out;
+  for (std::size_t i = 0; i < c.xyz.size() / 3; ++i) {
+    std::int64_t q[3];
+    bool ok = true;
+    for (int a = 0; a < 3; ++a) {
+      const float v = c.xyz[3 * i + a];
+      const double steps = std::round(static_cast<double>(v) / static_cast<double>(scale));
+      ok = ok && std::isfinite(v) && steps <= limit && steps >= -limit;
+      q[a] = ok ? static_cast<std::int64_t>(steps) : 0;
+    }
+    if (!ok) continue;
+    for (const std::int64_t v : q) {
+      for (int b = 0; b < (width == CoordWidth::kInt16 ? 2 : 4); ++b) out.push_back(static_cast<std::uint8_t>(v >> (8 * b)));
+    }
+    out.push_back(c.intensity[i]);
+    out.push_back(static_cast<std::uint8_t>(c.time_ticks[i]));
+    out.push_back(static_cast<std::uint8_t>(c.time_ticks[i] >> 8));
+  }
+  return out;
+}
+
+TEST(Fragmenter, PayloadBytesEqualTheStdRoundEncoding) {
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  for (const CoordWidth width : {CoordWidth::kInt16, CoordWidth::kInt32}) {
+    for (const float scale : {0.002f, 0.001f, 0.0137f}) {
+      // Coordinates across and beyond the int16 range, with ties, edges, NaN and inf mixed in.
+      test::SyntheticCloud c = test::make_cloud(5000, 80.0f, 17);
+      const float m = largest_quantizable(scale, width);
+      const float specials[] = {nan, inf, -inf, m, -m, std::nextafter(m, inf), -std::nextafter(m, inf),
+                                0.5f * scale, -0.5f * scale, 1.5f * scale, -2.5f * scale, -0.0f};
+      for (std::size_t k = 0; k < c.xyz.size(); k += 7) c.xyz[k] = specials[(k / 7) % std::size(specials)];
+      test::Datagrams datagrams;
+      PointCloudFragmenter used;
+      ASSERT_EQ(test::fragment_all(test::make_info(1, width, scale), c.view(), datagrams, &used), CloudStatus::kOk);
+      std::vector<std::uint8_t> payload;
+      for (const auto& d : datagrams) {
+        payload.insert(payload.end(), d.begin() + pointcloud_wire::kHeaderBytes, d.end() - pointcloud_wire::kTrailerBytes);
+      }
+      const std::vector<std::uint8_t> expected = reference_payload(c, scale, width);
+      EXPECT_EQ(payload, expected);
+      EXPECT_EQ(used.total_points(), expected.size() / used.point_stride_bytes());
+      EXPECT_GT(used.dropped_non_finite(), 0u);
+      if (width == CoordWidth::kInt16) {
+        EXPECT_GT(used.dropped_out_of_range(), 0u);
       }
     }
   }
