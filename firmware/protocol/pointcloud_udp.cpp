@@ -443,12 +443,15 @@ void decode_fragment(const std::uint8_t* r, std::size_t count, std::uint16_t fla
                      std::uint8_t* intensity, std::uint16_t* time_ticks) {
   const bool with_intensity = (flags & cloud_flags::kIntensity) != 0;
   const bool with_time = (flags & cloud_flags::kPointTime) != 0;
+  const auto coordinate = [&r, scale] {
+    const std::int32_t q = Wide ? static_cast<std::int32_t>(get_u32(r)) : static_cast<std::int16_t>(get_u16(r));
+    r += Wide ? 4 : 2;
+    return static_cast<float>(static_cast<double>(q) * scale);
+  };
   for (std::size_t k = 0; k < count; ++k) {
-    for (std::size_t axis = 0; axis < 3; ++axis) {
-      const std::int32_t q = Wide ? static_cast<std::int32_t>(get_u32(r)) : static_cast<std::int16_t>(get_u16(r));
-      r += Wide ? 4 : 2;
-      xyz[3 * k + axis] = static_cast<float>(static_cast<double>(q) * scale);
-    }
+    xyz[3 * k] = coordinate();
+    xyz[3 * k + 1] = coordinate();
+    xyz[3 * k + 2] = coordinate();
     if (with_intensity) intensity[k] = *r++;
     if (with_time) {
       time_ticks[k] = get_u16(r);
