@@ -397,7 +397,13 @@ bool read_shuffled_zlib(std::span<const std::uint8_t> bytes, const Header& h, Po
   if (!read_block_sizes(bytes, h, "binary_shuffled_zlib", kMaxZlibExpansion, b, error)) return false;
   const std::uint32_t raw = b.raw;
   // Not value-initialised: zlib writes every byte (checked), and zeroing 1 MB per scan showed.
-  const std::unique_ptr<std::uint8_t[]> planes(new std::uint8_t[raw]);
+  // Kept per thread: a fresh 1-2 MB block per cloud came back from the kernel page by page.
+  thread_local std::unique_ptr<std::uint8_t[]> planes;
+  thread_local std::size_t planes_capacity = 0;
+  if (raw > planes_capacity) {
+    planes.reset(new std::uint8_t[raw]);
+    planes_capacity = raw;
+  }
   if (raw > 0 && zlib_decompress({b.data, b.compressed}, {planes.get(), raw}) != raw) {
     error = "corrupt zlib data in binary_shuffled_zlib block"; return false;
   }
