@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "firmware/protocol/crc32.hpp"
+#include "firmware/protocol/round_half_away.hpp"
 #include "hal/little_endian.hpp"
 
 namespace v2xloc::protocol {
@@ -112,22 +113,32 @@ std::size_t cloud_point_stride(std::uint16_t flags) {
 bool quantize_coordinate(float value_m, float scale_m, CoordWidth width, std::int32_t& out) {
   if (!std::isfinite(value_m)) return false;
   const double limit = width == CoordWidth::kInt16 ? kInt16Limit : kInt32Limit;
-  const double steps = std::round(static_cast<double>(value_m) / static_cast<double>(scale_m));
+  const double steps = round_half_away(static_cast<double>(value_m) / static_cast<double>(scale_m));
   if (!(steps <= limit && steps >= -limit)) return false;
   out = static_cast<std::int32_t>(steps);
   return true;
 }
 
+// value -> round(value / scale) never decreases as value grows (IEEE division and rounding are
+// monotonic) and is odd, so the accepted values form one interval [-m, m]. Bisect m over the bit
+// patterns of the non-negative floats, which are ordered as their values: 0 is always accepted,
+// infinity never.
+float largest_quantizable(float scale_m, CoordWidth width) {
+  std::uint32_t accepted = 0, refused = 0x7F800000u;
+  std::int32_t q = 0;
+  while (refused - accepted > 1) {
+    const std::uint32_t mid = accepted + (refused - accepted) / 2;
+    if (quantize_coordinate(std::bit_cast<float>(mid), scale_m, width, q)) {
+      accepted = mid;
+    } else {
+      refused = mid;
+    }
+  }
+  return std::bit_cast<float>(accepted);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Fragmenter
-
-bool PointCloudFragmenter::point_is_sendable(std::size_t i) const {
-  std::int32_t q = 0;
-  for (std::size_t axis = 0; axis < 3; ++axis) {
-    if (!quantize_coordinate(points_.xyz[3 * i + axis], info_.scale_m, info_.width, q)) return false;
-  }
-  return true;
-}
 
 CloudStatus PointCloudFragmenter::begin(const CloudFrameInfo& info, const CloudPointsView& points,
                                         std::size_t max_datagram_bytes) {
@@ -152,12 +163,15 @@ CloudStatus PointCloudFragmenter::begin(const CloudFrameInfo& info, const CloudP
   if (max_datagram_bytes > kMaxDatagramBytes) max_datagram_bytes = kMaxDatagramBytes;
   if (max_datagram_bytes < kHeaderBytes + kTrailerBytes + stride_) return CloudStatus::kBufferTooSmall;
 
+  // Counting needs only the range check (one compare per coordinate); next() quantizes each
+  // sent point once.
+  max_abs_ = largest_quantizable(info.scale_m, info.width);
+  const float max_abs = max_abs_;
   for (std::size_t i = 0; i < n; ++i) {
-    bool finite = true;
-    for (std::size_t axis = 0; axis < 3; ++axis) finite = finite && std::isfinite(points.xyz[3 * i + axis]);
-    if (!finite) {
+    const float* p = &points.xyz[3 * i];
+    if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]))) {
       ++dropped_non_finite_;
-    } else if (!point_is_sendable(i)) {
+    } else if (std::fabs(p[0]) > max_abs || std::fabs(p[1]) > max_abs || std::fabs(p[2]) > max_abs) {
       ++dropped_out_of_range_;
     } else {
       ++total_points_;
@@ -197,20 +211,20 @@ CloudStatus PointCloudFragmenter::next(std::span<std::uint8_t> out, std::size_t&
   std::uint8_t* w = p + kHeaderBytes;
   const std::size_t n = points_.xyz.size() / 3;
   std::uint32_t packed = 0;
+  const double scale = static_cast<double>(info_.scale_m);
   while (packed < count && source_cursor_ < n) {
     const std::size_t i = source_cursor_++;
-    std::int32_t q[3];
-    bool ok = true;
+    const float* v = &points_.xyz[3 * i];
+    // Within [-max_abs_, max_abs_] (so finite) exactly when quantize_coordinate() accepts the
+    // coordinate, and then it returns this rounding. Other points were counted in begin().
+    if (!(std::fabs(v[0]) <= max_abs_ && std::fabs(v[1]) <= max_abs_ && std::fabs(v[2]) <= max_abs_)) continue;
     for (std::size_t axis = 0; axis < 3; ++axis) {
-      ok = ok && quantize_coordinate(points_.xyz[3 * i + axis], info_.scale_m, info_.width, q[axis]);
-    }
-    if (!ok) continue;  // counted in begin()
-    for (std::size_t axis = 0; axis < 3; ++axis) {
+      const auto q = static_cast<std::int32_t>(round_half_away_to_integer(static_cast<double>(v[axis]) / scale));
       if (info_.width == CoordWidth::kInt16) {
-        put_u16(w, static_cast<std::uint16_t>(static_cast<std::int16_t>(q[axis])));
+        put_u16(w, static_cast<std::uint16_t>(static_cast<std::int16_t>(q)));
         w += 2;
       } else {
-        put_u32(w, static_cast<std::uint32_t>(q[axis]));
+        put_u32(w, static_cast<std::uint32_t>(q));
         w += 4;
       }
     }
@@ -420,32 +434,47 @@ void PointCloudReassembler::open_slot(std::size_t index, const CloudFragmentHead
   for (std::size_t w = 0; w < bitmap_words(); ++w) storage_.bitmaps[index * bitmap_words() + w] = 0;
 }
 
+namespace {
+
+// One fragment's points, with the coordinate width a template parameter so the per-coordinate
+// loop has no branch on it (decoding was a tenth of the firmware's non-localizer time).
+template <bool Wide>
+void decode_fragment(const std::uint8_t* r, std::size_t count, std::uint16_t flags, double scale, float* xyz,
+                     std::uint8_t* intensity, std::uint16_t* time_ticks) {
+  const bool with_intensity = (flags & cloud_flags::kIntensity) != 0;
+  const bool with_time = (flags & cloud_flags::kPointTime) != 0;
+  const auto coordinate = [&r, scale] {
+    const std::int32_t q = Wide ? static_cast<std::int32_t>(get_u32(r)) : static_cast<std::int16_t>(get_u16(r));
+    r += Wide ? 4 : 2;
+    return static_cast<float>(static_cast<double>(q) * scale);
+  };
+  for (std::size_t k = 0; k < count; ++k) {
+    xyz[3 * k] = coordinate();
+    xyz[3 * k + 1] = coordinate();
+    xyz[3 * k + 2] = coordinate();
+    if (with_intensity) intensity[k] = *r++;
+    if (with_time) {
+      time_ticks[k] = get_u16(r);
+      r += 2;
+    }
+  }
+}
+
+}  // namespace
+
 // Decodes straight into the slot; parse_cloud_fragment() guaranteed first + count <= total.
 void PointCloudReassembler::decode_points(std::size_t index, const CloudFragmentHeader& h,
                                           std::span<const std::uint8_t> payload) {
-  const std::size_t base = static_cast<std::size_t>(index) * storage_.max_points;
-  const std::size_t first = static_cast<std::size_t>(h.fragment_index) * h.points_per_fragment;
-  const bool wide = (h.flags & cloud_flags::kCoordsInt32) != 0;
+  const std::size_t first = static_cast<std::size_t>(index) * storage_.max_points +
+                            static_cast<std::size_t>(h.fragment_index) * h.points_per_fragment;
   const double scale = static_cast<double>(h.info.scale_m);
-  const std::uint8_t* r = payload.data();
-  for (std::size_t k = 0; k < h.points_in_fragment; ++k) {
-    const std::size_t dst = base + first + k;
-    for (std::size_t axis = 0; axis < 3; ++axis) {
-      std::int32_t q = 0;
-      if (wide) {
-        q = static_cast<std::int32_t>(get_u32(r));
-        r += 4;
-      } else {
-        q = static_cast<std::int16_t>(get_u16(r));
-        r += 2;
-      }
-      storage_.xyz[3 * dst + axis] = static_cast<float>(static_cast<double>(q) * scale);
-    }
-    if (h.flags & cloud_flags::kIntensity) storage_.intensity[dst] = *r++;
-    if (h.flags & cloud_flags::kPointTime) {
-      storage_.time_ticks[dst] = get_u16(r);
-      r += 2;
-    }
+  float* xyz = storage_.xyz.data() + 3 * first;
+  std::uint8_t* intensity = storage_.intensity.data() + first;
+  std::uint16_t* time_ticks = storage_.time_ticks.data() + first;
+  if (h.flags & cloud_flags::kCoordsInt32) {
+    decode_fragment<true>(payload.data(), h.points_in_fragment, h.flags, scale, xyz, intensity, time_ticks);
+  } else {
+    decode_fragment<false>(payload.data(), h.points_in_fragment, h.flags, scale, xyz, intensity, time_ticks);
   }
 }
 

@@ -86,6 +86,10 @@ struct CloudPointsView {
 // Quantize one coordinate; false when not finite or outside the symmetric range of `width`.
 bool quantize_coordinate(float value_m, float scale_m, CoordWidth width, std::int32_t& out);
 
+// For a finite scale_m > 0: the largest m such that quantize_coordinate() accepts exactly the
+// values with |value| <= m (the accepted values are one interval, see the definition).
+float largest_quantizable(float scale_m, CoordWidth width);
+
 // Splits one frame into datagrams. All fragments but the last carry points_per_fragment points.
 // Points that are not finite or fall outside the quantization range are dropped and counted;
 // total_points on the wire is the number actually sent.
@@ -104,12 +108,11 @@ class PointCloudFragmenter {
   std::size_t point_stride_bytes() const { return stride_; }
 
  private:
-  bool point_is_sendable(std::size_t i) const;
-
   CloudFrameInfo info_{};
   CloudPointsView points_{};
   std::uint16_t flags_ = 0;
   std::size_t stride_ = 0;
+  float max_abs_ = 0.0f;  // largest_quantizable() of the frame's scale and width
   std::size_t source_cursor_ = 0;
   std::uint32_t total_points_ = 0;
   std::uint16_t fragment_count_ = 0;

@@ -81,7 +81,7 @@ bool ShareDigestBuilder::add(std::span<const std::uint8_t> datagram) {
              h.info.frame_seq != first_.info.frame_seq || h.fragment_count != first_.fragment_count) {
     return false;
   }
-  scratch_[h.fragment_index] = Entry{fragment_digest(payload), true};
+  scratch_[h.fragment_index] = Entry{hash_(payload), true};
   return true;
 }
 

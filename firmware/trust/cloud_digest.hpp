@@ -37,12 +37,17 @@ class ShareDigestBuilder {
     Digest digest{};
     bool present = false;
   };
-  explicit ShareDigestBuilder(std::span<Entry> scratch) : scratch_(scratch) {}
+  // Hashes a fragment's payload: fragment_digest(), or any other SHA-256 of it (a host sender may
+  // pass a hardware-accelerated one).
+  using PayloadHash = Digest (*)(std::span<const std::uint8_t>);
+  explicit ShareDigestBuilder(std::span<Entry> scratch, PayloadHash hash = fragment_digest)
+      : scratch_(scratch), hash_(hash) {}
   bool add(std::span<const std::uint8_t> datagram);
   bool finish(protocol::ReassembledCloud& frame, Digest& out) const;
 
  private:
   std::span<Entry> scratch_;
+  PayloadHash hash_;
   protocol::CloudFragmentHeader first_{};
   bool started_ = false;
 };

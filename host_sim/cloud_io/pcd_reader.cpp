@@ -7,9 +7,12 @@
 #include "host_sim/cloud_io/detail.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <type_traits>
+#include <utility>
 
 namespace v2xloc::cloud_io {
 namespace {
@@ -213,33 +216,37 @@ bool parse_header(std::span<const std::uint8_t> bytes, Header& h, std::string& e
   return true;
 }
 
-// Fills `out` from a getter value(point, field_index) -> double.
-template <typename Getter>
-void fill_cloud(const Header& h, std::size_t n, Getter&& value, PointCloud& out) {
+// Fills `out` one field at a time: column(field_index, dst, stride) writes the field's n values
+// as float to dst[0], dst[stride], ... (stride 3 for x y z and normals, 1 for the rest).
+template <typename Column>
+void fill_cloud_by_column(const Header& h, std::size_t n, Column&& column, PointCloud& out) {
+  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float));
   out.clear();
   out.points.resize(n);
   const int* rf = h.role_field;
-  for (std::size_t i = 0; i < n; ++i) {
-    out.points[i] = Eigen::Vector3f(static_cast<float>(value(i, rf[kX])),
-                                    static_cast<float>(value(i, rf[kY])),
-                                    static_cast<float>(value(i, rf[kZ])));
-  }
+  float* xyz = reinterpret_cast<float*>(out.points.data());
+  for (int axis = 0; axis < 3; ++axis) column(rf[kX + axis], xyz + axis, 3);
   if (rf[kIntensity] >= 0) {
     out.intensity.resize(n);
-    for (std::size_t i = 0; i < n; ++i) out.intensity[i] = static_cast<float>(value(i, rf[kIntensity]));
+    column(rf[kIntensity], out.intensity.data(), 1);
   }
   if (rf[kTime] >= 0) {
     out.time.resize(n);
-    for (std::size_t i = 0; i < n; ++i) out.time[i] = static_cast<float>(value(i, rf[kTime]));
+    column(rf[kTime], out.time.data(), 1);
   }
   if (rf[kNx] >= 0 && rf[kNy] >= 0 && rf[kNz] >= 0) {
     out.normals.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      out.normals[i] = Eigen::Vector3f(static_cast<float>(value(i, rf[kNx])),
-                                       static_cast<float>(value(i, rf[kNy])),
-                                       static_cast<float>(value(i, rf[kNz])));
-    }
+    float* normals = reinterpret_cast<float*>(out.normals.data());
+    for (int axis = 0; axis < 3; ++axis) column(rf[kNx + axis], normals + axis, 3);
   }
+}
+
+// Fills `out` from a getter value(point, field_index) -> double.
+template <typename Getter>
+void fill_cloud(const Header& h, std::size_t n, Getter&& value, PointCloud& out) {
+  fill_cloud_by_column(h, n, [&](int f, float* dst, std::size_t stride) {
+    for (std::size_t i = 0; i < n; ++i) dst[i * stride] = static_cast<float>(value(i, f));
+  }, out);
 }
 
 bool read_ascii(std::span<const std::uint8_t> bytes, const Header& h, PointCloud& out,
@@ -367,24 +374,57 @@ bool read_compressed(std::span<const std::uint8_t> bytes, const Header& h, Point
   return true;
 }
 
+// One single-valued field of the byte-plane layout as float: byte k of value i at
+// planes[k * n + i], the value scaled as the other readers' getters do (scale x stored, in double,
+// then float). The byte gather is unrolled at compile time.
+template <typename T>
+void unshuffle_column(const std::uint8_t* planes, std::size_t n, double scale, float* dst, std::size_t stride) {
+  using Bits = std::conditional_t<sizeof(T) == 1, std::uint8_t,
+               std::conditional_t<sizeof(T) == 2, std::uint16_t,
+               std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>>>;
+  const auto gather = [&]<std::size_t... K>(std::size_t i, std::index_sequence<K...>) {
+    return static_cast<Bits>((Bits{0} | ... | static_cast<Bits>(static_cast<Bits>(planes[K * n + i]) << (8 * K))));
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    const Bits bits = gather(i, std::make_index_sequence<sizeof(T)>{});
+    dst[i * stride] = static_cast<float>(scale * static_cast<double>(std::bit_cast<T>(bits)));
+  }
+}
+
 bool read_shuffled_zlib(std::span<const std::uint8_t> bytes, const Header& h, PointCloud& out,
                         std::string& error) {
   CompressedBlock b;
   if (!read_block_sizes(bytes, h, "binary_shuffled_zlib", kMaxZlibExpansion, b, error)) return false;
   const std::uint32_t raw = b.raw;
   // Not value-initialised: zlib writes every byte (checked), and zeroing 1 MB per scan showed.
-  const std::unique_ptr<std::uint8_t[]> planes(new std::uint8_t[raw]);
+  // Kept per thread: a fresh 1-2 MB block per cloud came back from the kernel page by page.
+  thread_local std::unique_ptr<std::uint8_t[]> planes;
+  thread_local std::size_t planes_capacity = 0;
+  if (raw > planes_capacity) {
+    planes.reset(new std::uint8_t[raw]);
+    planes_capacity = raw;
+  }
   if (raw > 0 && zlib_decompress({b.data, b.compressed}, {planes.get(), raw}) != raw) {
     error = "corrupt zlib data in binary_shuffled_zlib block"; return false;
   }
-  // Value e of field f: byte k at (block start) + k * (values in the block) + e.
-  fill_cloud(h, static_cast<std::size_t>(h.points), [&](std::size_t i, int fi) {
-    const Field& f = h.fields[static_cast<std::size_t>(fi)];
+  // Field by field with the element type fixed per loop (a per-value type switch cost more than
+  // the inflate).
+  const std::size_t n = static_cast<std::size_t>(h.points);
+  fill_cloud_by_column(h, n, [&](int fi, float* dst, std::size_t stride) {
+    const Field& f = h.fields[static_cast<std::size_t>(fi)];  // a role field: COUNT 1 (parse_header)
     const std::uint8_t* block = planes.get() + h.points * f.byte_offset;
-    const std::size_t values = h.points * f.count;
-    std::uint8_t value[8];
-    for (std::size_t k = 0; k < f.size; ++k) value[k] = block[k * values + i * f.count];
-    return f.scale * detail::load_scalar(f.scalar, value);
+    switch (f.scalar) {
+      case Scalar::kI8: return unshuffle_column<std::int8_t>(block, n, f.scale, dst, stride);
+      case Scalar::kU8: return unshuffle_column<std::uint8_t>(block, n, f.scale, dst, stride);
+      case Scalar::kI16: return unshuffle_column<std::int16_t>(block, n, f.scale, dst, stride);
+      case Scalar::kU16: return unshuffle_column<std::uint16_t>(block, n, f.scale, dst, stride);
+      case Scalar::kI32: return unshuffle_column<std::int32_t>(block, n, f.scale, dst, stride);
+      case Scalar::kU32: return unshuffle_column<std::uint32_t>(block, n, f.scale, dst, stride);
+      case Scalar::kI64: return unshuffle_column<std::int64_t>(block, n, f.scale, dst, stride);
+      case Scalar::kU64: return unshuffle_column<std::uint64_t>(block, n, f.scale, dst, stride);
+      case Scalar::kF32: return unshuffle_column<float>(block, n, f.scale, dst, stride);
+      case Scalar::kF64: return unshuffle_column<double>(block, n, f.scale, dst, stride);
+    }
   }, out);
   return true;
 }

@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <span>
 
 #include "host_sim/canlog/candump_log.hpp"
 #include "firmware/trust/cloud_digest.hpp"
+#include "host_sim/replay/host_sha256.hpp"
 
 namespace v2xloc::sim::replay {
 namespace {
@@ -62,9 +64,9 @@ std::int64_t EventStream::frame_time_ns(int i) const { return seconds_to_ns(read
 bool EventStream::fragment(protocol::CloudMessageType type, std::uint32_t sender_id, std::uint32_t seq,
                            std::int64_t stamp_ns, const Eigen::Isometry3d& pose, const cloud_io::PointCloud& cloud,
                            bool with_times, WireEvent& ev, std::string& error) const {
-  std::vector<float> xyz;
-  xyz.reserve(cloud.points.size() * 3);
-  for (const Eigen::Vector3f& p : cloud.points) xyz.insert(xyz.end(), {p.x(), p.y(), p.z()});
+  // The points are already packed x y z floats: the fragmenter reads them in place.
+  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float));
+  const std::span<const float> xyz(reinterpret_cast<const float*>(cloud.points.data()), 3 * cloud.points.size());
   std::vector<std::uint16_t> times;
   if (with_times && cloud.has_time()) {
     times.reserve(cloud.time.size());
@@ -118,7 +120,7 @@ bool EventStream::map_share(const MapCloudInfo& info, std::uint32_t id, std::uin
   if (signer == nullptr || !sign_shares_) return true;
   // Sign what the receiver will hash: the payload bytes of our own fragments, per fragment.
   std::vector<trust::ShareDigestBuilder::Entry> scratch(ev.datagrams.size());
-  trust::ShareDigestBuilder builder(scratch);
+  trust::ShareDigestBuilder builder(scratch, host_sha256);
   for (const auto& d : ev.datagrams) {
     if (!builder.add(d)) {
       error = "map share fragment did not parse for signing";
