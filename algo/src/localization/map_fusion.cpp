@@ -10,6 +10,14 @@ namespace v2xloc {
 
 namespace {
 constexpr auto kMaxProbes = static_cast<std::uint32_t>(config::kVoxelMaxProbes);
+
+// Whether the j-th of n items is one of k (<= n) kept evenly along the order: item j is kept when
+// floor(j k / n) steps up at j + 1, which happens exactly k times.
+bool kept_evenly(std::size_t j, std::size_t n, std::size_t k) {
+  const auto jj = static_cast<std::uint64_t>(j), nn = static_cast<std::uint64_t>(n), kk = static_cast<std::uint64_t>(k);
+  return (jj + 1) * kk / nn > jj * kk / nn;
+}
+
 }  // namespace
 
 MapFusion::MapFusion(const MapFusionParams& params) : params_(params) {}
@@ -188,8 +196,15 @@ void MapFusion::stage_candidate(const Mat4d& world_T_sensor, std::span<const Vec
     if (!staging_.push_back((R * p.cast<double>() + t).cast<float>())) ++r.capacity_dropped;
   }
   candidate_.clear();
-  const VoxelDownsampleResult ds =
-      downsample_.run(staging_.span(), static_cast<float>(params_.voxel_size), candidate_);
+  const auto voxel = static_cast<float>(params_.voxel_size);
+  VoxelDownsampleResult ds = downsample_.run(staging_.span(), voxel, candidate_);
+  // More voxels than the candidate holds: the output would be cut in scan order (whole sectors
+  // lost); the cloud is downsampled again with the voxel doubled instead (params).
+  for (std::uint32_t k = 0; k < params_.max_coarsen_steps && ds.output_overflow > 0; ++k) {
+    ds = downsample_.run(staging_.span(), voxel * static_cast<float>(2u << k), candidate_);
+    ++r.coarsened;
+  }
+  if (r.coarsened > 0) ++counters_.clouds_coarsened;
   r.capacity_dropped += ds.output_overflow + ds.hash_overflow + ds.range_overflow;
   counters_.non_finite_dropped += r.non_finite_dropped;
 }
@@ -232,11 +247,58 @@ bool MapFusion::passes_consistency(std::size_t own_slot, bool trusted, MapInsert
   return true;
 }
 
+std::uint32_t MapFusion::cut_sources(std::size_t share, std::size_t except) {
+  bool over[config::kMaxMapSources] = {};
+  bool any = false;
+  for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
+    over[s] = s != except && sources_[s].active && sources_[s].points > share;
+    any |= over[s];
+    if (over[s] && sources_[s].trusted) clear_source_cells(s);  // marked again from the kept points
+  }
+  if (!any) return 0;
+  std::size_t seen[config::kMaxMapSources] = {};
+  std::size_t n = 0;  // stable compaction, as remove_source_points
+  for (std::size_t i = 0; i < num_points_; ++i) {
+    const std::uint8_t s = point_source_[i];
+    if (over[s] && !kept_evenly(seen[s]++, sources_[s].points, share)) continue;
+    points_[n] = points_[i];
+    point_source_[n] = s;
+    for (int c = 0; c < 3; ++c) point_cells_[n][c] = point_cells_[i][c];
+    ++n;
+  }
+  const auto dropped = static_cast<std::uint32_t>(num_points_ - n);
+  num_points_ = n;
+  for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
+    if (!over[s]) continue;
+    sources_[s].points = static_cast<std::uint32_t>(share);
+    if (sources_[s].trusted) mark_source_cells(s, 0);
+  }
+  return dropped;
+}
+
+void MapFusion::make_room(std::size_t slot, MapInsertResult& r) {
+  std::size_t sources = 1;  // this one (its slot is not active yet when it is new)
+  for (std::size_t s = 0; s < config::kMaxMapSources; ++s) sources += (s != slot && sources_[s].active) ? 1u : 0u;
+  r.share_trimmed = cut_sources(capacity() / sources, slot);
+  counters_.points_trimmed_share += r.share_trimmed;
+  // The others now hold <= a share each: the room is >= a share (more when some hold less).
+  const std::size_t room = capacity() - std::min(num_points_, capacity());
+  const std::size_t n = candidate_.size();
+  if (n <= room) return;
+  std::size_t kept = 0;
+  for (std::size_t j = 0; j < n; ++j) {
+    if (kept_evenly(j, n, room)) candidate_[kept++] = candidate_[j];
+  }
+  candidate_.resize(kept);
+  r.capacity_dropped += static_cast<std::uint32_t>(n - kept);
+}
+
 std::uint32_t MapFusion::store_candidate(std::size_t slot, bool trusted, MapInsertResult& r) {
+  if (candidate_.size() + num_points_ > capacity()) make_room(slot, r);
   const std::size_t first = num_points_;
   std::uint32_t stored = 0;
   for (const Vec3f& p : candidate_) {
-    if (num_points_ == config::kMaxMapPoints) {
+    if (num_points_ >= capacity()) {
       ++r.capacity_dropped;
       continue;
     }

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <random>
 #include <vector>
@@ -165,6 +166,7 @@ TEST(MapFusion, CapacityAndSourceSlotOverflowCounted) {
   MapFusionParams params;
   params.check_consistency = false;
   params.voxel_size = 0.2;
+  params.max_coarsen_steps = 0;  // cut, not re-voxelised (FullMapSharedEvenlyBetweenSources, below)
   MapFusion& map = fresh_map(params);
   // One flat cloud larger than the map: 0.2 m grid over N x N cells.
   const int n = static_cast<int>(std::sqrt(double(config::kMaxMapPoints))) + 20;
@@ -203,6 +205,87 @@ TEST(MapFusion, CapacityAndSourceSlotOverflowCounted) {
   infra_present = 0;
   for (const MapSourceInfo& s : map.sources()) infra_present += (s.active && s.trusted) ? 1u : 0u;
   EXPECT_EQ(infra_present, half);
+}
+
+// Share of a full map: every source gets capacity / sources, the earlier ones thinned evenly to
+// make room (not the first source whole and the later ones nothing); all drops counted.
+TEST(MapFusion, FullMapSharedEvenlyBetweenSources) {
+  MapFusionParams params;
+  params.check_consistency = false;
+  params.voxel_size = 0.2;
+  params.max_points = 300;
+  MapFusion& map = fresh_map(params);
+  // Three flat 0.2 m grids of 400 points each, apart (one voxel per point).
+  auto grid = [](float x0) {
+    std::vector<Vec3f> g;
+    for (int i = 0; i < 20; ++i)
+      for (int j = 0; j < 20; ++j) g.emplace_back(x0 + 0.2f * i + 0.1f, 0.2f * j + 0.1f, 0.0f);
+    return g;
+  };
+  const Pose3d id(Mat4d::Identity());
+  auto r = map.insert(1, 0.0, id, grid(0.0f), true);
+  EXPECT_EQ(r.stored_points, 300u);  // alone: the whole capacity
+  EXPECT_EQ(r.capacity_dropped, 100u);
+  r = map.insert(2, 0.0, id, grid(10.0f), true);
+  EXPECT_EQ(r.stored_points, 150u);
+  EXPECT_EQ(r.share_trimmed, 150u);  // source 1 thinned to its half
+  r = map.insert(3, 0.0, id, grid(20.0f), true);
+  EXPECT_EQ(r.stored_points, 100u);
+  EXPECT_EQ(r.share_trimmed, 100u);  // 1 and 2 thinned to a third each
+  EXPECT_EQ(map.point_count(), 300u);
+  std::uint32_t per_source[4] = {};
+  for (const MapSourceInfo& s : map.sources()) {
+    if (s.active) per_source[s.id] = s.points;
+  }
+  EXPECT_EQ(per_source[1], 100u);
+  EXPECT_EQ(per_source[2], 100u);
+  EXPECT_EQ(per_source[3], 100u);
+  // Kept evenly: the thinned source still spans its whole grid.
+  FixedVector<Vec3f, 1024> out;
+  map.extract(out);
+  float lo = 1e9f, hi = -1e9f;
+  for (const Vec3f& p : out) {
+    if (p.x() < 5.0f) {
+      lo = std::min(lo, p.y());
+      hi = std::max(hi, p.y());
+    }
+  }
+  EXPECT_LT(lo, 0.5f);
+  EXPECT_GT(hi, 3.5f);
+  // A replacement frees the source's points first: it gets its share back, nothing thinned.
+  r = map.insert(1, 1.0, id, grid(0.0f), true);
+  EXPECT_EQ(r.status, MapInsertStatus::kReplaced);
+  EXPECT_EQ(r.stored_points, 100u);
+  EXPECT_EQ(r.share_trimmed, 0u);
+  EXPECT_EQ(map.point_count(), 300u);
+  EXPECT_EQ(map.counters().points_trimmed_share, 250u);
+  EXPECT_EQ(map.counters().points_dropped_capacity, 100u + 250u + 300u + 300u);
+}
+
+// A cloud with more voxels than the map holds is downsampled again with the voxel doubled, not
+// cut in scan order: nothing dropped, and it spans its whole extent.
+TEST(MapFusion, CloudOverTheCapacityIsCoarsenedNotCut) {
+  // Host: the staging buffer holds no more points than the map, so no cloud overflows it.
+  if (config::kMaxScanPoints <= config::kMaxMapPoints) GTEST_SKIP() << "needs more scan than map points (EMBEDDED)";
+  MapFusionParams params;
+  params.check_consistency = false;
+  params.voxel_size = 0.2;
+  MapFusion& map = fresh_map(params);
+  const int n = static_cast<int>(std::sqrt(double(config::kMaxMapPoints))) + 20;  // 0.2 m grid, > capacity
+  std::vector<Vec3f> big;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) big.emplace_back(0.2f * i + 0.1f, 0.2f * j + 0.1f, 0.0f);
+  const auto r = map.insert(1, 0.0, Pose3d(Mat4d::Identity()), big, true);
+  EXPECT_EQ(r.coarsened, 1u);  // 0.4 m: a quarter of the voxels
+  EXPECT_EQ(r.capacity_dropped, 0u);
+  EXPECT_GE(r.stored_points, static_cast<std::uint32_t>(((n + 1) / 2) * ((n + 1) / 2)));  // ~n/2 cells a side
+  EXPECT_LE(r.stored_points, static_cast<std::uint32_t>(((n + 3) / 2) * ((n + 3) / 2)));  // (grid phase)
+  EXPECT_EQ(map.counters().clouds_coarsened, 1u);
+  static FixedVector<Vec3f, config::kMaxMapPoints> out;
+  map.extract(out);
+  float hi = -1e9f;
+  for (const Vec3f& p : out) hi = std::max(hi, p.y());
+  EXPECT_GT(hi, 0.2f * static_cast<float>(n) - 0.5f);  // the last rows are kept
 }
 
 // Consistency before trust: an agent shifted by as little as 0.25 m fits the infrastructure better

@@ -7,6 +7,13 @@
 //   - expire(t) evicts sources older than max_age (a parked agent's old view must not persist);
 //   - at most config::kMaxMapSources sources; a new source takes a free slot or evicts the oldest
 //     source if that one is older than the new cloud, otherwise it is refused (counted);
+//   - a cloud that does not fit the map's free room gets a share of it: capacity / active
+//     sources. Sources above the share are thinned to it and the cloud to what is free, evenly
+//     along their order (deterministic; counted). Appending until full kept the first source
+//     whole and gave later units nothing (EMBEDDED: one 0.2 m infrastructure cloud alone filled
+//     the 8,192-point map). Evenly, not the points nearest the sensor: those are mostly ground
+//     and registration on them failed on every recording. No effect while clouds fit (the host
+//     profile's capacities);
 //   - consistency hook: before a cloud is accepted, its overlap with the other sources is measured
 //     (fraction of its points with another source's point nearby, over the points in the region
 //     the others cover); a source below min_fitness with enough overlap is rejected and counted
@@ -81,6 +88,13 @@ struct MapFusionParams {
   // Sources per role: invented agent ids cannot evict surveyed infrastructure, nor the reverse.
   std::uint32_t max_trusted_sources = config::kMaxMapSources / 2;
   std::uint32_t max_agent_sources = config::kMaxMapSources / 2;
+  // Map points held (the shares divide this); 0 or more than config::kMaxMapPoints: that capacity.
+  std::uint32_t max_points = 0;
+  // A cloud with more voxels than the candidate holds (config::kMaxMapPoints) would be cut in
+  // scan order, dropping whole sectors; it is downsampled again with the voxel doubled, at most
+  // this many times (then cut, counted). EMBEDDED: a 16k-point infrastructure cloud has ~12.6k
+  // voxels at 0.2 m, ~9.2k at 0.4 m, ~4.9k at 0.8 m. Never needed with the host capacities.
+  std::uint32_t max_coarsen_steps = 3;
 };
 
 enum class MapInsertStatus : std::uint8_t {
@@ -106,6 +120,8 @@ struct MapInsertResult {
   double best_probe_fitness = 0.0;      // best fitness of the shifted probes (shift check)
   bool outvoted = false;                // infrastructure rejected or held back by the quorum: its stored cloud evicted too
   bool quorum_checked = false;          // infrastructure checked by the full rule (>= 3 other units)
+  std::uint32_t share_trimmed = 0;      // other sources' points thinned to the share to make room
+  std::uint32_t coarsened = 0;          // voxel doublings to fit the candidate (max_coarsen_steps)
 };
 
 struct MapSourceInfo {
@@ -131,6 +147,8 @@ struct MapFusionCounters {
   std::uint64_t sources_evicted_age = 0;
   std::uint64_t sources_evicted_slot = 0;   // oldest source displaced by a new one
   std::uint64_t points_dropped_capacity = 0;
+  std::uint64_t points_trimmed_share = 0;   // stored points thinned to make room for a new cloud's share
+  std::uint64_t clouds_coarsened = 0;       // clouds downsampled again with a coarser voxel
   std::uint64_t non_finite_dropped = 0;
   std::uint64_t agent_points_covered = 0;   // agent points dropped where infrastructure sees
   std::uint64_t reference_cells_dropped = 0;  // reference cells not recorded (hash probes exhausted)
@@ -211,8 +229,19 @@ class MapFusion {
   // set in r) when the cloud is held back or rejected.
   bool passes_consistency(std::size_t own_slot, bool trusted, MapInsertResult& r);
   // Appends candidate_ under `slot` up to the map capacity (overflow counted in r), and a
-  // surveyed source's points to the reference cells; returns how many.
+  // surveyed source's points to the reference cells; returns how many. When it does not fit,
+  // make_room() first.
   std::uint32_t store_candidate(std::size_t slot, bool trusted, MapInsertResult& r);
+  // The share rule (header): other sources thinned to capacity / sources, candidate_ to the free
+  // room, evenly along their order; counted in r.
+  void make_room(std::size_t slot, MapInsertResult& r);
+  // Thins every active source but `except` holding more than `share` points to `share`, evenly
+  // along its order; returns the points dropped.
+  std::uint32_t cut_sources(std::size_t share, std::size_t except);
+  std::size_t capacity() const {
+    return params_.max_points > 0 && params_.max_points < config::kMaxMapPoints ? params_.max_points
+                                                                                 : config::kMaxMapPoints;
+  }
 
   MapFusionParams params_;
   MapSourceInfo sources_[config::kMaxMapSources];
