@@ -81,11 +81,22 @@ ScanIngestResult ScanIngest::run(std::span<const Vec3f> points, std::span<const 
   count_ = 0;
   if (!(params.voxel > 0.0f) || !std::isfinite(params.voxel)) return r;
   const bool has_times = times.size() == points.size() && !points.empty();
-  if (has_times) {
-    accumulate<true>(points, times.data(), params, r);
-  } else {
-    accumulate<false>(points, nullptr, params, r);
+  ScanIngestParams p = params;
+  for (std::uint32_t step = 0;; ++step) {
+    if (has_times) {
+      accumulate<true>(points, times.data(), p, r);
+    } else {
+      accumulate<false>(points, nullptr, p, r);
+    }
+    if (r.capacity_dropped == 0 || step >= params.max_coarsen_steps) break;
+    // Full: whole azimuth sectors would be lost; the sweep is read again with a coarser voxel.
+    for (std::size_t v = 0; v < count_; ++v) slots_[voxels_[v].slot] = 0;
+    count_ = 0;
+    r.non_finite_dropped = r.range_dropped = r.capacity_dropped = 0;
+    p.voxel *= 1.125f;
+    ++r.coarsened;
   }
+  r.voxel = p.voxel;
   for (std::size_t v = 0; v < count_; ++v) {
     const Accumulator& a = voxels_[v];
     const double n = static_cast<double>(a.count);

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -68,13 +69,47 @@ TEST(ScanIngest, OverflowingTheVoxelTableIsCountedNotSilent) {
       for (int k = 0; k < side; ++k) pts.emplace_back(4.25f + 0.5f * i, 0.25f + 0.5f * j, 0.25f + 0.5f * k);
   ScanIngestParams p;
   p.max_range = 100.0f;
+  p.max_coarsen_steps = 0;  // no coarser re-run: the overflow is dropped
   const ScanIngestResult r = g_ingest.run(pts, {}, nullptr, p);
   EXPECT_EQ(r.voxels, config::kMaxDownsampledPoints);
+  EXPECT_EQ(r.coarsened, 0u);
   EXPECT_EQ(r.voxels + r.capacity_dropped + r.range_dropped, pts.size());
   EXPECT_GT(r.capacity_dropped, 0u);
   // The table is empty again: the next small scan is exact.
   const std::vector<Vec3f> one = {Vec3f(10.1f, 0.1f, 0.1f)};
   EXPECT_EQ(g_ingest.run(one, {}, nullptr, p).voxels, 1u);
+  EXPECT_EQ(g_ingest.points()[0], one[0]);
+}
+
+// A surface with more 0.5 m voxels than the table holds (1.5x) is read again with the voxel grown
+// by 9/8 until it fits: nothing dropped, and the centroids still span the whole surface (cutting
+// the overflow would drop the returns read last, i.e. whole sectors of a sweep).
+TEST(ScanIngest, OverflowIsReadAgainWithACoarserVoxel) {
+  const int side = static_cast<int>(std::ceil(std::sqrt(1.5 * static_cast<double>(config::kMaxDownsampledPoints))));
+  std::vector<Vec3f> pts;
+  for (int i = 0; i < side; ++i)
+    for (int j = 0; j < side; ++j) pts.emplace_back(4.25f + 0.5f * i, 0.25f + 0.5f * j, 0.25f);
+  ScanIngestParams p;
+  p.max_range = 300.0f;
+  const ScanIngestResult r = g_ingest.run(pts, {}, nullptr, p);
+  EXPECT_EQ(r.capacity_dropped, 0u);
+  EXPECT_GE(r.coarsened, 1u);
+  EXPECT_LE(r.coarsened, p.max_coarsen_steps);
+  EXPECT_FLOAT_EQ(r.voxel, p.voxel * std::pow(1.125f, static_cast<float>(r.coarsened)));
+  EXPECT_LE(r.voxels, config::kMaxDownsampledPoints);
+  EXPECT_EQ(r.voxels, g_ingest.points().size());
+  float lo = 1e9f, hi = -1e9f;
+  for (const Vec3f& q : g_ingest.points()) {
+    lo = std::min(lo, q.x());
+    hi = std::max(hi, q.x());
+  }
+  EXPECT_LT(lo, 4.25f + 2.0f * r.voxel);
+  EXPECT_GT(hi, 4.25f + 0.5f * static_cast<float>(side - 1) - 2.0f * r.voxel);
+  // A scene that fits is read once, at the requested voxel.
+  const std::vector<Vec3f> one = {Vec3f(10.1f, 0.1f, 0.1f)};
+  const ScanIngestResult small = g_ingest.run(one, {}, nullptr, p);
+  EXPECT_EQ(small.coarsened, 0u);
+  EXPECT_EQ(small.voxel, p.voxel);
   EXPECT_EQ(g_ingest.points()[0], one[0]);
 }
 
