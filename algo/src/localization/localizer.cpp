@@ -67,7 +67,7 @@ const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
   ++counters_.frames;
   if (std::isfinite(in.t) && (!have_frame_ || in.t > last_frame_t_)) {
     probe_(LocalizerStage::kScanPrep);
-    scan_.prepare(in, vehicle_, counters_.scan_points_dropped);
+    scan_.prepare(in, vehicle_, counters_.scan_points_dropped, counters_.scans_coarsened);
     if (params_.use_stereo && !in.stereo.disparity.empty()) scan_.prepare_stereo(in.stereo);
     probe_(LocalizerStage::kOdometry);
     run_odometry(in);

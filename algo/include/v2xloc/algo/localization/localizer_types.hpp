@@ -123,6 +123,7 @@ struct LocalizerCounters {
   std::uint32_t gnss_received = 0;
   std::uint32_t gnss_invalid = 0;
   std::uint32_t scan_points_dropped = 0;       // non-finite, out of range or over capacity
+  std::uint32_t scans_coarsened = 0;           // sweeps over the ingest capacity, read again with a coarser voxel
   std::uint32_t odometry_failures = 0;
   std::uint32_t pending_overflow = 0;          // fixed-lag registrations that found no slot
   std::uint32_t filter_resets = 0;             // filter restarted at a registration
