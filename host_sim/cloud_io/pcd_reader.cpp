@@ -222,6 +222,7 @@ template <typename Column>
 void fill_cloud_by_column(const Header& h, std::size_t n, Column&& column, PointCloud& out) {
   static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float));
   out.clear();
+  if (n == 0) return;  // no columns to write (and no pointer arithmetic on an empty vector's null data())
   out.points.resize(n);
   const int* rf = h.role_field;
   float* xyz = reinterpret_cast<float*>(out.points.data());
