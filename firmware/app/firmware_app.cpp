@@ -174,7 +174,7 @@ void FirmwareApp::close_period(bool ego_link) {
   if (ego_link) drain_link(hal_.clouds, false);
   // Period boundary: shares waiting for their signature check are verified now (at most
   // kMaxSignatureVerificationsPerPeriod) and reach map fusion before this scan.
-  const std::size_t shares = std::min<std::size_t>(kMaxSignatureVerificationsPerPeriod, localizer_.map_clouds_per_period());
+  const std::size_t shares = shares_this_period(localizer_.map_clouds_per_period());
   for (std::size_t k = 0; k < shares; ++k) {
     const DecodedCloud share = decoder_.next_verified_share(&localizer_);
     if (share.kind == CloudKind::kNone) break;

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 
 namespace v2xloc::firmware {
 
@@ -23,6 +24,12 @@ inline constexpr std::size_t kMaxSignatureVerificationsPerPeriod = 2;
 // A queue of 4 dropped the same two sources' shares every cycle (they arrive first), so those
 // units never reached the map. Overflow drops the OLDEST waiting share (counted).
 inline constexpr std::size_t kShareVerifyQueueCapacity = 8;
+
+// Shares to verify and fuse at one period boundary: the schedule's cap, or fewer when the localizer
+// asks for fewer (Localizer::map_clouds_per_period: one while tracking).
+inline std::size_t shares_this_period(std::uint32_t localizer_limit) {
+  return localizer_limit < kMaxSignatureVerificationsPerPeriod ? localizer_limit : kMaxSignatureVerificationsPerPeriod;
+}
 
 template <std::size_t Capacity, std::size_t PerPeriod>
 class SharePeriodSchedule {

@@ -298,7 +298,8 @@ bool EventStream::next_frame(int i, std::vector<WireEvent>& out, std::string& er
 }
 
 namespace {
-// The firmware asks its localizer before verifying a share (firmware/app/localizer_port.hpp).
+// The firmware asks its localizer before verifying a share (firmware/app/localizer_port.hpp, a
+// layer host_sim does not include).
 struct LocalizerWants final : firmware::MapShareWanted {
   explicit LocalizerWants(const Localizer& l) : localizer(l) {}
   bool wants(std::uint32_t source_id, double t) const override { return localizer.wants_map_cloud(source_id, t); }
@@ -320,9 +321,9 @@ bool WireEventDecoder::feed(const WireEvent& event, DecodedFrame& frame) {
     const firmware::DecodedCloud decoded = decoder_.decode_completed();
     if (decoded.kind == firmware::CloudKind::kEgoScan || decoded.kind == firmware::CloudKind::kEgoRejected) {
       // As the firmware: at the period boundary, the shares waiting for verification first.
-      const std::size_t shares = std::min<std::size_t>(firmware::kMaxSignatureVerificationsPerPeriod, localizer_.map_clouds_per_period());
+      const LocalizerWants wanted(localizer_);
+      const std::size_t shares = firmware::shares_this_period(localizer_.map_clouds_per_period());
       for (std::size_t k = 0; k < shares; ++k) {
-        const LocalizerWants wanted(localizer_);
         const firmware::DecodedCloud share = decoder_.next_verified_share(&wanted);
         if (share.kind == firmware::CloudKind::kNone) break;
         if (share.kind == firmware::CloudKind::kMapCloud) localizer_.on_map_cloud(share.map);

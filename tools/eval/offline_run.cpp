@@ -185,7 +185,7 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
     schedule.begin_period();
     std::size_t slot = 0;
     // A share the map would not fuse (paced) costs the firmware no signature check: refunded.
-    const std::size_t shares = std::min<std::size_t>(firmware::kMaxSignatureVerificationsPerPeriod, localizer.map_clouds_per_period());
+    const std::size_t shares = firmware::shares_this_period(localizer.map_clouds_per_period());
     std::size_t shares_fused = 0;
     for (std::size_t k = 0; k < firmware::kShareVerifyQueueCapacity && shares_fused < shares && schedule.release(slot); ++k) {
       const sim::MapCloudInfo& info = *waiting[slot].info;

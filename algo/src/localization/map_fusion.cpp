@@ -33,14 +33,16 @@ void MapFusion::remove_source_points(std::size_t slot) {
   if (sources_[slot].active && sources_[slot].trusted) clear_source_cells(slot);
   std::size_t n = 0;  // stable compaction keeps the other sources' order (determinism)
   for (std::size_t i = 0; i < num_points_; ++i) {
-    if (point_source_[i] == slot) continue;
-    points_[n] = points_[i];
-    point_source_[n] = point_source_[i];
-    for (int c = 0; c < 3; ++c) point_cells_[n][c] = point_cells_[i][c];
-    ++n;
+    if (point_source_[i] != slot) move_point(i, n++);
   }
   num_points_ = n;
   sources_[slot].points = 0;
+}
+
+void MapFusion::move_point(std::size_t from, std::size_t to) {
+  points_[to] = points_[from];
+  point_source_[to] = point_source_[from];
+  for (int c = 0; c < 3; ++c) point_cells_[to][c] = point_cells_[from][c];
 }
 
 SourceCells::Mask MapFusion::trusted_bits(std::size_t slot) const {
@@ -260,11 +262,7 @@ std::uint32_t MapFusion::cut_sources(std::size_t share, std::size_t except) {
   std::size_t n = 0;  // stable compaction, as remove_source_points
   for (std::size_t i = 0; i < num_points_; ++i) {
     const std::uint8_t s = point_source_[i];
-    if (over[s] && !kept_evenly(seen[s]++, sources_[s].points, share)) continue;
-    points_[n] = points_[i];
-    point_source_[n] = s;
-    for (int c = 0; c < 3; ++c) point_cells_[n][c] = point_cells_[i][c];
-    ++n;
+    if (!over[s] || kept_evenly(seen[s]++, sources_[s].points, share)) move_point(i, n++);
   }
   const auto dropped = static_cast<std::uint32_t>(num_points_ - n);
   num_points_ = n;

@@ -18,7 +18,7 @@ void ReferenceMap::configure(const LocalizerParams& params) {
   revision_ = ~0ull;
   built_t_ = -1e300;
   ready_ = false;
-  clouds_this_period_ = 0;
+  fused_this_period_ = false;
   busy_ = false;
   for (Attempt& a : attempts_) a = Attempt{};
 }
@@ -55,7 +55,7 @@ MapInsertResult ReferenceMap::insert(const MapCloudInput& in) {
     r.input_points = static_cast<std::uint32_t>(in.points.size());
     return r;
   }
-  ++clouds_this_period_;
+  fused_this_period_ = true;
   record_attempt(in.source_id, in.t);
   return fusion_.insert(in.source_id, in.t, in.world_T_sensor, in.points, !in.is_agent);
 }
@@ -68,8 +68,8 @@ IcpTarget ReferenceMap::target() {
 
 bool ReferenceMap::refresh(double t, LazyNormalCounters& normals) {
   normals = targets_[active_].lazy.new_period(params_.map_normals_per_period);
-  busy_ = clouds_this_period_ > 0;
-  clouds_this_period_ = 0;
+  busy_ = fused_this_period_;
+  fused_this_period_ = false;
   fusion_.expire(t);
   // One build step per period while a map is in use; the first one is built at once.
   const std::uint32_t steps = ready_ ? 1u : kBuildSteps;

@@ -25,14 +25,20 @@ MapCloudInput cloud(std::uint32_t id, double t, const std::vector<Vec3f>& points
   return in;
 }
 
+// A reference map (static storage: on the heap in tests) pacing each source to `interval`.
+std::unique_ptr<ReferenceMap> paced_map(double interval) {
+  auto map = std::make_unique<ReferenceMap>();
+  LocalizerParams params;
+  params.map_cloud_interval = interval;
+  map->configure(params);
+  return map;
+}
+
 // A source's clouds closer than map_cloud_interval to its stored one are not fused (the rebuild
 // would take a later one); wants() says so beforehand; a new source, a later cloud and a stale
 // one take their usual paths.
 TEST(ReferenceMap, CloudsWithinTheIntervalOfTheSourcesLastArePaced) {
-  auto map = std::make_unique<ReferenceMap>();
-  LocalizerParams params;
-  params.map_cloud_interval = 0.9;
-  map->configure(params);
+  auto map = paced_map(0.9);
   const std::vector<Vec3f> points = wall();
 
   EXPECT_TRUE(map->wants(7, 1.0));
@@ -48,8 +54,7 @@ TEST(ReferenceMap, CloudsWithinTheIntervalOfTheSourcesLastArePaced) {
   EXPECT_TRUE(map->wants(7, 1.95));
   EXPECT_EQ(map->insert(cloud(7, 1.95, points)).status, MapInsertStatus::kReplaced);
 
-  params.map_cloud_interval = 0.0;  // off: every newer cloud is fused
-  map->configure(params);
+  map = paced_map(0.0);  // off: every newer cloud is fused
   EXPECT_EQ(map->insert(cloud(7, 1.0, points)).status, MapInsertStatus::kInserted);
   EXPECT_EQ(map->insert(cloud(7, 1.01, points)).status, MapInsertStatus::kReplaced);
 }
@@ -57,10 +62,7 @@ TEST(ReferenceMap, CloudsWithinTheIntervalOfTheSourcesLastArePaced) {
 // A source whose clouds are refused (here an agent with no infrastructure to be checked against:
 // held back) is paced on its last attempt: one consistency check per interval, not one per share.
 TEST(ReferenceMap, RefusedSourcesArePacedOnTheirLastAttempt) {
-  auto map = std::make_unique<ReferenceMap>();
-  LocalizerParams params;
-  params.map_cloud_interval = 0.9;
-  map->configure(params);
+  auto map = paced_map(0.9);
   const std::vector<Vec3f> points = wall();
   MapCloudInput agent = cloud(40, 1.0, points);
   agent.is_agent = true;

@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <deque>
 #include <limits>
 #include <string>
 #include <vector>
@@ -58,7 +57,6 @@ class Drive {
     name_ = std::move(name);
     period_ = 0;
   }
-  ~Drive() { waiting_.clear(); }
   Mat4d truth() const { return pose_xy_yaw(-20.0 + kSpeed * t_, 0.0, 0.0, 0.0); }
   Mat4d body_T_lidar() const { return pose_xy_yaw(0.0, 0.0, kLidarHeight, 0.0); }
 
@@ -138,20 +136,19 @@ class Drive {
   // (map_clouds_per_period); shares it would not fuse (paced) are skipped before the budget.
   void deliver_map_clouds(const std::vector<MapCloudInput>& arrived) {
     for (const MapCloudInput& c : arrived) {
-      if (waiting_.size() == firmware::kShareVerifyQueueCapacity) {
-        waiting_.pop_front();
-        ++shares_dropped_;
-      }
-      waiting_.push_back(c);
+      const firmware::ShareSchedule::Admission a = schedule_.admit();
+      if (a.dropped_oldest) ++shares_dropped_;
+      waiting_[a.slot] = c;
     }
-    const std::size_t budget = std::min<std::size_t>(firmware::kMaxSignatureVerificationsPerPeriod,
-                                                     g_localizer.map_clouds_per_period());
-    std::size_t fused = 0;
-    while (fused < budget && !waiting_.empty()) {
-      const MapCloudInput c = waiting_.front();
-      waiting_.pop_front();
-      if (!g_localizer.wants_map_cloud(c.source_id, c.t)) continue;
-      g_localizer.on_map_cloud(c);
+    schedule_.begin_period();
+    const std::size_t budget = firmware::shares_this_period(g_localizer.map_clouds_per_period());
+    std::size_t fused = 0, slot = 0;
+    for (std::size_t k = 0; k < firmware::kShareVerifyQueueCapacity && fused < budget && schedule_.release(slot); ++k) {
+      if (!g_localizer.wants_map_cloud(waiting_[slot].source_id, waiting_[slot].t)) {
+        schedule_.refund();
+        continue;
+      }
+      g_localizer.on_map_cloud(waiting_[slot]);
       ++fused;
     }
   }
@@ -159,7 +156,8 @@ class Drive {
   std::size_t shares_dropped() const { return shares_dropped_; }
 
  private:
-  std::deque<MapCloudInput> waiting_;  // spans into clouds the test keeps alive while it drives
+  firmware::ShareSchedule schedule_;
+  MapCloudInput waiting_[firmware::ShareSchedule::kCapacity];  // spans into clouds the test keeps alive
   std::size_t shares_dropped_ = 0;
   std::string name_;
   Scene scene_;

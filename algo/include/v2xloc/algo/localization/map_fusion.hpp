@@ -195,6 +195,8 @@ class MapFusion {
   static_assert(config::kMaxMapSources <= 255, "source slot stored in a byte");
 
   void remove_source_points(std::size_t slot);
+  // Point `from` (with its source and cell slots) to index `to` <= from: stable compaction.
+  void move_point(std::size_t from, std::size_t to);
   // Sets the source's bit in the reference cells of its stored points from index `first` on (a
   // stored cloud is appended at the end) and records each point's cell slots; surveyed sources
   // only: the reference is the infrastructure.

@@ -61,6 +61,7 @@ class ReferenceMap {
   bool build_step(double t, bool& finished);
   void build_vicinity(Target& target) const;
   void activate(Target& next);
+  void record_attempt(std::uint32_t source_id, double t);
 
   LocalizerParams params_{};
   MapFusion fusion_{};
@@ -73,7 +74,7 @@ class ReferenceMap {
   std::uint64_t revision_ = ~0ull;
   double built_t_ = -1e300;
   bool ready_ = false;
-  std::uint32_t clouds_this_period_ = 0;  // clouds handed to map fusion since the last refresh()
+  bool fused_this_period_ = false;  // a cloud was handed to map fusion since the last refresh()
   // Last cloud time handed to map fusion per source id (pacing of sources with no stored cloud);
   // full: the oldest entry gives way (pacing then fails open: more checks, never a lost cloud).
   struct Attempt {
@@ -83,7 +84,6 @@ class ReferenceMap {
   };
   static constexpr std::size_t kPacedSources = 2 * config::kMaxMapSources;
   Attempt attempts_[kPacedSources]{};
-  void record_attempt(std::uint32_t source_id, double t);
   bool busy_ = false;
 };
 
