@@ -103,6 +103,7 @@ def main():
         "worst_stages": dict(sorted(periods[worst].items(), key=lambda kv: -kv[1])),
         "over_budget_frames": sorted(f for f, v in totals.items() if v > args.budget),
         "per_frame": {str(f): totals[f] for f in sorted(totals)},
+        "per_frame_stages": {str(f): periods[f] for f in sorted(periods)},
     }
     M = 1e6
     print("%s: %d periods, instructions per period median %.1f M, p99 %.1f M, max %.1f M (frame %d); "

@@ -22,12 +22,16 @@ bool SourceCells::cell_key(const Vec3f& p, double cell, std::int32_t level, std:
 
 void SourceCells::clear() {
   for (Cell& c : cells_) c = Cell{};
+  for (std::uint64_t& w : seen_) w = 0;
   used_ = 0;
 }
 
 std::size_t SourceCells::find(const std::int32_t key[3]) const {
+  const std::uint32_t hash = spatial_hash(key);
+  const std::size_t bit = seen_bit(hash);
+  if (((seen_[bit / 64] >> (bit % 64)) & 1u) == 0) return kSlots;  // never added
   std::size_t found = kSlots;
-  linear_probe(spatial_hash(key), kSlots, kMaxProbes, [&](std::size_t slot) {
+  linear_probe(hash, kSlots, kMaxProbes, [&](std::size_t slot) {
     const Cell& c = cells_[slot];
     if (!c.used) return true;
     if (c.key[0] == key[0] && c.key[1] == key[1] && c.key[2] == key[2]) {
@@ -40,7 +44,10 @@ std::size_t SourceCells::find(const std::int32_t key[3]) const {
 }
 
 std::uint32_t SourceCells::add(const std::int32_t key[3], Mask bits) {
-  const ProbeResult r = linear_probe(spatial_hash(key), kSlots, kMaxProbes, [&](std::size_t slot) {
+  const std::uint32_t hash = spatial_hash(key);
+  const std::size_t bit = seen_bit(hash);
+  seen_[bit / 64] |= std::uint64_t{1} << (bit % 64);
+  const ProbeResult r = linear_probe(hash, kSlots, kMaxProbes, [&](std::size_t slot) {
     Cell& c = cells_[slot];
     if (!c.used) {
       c.key[0] = key[0];

@@ -167,13 +167,16 @@ bool PoseSearch::copy_scan(std::span<const Vec3f> scan_body, const IcpTarget& ma
     result_.best.status = RegistrationStatus::kInvalidInput;
     return false;
   }
+  const std::size_t n = scan_body.size() < config::kMaxSearchPoints ? scan_body.size() : config::kMaxSearchPoints;
+  result_.scan_points_dropped = static_cast<std::uint32_t>(scan_body.size() - n);  // callers pass <= kMaxSearchPoints (documented)
+  // Every stride-th point first (the ICP's subsample, in scan order), then the others.
+  const std::size_t want = params_.refine_points > 0 && params_.refine_points < n ? params_.refine_points : n;
+  const std::size_t stride = want > 0 ? (n + want - 1) / want : 1;
   scan_count_ = 0;
-  for (const Vec3f& p : scan_body) {
-    if (scan_count_ == config::kMaxSearchPoints) {
-      ++result_.scan_points_dropped;  // callers pass <= kMaxSearchPoints (documented)
-      continue;
-    }
-    scan_[scan_count_++] = p;
+  for (std::size_t i = 0; i < n; i += stride) scan_[scan_count_++] = scan_body[i];
+  refine_count_ = scan_count_;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i % stride != 0) scan_[scan_count_++] = scan_body[i];
   }
   for (Candidate& c : top_) c = Candidate{};
   candidate_ = 0;
@@ -190,15 +193,16 @@ void PoseSearch::start(std::span<const Vec3f> scan_body, const IcpTarget& map, c
   params_ = params;
   center_ = center;
   if (!copy_scan(scan_body, map)) return;
-  // Fixed subsample of above-ground points (every k-th), in body coordinates.
+  // Fixed subsample of above-ground points (every k-th), in body coordinates, in scan order.
+  const std::span<const Vec3f> body = scan_body.first(scan_count_);
   std::uint32_t above = 0;
-  for (const Vec3f& p : scan()) above += p.z() > params.min_height ? 1u : 0u;
+  for (const Vec3f& p : body) above += p.z() > params.min_height ? 1u : 0u;
   const std::uint32_t want = params.score_points < kMaxScorePoints ? params.score_points : kMaxScorePoints;
   if (above < 16) return;
   const std::uint32_t stride = above > want ? above / want : 1u;
   score_count_ = 0;
   std::uint32_t seen = 0;
-  for (const Vec3f& p : scan()) {
+  for (const Vec3f& p : body) {
     if (!(p.z() > params.min_height)) continue;
     if (seen++ % stride == 0 && score_count_ < want) score_pts_[score_count_++] = p;
   }
@@ -336,16 +340,16 @@ void PoseSearch::refine_candidate(const IcpTarget& map, std::uint64_t stop) {
   const IcpParams& icp_params = refining_fine_ ? params_.fine_icp : params_.icp;
   if (!run_started_) {
     const Mat4d initial = refining_fine_ ? coarse_.transform : pose_of(cand.x, cand.y, result_.ground_z, cand.yaw);
-    icp_begin(run_, scan(), map, initial, icp_params, hints());
+    icp_begin(run_, refine_scan(), map, initial, icp_params, hints());
     run_started_ = true;
   }
   const std::uint64_t left = stop > work_ ? stop - work_ : 0;
-  // ceil(left / scan points) without overflow (left is ~2^64 for an unbounded step), >= 1
-  const std::uint64_t passes = scan_count_ > 0 ? left / scan_count_ + (left % scan_count_ != 0 ? 1 : 0) : 1;
+  // ceil(left / ICP points) without overflow (left is ~2^64 for an unbounded step), >= 1
+  const std::uint64_t passes = refine_count_ > 0 ? left / refine_count_ + (left % refine_count_ != 0 ? 1 : 0) : 1;
   const std::uint32_t before = run_.passes;
   const bool finished =
-      icp_continue(run_, scan(), map, icp_params, passes > 1000 ? 1000u : static_cast<std::uint32_t>(passes), hints());
-  work_ += static_cast<std::uint64_t>(run_.passes - before) * scan_count_;
+      icp_continue(run_, refine_scan(), map, icp_params, passes > 1000 ? 1000u : static_cast<std::uint32_t>(passes), hints());
+  work_ += static_cast<std::uint64_t>(run_.passes - before) * refine_count_;
   if (!finished) return;
   run_started_ = false;
   if (!refining_fine_) {

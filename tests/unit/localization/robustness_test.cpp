@@ -281,6 +281,36 @@ TEST(PoseSearchRobustness, FinalistsAreReDecidedWithoutScoring) {
   EXPECT_EQ(none.finalists(out), 0u);
 }
 
+// The candidates' ICPs on an even quarter of the scan (refine_points), the selection on all of
+// it: the same basin comes out for a fraction of the ICP work, and the tight fitness is still
+// judged on every point (the selection's numbers equal a full-scan evaluation of the winner).
+TEST(PoseSearchRobustness, RefineSubsampleFindsTheSamePoseForLessWork) {
+  static CourtyardScene scene;
+  build_courtyard_scene(scene);
+  const IcpTarget& target = scene.target;
+  const std::vector<Vec3f>& scan = scene.scan;
+  PoseSearchParams sp = courtyard_search_params();
+  const Vec3d gnss(1.5, 0.5, 0.0);
+  static PoseSearch all_job, sub_job;
+  all_job.start(scan, target, gnss, sp);
+  ASSERT_TRUE(all_job.step(target, ~std::uint64_t{0}));
+  sp.refine_points = static_cast<std::uint32_t>(scan.size() / 4);
+  sub_job.start(scan, target, gnss, sp);
+  EXPECT_EQ(sub_job.scan().size(), all_job.scan().size()) << "every point is kept for the selection";
+  ASSERT_TRUE(sub_job.step(target, ~std::uint64_t{0}));
+  const PoseSearchResult& a = all_job.result();
+  const PoseSearchResult& b = sub_job.result();
+  ASSERT_TRUE(a.best.ok());
+  ASSERT_TRUE(b.best.ok());
+  EXPECT_EQ(a.hypotheses, b.hypotheses) << "scoring does not depend on the ICP subsample";
+  EXPECT_LT(sub_job.work(), all_job.work());
+  const Mat4d d = se3_inverse(a.best.transform) * b.best.transform;
+  EXPECT_LT(std::hypot(d(0, 3), d(1, 3)), 0.05);
+  EXPECT_LT(std::abs(det::wrap_pi(yaw_of(d.topLeftCorner<3, 3>()))), 0.01);
+  const double tight = evaluate_registration(scan, target, b.best.transform, sp.select_distance).fitness;
+  EXPECT_EQ(b.best_tight_fitness, tight) << "the winner is judged on the whole scan";
+}
+
 // Scoring on the proximity bitmap (start-up search) instead of the k-d tree: the same pose
 // comes out, the hypotheses cost a fraction of the work, and the grid covers the search region.
 TEST(PoseSearchRobustness, GridScoredSearchFindsTheTreeScoredPose) {

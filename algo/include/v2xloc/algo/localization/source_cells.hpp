@@ -7,6 +7,8 @@
 // Cells whose last bit is cleared stay in their probe chain (open addressing); once live and empty
 // cells fill half the table the owner rebuilds it from its points (needs_rebuild()). A cell that
 // finds no slot within config::kVoxelMaxProbes probes is not recorded and counted (dropped()).
+// Most lookups are of absent cells (a consistency check asks for the 27 cells around a point); a
+// bitmap of the hashes ever added answers most of those without walking a probe chain.
 #pragma once
 
 #include <cstddef>
@@ -55,8 +57,13 @@ class SourceCells {
   };
   // Slot of key, or kSlots when absent.
   std::size_t find(const std::int32_t key[3]) const;
+  // One bit per hash value modulo kSeenBits, set by add() until clear(): a clear bit proves the
+  // key absent. 4 bits per slot: at most half the slots are used, so >= 7/8 of the bits are clear.
+  static constexpr std::size_t kSeenBits = 4 * kSlots;
+  static std::size_t seen_bit(std::uint32_t hash) { return hash & (kSeenBits - 1); }
 
   Cell cells_[kSlots] = {};
+  std::uint64_t seen_[kSeenBits / 64] = {};
   std::size_t used_ = 0;
   std::uint64_t dropped_ = 0;
 };

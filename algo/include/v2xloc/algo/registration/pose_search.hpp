@@ -67,6 +67,10 @@ struct PoseSearchParams {
   double yaw_prior = 0.0;            // [rad]
   double yaw_prior_tolerance = 1.05; // [rad] (60 deg)
   std::uint32_t refine_candidates = 10;  // best distinct hypotheses refined (<= kPoseSearchRefine)
+  // [points] the ICPs refine on an even subsample of at most this many scan points (0: all); the
+  // selection (rays, tight fitness) still judges every scan point. The ICP only has to reach the
+  // basin's bottom; the tight fitness that tells an alias from the truth wants the many points.
+  std::uint32_t refine_points = 0;
   // Judge each refined pose as it comes (rays, tight fitness) so that provisional() names the
   // best so far while the search runs over several periods (costs ~1 fitness pass a candidate).
   bool provisional = false;
@@ -145,6 +149,8 @@ class PoseSearch {
   const PoseSearchResult& result() const { return result_; }
   std::uint64_t work() const { return work_; }  // queries so far
   std::span<const Vec3f> scan() const { return {scan_, scan_count_}; }
+  // The ICP's subsample: the first refine_count_ points of scan() (copy_scan puts them there).
+  std::span<const Vec3f> refine_scan() const { return {scan_, refine_count_}; }
   // The refined poses that reached the selection (not dropped by fitness or rays), winner
   // first; valid once done(). Returns how many were written (<= out.size()).
   std::uint32_t finalists(std::span<Mat4d> out) const;
@@ -165,7 +171,7 @@ class PoseSearch {
   std::uint32_t refine_count() const {
     return params_.refine_candidates < kPoseSearchRefine ? params_.refine_candidates : kPoseSearchRefine;
   }
-  std::span<std::uint32_t> hints() { return {hints_, scan_count_}; }
+  std::span<std::uint32_t> hints() { return {hints_, refine_count_}; }
 
   PoseSearchParams params_{};
   ProximityGrid* grid_ = nullptr;
@@ -176,6 +182,7 @@ class PoseSearch {
   Vec3f scan_[config::kMaxSearchPoints];
   std::uint32_t hints_[config::kMaxSearchPoints];
   std::size_t scan_count_ = 0;
+  std::size_t refine_count_ = 0;                  // leading scan_ points the ICPs use
   Vec3f score_pts_[kMaxScorePoints];
   std::uint32_t score_count_ = 0;
   int cells_ = 0, iy_ = 0, ix_ = 0;               // scoring cursor: grid row, column ...
