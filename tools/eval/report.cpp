@@ -149,7 +149,13 @@ std::string format_json(const std::vector<RowReport>& rows) {
                    {"map_rebuilds", c.map_rebuilds},
                    {"global_searches", c.global_searches},
                    {"basin_audits", c.basin_audits},
-                   {"basin_switches", c.basin_switches}};
+                   {"basin_switches", c.basin_switches},
+                   {"odometry_queries", c.odometry_queries},
+                   {"tracking_queries", c.tracking_queries},
+                   {"map_normals", c.map_normals_computed},
+                   {"audit_work", c.audit_work},
+                   {"rebuild_steps_deferred", c.rebuild_steps_deferred},
+                   {"audit_periods_starved", c.audit_periods_starved}};
     row["unaligned"] = columns_json(r.metrics.unaligned);
     row["aligned"] = columns_json(r.metrics.aligned);
     out_rows.push_back(std::move(row));

@@ -29,21 +29,28 @@ AuditOutcome BasinAudit::step(const AuditFrame& f, LocalizerCounters& counters) 
   if (running_ && f.frame - started_frame_ > params_.audit_max_frames) running_ = false;
   // Periods that fused map clouds have spent part of their spare work: the audit is insurance, it
   // takes a smaller quota there or waits (the frames it pauses count towards audit_max_frames).
-  const std::uint32_t quota = f.map_busy ? params_.audit_queries_per_busy_period : params_.audit_queries_per_period;
-  const bool paused = f.map_busy && quota == 0;
+  const std::uint32_t fixed = f.map_busy ? params_.audit_queries_per_busy_period : params_.audit_queries_per_period;
+  const std::uint64_t quota = fixed < f.work_cap ? fixed : f.work_cap;
+  const bool paused = (f.map_busy && fixed == 0) || f.work_cap == 0;
   if (!running_) {
     if (params_.audit_period_frames == 0 || ++frames_since_audit_ < params_.audit_period_frames) return {};
-    if (paused) return {};  // due: starts in the next quiet period
+    if (paused || !f.room_to_start) return {};  // due: starts in the next period with room
     frames_since_audit_ = 0;
     f.probe(LocalizerStage::kAudit);
     start(f);
   } else {
-    if (paused) return {};
+    if (paused) {
+      ++counters.audit_periods_starved;
+      return {};
+    }
     f.probe(LocalizerStage::kAudit);
   }
   const std::uint64_t budget = quota > 0 ? quota : ~std::uint64_t{0};
   AuditOutcome out;
-  if (job_.step(f.map, budget)) {
+  const std::uint64_t before = job_.work();
+  const bool done = job_.step(f.map, budget);
+  counters.audit_work += job_.work() - before;
+  if (done) {
     running_ = false;
     out = finish(f, counters);
   }

@@ -26,6 +26,9 @@ void Localizer::configure(const LocalizerParams& params, const GeodeticOrigin& o
   odometry_.configure(params.odometry);
   odometry_.reset();
   map_.configure(params);
+  work_.configure(params.work);
+  tracking_forecast_ = 0.0;
+  rebuild_deferred_ = 0;
   filter_.configure(params);
   startup_.configure(params);
   tracking_.configure(params);
@@ -57,6 +60,12 @@ void Localizer::on_gnss(const GnssInput& in) {
 MapInsertResult Localizer::on_map_cloud(const MapCloudInput& in) {
   const MapInsertResult r = map_.insert(in);
   if (r.status == MapInsertStatus::kPaced) ++counters_.map_clouds_paced;
+  const bool checked = r.status == MapInsertStatus::kInserted || r.status == MapInsertStatus::kReplaced ||
+                       r.status == MapInsertStatus::kRejectedInconsistent || r.status == MapInsertStatus::kHeldBack;
+  if (checked) {
+    const PeriodWorkParams& w = params_.work;
+    work_.add(w.map_cloud + r.units_vetted * w.map_vetting + (r.cells_rebuilt ? w.cells_rebuild : 0.0));
+  }
   return r;
 }
 
@@ -67,6 +76,7 @@ const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
   ++counters_.frames;
   if (std::isfinite(in.t) && (!have_frame_ || in.t > last_frame_t_)) {
     probe_(LocalizerStage::kScanPrep);
+    work_.add(params_.work.scan);
     scan_.prepare(in, vehicle_, counters_.scan_points_dropped, counters_.scans_coarsened);
     if (params_.use_stereo && !in.stereo.disparity.empty()) scan_.prepare_stereo(in.stereo);
     probe_(LocalizerStage::kOdometry);
@@ -76,7 +86,18 @@ const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
     filter_.predict_to(in.t);
     probe_(LocalizerStage::kMapRefresh);
     LazyNormalCounters normals;
-    if (map_.refresh(in.t, normals)) ++counters_.map_rebuilds;
+    const PeriodWorkParams& w = params_.work;
+    const double step = w.rebuild_step + (map_.next_step_activates() ? w.activation : 0.0);
+    const bool may_build = !w.enabled || rebuild_deferred_ >= w.max_deferred_rebuild_steps ||
+                           work_.left(tracking_forecast_) >= step;
+    if (map_.refresh(in.t, normals, may_build)) ++counters_.map_rebuilds;
+    if (map_.stepped()) work_.add(params_.work.rebuild_step);
+    if (!may_build && map_.build_due(in.t)) {
+      ++rebuild_deferred_;
+      ++counters_.rebuild_steps_deferred;
+    } else {
+      rebuild_deferred_ = 0;
+    }
     counters_.map_normals_computed += normals.computed;
     counters_.map_normals_refused += normals.refused;
     register_frame(in.t, in.body_T_lidar.matrix());
@@ -86,6 +107,7 @@ const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
   probe_(LocalizerStage::kFusion);
   fill_output(in.t);
   push_backfill();
+  work_.start_period();  // map clouds until the next scan belong to the next period
   ++frame_;
   probe_(LocalizerStage::kIdle);
   return output_;
@@ -106,6 +128,9 @@ void Localizer::run_odometry(const EgoScanInput& in) {
     predicted.matrix() = se3_inverse(body_T_lidar) * se3_exp(xi) * body_T_lidar;
   }
   const OdometryResult r = odometry_.register_voxelized_frame(scan_.deskewed(), predict ? &predicted : nullptr);
+  const std::uint64_t queries = static_cast<std::uint64_t>(r.iterations) * r.source_points;
+  counters_.odometry_queries += queries;
+  work_.add(static_cast<double>(queries) * params_.work.odometry_query);
   const bool ok = r.status == OdometryStatus::kOk || r.status == OdometryStatus::kFirstFrame;
   if (!ok) ++counters_.odometry_failures;
   const Mat4d lidar_T_body = se3_inverse(body_T_lidar);
@@ -154,8 +179,10 @@ RegistrationResult Localizer::track(double t, const Mat4d& body_T_lidar) {
                             map_.target(),        body_T_lidar.topRightCorner<3, 1>(),
                             icp_hints(),          probe_,
                             frame_,               odom_T_body_,
-                            map_.busy()};
+                            map_.busy(),          params_.work.enabled ? &work_ : nullptr};
+  const double before = work_.spent();
   const TrackingOutcome o = tracking_.step(frame, counters_);
+  tracking_forecast_ = work_.spent() - before;  // the next period's rebuild decision expects as much
   output_.basin_audited = o.audit.audited;
   if (o.audit.switch_basin) {
     lose_track();

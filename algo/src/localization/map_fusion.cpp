@@ -77,12 +77,13 @@ void MapFusion::clear_source_cells(std::size_t slot) {
 }
 
 // Drops the emptied cells once they crowd the table: every surveyed source marked again.
-void MapFusion::rebuild_cells_if_crowded() {
-  if (!cells_.needs_rebuild()) return;
+bool MapFusion::rebuild_cells_if_crowded() {
+  if (!cells_.needs_rebuild()) return false;
   cells_.clear();
   for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
     if (sources_[s].active && sources_[s].trusted) mark_source_cells(s, 0);
   }
+  return true;
 }
 
 double MapFusion::consistency(std::size_t slot, double margin, std::uint32_t& overlap_points,
@@ -359,13 +360,13 @@ MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
   info.active = true;
   info.trusted = trusted;
   info.vetted = r.quorum_checked;
-  rebuild_cells_if_crowded();  // after the slot's flags are set: a rebuild marks it too
+  r.cells_rebuilt = rebuild_cells_if_crowded();  // after the slot's flags are set: a rebuild marks it too
   r.stored_points = stored;
   r.status = known ? MapInsertStatus::kReplaced : MapInsertStatus::kInserted;
   if (known) ++counters_.replaced;
   else ++counters_.inserted;
   ++revision_;
-  if (trusted && params_.check_consistency) vet_infrastructure();
+  if (trusted && params_.check_consistency) r.units_vetted = vet_infrastructure();
   return r;
 }
 
@@ -376,9 +377,11 @@ void MapFusion::evict_outvoted(std::size_t slot) {
   ++revision_;
 }
 
-void MapFusion::vet_infrastructure() {
+std::uint32_t MapFusion::vet_infrastructure() {
+  std::uint32_t checked = 0;
   for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
     if (!sources_[s].active || !sources_[s].trusted || sources_[s].vetted || other_trusted(s) < 3) continue;
+    ++checked;
     candidate_.clear();  // free after the insert: the stored cloud is scored as a candidate would be
     for (std::size_t i = 0; i < num_points_; ++i) {
       if (point_source_[i] == s) candidate_.push_back(points_[i]);
@@ -390,6 +393,7 @@ void MapFusion::vet_infrastructure() {
       evict_outvoted(s);
     }
   }
+  return checked;
 }
 
 std::uint32_t MapFusion::expire(double now) {

@@ -66,18 +66,35 @@ IcpTarget ReferenceMap::target() {
                    params_.map_vicinity_cell > 0.0f ? &m.vicinity : nullptr, &m.lazy};
 }
 
-bool ReferenceMap::refresh(double t, LazyNormalCounters& normals) {
+bool ReferenceMap::refresh(double t, LazyNormalCounters& normals, bool may_build) {
   normals = targets_[active_].lazy.new_period(params_.map_normals_per_period);
   busy_ = fused_this_period_;
   fused_this_period_ = false;
+  stepped_ = false;
   fusion_.expire(t);
+  if (!may_build && ready_) return false;
   // One build step per period while a map is in use; the first one is built at once.
   const std::uint32_t steps = ready_ ? 1u : kBuildSteps;
   bool finished = false;
   for (std::uint32_t s = 0; s < steps; ++s) {
-    if (!build_step(t, finished)) break;
+    const bool more = build_step(t, finished);
+    stepped_ = stepped_ || more || finished;
+    if (!more) break;
   }
   return finished;
+}
+
+bool ReferenceMap::next_step_activates() const {
+  if (phase_ != BuildPhase::kTree || !tree_started_) return false;
+  const std::size_t quota = params_.map_tree_work_per_period > 0 ? params_.map_tree_work_per_period : ~std::size_t{0};
+  return targets_[1 - active_].tree.tree.build_work_left() <= quota;
+}
+
+bool ReferenceMap::build_due(double t) const {
+  if (phase_ != BuildPhase::kIdle) return true;
+  if (fusion_.revision() == revision_) return false;
+  if (ready_ && t - built_t_ < params_.map_refresh_period) return false;
+  return !(ready_ && busy_ && t - built_t_ < params_.map_refresh_period + params_.map_refresh_quiet_wait);
 }
 
 // The vicinity bitmap over the map's bounding box, reach = the tracking ICP's gate + 1 cm (the

@@ -1,5 +1,7 @@
 #include "v2xloc/algo/localization/tracking.hpp"
 
+#include "v2xloc/algo/registration/lazy_normals.hpp"
+
 namespace v2xloc {
 
 void TrackingRegistration::configure(const LocalizerParams& params) {
@@ -15,9 +17,22 @@ TrackingOutcome TrackingRegistration::step(const TrackingFrame& f, LocalizerCoun
   if (result.ok() && result.inlier_rmse > params_.max_inlier_rmse) {
     result.status = RegistrationStatus::kDidNotConverge;  // counted as a failed frame
   }
+  const std::uint64_t queries = (static_cast<std::uint64_t>(result.iterations) + 1) * f.tracking_scan.size();
+  counters.tracking_queries += queries;
+  std::uint64_t audit_cap = ~std::uint64_t{0};
+  bool room_to_start = true;
+  if (f.work != nullptr) {
+    const PeriodWorkParams& w = f.work->params();
+    const std::uint32_t normals = f.map.lazy_normals != nullptr ? f.map.lazy_normals->this_period().computed : 0u;
+    f.work->add(static_cast<double>(queries) * w.tracking_query + normals * w.map_normal);
+    if (w.audit_query > 0.0) audit_cap = static_cast<std::uint64_t>(f.work->left() / w.audit_query);
+    room_to_start = f.work->left() >= w.audit_start;
+  }
   if (result.ok()) {
-    const AuditFrame audit{Pose3d(result.transform), f.scan, f.search_scan, f.map, f.sensor_in_body, f.icp_hints,
-                           f.probe, f.frame, f.odom_T_body, f.map_busy};
+    AuditFrame audit{Pose3d(result.transform), f.scan, f.search_scan, f.map, f.sensor_in_body, f.icp_hints,
+                     f.probe, f.frame, f.odom_T_body, f.map_busy};
+    audit.work_cap = audit_cap;
+    audit.room_to_start = room_to_start;
     out.audit = audit_.step(audit, counters);
     if (out.audit.switch_basin) result.status = RegistrationStatus::kDidNotConverge;
   }

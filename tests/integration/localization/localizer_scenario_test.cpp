@@ -166,6 +166,24 @@ TEST(LocalizerScenario, ShortDriveFusesToCentimetres) {
   EXPECT_LT(sm.unaligned.fused_lag, 0.05);
   EXPECT_LT(sm.unaligned.fused_valid, 0.05);
   EXPECT_GT(sm.valid_frames, 10);
+
+  // A period budget with no room (the period-work estimate says every period is full): rebuild
+  // steps wait, but never more than max_deferred_rebuild_steps in a row, so the map still
+  // refreshes; the audit never starts; a pose comes out every frame and the track holds.
+  eval::RunOptions starved = options;
+  starved.params.work.budget = 1.0;
+  std::vector<eval::FrameRecord> starved_records;
+  ASSERT_TRUE(eval::run_offline(reader, g_localizer, starved, starved_records, stats, error)) << error;
+  ASSERT_EQ(starved_records.size(), 50u);
+  const eval::RowMetrics tm = eval::compute_metrics(starved_records);
+  std::printf("no period room: rebuild steps deferred %u, map rebuilds %u, audits %u, fused (valid) %.4f m\n",
+              stats.counters.rebuild_steps_deferred, stats.counters.map_rebuilds, stats.counters.basin_audits,
+              tm.unaligned.fused_valid);
+  EXPECT_GT(stats.counters.rebuild_steps_deferred, 0u);
+  EXPECT_GT(stats.counters.map_rebuilds, 1u) << "deferral is bounded: the map is rebuilt";
+  EXPECT_EQ(stats.counters.basin_audits, 0u);
+  EXPECT_LT(tm.unaligned.fused_valid, 0.05);
+  EXPECT_GT(tm.valid_frames, 10);
   std::filesystem::remove_all(dir);
 }
 

@@ -42,6 +42,28 @@ TEST(KdTreeIncremental, SlicedBuildIsTheSameTree) {
   }
 }
 
+// The estimate of the work a spread build has left (the period budget's forecast): positive
+// while building, never growing from one step to the next, at most the quota when the next step
+// finishes the tree, zero when done.
+TEST(KdTreeIncremental, WorkLeftShrinksToZero) {
+  const auto pts = random_points<Vec3f>(4000, 19, 30.0f);
+  KdBuildResult b = sliced.begin_build(pts);
+  std::size_t left = sliced.tree.build_work_left();
+  EXPECT_GE(left, pts.size()) << "every point is touched at least once";
+  const std::size_t quota = 500;
+  for (int steps = 0;; ++steps) {
+    ASSERT_LT(steps, 10000);
+    const bool last_step_expected = sliced.tree.build_work_left() <= quota;
+    const bool done = sliced.tree.build_step(quota, b);
+    const std::size_t now = sliced.tree.build_work_left();
+    EXPECT_LE(now, left);
+    left = now;
+    if (last_step_expected) EXPECT_TRUE(done) << "the estimate fit the quota: the step must finish the tree";
+    if (done) break;
+  }
+  EXPECT_EQ(sliced.tree.build_work_left(), 0u);
+}
+
 TEST(KdTreeIncremental, EmptyAndNonFiniteInputsFinishAtOnce) {
   const std::vector<Vec3f> none(5, Vec3f(NAN, 0.0f, 0.0f));
   KdBuildResult r = sliced.begin_build(none);

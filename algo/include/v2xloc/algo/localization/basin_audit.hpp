@@ -30,6 +30,9 @@ struct AuditFrame {
   std::uint32_t frame = 0;               // localizer frame index
   Pose3d odom_T_body = Pose3d::Identity();  // this frame's odometry pose
   bool map_busy = false;  // map clouds were fused this period: the audit waits for a quieter one
+  // [work units] at most this much this period (the period budget's rest; 0: it waits)
+  std::uint64_t work_cap = ~std::uint64_t{0};
+  bool room_to_start = true;  // the period budget has room for an audit's set-up
 };
 
 struct AuditOutcome {

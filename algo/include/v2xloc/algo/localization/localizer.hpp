@@ -105,6 +105,9 @@ class Localizer {
   ScanPreparation scan_{};
   LidarOdometry odometry_{};                 // drifting, in its own frame
   ReferenceMap map_{};
+  PeriodWork work_{};                    // this period's estimated instructions (period_work.hpp)
+  double tracking_forecast_ = 0.0;       // [instructions] the last tracked period's registration
+  std::uint32_t rebuild_deferred_ = 0;   // rebuild steps deferred in a row
   PoseFilter filter_{};
   StartupSearch startup_{};
   TrackingRegistration tracking_{};

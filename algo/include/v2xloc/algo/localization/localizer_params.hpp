@@ -9,6 +9,7 @@
 #include "v2xloc/algo/registration/icp.hpp"
 #include "v2xloc/algo/localization/map_fusion.hpp"
 #include "v2xloc/algo/localization/odometry.hpp"
+#include "v2xloc/algo/localization/period_work.hpp"
 #include "v2xloc/algo/registration/pose_search.hpp"
 #include "v2xloc/algo/registration/register_clouds.hpp"
 #include "v2xloc/algo/localization/stereo_cloud.hpp"
@@ -62,6 +63,11 @@ struct LocalizerParams {
   // map's box in config::kProximityGridWords): ICP queries it proves empty within the gate skip
   // the k-d tree (same matches); 0: off
   float map_vicinity_cell = 0.5f;
+
+  // ---- Period budget ----
+  // Estimated instructions per period (period_work.hpp): a map rebuild step waits for a period
+  // with room (at most work.max_deferred_rebuild_steps), the basin audit takes what is left.
+  PeriodWorkParams work = default_work();
 
   // ---- Odometry ----
   OdometryParams odometry = default_odometry();  // KISS-ICP-style LiDAR odometry (odometry.hpp)
@@ -158,6 +164,14 @@ struct LocalizerParams {
   // "Fused" column (LocalizerFrameOutput::fused_pose_ungated). The ECU leaves it off.
   bool shadow_ungated_filter = false;
 
+  static PeriodWorkParams default_work() {
+    PeriodWorkParams p;  // per-unit costs: callgrind, x86-64 -O2, Sim 0 / 4_infra_2_agent (TUNING.md)
+    p.odometry_query = 2450.0;
+    p.tracking_query = 2300.0;
+    p.map_normal = 5000.0;
+    p.audit_query = 3500.0;  // mean 2.6k; scoring units on the k-d tree cost up to ~5k
+    return p;
+  }
   static OdometryParams default_odometry() {
     OdometryParams p;
     p.convergence = 1e-3;  // [m, rad] |d xi| stop; 1e-4 ran ~2 more iterations for nothing (TUNING.md)

@@ -138,6 +138,12 @@ struct LocalizerCounters {
   std::uint32_t stereo_registrations = 0;
   std::uint32_t stereo_fused = 0;              // passed the stereo gate and the EKF's NIS gate
   std::uint32_t road_height_outputs = 0;       // pre-filter outputs at the map's road height
+  // Work counts behind the period budget (period_work.hpp):
+  std::uint64_t odometry_queries = 0;          // odometry source points x iterations
+  std::uint64_t tracking_queries = 0;          // tracking ICP points x nearest-neighbour passes
+  std::uint64_t audit_work = 0;                // basin-audit search work units
+  std::uint32_t rebuild_steps_deferred = 0;    // map rebuild steps that waited for a period with room
+  std::uint32_t audit_periods_starved = 0;     // running audits that got no work in a period
 };
 
 // The latest wheel speed and yaw rate (deskew, odometry prediction, filter (re)starts).

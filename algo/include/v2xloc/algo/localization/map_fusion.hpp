@@ -122,6 +122,8 @@ struct MapInsertResult {
   bool quorum_checked = false;          // infrastructure checked by the full rule (>= 3 other units)
   std::uint32_t share_trimmed = 0;      // other sources' points thinned to the share to make room
   std::uint32_t coarsened = 0;          // voxel doublings to fit the candidate (max_coarsen_steps)
+  std::uint32_t units_vetted = 0;       // other infrastructure units checked by the quorum after this insert
+  bool cells_rebuilt = false;           // the reference cells were rebuilt from every surveyed source
 };
 
 struct MapSourceInfo {
@@ -203,7 +205,7 @@ class MapFusion {
   void mark_source_cells(std::size_t slot, std::size_t first);
   // Clears the source's bit through the recorded slots (no keys recomputed).
   void clear_source_cells(std::size_t slot);
-  void rebuild_cells_if_crowded();
+  bool rebuild_cells_if_crowded();  // true when it rebuilt
   // Bits of the active surveyed sources other than `slot`: the reference a cloud is checked against.
   SourceCells::Mask trusted_bits(std::size_t slot) const;
   // Fraction of candidate points near other sources' points (see header), excluding `slot`;
@@ -214,7 +216,7 @@ class MapFusion {
   double consistency(std::size_t slot, double margin, std::uint32_t& overlap_points, double& best_probe);
   // Infrastructure accepted before the full quorum existed (the first units to send) is checked once
   // three other units are present: each unvetted stored cloud against the others, evicted if outvoted.
-  void vet_infrastructure();
+  std::uint32_t vet_infrastructure();
   void evict_outvoted(std::size_t slot);
   // Active trusted sources other than `slot` (the units an infrastructure cloud is checked against).
   std::uint32_t other_trusted(std::size_t slot) const;

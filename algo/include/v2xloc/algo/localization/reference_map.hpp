@@ -34,7 +34,14 @@ class ReferenceMap {
   MapInsertResult insert(const MapCloudInput& in);
   // Expires old clouds and advances the target build; true when a rebuild finished this period.
   // normals: the map normals computed / refused (cap) in the period that ends here.
-  bool refresh(double t, LazyNormalCounters& normals);
+  // may_build false: expiry only, the build waits (the period has no room for a step).
+  bool refresh(double t, LazyNormalCounters& normals, bool may_build = true);
+  bool stepped() const { return stepped_; }  // refresh() ran a build step this period
+  // A build step would run at t (a rebuild in progress, or one due); after refresh() of that period.
+  bool build_due(double t) const;
+  // The next build step will finish the tree and put the new target to use (its normals are then
+  // computed as the registration first asks: a costlier registration that period).
+  bool next_step_activates() const;
 
   bool ready() const { return ready_; }  // the active target has at least map_min_points
   // Clouds were fused in the period refresh() closed (arrived since the previous scan): its spare
@@ -75,6 +82,7 @@ class ReferenceMap {
   double built_t_ = -1e300;
   bool ready_ = false;
   bool fused_this_period_ = false;  // a cloud was handed to map fusion since the last refresh()
+  bool stepped_ = false;
   // Last cloud time handed to map fusion per source id (pacing of sources with no stored cloud);
   // full: the oldest entry gives way (pacing then fails open: more checks, never a lost cloud).
   struct Attempt {

@@ -8,6 +8,7 @@
 #include <span>
 
 #include "v2xloc/algo/localization/basin_audit.hpp"
+#include "v2xloc/algo/localization/period_work.hpp"
 #include "v2xloc/algo/localization/localizer_params.hpp"
 #include "v2xloc/algo/localization/localizer_types.hpp"
 #include "v2xloc/algo/localization/stage_probe.hpp"
@@ -28,6 +29,7 @@ struct TrackingFrame {
   std::uint32_t frame = 0;                  // localizer frame index
   Pose3d odom_T_body = Pose3d::Identity();  // this frame's odometry pose
   bool map_busy = false;                    // map clouds were fused this period (reference_map.hpp)
+  PeriodWork* work = nullptr;               // the period's estimated work (nullptr: fixed quotas)
 };
 
 struct TrackingOutcome {

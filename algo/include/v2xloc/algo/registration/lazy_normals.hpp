@@ -29,6 +29,7 @@ class LazyNormals {
   // A new period: at most `quota` normals computed until the next call (0: no limit). Returns
   // the ending period's {computed, refused}.
   LazyNormalCounters new_period(std::uint32_t quota);
+  LazyNormalCounters this_period() const { return counters_; }  // so far in the current period
   // The normal of point i: computed now unless done; NaN when the quota is spent or i is out of range.
   Vec3f get(std::uint32_t i);
 

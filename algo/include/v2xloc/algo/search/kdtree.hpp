@@ -127,6 +127,18 @@ class KdTree {
   KdBuildResult begin_build(std::span<const P> points, std::span<std::uint32_t> index_storage,
                             std::span<KdNode> node_storage, const KdBuildParams& params = {});
   bool build_step(std::size_t work_budget, KdBuildResult& result);
+  // Work a spread build still has to do, in build_step's units (points touched), at most: each
+  // pending node's points once per level down to the leaves (the larger half at every split).
+  // build_step(q) finishes the tree when this is <= q. 0 when idle.
+  std::size_t build_work_left() const {
+    std::size_t work = 0;
+    for (std::size_t i = 0; i < build_.top; ++i) {
+      const std::size_t n = build_.stack[i].end - build_.stack[i].begin;
+      for (std::size_t m = n; m > build_.leaf_size; m = (m + 1) / 2) work += n;
+      work += n;
+    }
+    return work;
+  }
 
   KdQueryResult knn(const P& query, std::size_t k, std::span<Neighbor> out) const;
   KdQueryResult radius(const P& query, float radius, std::span<Neighbor> out) const;
