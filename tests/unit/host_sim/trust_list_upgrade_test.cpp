@@ -37,7 +37,7 @@ class TrustListUpgradeTest : public test::RecordingDirTest {
 TEST_F(TrustListUpgradeTest, AddsTheSurveysBesideTheOriginal) {
   TrustListUpgrade r;
   std::string err;
-  ASSERT_TRUE(upgrade_trust_list(dir_.string(), r, err)) << err;
+  ASSERT_TRUE(upgrade_trust_list(dir_.string(), false, r, err)) << err;
   EXPECT_FALSE(r.already_surveyed);
   EXPECT_EQ(r.file, "trust_list_surveyed.txt");
   EXPECT_EQ(r.signers, 2u);
@@ -55,7 +55,7 @@ TEST_F(TrustListUpgradeTest, AddsTheSurveysBesideTheOriginal) {
   EXPECT_FALSE(list.signers[1].surveyed);  // the agent
 
   TrustListUpgrade again;
-  ASSERT_TRUE(upgrade_trust_list(dir_.string(), again, err)) << err;
+  ASSERT_TRUE(upgrade_trust_list(dir_.string(), false, again, err)) << err;
   EXPECT_TRUE(again.already_surveyed);
   EXPECT_EQ(again.file, "trust_list_surveyed.txt");
 }
@@ -66,7 +66,7 @@ TEST_F(TrustListUpgradeTest, InfrastructureWithoutASignerIsAnError) {
   write("trust_list.txt", trust_list_text(trust_list_of({agent})));
   TrustListUpgrade r;
   std::string err;
-  EXPECT_FALSE(upgrade_trust_list(dir_.string(), r, err));
+  EXPECT_FALSE(upgrade_trust_list(dir_.string(), false, r, err));
   EXPECT_NE(err.find("infra_2"), std::string::npos) << err;
   EXPECT_EQ(Json::parse(read("manifest.json"))["files"]["trust_list"], "trust_list.txt");
 }
