@@ -156,7 +156,7 @@ TrustListStatus parse_background_line(const Token* tok, TrustList& list) {
   std::uint32_t sender_id = 0;
   if (!parse_u32(tok[1], sender_id)) return TrustListStatus::kBadSenderId;
   TrustedSigner* signer = infrastructure_signer(list, sender_id);
-  if (signer == nullptr) return TrustListStatus::kBackgroundWithoutSigner;
+  if (signer == nullptr || !signer->surveyed) return TrustListStatus::kBackgroundWithoutSigner;
   if (signer->has_background) return TrustListStatus::kDuplicateBackground;
   if (!is_background_name(tok[2])) return TrustListStatus::kBadBackgroundName;
   Digest digest{};
@@ -240,7 +240,7 @@ const char* to_string(TrustListStatus s) {
     case TrustListStatus::kBadSurveyQuaternion: return "survey quaternion must be plain decimal numbers of unit length";
     case TrustListStatus::kDuplicateSurvey: return "second survey for the same signer";
     case TrustListStatus::kBackgroundWithoutSigner:
-      return "background of a sender id with no infrastructure signer listed above";
+      return "background of a sender id with no surveyed infrastructure signer (signer and survey lines) above";
     case TrustListStatus::kBadBackgroundName:
       return "background file must be a flat name of 1-63 characters [A-Za-z0-9_.-], not starting with '.'";
     case TrustListStatus::kBadBackgroundDigest: return "background digest must be 64 hex digits (SHA-256)";

@@ -15,7 +15,9 @@
 // signers without one are trusted on their declared pose as before (older lists parse unchanged).
 // A background line names the unit's surveyed background file (background_file.hpp) beside the
 // trust list and its SHA-256, so the list vouches for the file: a flat name of 1-63 characters
-// [A-Za-z0-9_.-] not starting with '.', infrastructure signers only, one per signer.
+// [A-Za-z0-9_.-] not starting with '.', one per signer, after the unit's survey line (the
+// background checks the points in the unit's sensor frame, the survey where that frame is: one
+// without the other would leave a unit half checked).
 // parse_trust_list() is a pure function over bytes (fuzzable): every key is checked to be a
 // P-256 point; duplicates (key, sender id or a second survey), unknown words, over-long lines,
 // more than kMaxTrustedSigners entries, a survey without an infrastructure signer above it, a
@@ -87,7 +89,7 @@ enum class TrustListStatus : std::uint8_t {
   kBadSurveyNumber,       // not a plain decimal number, not finite, or beyond kMaxSurveyCoordinateM
   kBadSurveyQuaternion,   // quaternion norm not 1 within kSurveyQuaternionNormTolerance
   kDuplicateSurvey,       // a second survey line for the same signer
-  kBackgroundWithoutSigner,  // background of a sender id with no infrastructure signer listed above
+  kBackgroundWithoutSigner,  // background of a sender id with no surveyed infrastructure signer above
   kBadBackgroundName,     // not a flat name of 1-63 characters [A-Za-z0-9_.-], or starting with '.'
   kBadBackgroundDigest,   // not 64 hex digits
   kDuplicateBackground,   // a second background line for the same signer

@@ -11,7 +11,6 @@ namespace {
 constexpr std::int64_t kSpanXY = 2 * kBackgroundHalfXY;  // offset-binary index range per axis
 constexpr std::int64_t kSpanZ = 2 * kBackgroundHalfZ;
 static_assert(kSpanXY * kSpanXY * kSpanZ == (std::int64_t{1} << 32), "keys fill 32 bits");
-static_assert(config::kMaxBackgroundCells < (std::size_t{1} << 31), "cell index fits a binary search's halving");
 
 // p's cell in offset binary; false when non-finite or outside the key's span.
 bool cell_of(const Vec3f& p, double inv_cell, std::int32_t c[3]) {
@@ -73,6 +72,7 @@ bool background_valid(const SurveyedBackground& b) {
 BackgroundScore check_background(const SurveyedBackground& b, std::span<const Vec3f> points,
                                  const Mat3d& sensor_R_world, const BackgroundCheckParams& params) {
   BackgroundScore s;
+  if (!(b.cell > 0.0)) return s;  // not a background (background_valid): inconsistent
   const double inv_cell = 1.0 / b.cell;
   const std::size_t cap = std::clamp<std::size_t>(params.max_points, 1, config::kBackgroundCheckPoints);
   const std::size_t stride = std::max<std::size_t>(1, (points.size() + cap - 1) / cap);

@@ -1,7 +1,7 @@
 // Trust-list files (firmware/trust/trust_list.hpp) from arbitrary bytes: a file parses or is
 // refused with a status and a line inside the text; a list that parses holds at most
-// kMaxTrustedSigners distinct signers with valid roles, surveys and backgrounds only on
-// infrastructure signers (finite coordinates and a unit quaternion; a flat background name that
+// kMaxTrustedSigners distinct signers with valid roles, surveys only on infrastructure signers
+// (finite coordinates and a unit quaternion), backgrounds only on surveyed ones (a flat name that
 // cannot leave the list's folder), formats to text that parses again to the same signers,
 // bit-identical surveys and the same backgrounds, and every signer is found by its HashedId8.
 #include <cmath>
@@ -27,7 +27,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (s.role != SignerRole::kInfrastructure && s.role != SignerRole::kAgent) std::abort();
     if (list->find(s.id) != &s) std::abort();
     if (s.has_background) {
-      if (s.role != SignerRole::kInfrastructure) std::abort();
+      if (s.role != SignerRole::kInfrastructure || !s.surveyed) std::abort();
       const std::size_t n = strnlen(s.background_file.data(), s.background_file.size());
       if (n == 0 || n > kMaxBackgroundNameChars || s.background_file[0] == '.') std::abort();
       for (std::size_t i = 0; i < n; ++i) {

@@ -96,8 +96,8 @@ TEST(FirmwareCli, ConfigFileKeysAreCheckedAndTheCommandLineWins) {
   std::remove(path.c_str());
 }
 
-// Trust list dir/list.txt with one infrastructure unit (sender 1) whose background line names
-// `name` with the SHA-256 of `vouched`.
+// Trust list dir/list.txt with one surveyed infrastructure unit (sender 1) whose background line
+// names `name` with the SHA-256 of `vouched`.
 std::string trust_list_with_background(const std::string& dir, const std::string& name,
                                        const std::vector<std::uint8_t>& vouched) {
   using namespace v2xloc::trust;
@@ -108,6 +108,7 @@ std::string trust_list_with_background(const std::string& dir, const std::string
   s.id = hashed_id8(s.key);
   s.role = SignerRole::kInfrastructure;
   s.sender_id = 1;
+  s.surveyed = true;
   s.has_background = true;
   name.copy(s.background_file.data(), name.size());
   s.background_sha256 = sha256(vouched);

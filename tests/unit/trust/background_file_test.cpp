@@ -32,7 +32,7 @@ std::vector<std::uint8_t> background_bytes(std::uint32_t sender, std::size_t n) 
   return out;
 }
 
-// Infrastructure unit 1 with a background, agent 32.
+// Infrastructure unit 1, surveyed, with a background; agent 32.
 TrustList list_with_background(const std::vector<std::uint8_t>& file) {
   TrustList l;
   for (int i = 0; i < 2; ++i) {
@@ -46,6 +46,8 @@ TrustList list_with_background(const std::vector<std::uint8_t>& file) {
     s.sender_id = i == 0 ? 1u : 32u;
   }
   TrustedSigner& infra = l.signers[0];
+  infra.surveyed = true;
+  infra.survey.position_m = {9.5, 9.5, 5.0};
   infra.has_background = true;
   const std::string name = "background_infra_0.bin";
   name.copy(infra.background_file.data(), name.size());
@@ -105,7 +107,7 @@ TEST(TrustListBackground, HostileLinesAreRefusedWithTheirLine) {
     TrustList out;
     const TrustListParseResult r = parse(text, out);
     EXPECT_EQ(r.status, c.want) << c.line;
-    EXPECT_EQ(r.line, 6u) << c.line;  // three comment lines, header, signer 1, then the background
+    EXPECT_EQ(r.line, 7u) << c.line;  // three comment lines, header, signer 1, survey, then the background
     EXPECT_EQ(out.count, 0u) << "nothing is kept from a refused list";
   }
   // A second background for the same unit, and one above its signer.
@@ -118,6 +120,11 @@ TEST(TrustListBackground, HostileLinesAreRefusedWithTheirLine) {
   const TrustListParseResult r = parse(above, out);
   EXPECT_EQ(r.status, TrustListStatus::kBackgroundWithoutSigner);
   EXPECT_EQ(r.line, 2u);
+  // A background before the unit's survey: the unit would be checked in a frame nobody surveyed.
+  std::string unsurveyed = text_of(list_with_background(background_bytes(1, 4)));
+  const std::size_t survey = unsurveyed.find("survey 1 ");
+  unsurveyed.erase(survey, unsurveyed.find('\n', survey) - survey + 1);
+  EXPECT_EQ(parse(unsurveyed, out).status, TrustListStatus::kBackgroundWithoutSigner);
 }
 
 TEST(BackgroundFile, ValidFileIsCopiedIntoTheCallersStorage) {
