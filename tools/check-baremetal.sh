@@ -10,7 +10,7 @@ if [ -n "$found$undef" ]; then
   echo "check-baremetal: FORBIDDEN symbols in $elf:"; echo "$found $undef"; exit 1
 fi
 # Every stage must be linked in (a stage the image does not call is a stage the check does not prove).
-stages='v2xloc::register_clouds( v2xloc::kabsch_fit( v2xloc::MapFusion::insert( v2xloc::deskew(
+stages='v2xloc::register_clouds( v2xloc::kabsch_fit( v2xloc::MapFusion::insert( v2xloc::check_background( v2xloc::deskew(
 v2xloc::LidarOdometry::register_frame( v2xloc::FixedLagValidityGate::push(
 v2xloc::CausalValidityGate::push( v2xloc::Ekf::on_registration( v2xloc::registration_covariance(
 v2xloc::geodetic_to_enu( v2xloc::enu_to_geodetic( v2xloc::stereo_to_cloud('

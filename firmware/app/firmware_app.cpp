@@ -78,6 +78,7 @@ void FirmwareApp::apply_cloud(const DecodedCloud& decoded) {
         if (!decoded.map.is_agent) ++counters_.map_infra_inconsistent;
         break;
       case MapInsertStatus::kHeldBack: ++counters_.map_held_back; break;
+      case MapInsertStatus::kBackgroundMismatch: ++counters_.map_background_mismatch; break;
       case MapInsertStatus::kNoSourceSlot: ++counters_.map_no_slot; break;
       case MapInsertStatus::kStale: ++counters_.map_stale; break;
       case MapInsertStatus::kPaced: ++counters_.map_paced; break;
@@ -230,7 +231,7 @@ protocol::Heartbeat FirmwareApp::heartbeat_now() const {
   hb.udp_dropped = saturate_u8(d.datagrams_rejected + counters_.datagrams_oversize + r.frames_timed_out +
                                r.frames_evicted + d.clouds_rejected + d.shares_untrusted + d.shares_queue_dropped + d.wrong_channel +
                                d.ego_time_rejected + counters_.map_inconsistent + counters_.map_held_back +
-                               counters_.map_no_slot);
+                               counters_.map_background_mismatch + counters_.map_no_slot);
   hb.counter = heartbeat_counter_;
   return hb;
 }

@@ -58,6 +58,7 @@ struct FirmwareCounters {
   std::uint64_t map_inconsistent = 0;    // verified shares map fusion refused: disagree with the infrastructure
   std::uint64_t map_infra_inconsistent = 0;  // of those, infrastructure shares (outvoted by the other units)
   std::uint64_t map_held_back = 0;       // agent shares with too little overlap to be checked
+  std::uint64_t map_background_mismatch = 0;  // infrastructure shares off their unit's surveyed background
   std::uint64_t map_no_slot = 0;         // per-role source cap reached
   std::uint64_t map_stale = 0;           // not newer than the source's stored cloud
   std::uint64_t map_paced = 0;           // not fused: the source's stored cloud is recent (map_cloud_interval)

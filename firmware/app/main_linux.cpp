@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <string>
@@ -19,6 +20,7 @@
 #include <CLI/CLI.hpp>
 
 #include "firmware/app/alloc_counter.hpp"
+#include "firmware/app/background_store.hpp"
 #include "firmware/app/emulated_wiring.hpp"
 #include "firmware/app/firmware_app.hpp"
 #include "firmware/app/configure_localizer.hpp"
@@ -45,6 +47,7 @@ using namespace v2xloc::firmware;
 // ---- The static objects of the ECU (BSS; nothing of this size lives on the stack or heap). ----
 Localizer g_localizer;
 InputDecoder g_decoder;
+BackgroundStore g_backgrounds;  // surveyed backgrounds the localizer reads (trust list `background` lines)
 
 volatile std::sig_atomic_t g_stop = 0;
 void on_signal(int) { g_stop = 1; }
@@ -52,8 +55,9 @@ void on_signal(int) { g_stop = 1; }
 void print_memory() {
   std::printf("v2xloc-firmware: localizer: v2xloc::Localizer\n");
   std::printf("v2xloc-firmware: static memory: localizer %.1f MiB, decoder (reassembler %zu slots x %zu points + cloud buffers) %.1f MiB,"
-              " app %zu B; .bss %.1f MiB, .data %zu B\n",
+              " backgrounds (%zu units x %zu cells) %.1f KiB, app %zu B; .bss %.1f MiB, .data %zu B\n",
               sizeof(Localizer) / 1048576.0, kReassemblySlots, kMaxCloudPoints, sizeof(InputDecoder) / 1048576.0,
+              BackgroundStore::kUnits, BackgroundStore::kCells, sizeof(BackgroundStore) / 1024.0,
               sizeof(FirmwareApp), static_cast<double>(&_end - &__bss_start) / 1048576.0,
               static_cast<std::size_t>(&_edata - &__data_start));
 }
@@ -101,10 +105,11 @@ void print_counters(const FirmwareApp& app) {
   std::printf("v2xloc-firmware: can_repeated %llu can_counter_gaps %llu gnss_position_dropped %llu gnss_time_rejected %llu\n",
               (unsigned long long)d.can_repeated, (unsigned long long)d.can_counter_gaps,
               (unsigned long long)d.gnss_position_dropped, (unsigned long long)c.gnss_time_rejected);
-  std::printf("v2xloc-firmware: map fusion of trusted shares: inconsistent %llu (infrastructure %llu) held_back %llu"
-              " no_slot %llu stale %llu; paced (not needed, source's last recent) %llu before and %llu after the signature check\n",
+  std::printf("v2xloc-firmware: map fusion of trusted shares: inconsistent %llu (infrastructure %llu) background_mismatch %llu"
+              " held_back %llu no_slot %llu stale %llu; paced (not needed, source's last recent) %llu before and %llu after the"
+              " signature check\n",
               (unsigned long long)c.map_inconsistent, (unsigned long long)c.map_infra_inconsistent,
-              (unsigned long long)c.map_held_back,
+              (unsigned long long)c.map_background_mismatch, (unsigned long long)c.map_held_back,
               (unsigned long long)c.map_no_slot, (unsigned long long)c.map_stale,
               (unsigned long long)d.shares_paced, (unsigned long long)c.map_paced);
   std::printf("v2xloc-firmware: reassembly fragments %llu frames %llu duplicates %llu stale %llu timed_out %llu evicted %llu"
@@ -244,7 +249,57 @@ bool open_cloud_link(const Options& options, Backends& b) {
   return true;
 }
 
-// The provisioned trust list (--trust-list FILE), read at start-up (heap allowed here).
+// One surveyed background file named by the trust list (beside it), read at start-up: refused
+// before reading when larger than the format allows, then checked against the signer's entry.
+bool load_background(const std::string& list_path, const trust::TrustedSigner& s) {
+  const std::string path = (std::filesystem::path(list_path).parent_path() / s.background_file.data()).string();
+  if (g_backgrounds.full()) {
+    std::fprintf(stderr, "v2xloc-firmware: %s: more backgrounds than the firmware holds (%zu)\n", path.c_str(),
+                 BackgroundStore::kUnits);
+    return false;
+  }
+  std::error_code ec;
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (ec) {
+    std::fprintf(stderr, "v2xloc-firmware: cannot read background %s: %s\n", path.c_str(), ec.message().c_str());
+    return false;
+  }
+  if (size > trust::kMaxBackgroundFileBytes) {
+    std::fprintf(stderr, "v2xloc-firmware: %s: %s\n", path.c_str(), trust::to_string(trust::BackgroundStatus::kTooLarge));
+    return false;
+  }
+  std::ifstream in(path, std::ios::binary);
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(size));
+  if (!in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size())) || in.peek() != EOF) {
+    std::fprintf(stderr, "v2xloc-firmware: cannot read background %s (changed while read?)\n", path.c_str());
+    return false;
+  }
+  const trust::BackgroundStatus status = g_backgrounds.load(s, bytes);
+  if (status != trust::BackgroundStatus::kOk) {
+    std::fprintf(stderr, "v2xloc-firmware: %s: %s\n", path.c_str(), trust::to_string(status));
+    return false;
+  }
+  return true;
+}
+
+// Every background the list names, into g_backgrounds and on to the localizer (after configure).
+bool provision_backgrounds(const std::string& list_path, const trust::TrustList& list) {
+  for (const trust::TrustedSigner& s : list.view()) {
+    if (s.has_background && !load_background(list_path, s)) return false;
+  }
+  if (g_backgrounds.provision(g_localizer) != g_backgrounds.count()) {
+    std::fprintf(stderr, "v2xloc-firmware: the localizer refused a surveyed background\n");
+    return false;
+  }
+  std::size_t cells = 0;
+  for (std::size_t i = 0; i < g_backgrounds.count(); ++i) cells += g_backgrounds.background(i).cells.size();
+  std::printf("v2xloc-firmware: surveyed backgrounds: %zu loaded, %zu cells (capacity %zu units x %zu)\n",
+              g_backgrounds.count(), cells, BackgroundStore::kUnits, BackgroundStore::kCells);
+  return true;
+}
+
+// The provisioned trust list (--trust-list FILE) and the backgrounds it names, read at start-up
+// (heap allowed here).
 bool provision_trust(const Options& options) {
   if (options.trust_list.empty()) {
     std::printf("v2xloc-firmware: no trust list: every V2X map share will be refused\n");
@@ -268,9 +323,9 @@ bool provision_trust(const Options& options) {
   std::size_t infrastructure = 0;
   for (const trust::TrustedSigner& s : list.view()) infrastructure += s.role == trust::SignerRole::kInfrastructure ? 1u : 0u;
   // Unsurveyed infrastructure is trusted on the pose it declares (lists written before surveys).
-  std::printf("v2xloc-firmware: trust list: %zu signers, %zu infrastructure, %zu of them surveyed\n", list.count,
-              infrastructure, list.surveyed_count());
-  return true;
+  std::printf("v2xloc-firmware: trust list: %zu signers, %zu infrastructure, %zu of them surveyed, %zu with a surveyed"
+              " background\n", list.count, infrastructure, list.surveyed_count(), list.background_count());
+  return provision_backgrounds(path, list);
 }
 
 // CAN over UDP on loopback, the SimClock driven by the replayer's sim-time frames, scripted PPS

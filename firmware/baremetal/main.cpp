@@ -1,11 +1,12 @@
 // Bare-metal link check: runs every stage of algo/ on a tiny synthetic scene held in static
 // storage (a box corner: floor and two walls, plus a transformed copy), so the linker proves the
 // core needs no heap, no exceptions and no OS. Registration (downsample, k-d tree, normals, FPFH,
-// correspondences, RANSAC, ICP, Kabsch) and localization (map fusion, deskew, LiDAR odometry,
-// validity gate, EKF, geodesy, stereo cloud). The Localizer object itself is not linked: it owns a
+// correspondences, RANSAC, ICP, Kabsch) and localization (map fusion with a surveyed background
+// held as the firmware holds it, deskew, LiDAR odometry, validity gate, EKF, geodesy, stereo cloud). The Localizer object itself is not linked: it owns a
 // copy of every stage's storage plus its frame buffers (~8 MiB static RAM in the EMBEDDED
 // profile), more than the few MB such a target has; the stages below are the same code.
 // Prints nothing; results go to volatile sinks so nothing is optimised away.
+#include <algorithm>
 #include <cstdint>
 #include <span>
 
@@ -21,6 +22,7 @@
 #include "v2xloc/algo/core/prng.hpp"
 #include "v2xloc/algo/registration/register_clouds.hpp"
 #include "v2xloc/algo/localization/stereo_cloud.hpp"
+#include "v2xloc/algo/localization/surveyed_background.hpp"
 #include "v2xloc/algo/localization/trajectory_backfill.hpp"
 #include "v2xloc/algo/localization/validity_gate.hpp"
 
@@ -38,6 +40,9 @@ v2xloc::Ekf g_ekf;
 v2xloc::FixedLagValidityGate g_fixed_lag_gate;
 v2xloc::CausalValidityGate g_causal_gate;
 v2xloc::TrajectoryBackfill g_backfill;
+// Surveyed backgrounds at the firmware's capacity (firmware/app/background_store.hpp), so the
+// image's static RAM counts them.
+std::uint32_t g_background_cells[v2xloc::config::kMaxBackgroundUnits][v2xloc::config::kMaxBackgroundCells];
 float g_sweep_times[kScenePoints];
 v2xloc::Vec3f g_deskewed[kScenePoints];
 constexpr std::uint32_t kStereoWidth = 32, kStereoHeight = 24;
@@ -75,15 +80,29 @@ void make_scene() {
   }
 }
 
-// Reference map from two "infrastructure" clouds, then the merged map on the voxel grid.
+// Unit 1's surveyed background: its own cloud's 0.5 m cells, sorted.
+v2xloc::SurveyedBackground survey_background(std::span<const v2xloc::Vec3f> cloud) {
+  std::uint32_t* cells = g_background_cells[0];
+  std::size_t n = 0;
+  for (const v2xloc::Vec3f& p : cloud) {
+    if (n < v2xloc::config::kMaxBackgroundCells && v2xloc::background_cell_key(p, 2.0, cells[n])) ++n;
+  }
+  std::sort(cells, cells + n);
+  n = static_cast<std::size_t>(std::unique(cells, cells + n) - cells);
+  return v2xloc::SurveyedBackground{0.5, std::span<const std::uint32_t>(cells, n)};
+}
+
+// Reference map from two "infrastructure" clouds, then the merged map on the voxel grid; unit 1
+// checked against its surveyed background.
 std::uint32_t fuse_map(std::span<const v2xloc::Vec3f> target, std::span<const v2xloc::Vec3f> source,
                        const v2xloc::Mat4d& target_T_source) {
+  const bool surveyed = g_map.set_background(1, survey_background(target));
   const v2xloc::MapInsertResult a = g_map.insert(1, 0.0, v2xloc::Pose3d::Identity(), target, true);
   const v2xloc::MapInsertResult b = g_map.insert(2, 0.05, v2xloc::Pose3d(target_T_source), source);
   g_map.expire(0.1);
   const v2xloc::MapExtractResult merged = g_map.extract(g_map_points);
   return static_cast<std::uint32_t>(a.status) | (static_cast<std::uint32_t>(b.status) << 4) |
-         (merged.points << 8);
+         (surveyed ? 1u << 8 : 0u) | (merged.points << 9);
 }
 
 // Deskews the source as a 0.1 s sweep, then two LiDAR odometry frames (target, deskewed source).

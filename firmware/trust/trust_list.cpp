@@ -130,15 +130,55 @@ TrustListStatus add_signer(const TrustedSigner& s, TrustList& list) {
   return TrustListStatus::kOk;
 }
 
+// The infrastructure signer listed with this sender id, else null.
+TrustedSigner* infrastructure_signer(TrustList& list, std::uint32_t sender_id) {
+  for (std::size_t k = 0; k < list.count; ++k) {
+    TrustedSigner& s = list.signers[k];
+    if (s.sender_id == sender_id) return s.role == SignerRole::kInfrastructure ? &s : nullptr;
+  }
+  return nullptr;
+}
+
+// A flat file name beside the trust list: no separators, no "." / ".." and no hidden files.
+bool is_background_name(const Token& t) {
+  if (t.n == 0 || t.n > kMaxBackgroundNameChars || t.p[0] == '.') return false;
+  for (std::size_t i = 0; i < t.n; ++i) {
+    const char c = t.p[i];
+    const bool ok = (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' ||
+                    c == '.' || c == '-';
+    if (!ok) return false;
+  }
+  return true;
+}
+
+// "background <sender id> <file> <sha256>" (4 tokens) onto the infrastructure signer listed above.
+TrustListStatus parse_background_line(const Token* tok, TrustList& list) {
+  std::uint32_t sender_id = 0;
+  if (!parse_u32(tok[1], sender_id)) return TrustListStatus::kBadSenderId;
+  TrustedSigner* signer = infrastructure_signer(list, sender_id);
+  if (signer == nullptr || !signer->surveyed) return TrustListStatus::kBackgroundWithoutSigner;
+  if (signer->has_background) return TrustListStatus::kDuplicateBackground;
+  if (!is_background_name(tok[2])) return TrustListStatus::kBadBackgroundName;
+  Digest digest{};
+  if (tok[3].n != 2 * digest.size()) return TrustListStatus::kBadBackgroundDigest;
+  for (std::size_t i = 0; i < digest.size(); ++i) {
+    const int hi = hex_value(tok[3].p[2 * i]), lo = hex_value(tok[3].p[2 * i + 1]);
+    if (hi < 0 || lo < 0) return TrustListStatus::kBadBackgroundDigest;
+    digest[i] = static_cast<std::uint8_t>(hi * 16 + lo);
+  }
+  signer->background_file = {};
+  std::memcpy(signer->background_file.data(), tok[2].p, tok[2].n);
+  signer->background_sha256 = digest;
+  signer->has_background = true;
+  return TrustListStatus::kOk;
+}
+
 // "survey <sender id> x y z qx qy qz qw" (9 tokens) onto the infrastructure signer listed above.
 TrustListStatus parse_survey(const Token* tok, TrustList& list) {
   std::uint32_t sender_id = 0;
   if (!parse_u32(tok[1], sender_id)) return TrustListStatus::kBadSenderId;
-  TrustedSigner* signer = nullptr;
-  for (std::size_t k = 0; k < list.count; ++k) {
-    if (list.signers[k].sender_id == sender_id) signer = &list.signers[k];
-  }
-  if (signer == nullptr || signer->role != SignerRole::kInfrastructure) return TrustListStatus::kSurveyWithoutSigner;
+  TrustedSigner* signer = infrastructure_signer(list, sender_id);
+  if (signer == nullptr) return TrustListStatus::kSurveyWithoutSigner;
   if (signer->surveyed) return TrustListStatus::kDuplicateSurvey;
   SurveyedPose pose;
   for (std::size_t i = 0; i < 3; ++i) {
@@ -172,6 +212,7 @@ TrustListStatus parse_line(const char* line, std::size_t len, bool& header, Trus
     return TrustListStatus::kOk;
   }
   if (tok[0].is("survey")) return nt == 9 ? parse_survey(tok, list) : TrustListStatus::kSyntax;
+  if (tok[0].is("background")) return nt == 4 ? parse_background_line(tok, list) : TrustListStatus::kSyntax;
   if (!tok[0].is("signer") || nt < 4 || nt > 5) return TrustListStatus::kSyntax;
   TrustedSigner s;
   const TrustListStatus status = parse_signer(tok, nt, s);
@@ -198,6 +239,12 @@ const char* to_string(TrustListStatus s) {
       return "survey position must be plain decimal numbers (no nan/inf/hex) within +-100 km";
     case TrustListStatus::kBadSurveyQuaternion: return "survey quaternion must be plain decimal numbers of unit length";
     case TrustListStatus::kDuplicateSurvey: return "second survey for the same signer";
+    case TrustListStatus::kBackgroundWithoutSigner:
+      return "background of a sender id with no surveyed infrastructure signer (signer and survey lines) above";
+    case TrustListStatus::kBadBackgroundName:
+      return "background file must be a flat name of 1-63 characters [A-Za-z0-9_.-], not starting with '.'";
+    case TrustListStatus::kBadBackgroundDigest: return "background digest must be 64 hex digits (SHA-256)";
+    case TrustListStatus::kDuplicateBackground: return "second background for the same signer";
   }
   return "?";
 }
@@ -212,6 +259,12 @@ const TrustedSigner* TrustList::find(const HashedId8& id) const {
 std::size_t TrustList::surveyed_count() const {
   std::size_t n = 0;
   for (std::size_t i = 0; i < count; ++i) n += signers[i].surveyed ? 1u : 0u;
+  return n;
+}
+
+std::size_t TrustList::background_count() const {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < count; ++i) n += signers[i].has_background ? 1u : 0u;
   return n;
 }
 
@@ -256,6 +309,7 @@ std::size_t format_trust_list(const TrustList& list, std::span<char> out) {
   };
   if (!put("# v2xloc trust list: signer <role> <sender id> <P-256 public key 04||X||Y hex> [name]\n"
            "#   survey <sender id> <x y z [m]> <qx qy qz qw>: an infrastructure unit's surveyed sensor pose\n"
+           "#   background <sender id> <file beside this list> <sha256>: its surveyed static background\n"
            "v2xloc-trust-list 1\n")) {
     return 0;
   }
@@ -270,6 +324,14 @@ std::size_t format_trust_list(const TrustList& list, std::span<char> out) {
       std::snprintf(line, sizeof line, "survey %u %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", s.sender_id,
                     p.position_m[0], p.position_m[1], p.position_m[2], p.quaternion_xyzw[0], p.quaternion_xyzw[1],
                     p.quaternion_xyzw[2], p.quaternion_xyzw[3]);
+      if (!put(line)) return 0;
+    }
+    if (s.has_background) {
+      int at = std::snprintf(line, sizeof line, "background %u %s ", s.sender_id, s.background_file.data());
+      for (const std::uint8_t b : s.background_sha256) {
+        at += std::snprintf(line + at, sizeof line - static_cast<std::size_t>(at), "%02x", b);
+      }
+      std::snprintf(line + at, sizeof line - static_cast<std::size_t>(at), "\n");
       if (!put(line)) return 0;
     }
   }

@@ -7,8 +7,9 @@
 // writes standard float32 PCD copies of a recording's clouds (format 2 stores them quantised).
 // v2xloc-sim upgrade-can RECORDING_DIR rewrites a CAN layout 1 log (recorded before every GNSS frame
 // had a counter and a CRC) in the current layout beside the original and points the manifest at it.
-// v2xloc-sim upgrade-trust RECORDING_DIR writes the trust list with every infrastructure unit's
-// surveyed pose (recorded before trust lists carried them) beside the original, likewise.
+// v2xloc-sim upgrade-trust RECORDING_DIR [--no-background] writes the trust list with every
+// infrastructure unit's surveyed pose and background (recorded before trust lists carried them)
+// beside the original, likewise; --no-background: the surveys only.
 #include "host_sim/recording/can_log_upgrade.hpp"
 #include "host_sim/recording/pcd_export.hpp"
 #include "host_sim/recording/recorder.hpp"
@@ -87,15 +88,15 @@ int run_upgrade_can(const std::string& dir) {
   return 0;
 }
 
-int run_upgrade_trust(const std::string& dir) {
+int run_upgrade_trust(const std::string& dir, bool backgrounds) {
   TrustListUpgrade result;
   std::string error;
-  if (!upgrade_trust_list(dir, result, error)) {
+  if (!upgrade_trust_list(dir, backgrounds, result, error)) {
     std::fprintf(stderr, "v2xloc-sim upgrade-trust: %s\n", error.c_str());
     return 1;
   }
-  std::printf("%s: trust list %s: %zu signers, %zu infrastructure surveyed%s\n", dir.c_str(), result.file.c_str(),
-              result.signers, result.surveyed,
+  std::printf("%s: trust list %s: %zu signers, %zu infrastructure surveyed, %zu with a background%s\n", dir.c_str(),
+              result.file.c_str(), result.signers, result.surveyed, result.backgrounds,
               result.already_surveyed ? " (already)" : "; the manifest names it, the original is kept");
   return 0;
 }
@@ -178,10 +179,13 @@ int main(int argc, char** argv) {
   std::string upgrade_dir;
   upgrade->add_option("RECORDING_DIR", upgrade_dir, "recording folder")->required();
   CLI::App* upgrade_trust = app.add_subcommand(
-      "upgrade-trust", "add every infrastructure unit's surveyed pose to a recording's trust list (the original is "
-                       "kept; without surveys the firmware trusts the pose a unit declares)");
+      "upgrade-trust", "add every infrastructure unit's surveyed pose and background to a recording's trust list (the "
+                       "original is kept; without surveys the firmware trusts the pose a unit declares, without a "
+                       "background the points it sends)");
   std::string upgrade_trust_dir;
+  bool no_background = false;
   upgrade_trust->add_option("RECORDING_DIR", upgrade_trust_dir, "recording folder")->required();
+  upgrade_trust->add_flag("--no-background", no_background, "add the surveyed poses only");
   try {
     app.parse(argc, argv);
     if (generate->parsed() && !all && (scenario < 0 || perm_name.empty()))
@@ -191,7 +195,7 @@ int main(int argc, char** argv) {
   }
   if (export_pcd->parsed()) return run_export(export_in, export_out, encoding_name);
   if (upgrade->parsed()) return run_upgrade_can(upgrade_dir);
-  if (upgrade_trust->parsed()) return run_upgrade_trust(upgrade_trust_dir);
+  if (upgrade_trust->parsed()) return run_upgrade_trust(upgrade_trust_dir, !no_background);
   base.stereo = !no_stereo;
   return run_generate(base, all, scenario, perm_name, out);
 }

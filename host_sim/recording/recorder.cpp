@@ -4,6 +4,8 @@
 #include "host_sim/common/png.hpp"
 #include "host_sim/common/rng.hpp"
 #include "host_sim/recording/pose_io.hpp"
+#include "host_sim/recording/sim_background.hpp"
+#include "v2xloc/algo/core/config.hpp"
 #include "host_sim/recording/sim_trust.hpp"
 #include "host_sim/recording/topview.hpp"
 #include "host_sim/scenario/simulation.hpp"
@@ -479,9 +481,36 @@ Json manifest_files(const Session& s, const RecordingSummary& summary) {
   return files;
 }
 
-// trust_list.txt: every map-cloud sensor's deterministic test key (sim_trust.hpp) and every
-// infrastructure sensor's surveyed pose, the list the firmware is provisioned with when this
-// recording is replayed.
+// Each infrastructure unit's surveyed background (sim_background.hpp), rendered in the world
+// without its vehicles, written beside the trust list and named on the unit's entry.
+bool write_backgrounds(const Session& s, trust::TrustList& list, std::string& error) {
+  IntersectionWorld survey;  // the recording's world (same seed), no dynamic bodies
+  WorldConfig world_config;
+  world_config.seed = s.cfg.seed;
+  build_intersection_world(world_config, survey);
+  for (std::size_t k = 0; k < s.sites.size(); ++k) {
+    std::uint32_t id = 0;
+    if (!sim_sender_id("infra", s.sites[k].name, id)) continue;
+    LidarConfig cfg = infra_lidar_config(s.cfg.quick);
+    cfg.name = s.sites[k].name;
+    cfg.mount = Eigen::Isometry3d::Identity();
+    SimBackground bg;
+    if (!render_background(survey.world, cfg, s.sites[k].sensor_to_enu, s.cfg.seed, k, config::kBackgroundFileCells, bg,
+                           error)) {
+      return false;
+    }
+    for (std::size_t i = 0; i < list.count; ++i) {
+      if (list.signers[i].sender_id == id && !write_background(s.root.string(), cfg.name, bg, list.signers[i], error)) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+// trust_list.txt: every map-cloud sensor's deterministic test key (sim_trust.hpp), every
+// infrastructure sensor's surveyed pose and background, the list the firmware is provisioned with
+// when this recording is replayed.
 bool write_trust_list(Session& s, std::string& error) {
   std::vector<SimSigner> signers;
   for (const auto& site : s.sites) {
@@ -497,7 +526,9 @@ bool write_trust_list(Session& s, std::string& error) {
       if (sim_signer("agent", "agent_" + std::to_string(a) + "_lidar", signer)) signers.push_back(signer);
     }
   }
-  return write_text_file((s.root / kTrustListFile).string(), trust_list_text(trust_list_of(signers)), error);
+  trust::TrustList list = trust_list_of(signers);
+  return write_backgrounds(s, list, error) &&
+         write_text_file((s.root / kTrustListFile).string(), trust_list_text(list), error);
 }
 
 Json manifest_sensors(const Session& s) {

@@ -230,6 +230,16 @@ bool RecordingReader::parse_manifest(const std::string& text, std::string& error
     return false;
   scenario_ = static_cast<int>(id);
   frame_count_ = static_cast<int>(count);
+  if (top.find("seed")) {  // written as a JSON number; an integer up to 2^53 survives a double
+    double seed = 0.0;
+    if (!top.number("seed", 0.0, 9007199254740992.0, seed)) return false;
+    if (seed != std::floor(seed)) return top.fail("seed", "not an integer");
+    seed_ = static_cast<std::uint64_t>(seed);
+  }
+  if (const Json* quick = top.find("quick")) {
+    if (!quick->is_boolean()) return top.fail("quick", "not true or false");
+    quick_ = quick->get<bool>();
+  }
   const Fields g(*geo, "geodetic_origin.", error);
   if (!g.number("lat_deg", -90, 90, origin_lat_deg_) || !g.number("lon_deg", -180, 180, origin_lon_deg_) ||
       !g.number("alt_m", -1e4, 1e5, origin_alt_m_))

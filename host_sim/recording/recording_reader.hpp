@@ -70,6 +70,10 @@ class RecordingReader {
   double origin_lat_deg() const { return origin_lat_deg_; }
   double origin_lon_deg() const { return origin_lon_deg_; }
   double origin_alt_m() const { return origin_alt_m_; }
+  // The simulator's world seed and sensor set-up (the world of a survey: sim_background.hpp);
+  // 1 and false when the manifest does not say.
+  std::uint64_t seed() const { return seed_; }
+  bool quick() const { return quick_; }
 
   // Ego LiDAR scan of frame i: sensor frame, per-point time relative to frame_time(i).
   bool ego_scan(int i, cloud_io::PointCloud& out, std::string& error) const;
@@ -131,6 +135,8 @@ class RecordingReader {
   double frame_rate_ = 10.0;
   double time_origin_unix_ = 0;
   double origin_lat_deg_ = 0, origin_lon_deg_ = 0, origin_alt_m_ = 0;
+  std::uint64_t seed_ = 1;
+  bool quick_ = false;
   IndexPattern scan_pattern_, disparity_pattern_;
   std::string gt_file_, gt100_file_, can_log_file_, trust_list_file_;
   std::vector<Eigen::Isometry3d> infra_poses_;

@@ -102,7 +102,8 @@ trust::TrustList trust_list_of(const std::vector<SimSigner>& signers) {
 }
 
 std::string trust_list_text(const trust::TrustList& list) {
-  std::string buf(256 + 256 * list.count, '\0');
+  // The file's bound: kMaxTrustedSigners entries with survey and background lines take ~17 kB.
+  std::string buf(trust::kMaxTrustListBytes, '\0');
   buf.resize(trust::format_trust_list(list, buf));
   return buf;
 }

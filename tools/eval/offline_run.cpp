@@ -208,7 +208,8 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
       frame_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
       stages.mark(LocalizerStage::kIdle);
       ++stats.map_clouds;
-      if (r.status == MapInsertStatus::kRejectedInconsistent) ++stats.map_clouds_rejected;
+      if (r.status == MapInsertStatus::kRejectedInconsistent || r.status == MapInsertStatus::kBackgroundMismatch)
+        ++stats.map_clouds_rejected;
     }
     // 3. The ego scan.
     if (!reader.ego_scan(i, scan, error)) return false;

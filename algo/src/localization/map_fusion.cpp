@@ -22,6 +22,39 @@ bool kept_evenly(std::size_t j, std::size_t n, std::size_t k) {
 
 MapFusion::MapFusion(const MapFusionParams& params) : params_(params) {}
 
+bool MapFusion::set_background(std::uint32_t source_id, const SurveyedBackground& background) {
+  if (!background_valid(background)) return false;
+  BackgroundSlot* slot = nullptr;
+  for (BackgroundSlot& b : backgrounds_) {
+    if (b.used && b.id == source_id) slot = &b;
+  }
+  for (BackgroundSlot& b : backgrounds_) {
+    if (slot == nullptr && !b.used) slot = &b;
+  }
+  if (slot == nullptr) return false;
+  *slot = BackgroundSlot{source_id, true, background};
+  return true;
+}
+
+const SurveyedBackground* MapFusion::background(std::uint32_t source_id) const {
+  for (const BackgroundSlot& b : backgrounds_) {
+    if (b.used && b.id == source_id) return &b.background;
+  }
+  return nullptr;
+}
+
+bool MapFusion::passes_background(const SurveyedBackground& background, const Mat4d& world_T_sensor,
+                                  std::span<const Vec3f> points, MapInsertResult& r) {
+  const Mat3d sensor_R_world = world_T_sensor.topLeftCorner<3, 3>().transpose();
+  r.background = check_background(background, points, sensor_R_world, params_.background);
+  r.background_checked = true;
+  ++counters_.background_checked;
+  if (r.background.consistent) return true;
+  r.status = MapInsertStatus::kBackgroundMismatch;
+  ++counters_.background_mismatch;
+  return false;
+}
+
 void MapFusion::clear() {
   for (MapSourceInfo& s : sources_) s = MapSourceInfo{};
   num_points_ = 0;
@@ -333,6 +366,11 @@ MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
     ++counters_.no_source_slot;
     return r;
   }
+
+  // A unit with a surveyed background shows it, or nothing of its cloud is used (checked on the
+  // sensor-frame points before any staging; the other checks below still apply to it).
+  const SurveyedBackground* background = trusted && params_.check_background ? this->background(source_id) : nullptr;
+  if (background != nullptr && !passes_background(*background, world_T_sensor, points, r)) return r;
 
   stage_candidate(world_T_sensor, points, r);
   // The source's previous cloud is left out of the reference (a displaced slot is not its own).

@@ -1,8 +1,9 @@
 // Trust-list files (firmware/trust/trust_list.hpp) from arbitrary bytes: a file parses or is
 // refused with a status and a line inside the text; a list that parses holds at most
 // kMaxTrustedSigners distinct signers with valid roles, surveys only on infrastructure signers
-// with finite coordinates and a unit quaternion, formats to text that parses again to the same
-// signers and bit-identical surveys, and every signer is found by its HashedId8.
+// (finite coordinates and a unit quaternion), backgrounds only on surveyed ones (a flat name that
+// cannot leave the list's folder), formats to text that parses again to the same signers,
+// bit-identical surveys and the same backgrounds, and every signer is found by its HashedId8.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -25,6 +26,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   for (const TrustedSigner& s : list->view()) {
     if (s.role != SignerRole::kInfrastructure && s.role != SignerRole::kAgent) std::abort();
     if (list->find(s.id) != &s) std::abort();
+    if (s.has_background) {
+      if (s.role != SignerRole::kInfrastructure || !s.surveyed) std::abort();
+      const std::size_t n = strnlen(s.background_file.data(), s.background_file.size());
+      if (n == 0 || n > kMaxBackgroundNameChars || s.background_file[0] == '.') std::abort();
+      for (std::size_t i = 0; i < n; ++i) {
+        if (s.background_file[i] == '/' || s.background_file[i] == '\\') std::abort();
+      }
+    }
     if (!s.surveyed) continue;
     if (s.role != SignerRole::kInfrastructure) std::abort();
     double norm2 = 0.0;
@@ -46,6 +55,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const TrustedSigner& b = again->signers[i];
     if (a.key != b.key || a.id != b.id || a.role != b.role || a.sender_id != b.sender_id) std::abort();
     if (a.surveyed != b.surveyed || std::memcmp(&a.survey, &b.survey, sizeof a.survey) != 0) std::abort();
+    if (a.has_background != b.has_background || a.background_file != b.background_file ||
+        a.background_sha256 != b.background_sha256)
+      std::abort();
   }
   return 0;
 }

@@ -99,6 +99,10 @@ TEST_F(ReplayE2e, FirmwarePoseFramesAreBitIdenticalToTheOfflinePath) {
       << replayed.firmware_output;
   EXPECT_NE(replayed.firmware_output.find("datagrams_rejected 0"), std::string::npos) << replayed.firmware_output;
   EXPECT_NE(replayed.firmware_output.find("timed_out 0 evicted 0"), std::string::npos) << replayed.firmware_output;
+  // The recording's surveyed backgrounds are loaded and every genuine share passes them (the
+  // offline path below has none, so equal frames also say that none was refused).
+  EXPECT_NE(replayed.firmware_output.find("surveyed backgrounds: 2 loaded"), std::string::npos) << replayed.firmware_output;
+  EXPECT_NE(replayed.firmware_output.find("background_mismatch 0 "), std::string::npos) << replayed.firmware_output;
   EXPECT_GT(replayed.stream_stats.map_clouds, 0u);
   EXPECT_GT(replayed.stream_stats.can_frames, 0u);
 

@@ -1,13 +1,19 @@
 // The v2xloc-firmware command line (CLI11) and its --config file: --help lists every option, bad
-// values and unknown keys are refused with a message and exit code 2 before any socket opens.
+// values and unknown keys are refused with a message and exit code 2 before any socket opens; a
+// surveyed background the trust list names but cannot be loaded stops the start with a message.
 // Host only: spawns the host-built executable.
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 #include <sys/wait.h>
 #include <unistd.h>
+
+#include "firmware/trust/background_file.hpp"
+#include "firmware/trust/trust_list.hpp"
 
 namespace {
 
@@ -88,6 +94,69 @@ TEST(FirmwareCli, ConfigFileKeysAreCheckedAndTheCommandLineWins) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.out.find("cloud_prot"), std::string::npos) << r.out;
   std::remove(path.c_str());
+}
+
+// Trust list dir/list.txt with one surveyed infrastructure unit (sender 1) whose background line
+// names `name` with the SHA-256 of `vouched`.
+std::string trust_list_with_background(const std::string& dir, const std::string& name,
+                                       const std::vector<std::uint8_t>& vouched) {
+  using namespace v2xloc::trust;
+  TrustList l;
+  TrustedSigner& s = l.signers[l.count++];
+  const std::string seed = "cli background unit";
+  derive_public_key(private_key_from_seed({reinterpret_cast<const std::uint8_t*>(seed.data()), seed.size()}), s.key);
+  s.id = hashed_id8(s.key);
+  s.role = SignerRole::kInfrastructure;
+  s.sender_id = 1;
+  s.surveyed = true;
+  s.has_background = true;
+  name.copy(s.background_file.data(), name.size());
+  s.background_sha256 = sha256(vouched);
+  std::string text(8192, '\0');
+  text.resize(format_trust_list(l, {text.data(), text.size()}));
+  std::ofstream(dir + "/list.txt") << text;
+  return dir + "/list.txt";
+}
+
+std::vector<std::uint8_t> background_of(std::uint32_t sender) {
+  const std::vector<std::uint32_t> keys = {5, 6, 9};
+  std::vector<std::uint8_t> out(v2xloc::trust::background_file_bytes(keys.size()));
+  v2xloc::trust::format_background(sender, 500'000, keys, out);
+  return out;
+}
+
+void write_bytes(const std::string& path, const std::vector<std::uint8_t>& bytes) {
+  std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+}
+
+TEST(FirmwareCli, BackgroundThatCannotBeLoadedStopsTheStart) {
+  const std::string dir = testing::TempDir() + "/v2xloc_fw_bg_" + std::to_string(::getpid());
+  std::filesystem::create_directories(dir);
+  const std::string args = "--emulated --origin 48.1,11.5,520 --cloud-port 0 --ego-port 0 --can-port 0 --trust-list ";
+  const std::vector<std::uint8_t> good = background_of(1);
+  std::vector<std::uint8_t> tampered = good;
+  tampered.back() ^= 1;
+  const struct {
+    const char* what;
+    std::vector<std::uint8_t> on_disk;  // empty: no file
+    std::vector<std::uint8_t> vouched;
+    const char* message;
+  } cases[] = {
+      {"missing", {}, good, "cannot read background"},
+      {"tampered", tampered, good, "SHA-256 differs"},
+      {"another unit's", background_of(2), background_of(2), "another sender id"},
+      {"oversized", std::vector<std::uint8_t>(v2xloc::trust::kMaxBackgroundFileBytes + 4, 0), good, "too large"},
+  };
+  for (const auto& c : cases) {
+    std::remove((dir + "/bg.bin").c_str());
+    if (!c.on_disk.empty()) write_bytes(dir + "/bg.bin", c.on_disk);
+    const ToolRun r = firmware(args + trust_list_with_background(dir, "bg.bin", c.vouched));
+    EXPECT_EQ(r.exit_code, 1) << c.what << "\n" << r.out;
+    EXPECT_NE(r.out.find(c.message), std::string::npos) << c.what << "\n" << r.out;
+    EXPECT_NE(r.out.find("bg.bin"), std::string::npos) << "names the file: " << r.out;
+    EXPECT_EQ(r.out.find("ready can="), std::string::npos) << c.what;
+  }
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

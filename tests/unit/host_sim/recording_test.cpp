@@ -1,8 +1,11 @@
 #include "host_sim/recording/pcd_export.hpp"
 #include "host_sim/recording/recorder.hpp"
 #include "host_sim/recording/recording_reader.hpp"
+#include "host_sim/recording/sim_trust.hpp"
 #include "host_sim/cloud_io/pcd.hpp"
 #include "firmware/protocol/can_messages.hpp"
+#include "firmware/trust/background_file.hpp"
+#include "v2xloc/algo/localization/surveyed_background.hpp"
 
 #include <gtest/gtest.h>
 
@@ -233,6 +236,43 @@ TEST_F(HostSimRecording, CanLogHoldsVehicleAndGnssFramesInTimeOrder) {
   EXPECT_EQ(motion, 100u);  // 100 Hz over 1 s
   EXPECT_GE(gnss, 20u);     // 5 Hz x (status + velocity + DOP + time [+ latitude + longitude])
   EXPECT_LT(last, 1.0);
+}
+
+// Every infrastructure unit's trust-list entry names its surveyed background beside the list,
+// the file passes the firmware's checks (digest, sender, order, capacity), and every cloud the
+// unit recorded (vehicles driving through its view) is consistent with it.
+TEST_F(HostSimRecording, EveryInfrastructureUnitHasABackgroundItsCloudsMatch) {
+  ASSERT_TRUE(ok_) << error_;
+  RecordingReader r;
+  std::string err;
+  ASSERT_TRUE(r.open(dir_a_, err)) << err;
+  EXPECT_EQ(r.seed(), 11u);
+  EXPECT_TRUE(r.quick());
+  trust::TrustList list;
+  ASSERT_TRUE(load_trust_list(r.trust_list_path(), list, err)) << err;
+  EXPECT_EQ(list.background_count(), 4u);
+  std::size_t checked = 0;
+  for (const trust::TrustedSigner& s : list.view()) {
+    if (s.role != trust::SignerRole::kInfrastructure) continue;
+    ASSERT_TRUE(s.has_background) << s.name.data();
+    const std::vector<char> file = slurp(fs::path(dir_a_) / s.background_file.data());
+    std::vector<std::uint32_t> cells(config::kBackgroundFileCells);
+    trust::BackgroundInfo info;
+    ASSERT_EQ(trust::parse_background({reinterpret_cast<const std::uint8_t*>(file.data()), file.size()}, s, cells, info),
+              trust::BackgroundStatus::kOk)
+        << s.background_file.data();
+    const SurveyedBackground bg{info.cell_m, std::span<const std::uint32_t>(cells.data(), info.cells)};
+    ASSERT_TRUE(background_valid(bg));
+    for (const MapCloudInfo& m : r.map_clouds()) {
+      if (m.sensor != s.name.data()) continue;
+      cloud_io::PointCloud c;
+      ASSERT_TRUE(r.load_map_cloud(m, c, err)) << err;
+      const BackgroundScore score = check_background(bg, c.points, m.sensor_pose.linear().transpose(), {});
+      EXPECT_TRUE(score.consistent) << m.file << ": fitness " << score.fitness << " best probe " << score.best_probe;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 8u);  // 4 units x 2 clouds
 }
 
 }  // namespace

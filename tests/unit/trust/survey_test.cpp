@@ -83,7 +83,7 @@ TEST(TrustListSurvey, HostileSurveysAreRefusedWithTheirLine) {
   const std::string good = with_survey("survey 1 1 2 3 0 0 0 1");
   TrustList ok;
   ASSERT_EQ(parse(good, ok).status, TrustListStatus::kOk);
-  const std::size_t line = 5;  // two comment lines, header, signer 1, then the survey
+  const std::size_t line = 6;  // three comment lines, header, signer 1, then the survey
   struct Case {
     std::string survey;
     TrustListStatus status;

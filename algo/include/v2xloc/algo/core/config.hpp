@@ -91,6 +91,19 @@ inline constexpr std::size_t kMapFusionHashSlots = kEmbeddedProfile ? 16384 : 26
 // sources' points on three grids, ~1.9 cells per point (measured, four units), rebuilt once live
 // and emptied cells fill half the slots (~every 60 frames on the 4-unit recordings). 16 B each.
 inline constexpr std::size_t kMapReferenceCellSlots = kEmbeddedProfile ? 65536 : 262144;
+// Surveyed backgrounds (localization/surveyed_background.hpp): infrastructure units that have one,
+// and its cells (4 B packed keys in the firmware's static storage: kMaxBackgroundUnits x
+// kMaxBackgroundCells x 4 B, EMBEDDED 4 x 8,192 x 4 B = 128 KiB of its ~400 KiB headroom). A
+// 32-beam unit's static scene has ~14k cells at 0.2 m and ~7.6-8k at 0.52 m; the simulator grows
+// the cell until a background fits kBackgroundFileCells, so every profile loads the same file.
+inline constexpr std::size_t kMaxBackgroundUnits = kEmbeddedProfile ? 4 : 8;
+inline constexpr std::size_t kMaxBackgroundCells = kEmbeddedProfile ? 8192 : 32768;
+inline constexpr std::size_t kBackgroundFileCells = 8192;
+static_assert(kBackgroundFileCells <= kMaxBackgroundCells, "the simulator's backgrounds fit every profile");
+// Cloud points one background check scores (even stride over the cloud): a fraction from 1k
+// samples is pinned to ~1 % (1 sigma at 0.9), well inside the 0.1 gap between the genuine and
+// the moved clouds' scores (algo/TUNING.md).
+inline constexpr std::size_t kBackgroundCheckPoints = 1024;
 
 // ---- Geodesy --------------------------------------------------------------------------------
 // Bowring's ECEF->geodetic iteration converges to 1e-14 rad in 2-3 steps for |h| < 1e5 m.

@@ -47,6 +47,12 @@ class Localizer {
   void on_vehicle(const VehicleInput& input);
   void on_gnss(const GnssInput& input);
   MapInsertResult on_map_cloud(const MapCloudInput& input);
+  // Provisioning, after configure(): infrastructure unit source_id's surveyed background (cells in
+  // the caller's storage, read for as long as the localizer runs); its clouds are then checked
+  // against it (map_fusion.hpp). False: not a valid background, or no background slot left.
+  bool set_background(std::uint32_t source_id, const SurveyedBackground& background) {
+    return map_.set_background(source_id, background);
+  }
   // False when on_map_cloud would not fuse a cloud of this source and time (kPaced: the source's
   // stored cloud is recent, reference_map.hpp); lets the caller skip the share's signature check.
   bool wants_map_cloud(std::uint32_t source_id, double t) const { return map_.wants(source_id, t); }

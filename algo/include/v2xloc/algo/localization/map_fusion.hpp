@@ -14,6 +14,10 @@
 //     the 8,192-point map). Evenly, not the points nearest the sensor: those are mostly ground
 //     and registration on them failed on every recording. No effect while clouds fit (the host
 //     profile's capacities);
+//   - surveyed background: an infrastructure unit with one (set_background, surveyed_background.hpp)
+//     has each cloud checked against it first, in its sensor frame; a cloud off its background is
+//     rejected (kBackgroundMismatch, counted) whatever the other units say. Units without one are
+//     handled as before;
 //   - consistency hook: before a cloud is accepted, its overlap with the other sources is measured
 //     (fraction of its points with another source's point nearby, over the points in the region
 //     the others cover); a source below min_fitness with enough overlap is rejected and counted
@@ -34,6 +38,7 @@
 #include "v2xloc/algo/core/types.hpp"
 #include "v2xloc/algo/localization/pose_types.hpp"
 #include "v2xloc/algo/localization/source_cells.hpp"
+#include "v2xloc/algo/localization/surveyed_background.hpp"
 #include "v2xloc/algo/registration/voxel_downsample.hpp"
 
 namespace v2xloc {
@@ -95,6 +100,10 @@ struct MapFusionParams {
   // this many times (then cut, counted). EMBEDDED: a 16k-point infrastructure cloud has ~12.6k
   // voxels at 0.2 m, ~9.2k at 0.4 m, ~4.9k at 0.8 m. Never needed with the host capacities.
   std::uint32_t max_coarsen_steps = 3;
+  // Infrastructure clouds of a unit with a surveyed background are checked against it (thresholds:
+  // surveyed_background.hpp, measured in algo/TUNING.md); false skips that check.
+  bool check_background = true;
+  BackgroundCheckParams background{};
 };
 
 enum class MapInsertStatus : std::uint8_t {
@@ -106,6 +115,7 @@ enum class MapInsertStatus : std::uint8_t {
   kInvalidInput,        // non-finite pose or time
   kHeldBack,            // too little overlap to be checked: an agent, or infrastructure facing a quorum
   kPaced,               // within map_cloud_interval of the source's stored cloud: not needed (reference_map.hpp)
+  kBackgroundMismatch,  // infrastructure cloud off its unit's surveyed background
 };
 
 struct MapInsertResult {
@@ -124,6 +134,8 @@ struct MapInsertResult {
   std::uint32_t coarsened = 0;          // voxel doublings to fit the candidate (max_coarsen_steps)
   std::uint32_t units_vetted = 0;       // other infrastructure units checked by the quorum after this insert
   bool cells_rebuilt = false;           // the reference cells were rebuilt from every surveyed source
+  bool background_checked = false;      // scored against the unit's surveyed background
+  BackgroundScore background{};         // that score (zero offset, best probe, points)
 };
 
 struct MapSourceInfo {
@@ -154,6 +166,8 @@ struct MapFusionCounters {
   std::uint64_t non_finite_dropped = 0;
   std::uint64_t agent_points_covered = 0;   // agent points dropped where infrastructure sees
   std::uint64_t reference_cells_dropped = 0;  // reference cells not recorded (hash probes exhausted)
+  std::uint64_t background_checked = 0;     // infrastructure clouds scored against their surveyed background
+  std::uint64_t background_mismatch = 0;    // of those: rejected, off the background
 };
 
 struct MapExtractResult {
@@ -166,9 +180,11 @@ class MapFusion {
   explicit MapFusion(const MapFusionParams& params = {});
   MapFusion(const MapFusion&) = delete;
   MapFusion& operator=(const MapFusion&) = delete;
+  // Resets the sources, counters and surveyed backgrounds: set backgrounds after configure().
   void configure(const MapFusionParams& params) {
     params_ = params;
     counters_ = {};
+    for (BackgroundSlot& b : backgrounds_) b = BackgroundSlot{};
     clear();
   }
   void clear();
@@ -180,6 +196,12 @@ class MapFusion {
   // form the quorum (infra_quorum_*) that can outvote it and evict its stored cloud.
   MapInsertResult insert(std::uint32_t source_id, double timestamp, const Pose3d& world_T_sensor,
                          std::span<const Vec3f> points, bool trusted = false);
+  // The surveyed background of infrastructure unit source_id (its cells stay the caller's and must
+  // outlive this object's use of them; a second call replaces the unit's). False, nothing kept:
+  // not background_valid, or config::kMaxBackgroundUnits other units have one.
+  bool set_background(std::uint32_t source_id, const SurveyedBackground& background);
+  // The unit's background, else null.
+  const SurveyedBackground* background(std::uint32_t source_id) const;
   // Evicts sources with now - timestamp > max_age; returns how many.
   std::uint32_t expire(double now);
   // Merged map on the voxel grid into `out` (cleared first).
@@ -196,6 +218,15 @@ class MapFusion {
   enum CellLevel : std::int32_t { kInlierLevel = 0, kOverlapLevel = 1, kFillLevel = 2 };
   static_assert(config::kMaxMapSources <= 255, "source slot stored in a byte");
 
+  struct BackgroundSlot {
+    std::uint32_t id = 0;
+    bool used = false;
+    SurveyedBackground background{};
+  };
+
+  // The background verdict on a trusted cloud (r filled; false: rejected and counted).
+  bool passes_background(const SurveyedBackground& background, const Mat4d& world_T_sensor,
+                         std::span<const Vec3f> points, MapInsertResult& r);
   void remove_source_points(std::size_t slot);
   // Point `from` (with its source and cell slots) to index `to` <= from: stable compaction.
   void move_point(std::size_t from, std::size_t to);
@@ -261,6 +292,7 @@ class MapFusion {
   FixedVector<std::uint32_t, config::kMapConsistencyPoints> overlap_;  // sampled candidate indices
   VoxelDownsampleStorage<config::kMapFusionHashSlots, config::kMaxMapPoints> downsample_;
   SourceCells cells_;
+  BackgroundSlot backgrounds_[config::kMaxBackgroundUnits];
 };
 
 }  // namespace v2xloc

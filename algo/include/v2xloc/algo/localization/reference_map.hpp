@@ -32,6 +32,10 @@ class ReferenceMap {
   // signature) before insert.
   bool wants(std::uint32_t source_id, double t) const;
   MapInsertResult insert(const MapCloudInput& in);
+  // An infrastructure unit's surveyed background (MapFusion::set_background); after configure().
+  bool set_background(std::uint32_t source_id, const SurveyedBackground& background) {
+    return fusion_.set_background(source_id, background);
+  }
   // Expires old clouds and advances the target build; true when a rebuild finished this period.
   // normals: the map normals computed / refused (cap) in the period that ends here.
   // may_build false: expiry only, the build waits (the period has no room for a step).
