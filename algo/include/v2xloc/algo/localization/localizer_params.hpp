@@ -5,6 +5,7 @@
 
 #include <cstdint>
 
+#include "v2xloc/algo/core/config.hpp"
 #include "v2xloc/algo/localization/ekf.hpp"
 #include "v2xloc/algo/registration/icp.hpp"
 #include "v2xloc/algo/localization/map_fusion.hpp"
@@ -228,7 +229,9 @@ struct LocalizerParams {
     p.radius = 30.0;                // [m] = global_min_region (bounded work: ~8k hypotheses)
     p.score_points = 96;            // [points] scan points scored per hypothesis
     p.refine_candidates = 5;        // [hypotheses] the best distinct ones refined by ICP
-    p.refine_points = 256;          // [points] the ICPs run on every 4th search point (TUNING.md)
+    // [points] the ICPs run on every 4th search point; EMBEDDED scans (4,096 ingest voxels) are
+    // too thin for that: all of them (TUNING.md)
+    p.refine_points = config::kEmbeddedProfile ? 0u : 256u;
     p.score_distance = 2.0;         // [m] score hit radius: half the grid cell's diagonal (TUNING.md)
     p.max_conflicts = 0.12;         // [0-1] ray conflict ratio above which a pose is no candidate (TUNING.md)
     p.fine_icp = default_icp();
