@@ -60,11 +60,15 @@ void Localizer::on_gnss(const GnssInput& in) {
 MapInsertResult Localizer::on_map_cloud(const MapCloudInput& in) {
   const MapInsertResult r = map_.insert(in);
   if (r.status == MapInsertStatus::kPaced) ++counters_.map_clouds_paced;
+  // Clouds that went through staging and a check (a background refusal is priced as a whole cloud:
+  // rare, and the budget errs towards deferring)
   const bool checked = r.status == MapInsertStatus::kInserted || r.status == MapInsertStatus::kReplaced ||
-                       r.status == MapInsertStatus::kRejectedInconsistent || r.status == MapInsertStatus::kHeldBack;
+                       r.status == MapInsertStatus::kRejectedInconsistent || r.status == MapInsertStatus::kHeldBack ||
+                       r.status == MapInsertStatus::kBackgroundMismatch;
   if (checked) {
     const PeriodWorkParams& w = params_.work;
-    work_.add(w.map_cloud + r.units_vetted * w.map_vetting + (r.cells_rebuilt ? w.cells_rebuild : 0.0));
+    work_.add(w.map_cloud + r.units_vetted * w.map_vetting + (r.cells_rebuilt ? w.cells_rebuild : 0.0) +
+              (r.background_checked ? w.background_check : 0.0));
   }
   return r;
 }

@@ -17,6 +17,7 @@ struct PeriodWorkParams {
   double map_cloud = 22e6;             // [instructions] per map cloud handed to map fusion
   double map_vetting = 12e6;           // [instructions] per other unit the quorum checked after it
   double cells_rebuild = 25e6;         // [instructions] map fusion's reference cells rebuilt
+  double background_check = 0.8e6;     // [instructions] a cloud scored on its unit's surveyed background
   double odometry_query = 0.0;         // [instructions] per odometry source point and iteration
   double tracking_query = 0.0;         // [instructions] per tracking ICP point and pass
   double map_normal = 0.0;             // [instructions] per map normal computed on first use
