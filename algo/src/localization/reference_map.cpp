@@ -86,15 +86,20 @@ bool ReferenceMap::refresh(double t, LazyNormalCounters& normals, bool may_build
 
 bool ReferenceMap::next_step_activates() const {
   if (phase_ != BuildPhase::kTree || !tree_started_) return false;
-  const std::size_t quota = params_.map_tree_work_per_period > 0 ? params_.map_tree_work_per_period : ~std::size_t{0};
-  return targets_[1 - active_].tree.tree.build_work_left() <= quota;
+  return targets_[1 - active_].tree.tree.build_work_left() <= tree_quota();
 }
 
 bool ReferenceMap::build_due(double t) const {
   if (phase_ != BuildPhase::kIdle) return true;
   if (fusion_.revision() == revision_) return false;
   if (ready_ && t - built_t_ < params_.map_refresh_period) return false;
+  // Sources send in bursts: the rebuild waits for the burst to end (all its clouds in one
+  // rebuild, none of its periods also extracting), but not forever.
   return !(ready_ && busy_ && t - built_t_ < params_.map_refresh_period + params_.map_refresh_quiet_wait);
+}
+
+std::size_t ReferenceMap::tree_quota() const {
+  return ready_ && params_.map_tree_work_per_period > 0 ? params_.map_tree_work_per_period : ~std::size_t{0};
 }
 
 // The vicinity bitmap over the map's bounding box, reach = the tracking ICP's gate + 1 cm (the
@@ -135,11 +140,7 @@ bool ReferenceMap::build_step(double t, bool& finished) {
   Target& next = targets_[1 - active_];
   switch (phase_) {
     case BuildPhase::kIdle:
-      if (fusion_.revision() == revision_) return false;
-      if (ready_ && t - built_t_ < params_.map_refresh_period) return false;
-      // Sources send in bursts: the rebuild waits for the burst to end (all its clouds in one
-      // rebuild, none of its periods also extracting), but not forever.
-      if (ready_ && busy_ && t - built_t_ < params_.map_refresh_period + params_.map_refresh_quiet_wait) return false;
+      if (!build_due(t)) return false;
       fusion_.extract(next.points);
       build_revision_ = fusion_.revision();
       built_t_ = t;
@@ -152,9 +153,7 @@ bool ReferenceMap::build_step(double t, bool& finished) {
         next.tree.begin_build(next.points.span());
         tree_started_ = true;
       }
-      const std::size_t quota = ready_ && params_.map_tree_work_per_period > 0 ? params_.map_tree_work_per_period
-                                                                              : ~std::size_t{0};
-      if (!next.tree.tree.build_step(quota, tree_result_)) return false;  // more next period
+      if (!next.tree.tree.build_step(tree_quota(), tree_result_)) return false;  // more next period
       tree_started_ = false;
       build_vicinity(next);  // O(N + grid words), a few M instructions: in the tree's last slice
       activate(next);

@@ -9,19 +9,13 @@
 
 #include "firmware/trust/background_file.hpp"
 #include "firmware/trust/trust_list.hpp"
+#include "trust_list_fixture.hpp"
 
 namespace v2xloc::trust {
 namespace {
 
-TrustListParseResult parse(const std::string& s, TrustList& out) {
-  return parse_trust_list(std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(s.data()), s.size()), out);
-}
-
-std::string text_of(const TrustList& l) {
-  std::string buf(8192, '\0');
-  buf.resize(format_trust_list(l, {buf.data(), buf.size()}));
-  return buf;
-}
+using test::parse;
+using test::text_of;
 
 // A valid background file of unit `sender` with `n` ascending keys at 0.5 m.
 std::vector<std::uint8_t> background_bytes(std::uint32_t sender, std::size_t n) {
@@ -34,17 +28,7 @@ std::vector<std::uint8_t> background_bytes(std::uint32_t sender, std::size_t n) 
 
 // Infrastructure unit 1, surveyed, with a background; agent 32.
 TrustList list_with_background(const std::vector<std::uint8_t>& file) {
-  TrustList l;
-  for (int i = 0; i < 2; ++i) {
-    const std::string seed = "background unit " + std::to_string(i);
-    TrustedSigner& s = l.signers[l.count++];
-    derive_public_key(private_key_from_seed(std::span<const std::uint8_t>(
-                          reinterpret_cast<const std::uint8_t*>(seed.data()), seed.size())),
-                      s.key);
-    s.id = hashed_id8(s.key);
-    s.role = i == 0 ? SignerRole::kInfrastructure : SignerRole::kAgent;
-    s.sender_id = i == 0 ? 1u : 32u;
-  }
+  TrustList l = test::infra_and_agent("background unit ");
   TrustedSigner& infra = l.signers[0];
   infra.surveyed = true;
   infra.survey.position_m = {9.5, 9.5, 5.0};

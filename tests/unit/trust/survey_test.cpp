@@ -10,32 +10,17 @@
 
 #include "firmware/trust/map_share_verifier.hpp"
 #include "firmware/trust/trust_list.hpp"
+#include "trust_list_fixture.hpp"
 
 namespace v2xloc::trust {
 namespace {
 
-TrustListParseResult parse(const std::string& s, TrustList& out) {
-  return parse_trust_list(std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(s.data()), s.size()), out);
-}
-
-std::string text_of(const TrustList& l) {
-  char buf[8192];
-  return std::string(buf, format_trust_list(l, buf));
-}
+using test::parse;
+using test::text_of;
 
 // Infrastructure unit 1 (surveyed at (9.5, 9.5, 5), yawed 135 deg), agent 32.
 TrustList surveyed_list() {
-  TrustList l;
-  for (int i = 0; i < 2; ++i) {
-    const std::string seed = "survey unit " + std::to_string(i);
-    TrustedSigner& s = l.signers[l.count++];
-    derive_public_key(private_key_from_seed(std::span<const std::uint8_t>(
-                          reinterpret_cast<const std::uint8_t*>(seed.data()), seed.size())),
-                      s.key);
-    s.id = hashed_id8(s.key);
-    s.role = i == 0 ? SignerRole::kInfrastructure : SignerRole::kAgent;
-    s.sender_id = i == 0 ? 1u : 32u;
-  }
+  TrustList l = test::infra_and_agent("survey unit ");
   TrustedSigner& infra = l.signers[0];
   infra.surveyed = true;
   const double half = 0.5 * 135.0 * M_PI / 180.0;

@@ -5,6 +5,7 @@
 // second and the static scene hardly changes between them.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <span>
 
@@ -70,6 +71,7 @@ class ReferenceMap {
 
   // One build step; false: nothing (more) to do this period. finished: the new target is active.
   bool build_step(double t, bool& finished);
+  std::size_t tree_quota() const;  // points a tree slice may touch this period (all for the first map)
   void build_vicinity(Target& target) const;
   void activate(Target& next);
   void record_attempt(std::uint32_t source_id, double t);
