@@ -154,6 +154,9 @@ std::string format_json(const std::vector<RowReport>& rows) {
                    {"tracking_queries", c.tracking_queries},
                    {"map_normals", c.map_normals_computed},
                    {"audit_work", c.audit_work},
+                   {"global_search_work", c.global_search_work},
+                   {"odometry_query_capped", c.odometry_query_capped},
+                   {"tracking_work_capped", c.tracking_work_capped},
                    {"rebuild_steps_deferred", c.rebuild_steps_deferred},
                    {"audit_periods_starved", c.audit_periods_starved}};
     row["unaligned"] = columns_json(r.metrics.unaligned);

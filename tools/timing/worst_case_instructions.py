@@ -2,10 +2,10 @@
 """Runs the worst-case localizer test binary under callgrind and checks every adversarial
 period against the instruction budget (100 M per 100 ms period, A53-class core at 10 Hz).
 
-The binary (tests/worst_case/localizer) brackets each counted period with callgrind dumps
-labelled "CASE period N"; set-up work is dumped as "setup" and ignored. Prints one row per case
-(max instructions per period, periods) and fails when any period exceeds the budget or the
-gtest itself fails.
+The binary (tests/worst_case/localizer) dumps each counted period stage by stage, labelled
+"CASE period N STAGE"; set-up work is dumped as "setup" and ignored. Prints one row per case
+(max instructions per period, periods, the worst period's largest stages) and fails when any
+period exceeds the budget or the gtest itself fails.
 
   tools/timing/worst_case_instructions.py build/host/bin/test_worst_case_localizer [--filter X]
 """
@@ -39,27 +39,33 @@ def main():
             sys.stderr.write(r.stderr[-3000:])
             print("FAIL: the worst-case test binary failed under callgrind")
             return 1
-        cases = {}
+        cases = {}  # case -> {period: {stage: instructions}}
         for label, instr in parse_parts(out):
-            m = re.match(r"(\S+) period (\d+)$", label)
+            m = re.match(r"(\S+) period (\d+)(?: (\S+))?$", label)
             if m:
-                cases.setdefault(m.group(1), []).append(instr)
+                stages = cases.setdefault(m.group(1), {}).setdefault(int(m.group(2)), {})
+                stage = m.group(3) or "all"
+                stages[stage] = stages.get(stage, 0) + instr
     if not cases:
         print("FAIL: no counted periods found")
         return 1
     over = 0
     if args.markdown:
-        print("| adversarial input | periods | max instructions per period | budget |")
-        print("|---|---|---|---|")
-    for name, values in cases.items():
-        worst = max(values)
+        print("| adversarial input | periods | max instructions per period | largest stages of that period (M) | budget |")
+        print("|---|---|---|---|---|")
+    for name, periods in cases.items():
+        totals = {p: sum(st.values()) for p, st in periods.items()}
+        worst_period = max(totals, key=lambda p: totals[p])
+        worst = totals[worst_period]
         ok = worst <= args.budget
         over += 0 if ok else 1
+        top = sorted(periods[worst_period].items(), key=lambda kv: -kv[1])[:3]
+        stages = ", ".join("%s %.1f" % (k, v / 1e6) for k, v in top)
         if args.markdown:
-            print("| %s | %d | %.1f M | %s |" % (name, len(values), worst / 1e6, "ok" if ok else "OVER"))
+            print("| %s | %d | %.1f M | %s | %s |" % (name, len(totals), worst / 1e6, stages, "ok" if ok else "OVER"))
         else:
-            print("%-28s periods %3d  max %8.1f M  %s" % (name, len(values), worst / 1e6,
-                                                         "ok" if ok else "OVER BUDGET"))
+            print("%-28s periods %3d  max %8.1f M (period %d: %s)  %s" % (
+                name, len(totals), worst / 1e6, worst_period, stages, "ok" if ok else "OVER BUDGET"))
     if over:
         print("FAIL: %d case(s) over %.0f M instructions per period" % (over, args.budget / 1e6))
         return 1

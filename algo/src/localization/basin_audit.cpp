@@ -29,7 +29,7 @@ AuditOutcome BasinAudit::step(const AuditFrame& f, LocalizerCounters& counters) 
   if (running_ && f.frame - started_frame_ > params_.audit_max_frames) running_ = false;
   // Periods that fused map clouds have spent part of their spare work: the audit is insurance, it
   // takes a smaller quota there or waits (the frames it pauses count towards audit_max_frames).
-  const std::uint32_t fixed = f.map_busy ? params_.audit_queries_per_busy_period : params_.audit_queries_per_period;
+  const std::uint32_t fixed = f.map_busy ? params_.audit_work_per_busy_period : params_.audit_work_per_period;
   const std::uint64_t quota = fixed < f.work_cap ? fixed : f.work_cap;
   const bool paused = (f.map_busy && fixed == 0) || f.work_cap == 0;
   if (!running_) {
@@ -79,6 +79,11 @@ AuditOutcome BasinAudit::finish(const AuditFrame& f, LocalizerCounters& counters
   const PoseSearchResult& s = job_.result();
   const PoseSearchParams& sp = search_params_;
   if (!s.best.ok() || !distinct_basin(tracked_at_start_, s.best.transform, sp)) return out;
+  // The search covered the disc around the tracked pose; an ICP that walked out of it (a scan the
+  // map barely explains, a degenerate direction) is no nomination.
+  const double dx = s.best.transform(0, 3) - tracked_at_start_(0, 3), dy = s.best.transform(1, 3) - tracked_at_start_(1, 3);
+  const double reach = sp.radius + sp.step;
+  if (dx * dx + dy * dy > reach * reach) return out;
   const double tracked_tight = evaluate_registration(job_.scan(), f.map, tracked_at_start_, sp.select_distance).fitness;
   if (!(s.best_tight_fitness > params_.audit_switch_ratio * tracked_tight)) return out;
   const Mat4d nominated = s.best.transform * se3_inverse(odom_at_start_) * f.odom_T_body.matrix();

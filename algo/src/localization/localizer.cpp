@@ -67,7 +67,7 @@ MapInsertResult Localizer::on_map_cloud(const MapCloudInput& in) {
                        r.status == MapInsertStatus::kBackgroundMismatch;
   if (checked) {
     const PeriodWorkParams& w = params_.work;
-    work_.add(w.map_cloud + r.units_vetted * w.map_vetting + (r.cells_rebuilt ? w.cells_rebuild : 0.0) +
+    work_.add(w.map_cloud_point * r.input_points + r.units_vetted * w.map_vetting + (r.cells_rebuilt ? w.cells_rebuild : 0.0) +
               (r.background_checked ? w.background_check : 0.0));
   }
   return r;
@@ -137,6 +137,7 @@ void Localizer::run_odometry(const EgoScanInput& in) {
   work_.add(static_cast<double>(queries) * params_.work.odometry_query);
   const bool ok = r.status == OdometryStatus::kOk || r.status == OdometryStatus::kFirstFrame;
   if (!ok) ++counters_.odometry_failures;
+  if (r.query_capped) ++counters_.odometry_query_capped;
   const Mat4d lidar_T_body = se3_inverse(body_T_lidar);
   output_.odometry_ok = ok;
   output_.odometry_pose = Pose3d(r.pose.matrix() * lidar_T_body);
@@ -220,6 +221,7 @@ StartupOutcome Localizer::search(double t, const Mat4d& body_T_lidar) {
   frame.filter_needs_start = filter_.needs_start();
   frame.icp_hints = icp_hints();
   frame.probe = probe_;
+  if (params_.work.enabled) frame.work = &work_;
   const StartupOutcome s = startup_.step(frame, counters_);
   if (s.status == StartupStatus::kStartFilter) filter_.start(t, Pose3d(s.registration.transform), vehicle_);
   const StartupSearchReport& r = s.report;

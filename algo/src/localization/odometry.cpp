@@ -224,7 +224,12 @@ Mat4d LidarOdometry::align(const Mat4d& prediction, OdometryResult& r) const {
   const double k2 = kappa * kappa;
   Mat4d T = prediction;
   r.status = OdometryStatus::kOk;
+  const std::uint64_t per_iteration = frame_coarse_.size();
   for (std::uint32_t it = 0; it < params_.max_iterations; ++it) {
+    if (it > 0 && params_.max_queries > 0 && (it + 1) * per_iteration > params_.max_queries) {
+      r.query_capped = true;
+      break;
+    }
     Mat6d H = Mat6d::Zero();
     Vec6d b = Vec6d::Zero();
     double sse = 0.0;

@@ -33,10 +33,11 @@ ScanIngest::Accumulator* ScanIngest::find_or_add(const std::int32_t key[3]) {
 
 // One pass over the returns (see the header), specialised on whether times are given. The
 // finite and range tests share one comparison on the fast path (NaN and Inf fail it); a return
-// failing it is classified in the order of the full tests.
+// failing it is classified in the order of the full tests. stop_when_full: a pass that will be
+// read again coarser ends at its first capacity drop (the rest of the sweep would change nothing).
 template <bool kTimes>
 void ScanIngest::accumulate(std::span<const Vec3f> points, const float* times, const ScanIngestParams& params,
-                            ScanIngestResult& r) {
+                            bool stop_when_full, ScanIngestResult& r) {
   const float min2 = params.min_range * params.min_range;
   const float max2 = params.max_range * params.max_range;
   const float inv = 1.0f / params.voxel;  // keys stay within +-max_range / voxel: no overflow
@@ -63,6 +64,7 @@ void ScanIngest::accumulate(std::span<const Vec3f> points, const float* times, c
       a = find_or_add(key);
       if (a == nullptr) {
         ++r.capacity_dropped;
+        if (stop_when_full) return;
         continue;
       }
       last = a;
@@ -83,12 +85,13 @@ ScanIngestResult ScanIngest::run(std::span<const Vec3f> points, std::span<const 
   const bool has_times = times.size() == points.size() && !points.empty();
   ScanIngestParams p = params;
   for (std::uint32_t step = 0;; ++step) {
+    const bool last_try = step >= params.max_coarsen_steps;
     if (has_times) {
-      accumulate<true>(points, times.data(), p, r);
+      accumulate<true>(points, times.data(), p, !last_try, r);
     } else {
-      accumulate<false>(points, nullptr, p, r);
+      accumulate<false>(points, nullptr, p, !last_try, r);
     }
-    if (r.capacity_dropped == 0 || step >= params.max_coarsen_steps) break;
+    if (r.capacity_dropped == 0 || last_try) break;
     // Full: whole azimuth sectors would be lost; the sweep is read again with a coarser voxel.
     for (std::size_t v = 0; v < count_; ++v) slots_[voxels_[v].slot] = 0;
     count_ = 0;

@@ -30,6 +30,7 @@ void StartupSearch::configure(const LocalizerParams& params) {
   frames_since_search_ = params.global_retry_frames;  // allow a search at the first frame
   job_kind_ = JobKind::kNone;
   finalist_count_ = 0;
+  acquired_ = false;
   job_.set_proximity_grid(params.search_on_proximity_grid ? &grid_ : nullptr);
 }
 
@@ -94,12 +95,15 @@ StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& cou
     f.probe(LocalizerStage::kGlobalSearch);
     ++counters.global_searches;
     start_job(f, counters);
+    job_work_counted_ = 0;
   } else {
     f.probe(LocalizerStage::kGlobalSearch);
   }
-  const std::uint64_t budget =
-      params_.startup_queries_per_period > 0 ? params_.startup_queries_per_period : ~std::uint64_t{0};
-  if (!job_.step(f.map, budget)) {
+  const bool finished = job_.step(f.map, slice_budget(f));
+  if (f.work != nullptr) f.work->add(static_cast<double>(job_.work() - job_work_counted_) * f.work->params().search_unit);
+  counters.global_search_work += job_.work() - job_work_counted_;
+  job_work_counted_ = job_.work();
+  if (!finished) {
     if (job_kind_ == JobKind::kExhaustive) provisional_valid_ = job_.provisional(provisional_);
     out.status = StartupStatus::kSearching;
     f.probe(LocalizerStage::kFusion);
@@ -122,9 +126,32 @@ StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& cou
   r.runner_up_pose = Pose3d(s.searched.runner_up.transform);
   if (kind == JobKind::kExhaustive && params_.use_fpfh_ransac) fpfh_ransac(f, s);
   out.status = accept(f, s, out.registration, counters);
+  if (out.status == StartupStatus::kStartFilter) acquired_ = true;
   if (out.status == StartupStatus::kRejected && candidate_.valid && candidate_.frame == f.frame) keep_finalists(f);
   f.probe(LocalizerStage::kFusion);
   return out;
+}
+
+// This period's slice: what the period has left (period_work.hpp), between the floor that keeps
+// the search moving in crowded periods and the fixed quota (all of it without a period budget).
+// Until the first acquisition, at least startup_first_work_per_period.
+std::uint64_t StartupSearch::slice_budget(const StartupFrame& f) const {
+  const std::uint64_t quota = params_.startup_work_per_period;
+  if (quota == 0) return ~std::uint64_t{0};
+  if (!acquired_ && f.frame < params_.startup_first_frames && params_.startup_first_work_per_period > 0) {
+    const std::uint64_t first = params_.startup_first_work_per_period;
+    const std::uint64_t rest = slice_budget_in_period(f, quota);
+    return first > rest ? first : rest;
+  }
+  return slice_budget_in_period(f, quota);
+}
+
+std::uint64_t StartupSearch::slice_budget_in_period(const StartupFrame& f, std::uint64_t quota) const {
+  if (f.work == nullptr || !(f.work->params().search_unit > 0.0)) return quota;
+  const double room = f.work->left() / f.work->params().search_unit;
+  const std::uint64_t floor = params_.startup_min_work_per_period < quota ? params_.startup_min_work_per_period : quota;
+  if (room <= static_cast<double>(floor)) return floor;
+  return room >= static_cast<double>(quota) ? quota : static_cast<std::uint64_t>(room);
 }
 
 double StartupSearch::region_radius(const StartupFrame& f) const {
@@ -148,7 +175,7 @@ void StartupSearch::start_job(const StartupFrame& f, LocalizerCounters& counters
     sp.yaw_prior_tolerance = params_.heading_search_tolerance;
     ++counters.heading_searches;
   }
-  sp.provisional = params_.startup_output_provisional && params_.startup_queries_per_period > 0;
+  sp.provisional = params_.startup_output_provisional && params_.startup_work_per_period > 0;
   job_frame_ = f.frame;
   job_odom_ = f.odom_T_body.matrix();
   job_track_broken_ = false;

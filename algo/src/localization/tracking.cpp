@@ -14,6 +14,7 @@ TrackingOutcome TrackingRegistration::step(const TrackingFrame& f, LocalizerCoun
   ++counters.tracking_registrations;
   RegistrationResult& result = out.registration;
   result = icp(f.tracking_scan, f.map, f.predicted.matrix(), params_.icp, f.icp_hints);
+  if (result.status == RegistrationStatus::kDidNotConverge) ++counters.tracking_work_capped;  // icp.max_work
   if (result.ok() && result.inlier_rmse > params_.max_inlier_rmse) {
     result.status = RegistrationStatus::kDidNotConverge;  // counted as a failed frame
   }
@@ -25,7 +26,7 @@ TrackingOutcome TrackingRegistration::step(const TrackingFrame& f, LocalizerCoun
     const PeriodWorkParams& w = f.work->params();
     const std::uint32_t normals = f.map.lazy_normals != nullptr ? f.map.lazy_normals->this_period().computed : 0u;
     f.work->add(static_cast<double>(queries) * w.tracking_query + normals * w.map_normal);
-    if (w.audit_query > 0.0) audit_cap = static_cast<std::uint64_t>(f.work->left() / w.audit_query);
+    if (w.search_unit > 0.0) audit_cap = static_cast<std::uint64_t>(f.work->left() / w.search_unit);
     room_to_start = f.work->left() >= w.audit_start;
   }
   if (result.ok()) {

@@ -76,34 +76,20 @@ double preconditioned_eigen_ratio(const Mat6d& h) {
   return hi > 0.0 && lo > 0.0 ? lo / hi : 0.0;
 }
 
-// One nearest-neighbour pass at transform T: evaluation (fitness / RMSE / information) plus the
-// system of the chosen method. Sums in source order (deterministic).
-struct Pass {
-  std::uint32_t valid_source = 0;
-  std::uint32_t inliers = 0;
-  double squared_error_sum = 0.0;
-  // Information, closed form of sum J^T J with J = [-[q]x | I]: needs sum q q^T, sum q, count.
-  Mat3d qq_sum = Mat3d::Zero();
-  Vec3d q_sum = Vec3d::Zero();
-  // Point-to-plane normal equations.
-  Mat6d h = Mat6d::Zero();
-  Vec6d b = Vec6d::Zero();
-  // Point-to-point: weighted Kabsch (the exact minimiser of the weighted problem).
-  KabschAccumulator kabsch;
-  std::uint32_t search_truncated = 0;
+using Pass = IcpPass;
+constexpr std::uint64_t kMapNormalWork = 45;  // a map normal computed on first use (~5,000 instructions)
 
-  double fitness() const { return valid_source > 0 ? double(inliers) / double(valid_source) : 0.0; }
-  double rmse() const { return inliers > 0 ? std::sqrt(squared_error_sum / double(inliers)) : 0.0; }
-  Mat6d information() const {
-    Mat6d info = Mat6d::Zero();
-    const double n = double(inliers);
-    info.topLeftCorner<3, 3>() = qq_sum.trace() * Mat3d::Identity() - qq_sum;
-    info.topRightCorner<3, 3>() = skew(q_sum);
-    info.bottomLeftCorner<3, 3>() = skew(q_sum).transpose();
-    info.bottomRightCorner<3, 3>() = n * Mat3d::Identity();
-    return info;
-  }
-};
+double fitness(const Pass& p) { return p.valid_source > 0 ? double(p.inliers) / double(p.valid_source) : 0.0; }
+double rmse(const Pass& p) { return p.inliers > 0 ? std::sqrt(p.squared_error_sum / double(p.inliers)) : 0.0; }
+Mat6d information(const Pass& p) {
+  Mat6d info = Mat6d::Zero();
+  const double n = double(p.inliers);
+  info.topLeftCorner<3, 3>() = p.qq_sum.trace() * Mat3d::Identity() - p.qq_sum;
+  info.topRightCorner<3, 3>() = skew(p.q_sum);
+  info.bottomLeftCorner<3, 3>() = skew(p.q_sum).transpose();
+  info.bottomRightCorner<3, 3>() = n * Mat3d::Identity();
+  return info;
+}
 
 enum class PassMode { kEvaluateOnly, kPointToPoint, kPointToPlane };
 
@@ -120,9 +106,12 @@ float search_bound(const Vec3d& pt, double max_distance) {
 }
 
 // hints (optional, one per source point): last pass's match, seeds the search (same result).
-void run_pass(std::span<const Vec3f> source, const IcpTarget& target, const Mat4d& transform,
+// Accumulates source points [cursor, end) into pass until `work` reaches work_limit (one unit a
+// point plus its query's node visits); true when the pass is complete.
+bool run_pass(std::span<const Vec3f> source, const IcpTarget& target, const Mat4d& transform,
               double max_distance, const RobustKernel& kernel, PassMode mode, Pass& pass,
-              std::span<std::uint32_t> hints = {}) {
+              std::span<std::uint32_t> hints, std::uint32_t& cursor, std::uint64_t& work,
+              std::uint64_t work_limit) {
   const Mat3d r = transform.topLeftCorner<3, 3>();
   const Vec3d t = transform.topRightCorner<3, 1>();
   const double max_d2 = max_distance * max_distance;
@@ -132,7 +121,10 @@ void run_pass(std::span<const Vec3f> source, const IcpTarget& target, const Mat4
   constexpr double kVicinitySlack = 1e-3;
   const bool skip_empty = target.vicinity != nullptr && target.vicinity->ready() && target.vicinity->valid() &&
                           max_distance + kVicinitySlack <= target.vicinity->reach();
-  for (std::size_t k = 0; k < source.size(); ++k) {
+  for (; cursor < source.size(); ++cursor) {
+    if (work >= work_limit) return false;
+    ++work;
+    const std::size_t k = cursor;
     const Vec3f& pf = source[k];
     if (!pf.allFinite()) continue;
     ++pass.valid_source;
@@ -146,6 +138,8 @@ void run_pass(std::span<const Vec3f> source, const IcpTarget& target, const Mat4
     }
     const std::uint32_t hint = use_hints ? hints[k] : KdTree<Vec3f>::kNoHint;
     const KdQueryResult qr = target.tree->nearest_within(ptf, search_bound(pt, max_distance), hint, nn);
+    pass.node_visits += qr.node_visits;
+    work += qr.node_visits;
     if (qr.visit_cap_hit) ++pass.search_truncated;
     if (use_hints) hints[k] = qr.count == 0 ? KdTree<Vec3f>::kNoHint : nn.index;
     if (qr.count == 0) continue;
@@ -160,8 +154,15 @@ void run_pass(std::span<const Vec3f> source, const IcpTarget& target, const Mat4
     if (mode == PassMode::kPointToPoint) {
       pass.kabsch.add(p, q, kernel.weight(std::sqrt(d2)));
     } else if (mode == PassMode::kPointToPlane) {
-      const Vec3d n =
-          (target.lazy_normals != nullptr ? target.lazy_normals->get(nn.index) : target.normals[nn.index]).cast<double>();
+      Vec3f nf;
+      if (target.lazy_normals != nullptr) {
+        const std::uint32_t computed = target.lazy_normals->this_period().computed;
+        nf = target.lazy_normals->get(nn.index);
+        work += (target.lazy_normals->this_period().computed - computed) * kMapNormalWork;
+      } else {
+        nf = target.normals[nn.index];
+      }
+      const Vec3d n = nf.cast<double>();
       if (!n.allFinite()) continue;
       const double residual = n.dot(e);
       const double w = kernel.weight(residual);
@@ -174,6 +175,15 @@ void run_pass(std::span<const Vec3f> source, const IcpTarget& target, const Mat4
     }
   }
   if (mode == PassMode::kPointToPlane) mirror_lower(pass.h);
+  return true;
+}
+
+// A whole pass at once.
+void run_pass(std::span<const Vec3f> source, const IcpTarget& target, const Mat4d& transform,
+              double max_distance, const RobustKernel& kernel, PassMode mode, Pass& pass) {
+  std::uint32_t cursor = 0;
+  std::uint64_t work = 0;
+  run_pass(source, target, transform, max_distance, kernel, mode, pass, {}, cursor, work, ~std::uint64_t{0});
 }
 
 bool target_valid(const IcpTarget& target, bool need_normals) {
@@ -183,10 +193,10 @@ bool target_valid(const IcpTarget& target, bool need_normals) {
 }
 
 void fill_from_pass(const Pass& pass, RegistrationResult& result) {
-  result.fitness = pass.fitness();
-  result.inlier_rmse = pass.rmse();
+  result.fitness = fitness(pass);
+  result.inlier_rmse = rmse(pass);
   result.inliers = pass.inliers;
-  result.information = pass.information();
+  result.information = information(pass);
 }
 
 std::uint32_t count_nonfinite(std::span<const Vec3f> cloud) {
@@ -243,6 +253,7 @@ RegistrationResult evaluate_registration(std::span<const Vec3f> source, const Ic
            PassMode::kEvaluateOnly, pass);
   fill_from_pass(pass, result);
   result.search_truncated = pass.search_truncated;
+  result.node_visits = pass.node_visits;
   result.status = pass.valid_source == 0   ? RegistrationStatus::kNotEnoughPoints
                   : pass.inliers == 0      ? RegistrationStatus::kNoCorrespondences
                                            : RegistrationStatus::kOk;
@@ -253,7 +264,9 @@ RegistrationResult icp(std::span<const Vec3f> source, const IcpTarget& target, c
                        const IcpParams& params, std::span<std::uint32_t> neighbor_scratch) {
   IcpRun run;
   icp_begin(run, source, target, initial, params, neighbor_scratch);
-  while (!icp_continue(run, source, target, params, ~std::uint32_t{0}, neighbor_scratch)) {
+  const std::uint64_t work = params.max_work > 0 ? params.max_work : ~std::uint64_t{0};
+  if (!icp_continue(run, source, target, params, ~std::uint32_t{0}, neighbor_scratch, work)) {
+    run.result.status = RegistrationStatus::kDidNotConverge;  // out of work: as at the iteration cap
   }
   return run.result;
 }
@@ -285,19 +298,29 @@ void icp_begin(IcpRun& run, std::span<const Vec3f> source, const IcpTarget& targ
 // One nearest-neighbour pass plus the update it implies: the body of the ICP loop.
 bool icp_continue(IcpRun& run, std::span<const Vec3f> source, const IcpTarget& target,
                   const IcpParams& params, std::uint32_t max_passes,
-                  std::span<std::uint32_t> neighbor_scratch) {
+                  std::span<std::uint32_t> neighbor_scratch, std::uint64_t max_work) {
   RegistrationResult& result = run.result;
+  const std::uint64_t work_limit = max_work > ~std::uint64_t{0} - run.work ? ~std::uint64_t{0} : run.work + max_work;
   const bool plane = params.method == IcpMethod::kPointToPlane;
   const std::uint32_t max_iterations =
       params.criteria.max_iterations < config::kIcpMaxIterations ? params.criteria.max_iterations
                                                                  : config::kIcpMaxIterations;
   const PassMode mode = plane ? PassMode::kPointToPlane : PassMode::kPointToPoint;
   for (std::uint32_t passes = 0; !run.finished && passes < max_passes; ++passes) {
+    if (!run.in_pass) {
+      run.pass = Pass{};
+      run.cursor = 0;
+      run.in_pass = true;
+    }
+    if (!run_pass(source, target, run.transform, params.max_correspondence_distance, params.kernel, mode, run.pass,
+                  neighbor_scratch, run.cursor, run.work, work_limit)) {
+      return false;  // out of work inside the pass: it resumes at run.cursor
+    }
+    run.in_pass = false;
+    const Pass& pass = run.pass;
     const std::uint32_t k = run.passes++;
-    Pass pass;
-    run_pass(source, target, run.transform, params.max_correspondence_distance, params.kernel, mode, pass,
-             neighbor_scratch);
     result.search_truncated += pass.search_truncated;
+    result.node_visits += pass.node_visits;
     result.transform = run.transform;
     fill_from_pass(pass, result);
     result.iterations = k;
@@ -306,8 +329,8 @@ bool icp_continue(IcpRun& run, std::span<const Vec3f> source, const IcpTarget& t
       result.status = RegistrationStatus::kNoCorrespondences;
       return true;
     }
-    if (k > 0 && std::abs(run.prev_fitness - pass.fitness()) < params.criteria.relative_fitness &&
-        std::abs(run.prev_rmse - pass.rmse()) < params.criteria.relative_rmse) {
+    if (k > 0 && std::abs(run.prev_fitness - fitness(pass)) < params.criteria.relative_fitness &&
+        std::abs(run.prev_rmse - rmse(pass)) < params.criteria.relative_rmse) {
       result.converged = true;
       result.status = RegistrationStatus::kOk;
       return true;
@@ -316,8 +339,8 @@ bool icp_continue(IcpRun& run, std::span<const Vec3f> source, const IcpTarget& t
       result.status = RegistrationStatus::kOk;
       return true;
     }
-    run.prev_fitness = pass.fitness();
-    run.prev_rmse = pass.rmse();
+    run.prev_fitness = fitness(pass);
+    run.prev_rmse = rmse(pass);
     if (!update_transform(pass, plane, params, run.transform, result)) return true;
     run.finished = false;
   }

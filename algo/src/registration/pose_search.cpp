@@ -11,10 +11,13 @@ namespace v2xloc {
 namespace {
 
 using Candidate = PoseSearchCandidate;
-// Work accounting: this many proximity-grid lookups count as one nearest-neighbour query
-// (~40 instructions with the transform, against ~2,300 per ICP correspondence, callgrind).
-constexpr std::uint32_t kGridLookupsPerQuery = 64;
-constexpr std::uint64_t kGridWorkPerQuery = 8;  // build units (~50 instructions each)
+// Work accounting in kPoseSearchWorkUnit (~110 instructions), callgrind x86-64 -O2: a score
+// point's proximity-grid lookup with its transform costs ~30-70, a proximity-grid build unit ~50,
+// a map point of the road-height histograms ~25.
+constexpr std::uint32_t kGridLookupsPerUnit = 2;
+constexpr std::uint64_t kGridBuildPerUnit = 2;
+constexpr std::uint64_t kRoadHeightPointsPerUnit = 4;
+constexpr std::uint64_t kHypothesisUnits = 2;  // a hypothesis's own set-up and ranking
 
 PoseSearch g_search;  // search_pose()'s job: ~40 kB, static
 
@@ -29,6 +32,8 @@ bool same_basin(const Candidate& a, const Candidate& b, const PoseSearchParams& 
 // sees the alternatives and the ambiguity check has no runner-up to measure.
 void keep_distinct_best(Candidate (&top)[kPoseSearchRefine], const Candidate& c, const PoseSearchParams& params) {
   constexpr int kLast = static_cast<int>(kPoseSearchRefine) - 1;
+  // Most hypotheses score below a full list's worst: whatever their basin, they change nothing.
+  if (top[kLast].score >= c.score) return;
   int slot = kLast;  // the entry the new candidate replaces: its basin's, else the worst
   for (int i = 0; i <= kLast; ++i) {
     if (top[i].score < 0.0 || !same_basin(top[i], c, params)) continue;
@@ -104,7 +109,7 @@ bool road_height_near(std::span<const Vec3f> map, const Vec3d& center, double ra
 }
 
 double ray_conflict_ratio(std::span<const Vec3f> scan_body, const IcpTarget& map, const Mat4d& pose,
-                          double ground_z, const PoseSearchParams& params, std::uint32_t* samples) {
+                          double ground_z, const PoseSearchParams& params, std::uint64_t* work) {
   if (map.tree == nullptr || !(params.conflict_step > 0.0) || params.conflict_rays == 0) return -1.0;
   const Vec3d& s = params.sensor_in_body;
   const double min_range2 = params.conflict_min_range * params.conflict_min_range;
@@ -136,9 +141,10 @@ double ray_conflict_ratio(std::span<const Vec3f> scan_body, const IcpTarget& map
       if (along >= free) break;
       const Vec3d q = origin + along * dir;
       if (q.z() < floor_z) continue;
-      if (samples != nullptr) ++*samples;
       Neighbor nb{0, 0.0f};
-      if (map.tree->nearest_within(q.cast<float>(), r2, hint, nb).count > 0) {
+      const KdQueryResult qr = map.tree->nearest_within(q.cast<float>(), r2, hint, nb);
+      if (work != nullptr) *work += 1 + qr.node_visits;
+      if (qr.count > 0) {
         ++conflicts;
         break;
       }
@@ -160,6 +166,7 @@ bool PoseSearch::copy_scan(std::span<const Vec3f> scan_body, const IcpTarget& ma
   result_ = PoseSearchResult{};
   result_.best.status = RegistrationStatus::kNotEnoughPoints;
   work_ = 0;
+  step_from_ = 0;
   phase_ = Phase::kDone;
   from_given_ = false;
   if (map.tree == nullptr || map.points.empty() || scan_body.empty() || !(params_.step > 0.0) ||
@@ -208,7 +215,13 @@ void PoseSearch::start(std::span<const Vec3f> scan_body, const IcpTarget& map, c
   }
   // Not around the fix's altitude: a canyon fix can be far off vertically (TUNING.md).
   road_height_near(map.points, center, params.radius + params.ground_margin, result_.ground_z);
+  work_ += 2 * map.points.size() / kRoadHeightPointsPerUnit;  // the mean height, then the histogram
   if (grid_ != nullptr) build_grid(map);
+  for (std::uint32_t i = 0; i < params.yaw_steps && i < kMaxYawTable; ++i) {
+    const double yaw = 2.0 * det::kPi * i / params.yaw_steps;
+    yaw_cos_[i] = det::cos(yaw);
+    yaw_sin_[i] = det::sin(yaw);
+  }
   cells_ = static_cast<int>(std::floor(params.radius / params.step));
   iy_ = -cells_;
   ix_ = -cells_;
@@ -235,7 +248,7 @@ void PoseSearch::build_grid(const IcpTarget& map) {
   gp.cell = params_.grid_cell;
   gp.reach = params_.grid_reach;
   grid_->build(map.points, center, half, gp);
-  work_ += grid_->total_work() / kGridWorkPerQuery;
+  work_ += grid_->total_work() / kGridBuildPerUnit;
 }
 
 void PoseSearch::start_from_poses(std::span<const Vec3f> scan_body, const IcpTarget& map,
@@ -256,7 +269,8 @@ void PoseSearch::start_from_poses(std::span<const Vec3f> scan_body, const IcpTar
 }
 
 bool PoseSearch::step(const IcpTarget& map, std::uint64_t budget) {
-  const std::uint64_t stop = budget > ~std::uint64_t{0} - work_ ? ~std::uint64_t{0} : work_ + budget;
+  // From the previous step's end (or the job's start, so that start()'s own work counts here).
+  const std::uint64_t stop = budget > ~std::uint64_t{0} - step_from_ ? ~std::uint64_t{0} : step_from_ + budget;
   if (phase_ != Phase::kDone && (map.tree == nullptr || map.points.empty())) {
     result_.best.status = RegistrationStatus::kInvalidInput;  // the map went away mid-search
     phase_ = Phase::kDone;
@@ -269,6 +283,7 @@ bool PoseSearch::step(const IcpTarget& map, std::uint64_t budget) {
       case Phase::kDone: break;
     }
   }
+  step_from_ = work_;
   return phase_ == Phase::kDone;
 }
 
@@ -293,16 +308,19 @@ void PoseSearch::score_hypotheses(const IcpTarget& map, std::uint64_t stop) {
         if (params_.use_yaw_prior && std::abs(det::wrap_pi(yaw - params_.yaw_prior)) > params_.yaw_prior_tolerance) continue;
         if (result_.hypotheses >= params_.max_hypotheses) break;
         ++result_.hypotheses;
-        work_ += grid != nullptr ? (score_count_ + kGridLookupsPerQuery - 1) / kGridLookupsPerQuery : score_count_;
-        const double c = det::cos(yaw), s = det::sin(yaw);
+        const bool tabled = yaw_index_ < kMaxYawTable;
+        const double c = tabled ? yaw_cos_[yaw_index_] : det::cos(yaw);
+        const double s = tabled ? yaw_sin_[yaw_index_] : det::sin(yaw);
         const double x = center_.x() + ox, y = center_.y() + oy;
         std::uint32_t hits = 0;
         for (std::uint32_t i = 0; i < score_count_; ++i) {
           const Vec3f& p = score_pts_[i];
           const Vec3f q(static_cast<float>(c * p.x() - s * p.y() + x), static_cast<float>(s * p.x() + c * p.y() + y),
                         static_cast<float>(p.z() + result_.ground_z));
-          hits += (grid != nullptr ? grid->near(q) : map.tree->any_within(q, d2max_f)) ? 1u : 0u;
+          hits += (grid != nullptr ? grid->near(q) : map.tree->any_within(q, d2max_f, &work_)) ? 1u : 0u;
         }
+        work_ += kHypothesisUnits +
+                 (grid != nullptr ? (score_count_ + kGridLookupsPerUnit - 1) / kGridLookupsPerUnit : score_count_);
         keep_distinct_best(top_, Candidate{static_cast<double>(hits) / score_count_, x, y, yaw}, params_);
       }
     }
@@ -343,13 +361,10 @@ void PoseSearch::refine_candidate(const IcpTarget& map, std::uint64_t stop) {
     icp_begin(run_, refine_scan(), map, initial, icp_params, hints());
     run_started_ = true;
   }
-  const std::uint64_t left = stop > work_ ? stop - work_ : 0;
-  // ceil(left / ICP points) without overflow (left is ~2^64 for an unbounded step), >= 1
-  const std::uint64_t passes = refine_count_ > 0 ? left / refine_count_ + (left % refine_count_ != 0 ? 1 : 0) : 1;
-  const std::uint32_t before = run_.passes;
-  const bool finished =
-      icp_continue(run_, refine_scan(), map, icp_params, passes > 1000 ? 1000u : static_cast<std::uint32_t>(passes), hints());
-  work_ += static_cast<std::uint64_t>(run_.passes - before) * refine_count_;
+  const std::uint64_t before = run_.work;
+  const bool finished = icp_continue(run_, refine_scan(), map, icp_params, ~std::uint32_t{0}, hints(),
+                                     stop > work_ ? stop - work_ : 1);
+  work_ += run_.work - before;
   if (!finished) return;
   run_started_ = false;
   if (!refining_fine_) {
@@ -388,13 +403,12 @@ void PoseSearch::judge_provisional(const IcpTarget& map, const RegistrationResul
 // (when max_conflicts is on) and, unless its rays cross the map (false), the tight fitness.
 bool PoseSearch::rate_pose(const IcpTarget& map, const Mat4d& pose, double& conflicts, double& tight) {
   if (params_.max_conflicts > 0.0) {
-    std::uint32_t samples = 0;
-    conflicts = ray_conflict_ratio(scan(), map, pose, result_.ground_z, params_, &samples);
-    work_ += samples;
+    conflicts = ray_conflict_ratio(scan(), map, pose, result_.ground_z, params_, &work_);
     if (conflicts > params_.max_conflicts) return false;
   }
-  tight = evaluate_registration(scan(), map, pose, params_.select_distance).fitness;
-  work_ += scan_count_;
+  const RegistrationResult fit = evaluate_registration(scan(), map, pose, params_.select_distance);
+  tight = fit.fitness;
+  work_ += scan_count_ + fit.node_visits;
   return true;
 }
 

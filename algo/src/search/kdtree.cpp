@@ -538,7 +538,7 @@ KdQueryResult KdTree<P>::has_closer(const P& query, const float* qp, const Neigh
 }
 
 template <class P>
-bool KdTree<P>::any_within(const P& query, float max_squared_distance) const {
+bool KdTree<P>::any_within(const P& query, float max_squared_distance, std::uint64_t* node_visits) const {
   if (num_nodes_ == 0 || !is_finite_point(query) || !(max_squared_distance >= 0.0f)) return false;
   const float* q = query.data();
   bool found = false;
@@ -552,6 +552,7 @@ bool KdTree<P>::any_within(const P& query, float max_squared_distance) const {
     }
   };
   traverse<kDim>(nodes_, q, max_node_visits_, prune, leaf, r);
+  if (node_visits != nullptr) *node_visits += r.node_visits;
   return found;
 }
 

@@ -143,7 +143,8 @@ TEST(LocalizerScenario, ShortDriveFusesToCentimetres) {
   // flagged localized), the filter starts within 20 frames and the revised start-up frames and
   // the gate-valid frames are as good as with the search in one period.
   eval::RunOptions spread = options;
-  spread.params.startup_queries_per_period = 20000;  // a third of the default: several periods
+  spread.params.startup_work_per_period = 80000;  // a tenth of the default: several periods
+  spread.params.startup_first_work_per_period = 0;  // the first acquisition on that quota too
   std::vector<eval::FrameRecord> spread_records;
   ASSERT_TRUE(eval::run_offline(reader, g_localizer, spread, spread_records, stats, error)) << error;
   int first_result = -1, first_on_map = -1, spread_first = -1;

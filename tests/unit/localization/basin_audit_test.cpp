@@ -40,8 +40,8 @@ TEST(BasinAudit, WaitsOutPeriodsThatFusedMapClouds) {
 
   LocalizerParams params;
   params.audit_period_frames = 1;
-  params.audit_queries_per_period = 50;  // a job over many periods
-  params.audit_queries_per_busy_period = 0;
+  params.audit_work_per_period = 1000;  // a job over many periods
+  params.audit_work_per_busy_period = 0;
   auto audit = std::make_unique<BasinAudit>();
   audit->configure(params);
   AuditMarks marks;
@@ -72,7 +72,7 @@ TEST(BasinAudit, WaitsOutPeriodsThatFusedMapClouds) {
   audit->step(f, counters);
   EXPECT_EQ(marks.audit, 2) << "resumed";
 
-  params.audit_queries_per_busy_period = 25;  // busy periods advance it, by less
+  params.audit_work_per_busy_period = 500;  // busy periods advance it, by less
   audit->configure(params);
   f.map_busy = true;
   f.frame = 6;

@@ -1,7 +1,7 @@
 // The basin audit: every audit_period_frames tracked frames a local exhaustive pose search
 // around the tracked pose asks whether tracking sits in an aliased basin (a street repeats
 // itself along its length). The search runs as a job spread over the following tracked frames,
-// audit_queries_per_period nearest-neighbour queries each (pose_search.hpp), on the scan and
+// audit_work_per_period work units each (pose_search.hpp), on the scan and
 // tracked pose of the frame it started at; its answer is carried to the current frame by the
 // odometry. The search's subsample only nominates another basin; the switch is decided on the
 // current full scan after the tracking ICP. Owns its period count and the job; one entry point

@@ -93,9 +93,19 @@ struct LocalizerParams {
   double tracking_max_sigma_xy = 0.5; // [m] EKF position sigma above which we search globally
   std::uint32_t max_failed_frames = 10;   // [frames] consecutive unfused registrations -> global search
   std::uint32_t global_retry_frames = 2;  // [frames] between two global searches (bounded cost)
-  // [queries/period] the start-up search runs as a job, this many nearest-neighbour queries per
-  // period; its result is carried to the frame it finishes in by the odometry (0: at once)
-  std::uint32_t startup_queries_per_period = 50000;
+  // [work units/period] the start-up search runs as a job, at most this much work per period
+  // (pose_search.hpp: ~110 instructions a unit) and no more than the period budget has left
+  // (work), but at least startup_min_work_per_period; its result is carried to the frame it
+  // finishes in by the odometry (0: all at once)
+  std::uint32_t startup_work_per_period = 800000;
+  std::uint32_t startup_min_work_per_period = 50000;
+  // [work units/period] the first acquisition after power-up (until the filter first starts) gets
+  // at least this per period, budget or not: on the 12 recordings the first two periods hold the
+  // first map build and two map clouds, and a search on what is left outputs the GNSS fix for 2-9
+  // frames (live Fused 0.08-0.23 m instead of <= 0.014 m; README "Real time"). Later searches (a
+  // lost track) keep to the budget, and so does the first after startup_first_frames. 0: always.
+  std::uint32_t startup_first_work_per_period = 900000;
+  std::uint32_t startup_first_frames = 10;  // [frames] since configure()
   std::uint32_t startup_max_frames = 20;  // [frames] a search job not finished within this is dropped
   // While a spread search runs, output its best refined pose so far (not localized, not fused).
   bool startup_output_provisional = true;
@@ -113,13 +123,12 @@ struct LocalizerParams {
   // costs ~270 M instructions in all, so every 3 s keeps its share of a period near 8 M
   std::uint32_t audit_period_frames = 30;
   double audit_radius = 8.0;              // [m] basin audit: search disc around the tracked pose
-  // [queries/period] the audit's pose search runs beside tracking, this many nearest-neighbour
-  // queries per tracked frame (0: the whole search in one frame); 7.5k: <= ~37 M a period, an
-  // audit spans ~15 frames (15k: <= ~60 M; fused trajectories identical on the 12 recordings)
-  std::uint32_t audit_queries_per_period = 7500;
-  // [queries/period] ... in a period that fused a map cloud (~20 M of its budget spent; 0: the
+  // [work units/period] the audit's pose search runs beside tracking, this much work per tracked
+  // frame (pose_search.hpp: ~110 instructions a unit; 0: the whole search in one frame)
+  std::uint32_t audit_work_per_period = 180000;
+  // [work units/period] ... in a period that fused a map cloud (~20 M of its budget spent; 0: the
   // audit pauses there). While tracking most periods fuse one (sources paced to ~1 Hz, one a period).
-  std::uint32_t audit_queries_per_busy_period = 3750;
+  std::uint32_t audit_work_per_busy_period = 90000;
   std::uint32_t audit_max_frames = 60;    // [frames] a search not finished within this is dropped (it pauses in busy periods)
   std::uint32_t audit_refine_candidates = 10;  // [hypotheses] the audit refines (<= kPoseSearchRefine)
   double audit_switch_ratio = 1.15;       // [ratio] audit pose's tight fitness over tracked: switch
@@ -170,7 +179,7 @@ struct LocalizerParams {
     p.odometry_query = 2450.0;
     p.tracking_query = 2300.0;
     p.map_normal = 5000.0;
-    p.audit_query = 3500.0;  // mean 2.6k; scoring units on the k-d tree cost up to ~5k
+    p.search_unit = 150.0;  // kPoseSearchWorkUnit's ~110 is a mean: slices measured up to ~170 a unit
     return p;
   }
   static OdometryParams default_odometry() {
@@ -188,6 +197,9 @@ struct LocalizerParams {
     p.criteria.relative_rmse = 1e-3;      // [m]
     p.kernel.type = RobustKernelType::kTukey;
     p.kernel.scale = 0.3;                 // [m] Tukey scale: residuals beyond it weigh nothing
+    // [work units] ~44 M instructions: the recordings' tracking ICPs stay below ~28 M; a
+    // featureless corridor (degenerate along it, every pass computing new map normals) took 175 M
+    p.max_work = 400000;
     return p;
   }
   static RegisterCloudsParams default_global() {

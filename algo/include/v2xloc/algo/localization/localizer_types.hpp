@@ -142,6 +142,9 @@ struct LocalizerCounters {
   std::uint64_t odometry_queries = 0;          // odometry source points x iterations
   std::uint64_t tracking_queries = 0;          // tracking ICP points x nearest-neighbour passes
   std::uint64_t audit_work = 0;                // basin-audit search work units
+  std::uint64_t global_search_work = 0;        // start-up / lost-track search work units
+  std::uint32_t odometry_query_capped = 0;     // odometry frames whose iterations max_queries ended
+  std::uint32_t tracking_work_capped = 0;      // tracking ICPs that ran out of work (icp.max_work)
   std::uint32_t rebuild_steps_deferred = 0;    // map rebuild steps that waited for a period with room
   std::uint32_t audit_periods_starved = 0;     // running audits that got no work in a period
 };

@@ -48,6 +48,10 @@ struct OdometryParams {
   // [points] fine points a source normal's PCA needs (over the 2x2x2 coarse voxels around the
   // point, ~3 v wide); fewer: the point has no normal and is not registered.
   std::uint32_t normal_min_points = 5;
+  // [queries] per frame (registration points x iterations; ~2,450 instructions each): the
+  // iterations stop before exceeding it, as at max_iterations (0: none). The recordings' frames
+  // need <= ~12.5k; a featureless corridor ran 50 iterations (100 M).
+  std::uint32_t max_queries = 16384;
 };
 
 enum class OdometryStatus : std::uint8_t {
@@ -67,6 +71,7 @@ struct OdometryResult {
   double rmse = 0.0;                  // [m] over correspondences of the final iteration
   std::uint32_t iterations = 0;
   bool converged = false;
+  bool query_capped = false;          // max_queries ended the iterations
   std::uint32_t source_points = 0;    // 1.5 v points registered
   std::uint32_t correspondences = 0;
   std::uint32_t map_points = 0;

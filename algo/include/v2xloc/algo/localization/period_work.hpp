@@ -11,10 +11,13 @@
 namespace v2xloc {
 
 struct PeriodWorkParams {
-  bool enabled = true;                 // false: fixed quotas only (audit_queries_per_period, every rebuild step)
+  bool enabled = true;                 // false: fixed quotas only (audit_work_per_period, every rebuild step)
   double budget = 92e6;                // [instructions] target per period (100 M less the estimate's error)
   double scan = 10.5e6;                // [instructions] scan ingest and registration downsampling, per scan
-  double map_cloud = 22e6;             // [instructions] per map cloud handed to map fusion
+  // [instructions] per point of a map cloud handed to map fusion: the recordings' ~16k-point clouds
+  // cost ~16-22 M; a 131k-point cloud of a synthetic canyon 61 M (priced high: the budget errs
+  // towards deferring)
+  double map_cloud_point = 1375.0;
   double map_vetting = 12e6;           // [instructions] per other unit the quorum checked after it
   double cells_rebuild = 25e6;         // [instructions] map fusion's reference cells rebuilt
   double background_check = 0.8e6;     // [instructions] a cloud scored on its unit's surveyed background
@@ -23,7 +26,7 @@ struct PeriodWorkParams {
   double map_normal = 0.0;             // [instructions] per map normal computed on first use
   double rebuild_step = 16e6;          // [instructions] one map rebuild step (extract, or a tree slice)
   double activation = 14e6;            // [instructions] the new map's first normals, in the period it activates
-  double audit_query = 0.0;            // [instructions] per basin-audit work unit (pose_search.hpp)
+  double search_unit = 0.0;            // [instructions] per pose-search work unit (pose_search.hpp)
   double audit_start = 12e6;           // [instructions] an audit's set-up (road height over the map, score points)
   // [periods] a rebuild step deferred this many periods in a row runs regardless (bounded latency)
   std::uint32_t max_deferred_rebuild_steps = 5;

@@ -6,7 +6,7 @@
 // one pass over the ~64k returns instead of three, and a capacity set by the voxels a scene
 // holds, not by the sensor's return count (the EMBEDDED profile cannot hold a raw 64-beam sweep).
 // A scene with more voxels than the capacity is ingested again with the voxel grown by 9/8 (at
-// most max_coarsen_steps times; counted): dropping the returns beyond the capacity would cut the
+// most max_coarsen_steps times; counted; a pass stops reading where the table fills): dropping the returns beyond the capacity would cut the
 // sweep in firing order, i.e. lose whole azimuth sectors (EMBEDDED, 4,096 voxels: the 12
 // recordings' scans hold ~6.7k 0.5 m voxels, ~40 % of the returns were dropped, and a scan
 // without its last sectors locked the start-up search 23 m off along a street). Returns still
@@ -64,7 +64,7 @@ class ScanIngest {
   Accumulator* find_or_add(const std::int32_t key[3]);
   template <bool kTimes>
   void accumulate(std::span<const Vec3f> points, const float* times, const ScanIngestParams& params,
-                  ScanIngestResult& r);
+                  bool stop_when_full, ScanIngestResult& r);
 
   Accumulator voxels_[kMaxVoxels];
   std::uint32_t slots_[kSlots] = {};  // voxel index + 1, 0 = empty

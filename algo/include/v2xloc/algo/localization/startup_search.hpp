@@ -4,7 +4,7 @@
 // course over ground and the GNSS track the odometry implies. An accepted solution starts the
 // filter only when a second search within global_confirm_window frames agrees with it through
 // the odometry (the candidate); that search may re-decide only the first one's finalists
-// (global_confirm_finalists). The search is a job: startup_queries_per_period bounds its work per
+// (global_confirm_finalists). The search is a job: startup_work_per_period bounds its work per
 // frame, its result is carried to the frame it finishes in by the odometry. Owns all its state:
 // the job, the candidate, the track of recent odometry / GNSS positions, the retry spacing and
 // the FPFH + RANSAC workspace. One entry point per frame (step), everything it reads in a
@@ -41,6 +41,7 @@ struct StartupFrame {
   bool filter_needs_start = false;          // an accepted solution must be confirmed to start it
   std::span<std::uint32_t> icp_hints{};     // ICP scratch, >= scan.size()
   StageProbe probe{};
+  PeriodWork* work = nullptr;               // the period's budget (nullptr: fixed quota)
 };
 
 // The search's diagnostics (LocalizerFrameOutput::search_*).
@@ -100,6 +101,8 @@ class StartupSearch {
   struct Search;                     // one search's intermediate results (startup_search.cpp)
   enum class JobKind : std::uint8_t { kNone, kExhaustive, kFinalists };
 
+  std::uint64_t slice_budget(const StartupFrame& f) const;
+  std::uint64_t slice_budget_in_period(const StartupFrame& f, std::uint64_t quota) const;
   double region_radius(const StartupFrame& f) const;
   void start_job(const StartupFrame& f, LocalizerCounters& counters);
   void take_result(const StartupFrame& f, Search& s) const;
@@ -124,6 +127,8 @@ class StartupSearch {
   PoseSearch job_;
   ProximityGrid grid_;               // the job's hypothesis scoring (search_on_proximity_grid)
   JobKind job_kind_ = JobKind::kNone;
+  std::uint64_t job_work_counted_ = 0;
+  bool acquired_ = false;  // the filter was started once (the first acquisition is over)  // of job_.work(), already in counters.global_search_work
   bool job_track_broken_ = false;    // the odometry failed since the job started
   std::uint32_t job_frame_ = 0;
   Mat4d job_odom_ = Mat4d::Identity();

@@ -14,6 +14,7 @@
 #include <span>
 
 #include "v2xloc/algo/core/config.hpp"
+#include "v2xloc/algo/registration/kabsch.hpp"
 #include "v2xloc/algo/search/kdtree.hpp"
 #include "v2xloc/algo/search/proximity_grid.hpp"
 #include "v2xloc/algo/registration/registration_result.hpp"
@@ -53,6 +54,10 @@ struct IcpParams {
   // this fraction of the largest (a single plane leaves 3 DoF unobserved for point-to-plane;
   // collinear pairs one for point-to-point).
   double min_eigenvalue_ratio = 1e-8;
+  // [work units] per run: one a source point, plus the k-d tree nodes its query visited and the
+  // map normals it had computed (~110 instructions a unit, pose_search.hpp). A run that spends them
+  // ends like one at its iteration cap (kDidNotConverge, the last full pass's estimate). 0: none.
+  std::uint64_t max_work = 0;
 };
 
 // The (map) target as a view: reusable across frames without rebuilding. normals may be empty
@@ -84,8 +89,28 @@ RegistrationResult icp(std::span<const Vec3f> source, const IcpTarget& target,
                        const Mat4d& initial, const IcpParams& params,
                        std::span<std::uint32_t> neighbor_scratch = {});
 
+// One nearest-neighbour pass at a transform, as it accumulates: evaluation (fitness / RMSE /
+// information) plus the system of the chosen method, summed in source order (deterministic).
+struct IcpPass {
+  std::uint32_t valid_source = 0;
+  std::uint32_t inliers = 0;
+  double squared_error_sum = 0.0;
+  // Information, closed form of sum J^T J with J = [-[q]x | I]: needs sum q q^T, sum q, count.
+  Mat3d qq_sum = Mat3d::Zero();
+  Vec3d q_sum = Vec3d::Zero();
+  // Point-to-plane normal equations.
+  Mat6d h = Mat6d::Zero();
+  Vec6d b = Vec6d::Zero();
+  // Point-to-point: weighted Kabsch (the exact minimiser of the weighted problem).
+  KabschAccumulator kabsch;
+  std::uint32_t search_truncated = 0;
+  std::uint64_t node_visits = 0;  // k-d tree nodes visited (the pass's real search work)
+};
+
 // The same ICP in slices (a search spread over several periods): icp_begin checks the inputs,
-// each icp_continue runs at most max_passes nearest-neighbour passes over the source and returns
+// each icp_continue runs at most max_passes nearest-neighbour passes over the source, and stops
+// inside a pass once max_work work units are spent (one per source point plus the k-d tree
+// nodes its query visited: a pass from a wrong pose can cost 100x one near the map). It returns
 // true once finished; run.result is then what icp() returns (bit-identical). source, target,
 // params and neighbor_scratch must be the same in every call of one run.
 struct IcpRun {
@@ -93,14 +118,18 @@ struct IcpRun {
   Mat4d transform = Mat4d::Identity();
   double prev_fitness = 0.0;
   double prev_rmse = 0.0;
-  std::uint32_t passes = 0;   // nearest-neighbour passes so far (work: passes * source size)
+  std::uint32_t passes = 0;   // nearest-neighbour passes completed
+  std::uint64_t work = 0;     // work units spent so far
+  IcpPass pass{};             // the pass in progress (when in_pass)
+  std::uint32_t cursor = 0;   // its next source point
+  bool in_pass = false;
   bool finished = true;
 };
 void icp_begin(IcpRun& run, std::span<const Vec3f> source, const IcpTarget& target, const Mat4d& initial,
                const IcpParams& params, std::span<std::uint32_t> neighbor_scratch = {});
 bool icp_continue(IcpRun& run, std::span<const Vec3f> source, const IcpTarget& target,
                   const IcpParams& params, std::uint32_t max_passes,
-                  std::span<std::uint32_t> neighbor_scratch = {});
+                  std::span<std::uint32_t> neighbor_scratch = {}, std::uint64_t max_work = ~std::uint64_t{0});
 
 // Open3D's evaluate_registration: fitness, inlier RMSE, inliers and the information matrix of
 // `transform` without iterating (status kOk, kNoCorrespondences, kNotEnoughPoints or

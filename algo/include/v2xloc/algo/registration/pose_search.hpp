@@ -8,6 +8,10 @@
 // Work is bounded by the grid size: hypotheses <= (2 r / step + 1)^2 * yaw_steps, each costing
 // score_points nearest-neighbour queries; the ray check adds <= kPoseSearchRefine *
 // kPoseSearchMaxConflictRays * kPoseSearchMaxRaySteps bounded-radius queries.
+// Work is counted in units of about one k-d tree node visit (kPoseSearchWorkUnit instructions):
+// the nodes the queries actually visit, plus one unit per point a pass transforms and accumulates,
+// so a slice costs the same instructions whether its queries are cheap (near the map) or dear (a
+// wrong pose, a sparse map, noise).
 #pragma once
 
 #include <cstdint>
@@ -28,6 +32,10 @@ inline constexpr std::uint32_t kPoseSearchMaxRaySteps = 256;  // per ray (128 m 
 // not judged further: inside the margin the loose fitness cannot tell the truth from an alias (both
 // explain the scan at 1 m), so the tight fitness (select_distance) decides.
 inline constexpr double kPoseSearchFitnessMargin = 0.1;
+// [instructions] one work unit: a k-d tree node visit with its share of leaf tests, or one
+// point's transform and accumulation. Callgrind, x86-64 -O2, whole search slices: 77-127 per unit
+// in a synthetic canyon searched from a 30 m-wrong fix, ~93 on Sim 0 / 4_infra_2_agent.
+inline constexpr double kPoseSearchWorkUnit = 110.0;
 
 struct PoseSearchParams {
   double radius = 20.0;            // [m] search disc around the GNSS fix
@@ -97,9 +105,9 @@ struct PoseSearchResult {
 
 
 // The ray conflict ratio above for one pose (world_T_body); -1 when no ray qualifies.
-// samples (optional): incremented by the bounded queries made (work accounting).
+// work (optional): incremented by the work units spent (one per sample plus the nodes visited).
 double ray_conflict_ratio(std::span<const Vec3f> scan_body, const IcpTarget& map, const Mat4d& pose,
-                          double ground_z, const PoseSearchParams& params, std::uint32_t* samples = nullptr);
+                          double ground_z, const PoseSearchParams& params, std::uint64_t* work = nullptr);
 
 // [m] height bin of road_height: the road height (the hypotheses' z) is a bin centre, within
 // 0.1 m of the road's points, far inside the coarse ICP's gate, which refines it.
@@ -127,9 +135,9 @@ struct PoseSearchCandidate {
 
 // The search as a job spread over several periods (start-up, basin audit): start() copies the
 // scan (<= config::kMaxSearchPoints points) and takes the road height; each step() runs until
-// `budget` nearest-neighbour queries are spent (scored hypothesis points, ICP passes, ray
-// samples, fitness passes; a hypothesis, an ICP pass or a candidate's ray check is never split,
-// so a step overruns by at most one of them) and returns true when result() is final. Run to
+// `budget` work units are spent (scored hypotheses, ICP passes, ray checks, fitness passes; one
+// of them is never split, so a step overruns by at most one) and returns true when result() is
+// final. start() counts its own work (road height, proximity grid) towards the first step. Run to
 // completion it is exactly search_pose(). The map may be swapped between steps (a rebuilt
 // map of the same scene): ICP hints are only seeds, results stay exact for the map given.
 class PoseSearch {
@@ -147,7 +155,7 @@ class PoseSearch {
   void set_proximity_grid(ProximityGrid* grid) { grid_ = grid; }
   bool done() const { return phase_ == Phase::kDone; }
   const PoseSearchResult& result() const { return result_; }
-  std::uint64_t work() const { return work_; }  // queries so far
+  std::uint64_t work() const { return work_; }  // work units so far (kPoseSearchWorkUnit)
   std::span<const Vec3f> scan() const { return {scan_, scan_count_}; }
   // The ICP's subsample: the first refine_count_ points of scan() (copy_scan puts them there).
   std::span<const Vec3f> refine_scan() const { return {scan_, refine_count_}; }
@@ -179,12 +187,16 @@ class PoseSearch {
   PoseSearchResult result_{};
   Phase phase_ = Phase::kDone;
   std::uint64_t work_ = 0;
+  std::uint64_t step_from_ = 0;                   // work_ when the current step began
   Vec3f scan_[config::kMaxSearchPoints];
   std::uint32_t hints_[config::kMaxSearchPoints];
   std::size_t scan_count_ = 0;
   std::size_t refine_count_ = 0;                  // leading scan_ points the ICPs use
   Vec3f score_pts_[kMaxScorePoints];
   std::uint32_t score_count_ = 0;
+  static constexpr std::uint32_t kMaxYawTable = 720;  // headings whose cos / sin start() tabulates
+  double yaw_cos_[kMaxYawTable] = {};
+  double yaw_sin_[kMaxYawTable] = {};
   int cells_ = 0, iy_ = 0, ix_ = 0;               // scoring cursor: grid row, column ...
   std::uint32_t yaw_index_ = 0;                   // ... and heading
   PoseSearchCandidate top_[kPoseSearchRefine];

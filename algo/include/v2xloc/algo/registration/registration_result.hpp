@@ -51,6 +51,7 @@ struct RegistrationResult {
   std::uint32_t nonfinite_dropped = 0;     // NaN/Inf input points skipped
   std::uint32_t overflow_dropped = 0;      // inputs beyond a capacity, truncated
   std::uint32_t search_truncated = 0;      // k-d tree queries that hit the node-visit cap
+  std::uint64_t node_visits = 0;           // ICP / evaluation: k-d tree nodes the queries visited (their work)
 
   bool ok() const { return status == RegistrationStatus::kOk; }
 };

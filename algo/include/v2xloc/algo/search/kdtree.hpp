@@ -157,7 +157,8 @@ class KdTree {
   static constexpr std::uint32_t kNoHint = 0xFFFFFFFFu;
   // Whether some point lies within squared distance max_squared_distance (inclusive): exactly
   // nearest_within(...).count > 0, but it stops at the first such point (hypothesis scoring).
-  bool any_within(const P& query, float max_squared_distance) const;
+  // node_visits (optional): incremented by the nodes visited.
+  bool any_within(const P& query, float max_squared_distance, std::uint64_t* node_visits = nullptr) const;
   // found = some indexed point n has (d2(query, n), n.index) < (bound.squared_distance,
   // bound.index). count = 1 when found.
   KdQueryResult has_closer(const P& query, const Neighbor& bound, bool& found) const;
