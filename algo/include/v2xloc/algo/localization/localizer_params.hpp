@@ -98,7 +98,7 @@ struct LocalizerParams {
   // (work), but at least startup_min_work_per_period; its result is carried to the frame it
   // finishes in by the odometry (0: all at once)
   std::uint32_t startup_work_per_period = 800000;
-  std::uint32_t startup_min_work_per_period = 50000;
+  std::uint32_t startup_min_work_per_period = 30000;
   // [work units/period] the first acquisition after power-up (until the filter first starts) gets
   // at least this per period, budget or not: on the 12 recordings the first two periods hold the
   // first map build and two map clouds, and a search on what is left outputs the GNSS fix for 2-9
@@ -184,6 +184,10 @@ struct LocalizerParams {
   }
   static OdometryParams default_odometry() {
     OdometryParams p;
+    // [queries] ~40 M instructions at ~2,450 a query: the recordings' frames need <= ~12.5k
+    // (capped in 2-15 frames a recording, Table 1 within 1 mm); a featureless corridor ran 50
+    // iterations (100 M)
+    p.max_queries = 16384;
     p.convergence = 1e-3;  // [m, rad] |d xi| stop; 1e-4 ran ~2 more iterations for nothing (TUNING.md)
     return p;
   }

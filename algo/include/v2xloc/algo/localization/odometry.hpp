@@ -48,10 +48,9 @@ struct OdometryParams {
   // [points] fine points a source normal's PCA needs (over the 2x2x2 coarse voxels around the
   // point, ~3 v wide); fewer: the point has no normal and is not registered.
   std::uint32_t normal_min_points = 5;
-  // [queries] per frame (registration points x iterations; ~2,450 instructions each): the
-  // iterations stop before exceeding it, as at max_iterations (0: none). The recordings' frames
-  // need <= ~12.5k; a featureless corridor ran 50 iterations (100 M).
-  std::uint32_t max_queries = 16384;
+  // [queries] per frame (registration points x iterations): the iterations stop before
+  // exceeding it, as at max_iterations (0: none; the localizer sets one for its period budget).
+  std::uint32_t max_queries = 0;
 };
 
 enum class OdometryStatus : std::uint8_t {
