@@ -91,6 +91,9 @@ StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& cou
   }
   if (job_kind_ == JobKind::kNone) {
     if (!f.gnss.valid || frames_since_search_ < params_.global_retry_frames) return out;
+    // Its set-up (road height over the whole map, the proximity grid) is one piece: a search
+    // starts in a period with room for it (the first acquisition does not wait).
+    if (!first_acquisition(f) && f.work != nullptr && f.work->left() < f.work->params().search_start) return out;
     frames_since_search_ = 0;
     f.probe(LocalizerStage::kGlobalSearch);
     ++counters.global_searches;
@@ -138,7 +141,7 @@ StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& cou
 std::uint64_t StartupSearch::slice_budget(const StartupFrame& f) const {
   const std::uint64_t quota = params_.startup_work_per_period;
   if (quota == 0) return ~std::uint64_t{0};
-  if (!acquired_ && f.frame < params_.startup_first_frames && params_.startup_first_work_per_period > 0) {
+  if (first_acquisition(f)) {
     const std::uint64_t first = params_.startup_first_work_per_period;
     const std::uint64_t rest = slice_budget_in_period(f, quota);
     return first > rest ? first : rest;

@@ -104,7 +104,7 @@ struct LocalizerParams {
   // first map build and two map clouds, and a search on what is left outputs the GNSS fix for 2-9
   // frames (live Fused 0.08-0.23 m instead of <= 0.014 m; README "Real time"). Later searches (a
   // lost track) keep to the budget, and so does the first after startup_first_frames. 0: always.
-  std::uint32_t startup_first_work_per_period = 900000;
+  std::uint32_t startup_first_work_per_period = 1500000;
   std::uint32_t startup_first_frames = 10;  // [frames] since configure()
   std::uint32_t startup_max_frames = 20;  // [frames] a search job not finished within this is dropped
   // While a spread search runs, output its best refined pose so far (not localized, not fused).

@@ -28,6 +28,7 @@ struct PeriodWorkParams {
   double activation = 14e6;            // [instructions] the new map's first normals, in the period it activates
   double search_unit = 0.0;            // [instructions] per pose-search work unit (pose_search.hpp)
   double audit_start = 12e6;           // [instructions] an audit's set-up (road height over the map, score points)
+  double search_start = 12e6;          // [instructions] a lost-track search's set-up (road height, proximity grid)
   // [periods] a rebuild step deferred this many periods in a row runs regardless (bounded latency)
   std::uint32_t max_deferred_rebuild_steps = 5;
 };

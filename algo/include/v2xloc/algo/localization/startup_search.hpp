@@ -102,6 +102,10 @@ class StartupSearch {
   enum class JobKind : std::uint8_t { kNone, kExhaustive, kFinalists };
 
   std::uint64_t slice_budget(const StartupFrame& f) const;
+  // Power-up: no filter started yet, within startup_first_frames (startup_first_work_per_period).
+  bool first_acquisition(const StartupFrame& f) const {
+    return !acquired_ && f.frame < params_.startup_first_frames && params_.startup_first_work_per_period > 0;
+  }
   std::uint64_t slice_budget_in_period(const StartupFrame& f, std::uint64_t quota) const;
   double region_radius(const StartupFrame& f) const;
   void start_job(const StartupFrame& f, LocalizerCounters& counters);
