@@ -65,6 +65,7 @@ constexpr Signal kGuardCount[4] = {{0, 12, false, 1.0, 0.0, 0.0, 4095.0},
                                    {12, 12, false, 1.0, 0.0, 0.0, 4095.0},
                                    {24, 12, false, 1.0, 0.0, 0.0, 4095.0},
                                    {36, 12, false, 1.0, 0.0, 0.0, 4095.0}};
+constexpr Signal kBackgroundMismatch{52, 4, false, 1.0, 0.0, 0.0, 15.0};  // 0x302 bits 52..55, beside the counter
 // Diagnostics (0x210..0x214).
 constexpr Signal kRegX{0, 24, true, 0.001, 0.0, -8388.608, 8388.607};
 constexpr Signal kRegY{24, 24, true, 0.001, 0.0, -8388.608, 8388.607};
@@ -134,6 +135,7 @@ constexpr NamedCanSignal kSignalTable[] = {
     V2XLOC_SIGNAL(kInputGuardsId, "CanCounterRejected", kGuardCount[1]),
     V2XLOC_SIGNAL(kInputGuardsId, "EgoTimeRejected", kGuardCount[2]),
     V2XLOC_SIGNAL(kInputGuardsId, "MissingSignature", kGuardCount[3]),
+    V2XLOC_SIGNAL(kInputGuardsId, "BackgroundMismatch", kBackgroundMismatch),
     V2XLOC_SIGNAL(kRegistrationPositionId, "RegX", kRegX),
     V2XLOC_SIGNAL(kRegistrationPositionId, "RegY", kRegY),
     V2XLOC_SIGNAL(kRegistrationQualityId, "RegZ", kRegZ),
@@ -542,6 +544,7 @@ CanFrame pack(const InputGuards& m, PackStats* stats) {
   CanFrame f = start_frame(kInputGuardsId);
   const std::uint16_t counts[4] = {m.can_crc_rejected, m.can_counter_rejected, m.ego_time_rejected, m.missing_signature};
   for (int k = 0; k < 4; ++k) encode(f.data, kGuardCount[k], static_cast<double>(counts[k]), stats);
+  encode(f.data, kBackgroundMismatch, static_cast<double>(m.background_mismatch), stats);
   put_counter(f.data, kCounterBit48, m.counter);
   seal(f);
   return f;
@@ -552,6 +555,8 @@ DecodeStatus unpack(const CanFrame& f, InputGuards& m) {
   if (s != DecodeStatus::kOk) return s;
   std::uint16_t* counts[4] = {&m.can_crc_rejected, &m.can_counter_rejected, &m.ego_time_rejected, &m.missing_signature};
   for (int k = 0; k < 4; ++k) *counts[k] = static_cast<std::uint16_t>(get_bits_le(f.data, kGuardCount[k].start, 12));
+  m.background_mismatch =
+      static_cast<std::uint8_t>(get_bits_le(f.data, kBackgroundMismatch.start, kBackgroundMismatch.length));
   m.counter = static_cast<std::uint8_t>(get_bits_le(f.data, kCounterBit48, 4));
   return DecodeStatus::kOk;
 }

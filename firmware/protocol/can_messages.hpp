@@ -224,7 +224,8 @@ struct Heartbeat {
 // ---- Security diagnostics (0x301, 0x302; 1 Hz, after the heartbeat) ----------------------------
 // Saturating counts since start-up of what the firmware refused. 0x301: V2X map shares refused by
 // the trust layer, per reason; 0x302: CAN frames refused by CRC/DLC/range or by their rolling
-// counter, ego scans refused by the time guard, map shares that arrived unsigned.
+// counter, ego scans refused by the time guard, map shares that arrived unsigned, and signed
+// infrastructure clouds map fusion refused as off their unit's surveyed background.
 struct TrustRejections {
   std::uint8_t unknown_signer = 0;   // [0, 255] each
   std::uint8_t bad_signature = 0;
@@ -241,6 +242,7 @@ struct InputGuards {
   std::uint16_t can_counter_rejected = 0;  // rolling counter repeated (stale or replayed frame)
   std::uint16_t ego_time_rejected = 0;     // ego scans dated implausibly against the local clock
   std::uint16_t missing_signature = 0;     // map shares without a signature
+  std::uint8_t background_mismatch = 0;    // [0, 15] infrastructure clouds off their surveyed background
   std::uint8_t counter = 0;
 };
 inline constexpr std::uint16_t kInputGuardsMax = 4095;

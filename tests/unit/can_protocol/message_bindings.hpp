@@ -331,6 +331,7 @@ inline std::vector<MessageBinding> message_bindings() {
                  m.can_counter_rejected = as<std::uint16_t>(v, "CanCounterRejected");
                  m.ego_time_rejected = as<std::uint16_t>(v, "EgoTimeRejected");
                  m.missing_signature = as<std::uint16_t>(v, "MissingSignature");
+                 m.background_mismatch = as<std::uint8_t>(v, "BackgroundMismatch");
                  m.counter = as<std::uint8_t>(v, "Counter");
                  return pack(m, s);
                },
@@ -339,7 +340,7 @@ inline std::vector<MessageBinding> message_bindings() {
                  const auto st = unpack(f, m);
                  v = {{"CanCrcRejected", m.can_crc_rejected}, {"CanCounterRejected", m.can_counter_rejected},
                       {"EgoTimeRejected", m.ego_time_rejected}, {"MissingSignature", m.missing_signature},
-                      {"Counter", m.counter}};
+                      {"BackgroundMismatch", m.background_mismatch}, {"Counter", m.counter}};
                  return st;
                }});
   return b;

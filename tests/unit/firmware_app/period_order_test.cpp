@@ -79,8 +79,11 @@ class RecordingPort final : public LocalizerPort {
   void on_gnss(const GnssInput&) override { calls += "g"; }
   MapInsertResult on_map_cloud(const MapCloudInput&) override {
     calls += "m";
-    return MapInsertResult{};
+    MapInsertResult r;
+    r.status = insert_status;
+    return r;
   }
+  MapInsertStatus insert_status = MapInsertStatus::kInvalidInput;  // what map fusion answers
   const LocalizerFrameOutput& on_ego_scan(const EgoScanInput&) override {
     calls += "e";
     return output_;
@@ -223,6 +226,47 @@ TEST(FirmwareSecurityDiagnostics, HeartbeatIsFollowedByTheRefusalCounts) {
     }
   }
   EXPECT_EQ(found, 2);
+}
+
+// A signed share that map fusion refuses as off its unit's surveyed background is counted and
+// reaches the vehicle bus in 0x302 with the next heartbeat.
+TEST(FirmwareSecurityDiagnostics, SurveyedBackgroundRefusalIsReportedOn0x302) {
+  constexpr std::int64_t kT = 100'000'000;
+  hal::SimClock clock(0, kEpoch);
+  ScriptedCan can;
+  SimTimeCanBus sim_can(can, clock);
+  ScriptedLink v2x, ego;
+  const auto share = cloud(protocol::CloudMessageType::kMapShare, kInfraSenderBase, kT);
+  v2x.queue.push_back(test::sign_share(share, kInfraSenderBase, static_cast<std::uint64_t>(kEpoch + kT)));
+  for (const auto& d : share) v2x.queue.push_back(d);
+  for (const auto& d : cloud(protocol::CloudMessageType::kEgoScan, kEgoSenderId, kT)) ego.queue.push_back(d);
+  can.queue.push_back(make_sim_time_frame(kT));
+
+  auto decoder = std::make_unique<InputDecoder>(kEpoch);
+  trust::TrustList list;
+  test::add_signer(list, kInfraSenderBase, trust::SignerRole::kInfrastructure);
+  decoder->provision_trust(list);
+  RecordingPort port;
+  port.insert_status = MapInsertStatus::kBackgroundMismatch;
+  FirmwareApp app(FirmwareHal{sim_can, v2x, clock, nullptr, nullptr, &ego}, *decoder, port);
+  ASSERT_EQ(app.start(), hal::Status::kOk);
+  for (int k = 0; k < 10 && app.counters().frames_published == 0; ++k) app.poll_once();
+  ASSERT_EQ(app.counters().frames_published, 1u);
+  ASSERT_EQ(port.calls, "me");
+  EXPECT_EQ(app.counters().map_background_mismatch, 1u);
+  can.queue.push_back(make_sim_time_frame(1'100'000'000));
+  app.poll_once();
+  ASSERT_EQ(app.counters().heartbeats, 1u);
+  int found = 0;
+  for (const hal::CanFrame& f : can.sent) {
+    if (f.id != protocol::kInputGuardsId) continue;
+    protocol::InputGuards g;
+    ASSERT_EQ(protocol::unpack(f, g), protocol::DecodeStatus::kOk);
+    EXPECT_EQ(g.background_mismatch, 1u);
+    EXPECT_EQ(g.missing_signature, 0u);
+    ++found;
+  }
+  EXPECT_EQ(found, 1);
 }
 
 TEST(SharePeriodSchedule, KeepsTheNewestCapacityAndReleasesAtMostPerPeriodOldestFirst) {
