@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 
 #if __has_include(<valgrind/callgrind.h>)
@@ -16,12 +17,54 @@
 #include "firmware/wire/share_schedule.hpp"
 #include "firmware/wire/wire_conventions.hpp"
 #include "firmware/protocol/can_messages.hpp"
+#include "firmware/trust/background_file.hpp"
 #include "host_sim/cloud_io/point_cloud.hpp"
+#include "host_sim/common/text_file.hpp"
+#include "host_sim/recording/sim_trust.hpp"
 
 namespace v2xloc::eval {
 namespace {
 
 Mat4d to_mat(const Eigen::Isometry3d& iso) { return iso.matrix(); }
+
+// The recording's surveyed backgrounds (its trust list's `background` lines), read and checked as
+// the firmware reads them (size cap, the list's digest, the sender), so that the in-process run
+// refuses the clouds the firmware refuses. A bad file fails the run, as it stops the firmware.
+// The cells live here until the next run: the localizer reads them until its next configure().
+std::vector<std::vector<std::uint32_t>> g_background_cells;
+
+bool provision_backgrounds(const sim::RecordingReader& reader, Localizer& localizer, std::size_t& loaded,
+                           std::string& error) {
+  g_background_cells.clear();  // after configure(): the localizer holds none of them any more
+  loaded = 0;
+  const std::string list_path = reader.trust_list_path();
+  if (list_path.empty()) return true;
+  trust::TrustList list;
+  if (!sim::load_trust_list(list_path, list, error)) return false;
+  const std::filesystem::path dir = std::filesystem::path(list_path).parent_path();
+  g_background_cells.reserve(list.count);  // no reallocation while the localizer holds spans
+  for (const trust::TrustedSigner& s : list.view()) {
+    if (!s.has_background) continue;
+    const std::string path = (dir / s.background_file.data()).string();
+    std::string bytes;
+    if (!sim::read_text_file(path, trust::kMaxBackgroundFileBytes, bytes, error)) return false;
+    std::vector<std::uint32_t>& cells = g_background_cells.emplace_back(config::kMaxBackgroundCells);
+    trust::BackgroundInfo info;
+    const trust::BackgroundStatus status = trust::parse_background(
+        std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()), s, cells, info);
+    if (status != trust::BackgroundStatus::kOk) {
+      error = path + ": " + trust::to_string(status);
+      return false;
+    }
+    cells.resize(info.cells);
+    if (!localizer.set_background(info.sender_id, SurveyedBackground{info.cell_m, cells})) {
+      error = path + ": the localizer refused this background (not valid, or no background slot left)";
+      return false;
+    }
+    ++loaded;
+  }
+  return true;
+}
 
 // Wall time of one localizer call [s].
 template <class F>
@@ -117,6 +160,7 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
   params.shadow_ungated_filter = true;  // the evaluator reports the ungated "Fused" column
   localizer.configure(params, origin);
   stats = {};
+  if (!provision_backgrounds(reader, localizer, stats.backgrounds_loaded, error)) return false;
 
   const int frames = options.max_frames < 0 ? reader.frame_count()
                                             : std::min(options.max_frames, reader.frame_count());
@@ -258,6 +302,8 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
   }
   localizer.set_stage_probe(StageProbe{});
   stats.counters = localizer.counters();
+  stats.map_background_checked = localizer.map().counters().background_checked;
+  stats.map_background_mismatch = localizer.map().counters().background_mismatch;
   if (!options.quiet) {
     const LocalizerCounters& c = stats.counters;
     std::fprintf(stderr,

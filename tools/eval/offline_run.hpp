@@ -56,6 +56,9 @@ struct RunStats {
   std::size_t map_clouds_rejected = 0;
   std::size_t map_clouds_paced = 0;     // not handed to the map: the source's stored cloud is recent (map_cloud_interval)
   std::size_t map_clouds_dropped = 0;    // waited beyond the share queue (the firmware's schedule)
+  std::size_t backgrounds_loaded = 0;    // surveyed backgrounds the recording's trust list names
+  std::uint64_t map_background_checked = 0;   // infrastructure clouds scored against them
+  std::uint64_t map_background_mismatch = 0;  // of those: refused
   std::vector<StageMs> period_stage_ms;  // one per frame when RunOptions::timing
 };
 

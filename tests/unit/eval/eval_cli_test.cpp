@@ -6,6 +6,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -77,7 +78,24 @@ TEST(EvalCli, JsonReportOfAShortRun) {
   const ToolRun gen = run(kBin + "v2xloc-sim generate --scenario 0 --perm 2_infra --quick --duration 1 --no-stereo --out " + dir);
   ASSERT_EQ(gen.exit_code, 0) << gen.out;
   const ToolRun r = run(kBin + "v2xloc-eval " + dir + " --frames 3 --json 2>/dev/null");
+  // A surveyed background that does not match its trust-list digest stops the run with its name,
+  // as it stops the firmware.
+  std::string background;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    if (e.path().filename().string().rfind("background_", 0) == 0) background = e.path().string();
+  }
+  ToolRun bad{};
+  if (!background.empty()) {
+    std::fstream f(background, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(40);
+    f.put('\x5a');
+    f.close();
+    bad = run(kBin + "v2xloc-eval " + dir + " --frames 3 --json 2>&1");
+  }
   std::filesystem::remove_all(dir);
+  ASSERT_FALSE(background.empty()) << "the generated recording has surveyed backgrounds";
+  EXPECT_NE(bad.exit_code, 0) << bad.out;
+  EXPECT_NE(bad.out.find(std::filesystem::path(background).filename().string()), std::string::npos) << bad.out;
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const nlohmann::json j = nlohmann::json::parse(r.out, nullptr, false);
   ASSERT_FALSE(j.is_discarded()) << r.out;
@@ -93,6 +111,9 @@ TEST(EvalCli, JsonReportOfAShortRun) {
     for (const char* key : {"slam", "gps", "reg", "reg_valid", "fused", "fused_valid", "fused_ungated", "fused_lag", "gps_3d"})
       EXPECT_TRUE(row.at(table).contains(key)) << table << "." << key;
   EXPECT_TRUE(row["unaligned"]["gps"].is_number());
+  // The recording's surveyed backgrounds are loaded in process too, and no genuine cloud fails them.
+  EXPECT_EQ(row.at("work").at("backgrounds_loaded"), 2);
+  EXPECT_EQ(row.at("work").at("map_background_mismatch"), 0);
 }
 
 }  // namespace
