@@ -159,6 +159,7 @@ std::string format_json(const std::vector<RowReport>& rows) {
                    {"audit_work", c.audit_work},
                    {"global_search_work", c.global_search_work},
                    {"odometry_query_capped", c.odometry_query_capped},
+                   {"odometry_frames_thinned", c.odometry_frames_thinned},
                    {"tracking_work_capped", c.tracking_work_capped},
                    {"rebuild_steps_deferred", c.rebuild_steps_deferred},
                    {"audit_periods_starved", c.audit_periods_starved}};

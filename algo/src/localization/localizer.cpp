@@ -81,7 +81,8 @@ const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
   if (std::isfinite(in.t) && (!have_frame_ || in.t > last_frame_t_)) {
     probe_(LocalizerStage::kScanPrep);
     work_.add(params_.work.scan);
-    scan_.prepare(in, vehicle_, counters_.scan_points_dropped, counters_.scans_coarsened);
+    const std::uint32_t passes = scan_.prepare(in, vehicle_, counters_.scan_points_dropped, counters_.scans_coarsened);
+    work_.add(params_.work.scan * (passes - 1));  // a sweep over the ingest capacity, read again coarser
     if (params_.use_stereo && !in.stereo.disparity.empty()) scan_.prepare_stereo(in.stereo);
     probe_(LocalizerStage::kOdometry);
     run_odometry(in);
@@ -138,6 +139,7 @@ void Localizer::run_odometry(const EgoScanInput& in) {
   const bool ok = r.status == OdometryStatus::kOk || r.status == OdometryStatus::kFirstFrame;
   if (!ok) ++counters_.odometry_failures;
   if (r.query_capped) ++counters_.odometry_query_capped;
+  if (r.fine_points_skipped > 0) ++counters_.odometry_frames_thinned;
   const Mat4d lidar_T_body = se3_inverse(body_T_lidar);
   output_.odometry_ok = ok;
   output_.odometry_pose = Pose3d(r.pose.matrix() * lidar_T_body);

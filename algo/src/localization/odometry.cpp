@@ -77,7 +77,20 @@ OdometryResult LidarOdometry::register_frame(std::span<const Vec3f> scan, const 
 OdometryResult LidarOdometry::register_voxelized_frame(std::span<const Vec3f> fine, const Pose3d* predicted_delta) {
   OdometryResult r;
   keep_in_range(fine, frame_fine_, r);
+  thin_fine_frame(r);
   return register_fine(predicted_delta != nullptr ? &predicted_delta->matrix() : nullptr, r);
+}
+
+// An even subsample of at most max_fine_points (kept in order): the frame's set-up (coarse voxels,
+// their normals, the map update) is linear in its points.
+void LidarOdometry::thin_fine_frame(OdometryResult& r) {
+  const std::size_t n = frame_fine_.size(), cap = params_.max_fine_points;
+  if (cap == 0 || n <= cap) return;
+  const std::size_t stride = (n + cap - 1) / cap;
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < n; i += stride) frame_fine_[kept++] = frame_fine_[i];
+  frame_fine_.resize(kept);
+  r.fine_points_skipped = static_cast<std::uint32_t>(n - kept);
 }
 
 OdometryResult LidarOdometry::register_fine(const Mat4d* predicted_delta, OdometryResult& r) {

@@ -28,8 +28,8 @@ void ScanPreparation::configure(const LocalizerParams& params) {
 // motion of the latest wheel speed and yaw rate (KISS-ICP's model). Raw vehicle signals, not the
 // EKF's or the odometry's estimates: the deskewed scan feeds both, and a deskew driven by what
 // it feeds is a feedback loop.
-void ScanPreparation::prepare(const EgoScanInput& in, const VehicleMotion& vehicle, std::uint32_t& dropped,
-                              std::uint32_t& coarsened) {
+std::uint32_t ScanPreparation::prepare(const EgoScanInput& in, const VehicleMotion& vehicle, std::uint32_t& dropped,
+                                       std::uint32_t& coarsened) {
   stereo_down_.clear();
   have_vehicle_delta_ = vehicle.valid && params_.use_vehicle_signals;
   Mat4d delta = Mat4d::Identity();
@@ -49,6 +49,7 @@ void ScanPreparation::prepare(const EgoScanInput& in, const VehicleMotion& vehic
   const ScanIngestResult r = ingest_.run(in.points, in.point_times, deskew_now ? &delta : nullptr, ip);
   dropped += r.non_finite_dropped + r.range_dropped + r.capacity_dropped;
   coarsened += r.coarsened > 0 ? 1u : 0u;
+  return 1u + r.coarsened;
 }
 
 void ScanPreparation::prepare_stereo(const StereoInput& stereo) {

@@ -188,6 +188,9 @@ struct LocalizerParams {
     // (capped in 2-15 frames a recording, Table 1 within 1 mm); a featureless corridor ran 50
     // iterations (100 M)
     p.max_queries = 16384;
+    // [points] the recordings' frames hold ~7k 0.5 m points; a noise-filled sweep 32k (55 M of
+    // set-up: coarse voxels, normals, map update)
+    p.max_fine_points = 16384;
     p.convergence = 1e-3;  // [m, rad] |d xi| stop; 1e-4 ran ~2 more iterations for nothing (TUNING.md)
     return p;
   }

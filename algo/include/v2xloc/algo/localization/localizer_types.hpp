@@ -144,6 +144,7 @@ struct LocalizerCounters {
   std::uint64_t audit_work = 0;                // basin-audit search work units
   std::uint64_t global_search_work = 0;        // start-up / lost-track search work units
   std::uint32_t odometry_query_capped = 0;     // odometry frames whose iterations max_queries ended
+  std::uint32_t odometry_frames_thinned = 0;   // odometry frames thinned to max_fine_points
   std::uint32_t tracking_work_capped = 0;      // tracking ICPs that ran out of work (icp.max_work)
   std::uint32_t rebuild_steps_deferred = 0;    // map rebuild steps that waited for a period with room
   std::uint32_t audit_periods_starved = 0;     // running audits that got no work in a period

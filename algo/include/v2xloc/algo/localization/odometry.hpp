@@ -51,6 +51,9 @@ struct OdometryParams {
   // [queries] per frame (registration points x iterations): the iterations stop before
   // exceeding it, as at max_iterations (0: none; the localizer sets one for its period budget).
   std::uint32_t max_queries = 0;
+  // [points] a pre-voxelised frame (register_voxelized_frame) is thinned evenly to at most this
+  // many 0.5 v points (0: none; the localizer sets one for its period budget).
+  std::uint32_t max_fine_points = 0;
 };
 
 enum class OdometryStatus : std::uint8_t {
@@ -71,6 +74,7 @@ struct OdometryResult {
   std::uint32_t iterations = 0;
   bool converged = false;
   bool query_capped = false;          // max_queries ended the iterations
+  std::uint32_t fine_points_skipped = 0;  // 0.5 v points left out by max_fine_points
   std::uint32_t source_points = 0;    // 1.5 v points registered
   std::uint32_t correspondences = 0;
   std::uint32_t map_points = 0;
@@ -113,6 +117,7 @@ class LidarOdometry {
   std::uint32_t find_coarse(const std::int32_t key[3]) const;
   Vec3f coarse_normal(const Vec3d& mean, const std::int32_t key[3], double cv) const;
   Mat4d align(const Mat4d& prediction, OdometryResult& r) const;
+  void thin_fine_frame(OdometryResult& r);
   double model_sigma() const;
 
   static constexpr std::uint32_t kNone = 0xFFFFFFFFu;

@@ -23,7 +23,9 @@ class ScanPreparation {
   // Finite points within [min_range, max_range] (the rest counted in dropped), deskewed with the
   // vehicle signals' motion over one frame; the stereo cloud is cleared.
   // dropped / coarsened: running counts (returns dropped; sweeps read again with a coarser voxel).
-  void prepare(const EgoScanInput& in, const VehicleMotion& vehicle, std::uint32_t& dropped, std::uint32_t& coarsened);
+  // Returns the passes the ingest read the sweep in (1, or more when it was read again coarser).
+  std::uint32_t prepare(const EgoScanInput& in, const VehicleMotion& vehicle, std::uint32_t& dropped,
+                        std::uint32_t& coarsened);
   // Disparity -> body-frame points with depth sigmas, the noisy far ones dropped, downsampled.
   void prepare_stereo(const StereoInput& stereo);
   // The deskewed scan in the body frame, downsampled, and every k-th point of it for the search.
