@@ -80,9 +80,9 @@ const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
   ++counters_.frames;
   if (std::isfinite(in.t) && (!have_frame_ || in.t > last_frame_t_)) {
     probe_(LocalizerStage::kScanPrep);
-    work_.add(params_.work.scan);
+    // Priced per pass: a sweep over the ingest capacity is read again coarser.
     const std::uint32_t passes = scan_.prepare(in, vehicle_, counters_.scan_points_dropped, counters_.scans_coarsened);
-    work_.add(params_.work.scan * (passes - 1));  // a sweep over the ingest capacity, read again coarser
+    work_.add(params_.work.scan * passes);
     if (params_.use_stereo && !in.stereo.disparity.empty()) scan_.prepare_stereo(in.stereo);
     probe_(LocalizerStage::kOdometry);
     run_odometry(in);

@@ -89,6 +89,7 @@ StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& cou
     provisional_valid_ = false;
     ++counters.global_searches_dropped;
   }
+  bool started = false;
   if (job_kind_ == JobKind::kNone) {
     if (!f.gnss.valid || frames_since_search_ < params_.global_retry_frames) return out;
     // Its set-up (road height over the whole map, the proximity grid) is one piece: a search
@@ -98,14 +99,16 @@ StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& cou
     f.probe(LocalizerStage::kGlobalSearch);
     ++counters.global_searches;
     start_job(f, counters);
-    job_work_counted_ = 0;
+    started = true;
   } else {
     f.probe(LocalizerStage::kGlobalSearch);
   }
+  // This period's work, including the set-up start_job() did (a new job's work starts at 0).
+  const std::uint64_t before = started ? 0 : job_.work();
   const bool finished = job_.step(f.map, slice_budget(f));
-  if (f.work != nullptr) f.work->add(static_cast<double>(job_.work() - job_work_counted_) * f.work->params().search_unit);
-  counters.global_search_work += job_.work() - job_work_counted_;
-  job_work_counted_ = job_.work();
+  const std::uint64_t spent = job_.work() - before;
+  if (f.work != nullptr) f.work->add(static_cast<double>(spent) * f.work->params().search_unit);
+  counters.global_search_work += spent;
   if (!finished) {
     if (job_kind_ == JobKind::kExhaustive) provisional_valid_ = job_.provisional(provisional_);
     out.status = StartupStatus::kSearching;
@@ -141,20 +144,16 @@ StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& cou
 std::uint64_t StartupSearch::slice_budget(const StartupFrame& f) const {
   const std::uint64_t quota = params_.startup_work_per_period;
   if (quota == 0) return ~std::uint64_t{0};
-  if (first_acquisition(f)) {
-    const std::uint64_t first = params_.startup_first_work_per_period;
-    const std::uint64_t rest = slice_budget_in_period(f, quota);
-    return first > rest ? first : rest;
+  std::uint64_t slice = quota;
+  if (f.work != nullptr && f.work->params().search_unit > 0.0) {
+    const double room = f.work->left() / f.work->params().search_unit;
+    const std::uint64_t floor = params_.startup_min_work_per_period < quota ? params_.startup_min_work_per_period : quota;
+    slice = room <= static_cast<double>(floor) ? floor
+            : room >= static_cast<double>(quota) ? quota
+                                                 : static_cast<std::uint64_t>(room);
   }
-  return slice_budget_in_period(f, quota);
-}
-
-std::uint64_t StartupSearch::slice_budget_in_period(const StartupFrame& f, std::uint64_t quota) const {
-  if (f.work == nullptr || !(f.work->params().search_unit > 0.0)) return quota;
-  const double room = f.work->left() / f.work->params().search_unit;
-  const std::uint64_t floor = params_.startup_min_work_per_period < quota ? params_.startup_min_work_per_period : quota;
-  if (room <= static_cast<double>(floor)) return floor;
-  return room >= static_cast<double>(quota) ? quota : static_cast<std::uint64_t>(room);
+  if (first_acquisition(f) && params_.startup_first_work_per_period > slice) slice = params_.startup_first_work_per_period;
+  return slice;
 }
 
 double StartupSearch::region_radius(const StartupFrame& f) const {

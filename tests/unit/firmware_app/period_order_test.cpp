@@ -121,26 +121,38 @@ struct PeriodOutcome {
   std::int64_t clock_ns = 0;
 };
 
+// A signed infrastructure share and an ego scan, both stamped t, and the sim-time frame that
+// moves the emulated clock to t.
+void queue_signed_period(ScriptedLink& v2x, ScriptedLink& ego, ScriptedCan& can, std::int64_t t) {
+  const auto share = cloud(protocol::CloudMessageType::kMapShare, kInfraSenderBase, t);
+  v2x.queue.push_back(test::sign_share(share, kInfraSenderBase, static_cast<std::uint64_t>(kEpoch + t)));
+  for (const auto& d : share) v2x.queue.push_back(d);
+  for (const auto& d : cloud(protocol::CloudMessageType::kEgoScan, kEgoSenderId, t)) ego.queue.push_back(d);
+  can.queue.push_back(make_sim_time_frame(t));
+}
+
+// A decoder whose trust list names the infrastructure signer of queue_signed_period.
+std::unique_ptr<InputDecoder> decoder_trusting_infra() {
+  auto decoder = std::make_unique<InputDecoder>(kEpoch);
+  trust::TrustList list;
+  test::add_signer(list, kInfraSenderBase, trust::SignerRole::kInfrastructure);
+  decoder->provision_trust(list);
+  return decoder;
+}
+
 PeriodOutcome run_one_period(int share_after_ego_reads) {
   constexpr std::int64_t kT = 100'000'000;
   hal::SimClock clock(0, kEpoch);
   ScriptedCan can;
   SimTimeCanBus sim_can(can, clock);
   ScriptedLink v2x, ego;
-  const auto share = cloud(protocol::CloudMessageType::kMapShare, kInfraSenderBase, kT);
-  v2x.queue.push_back(test::sign_share(share, kInfraSenderBase, static_cast<std::uint64_t>(kEpoch + kT)));
-  for (const auto& d : share) v2x.queue.push_back(d);
+  queue_signed_period(v2x, ego, can, kT);
   v2x.gate = &ego;
   v2x.after_reads = share_after_ego_reads;
-  for (const auto& d : cloud(protocol::CloudMessageType::kEgoScan, kEgoSenderId, kT)) ego.queue.push_back(d);
-  can.queue.push_back(make_sim_time_frame(kT));
   can.gate = &ego;
   can.after_reads = 1;
 
-  auto decoder = std::make_unique<InputDecoder>(kEpoch);
-  trust::TrustList list;
-  test::add_signer(list, kInfraSenderBase, trust::SignerRole::kInfrastructure);
-  decoder->provision_trust(list);
+  auto decoder = decoder_trusting_infra();
   RecordingPort port;
   FirmwareApp app(FirmwareHal{sim_can, v2x, clock, nullptr, nullptr, &ego}, *decoder, port);
   EXPECT_EQ(app.start(), hal::Status::kOk);
@@ -236,16 +248,9 @@ TEST(FirmwareSecurityDiagnostics, SurveyedBackgroundRefusalIsReportedOn0x302) {
   ScriptedCan can;
   SimTimeCanBus sim_can(can, clock);
   ScriptedLink v2x, ego;
-  const auto share = cloud(protocol::CloudMessageType::kMapShare, kInfraSenderBase, kT);
-  v2x.queue.push_back(test::sign_share(share, kInfraSenderBase, static_cast<std::uint64_t>(kEpoch + kT)));
-  for (const auto& d : share) v2x.queue.push_back(d);
-  for (const auto& d : cloud(protocol::CloudMessageType::kEgoScan, kEgoSenderId, kT)) ego.queue.push_back(d);
-  can.queue.push_back(make_sim_time_frame(kT));
+  queue_signed_period(v2x, ego, can, kT);
 
-  auto decoder = std::make_unique<InputDecoder>(kEpoch);
-  trust::TrustList list;
-  test::add_signer(list, kInfraSenderBase, trust::SignerRole::kInfrastructure);
-  decoder->provision_trust(list);
+  auto decoder = decoder_trusting_infra();
   RecordingPort port;
   port.insert_status = MapInsertStatus::kBackgroundMismatch;
   FirmwareApp app(FirmwareHal{sim_can, v2x, clock, nullptr, nullptr, &ego}, *decoder, port);

@@ -106,7 +106,6 @@ class StartupSearch {
   bool first_acquisition(const StartupFrame& f) const {
     return !acquired_ && f.frame < params_.startup_first_frames && params_.startup_first_work_per_period > 0;
   }
-  std::uint64_t slice_budget_in_period(const StartupFrame& f, std::uint64_t quota) const;
   double region_radius(const StartupFrame& f) const;
   void start_job(const StartupFrame& f, LocalizerCounters& counters);
   void take_result(const StartupFrame& f, Search& s) const;
@@ -131,8 +130,7 @@ class StartupSearch {
   PoseSearch job_;
   ProximityGrid grid_;               // the job's hypothesis scoring (search_on_proximity_grid)
   JobKind job_kind_ = JobKind::kNone;
-  std::uint64_t job_work_counted_ = 0;
-  bool acquired_ = false;  // the filter was started once (the first acquisition is over)  // of job_.work(), already in counters.global_search_work
+  bool acquired_ = false;            // the filter was started once (the first acquisition is over)
   bool job_track_broken_ = false;    // the odometry failed since the job started
   std::uint32_t job_frame_ = 0;
   Mat4d job_odom_ = Mat4d::Identity();
