@@ -224,10 +224,7 @@ Vec3f LidarOdometry::coarse_normal(const Vec3d& mean, const std::int32_t key[3],
   Mat3d moments;
   moments << outer[0], outer[1], outer[2], outer[1], outer[3], outer[4], outer[2], outer[4], outer[5];
   const Mat3d cov = moments / static_cast<double>(n) - centroid * centroid.transpose();
-  Vec3d lambda;
-  Mat3d vectors;
-  symmetric_eigen3(cov, lambda, vectors);
-  return vectors.col(0).cast<float>();
+  return smallest_eigenvector3(cov).cast<float>();
 }
 
 // Gauss-Newton with a Geman-McClure kernel, left-multiplied twist (rho, omega).
