@@ -31,13 +31,16 @@ struct LocalizerParams {
   float max_range = 80.0f;            // [m] returns farther than this are sparse and noisy: dropped
   float registration_voxel = 0.5f;    // [m] ingest voxel (LiDAR frame): odometry's 0.5 v frame and the registration scan
   // [points] the tracking ICP registers an even subsample of at most this many scan points
-  // (one nearest-neighbour query each per iteration; 0: all)
-  std::uint32_t tracking_points = 3000;
+  // (one nearest-neighbour query each per iteration; 0: all). 1,500 (was 3,000): tracking -44 %
+  // instructions, Fused (valid) within 1 mm on the 12 recordings (TUNING.md "Tracking subsample")
+  std::uint32_t tracking_points = 1500;
   double odometry_prediction_max_gap = 1.0;  // [s] frame gap up to which the signals predict odometry
 
   // ---- Reference map ----
   MapFusionParams map{};              // fused infrastructure + agent clouds (map_fusion.hpp)
-  double map_refresh_period = 1.0;    // [s] rebuild map points / normals / tree at most this often (TUNING.md)
+  // [s] rebuild map points / normals / tree at most this often (TUNING.md); the EMBEDDED profile's
+  // 8,192-point map keeps 1 s (at 2 s its Fused (lag) rose to 0.034 m on Sim 2 / 4_infra)
+  double map_refresh_period = config::kEmbeddedProfile ? 1.0 : 2.0;
   // [clouds/period] map clouds the localizer takes per period while tracking (its caller's share
   // schedule allows more at start-up, when the map is still being assembled; 0: no limit). One
   // fused cloud is ~20 M instructions (TUNING.md "Quiet periods").
@@ -46,8 +49,9 @@ struct LocalizerParams {
   // [s] a source's cloud is fused at most this often (0: every cloud). The map is rebuilt at most
   // every map_refresh_period and takes each source's latest cloud, so of a 2 Hz source's clouds
   // only every other one would ever reach a rebuild; checking and storing the others is wasted
-  // (TUNING.md). Just under the refresh period so a 1 Hz share with jitter is never skipped.
-  double map_cloud_interval = 0.9;
+  // (TUNING.md). Just under the refresh period so a share of a 1 Hz (host: 0.5 Hz) cycle with
+  // jitter is never skipped.
+  double map_cloud_interval = config::kEmbeddedProfile ? 0.9 : 1.9;
   float map_normal_radius = 0.6f;     // [m] normal estimation radius on the map (3 map voxels)
   std::uint32_t map_min_points = 100; // [points] a map with fewer is not registered against
   // [points/period] a map rebuild runs beside the registration, one step per period (extract,
@@ -124,11 +128,11 @@ struct LocalizerParams {
   std::uint32_t audit_period_frames = 30;
   double audit_radius = 8.0;              // [m] basin audit: search disc around the tracked pose
   // [work units/period] the audit's pose search runs beside tracking, this much work per tracked
-  // frame (pose_search.hpp: ~110 instructions a unit; 0: the whole search in one frame)
-  std::uint32_t audit_work_per_period = 180000;
+  // frame (pose_search.hpp: ~110 instructions a unit, so ~10 M; 0: the whole search in one frame)
+  std::uint32_t audit_work_per_period = 90000;
   // [work units/period] ... in a period that fused a map cloud (~20 M of its budget spent; 0: the
   // audit pauses there). While tracking most periods fuse one (sources paced to ~1 Hz, one a period).
-  std::uint32_t audit_work_per_busy_period = 90000;
+  std::uint32_t audit_work_per_busy_period = 45000;
   std::uint32_t audit_max_frames = 60;    // [frames] a search not finished within this is dropped (it pauses in busy periods)
   std::uint32_t audit_refine_candidates = 10;  // [hypotheses] the audit refines (<= kPoseSearchRefine)
   double audit_switch_ratio = 1.15;       // [ratio] audit pose's tight fitness over tracked: switch

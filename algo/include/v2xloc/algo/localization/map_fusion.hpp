@@ -45,7 +45,7 @@ namespace v2xloc {
 
 struct MapFusionParams {
   double voxel_size = 0.2;          // [m] map resolution (registration voxel size)
-  double max_age = 3.0;             // [s] sources older than this are evicted by expire() (paced: a stored cloud is up to ~1 s older than its source's latest)
+  double max_age = 4.0;             // [s] sources older than this are evicted by expire() (paced: a stored cloud is up to ~2 s older than its source's latest)
   bool check_consistency = true;
   double inlier_distance = 0.3;     // [m] "another source's point nearby" (~1.5 voxels)
   double overlap_cell = 2.0;        // [m] cells that define the region the other sources cover
