@@ -217,7 +217,8 @@ bool run_firmware(const sim::RecordingReader& reader, const FirmwareRunOptions& 
       const std::size_t end = result.firmware_output.find('\n', pos);
       const std::string line = result.firmware_output.substr(pos, end == std::string::npos ? std::string::npos : end - pos);
       if (line.find("trust shares") != std::string::npos || line.find("trust list") != std::string::npos || line.find("decoded vehicle") != std::string::npos ||
-          line.find("map fusion") != std::string::npos || line.find("reassembly") != std::string::npos) {
+          line.find("map fusion") != std::string::npos || line.find("reassembly") != std::string::npos ||
+          line.find("localizer searches") != std::string::npos) {
         std::fprintf(stderr, "  %s\n", line.c_str());
       }
       if (end == std::string::npos) break;

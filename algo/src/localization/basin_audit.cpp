@@ -20,8 +20,8 @@ bool distinct_basin(const Mat4d& a, const Mat4d& b, const PoseSearchParams& sp) 
 
 void BasinAudit::configure(const LocalizerParams& params) {
   params_ = params;
-  frames_since_audit_ = 0;
   running_ = false;
+  frames_since_audit_ = first_audit_due();
 }
 
 AuditOutcome BasinAudit::step(const AuditFrame& f, LocalizerCounters& counters) {
@@ -95,12 +95,15 @@ AuditOutcome BasinAudit::finish(const AuditFrame& f, LocalizerCounters& counters
   return out;
 }
 
-// The candidate is refined with the tracking ICP (as an accepted pose would be) and must still
-// be another basin and beat the tracked pose's full-scan tight fitness.
+// The candidate is refined with the tracking ICP on the tracking subsample (as an accepted pose
+// and every tracked frame are: on the whole scan the ICP's work cap ended it unconverged, so no
+// audit could switch) and must still be another basin and beat the tracked pose's full-scan tight
+// fitness.
 bool BasinAudit::wins_on_full_scan(const AuditFrame& f, const Mat4d& nominated, Mat4d& refined) const {
   const Mat4d& tracked = f.tracked.matrix();
   const double select = params_.search.select_distance;
-  const RegistrationResult full = icp(f.scan, f.map, nominated, params_.icp, f.icp_hints);
+  const std::span<const Vec3f> scan = f.tracking_scan.empty() ? f.scan : f.tracking_scan;
+  const RegistrationResult full = icp(scan, f.map, nominated, params_.icp, f.icp_hints);
   const double tracked_full = evaluate_registration(f.scan, f.map, tracked, select).fitness;
   const double cand_full = full.ok() ? evaluate_registration(f.scan, f.map, full.transform, select).fitness : 0.0;
   if (!full.ok() || !distinct_basin(tracked, full.transform, params_.search) ||

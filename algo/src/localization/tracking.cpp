@@ -30,7 +30,7 @@ TrackingOutcome TrackingRegistration::step(const TrackingFrame& f, LocalizerCoun
     room_to_start = f.work->left() >= w.audit_start;
   }
   if (result.ok()) {
-    AuditFrame audit{Pose3d(result.transform), f.scan, f.search_scan, f.map, f.sensor_in_body, f.icp_hints,
+    AuditFrame audit{Pose3d(result.transform), f.scan, f.tracking_scan, f.search_scan, f.map, f.sensor_in_body, f.icp_hints,
                      f.probe, f.frame, f.odom_T_body, f.map_busy};
     audit.work_cap = audit_cap;
     audit.room_to_start = room_to_start;

@@ -18,40 +18,56 @@ struct AuditMarks {
   }
 };
 
+// Three orthogonal walls as the map, the first 600 of their points as the scan.
+struct AuditScene {
+  std::vector<Vec3f> map_points;
+  std::unique_ptr<KdTreeStorage<Vec3f, 4096>> tree = std::make_unique<KdTreeStorage<Vec3f, 4096>>();
+  std::vector<Vec3f> normals;
+  std::vector<Vec3f> scan;
+  std::vector<std::uint32_t> hints;
+  AuditMarks marks;
+  bool normals_ok = false;
+
+  AuditScene() {
+    for (int i = 0; i < 40; ++i)
+      for (int j = 0; j < 15; ++j) {
+        map_points.emplace_back(0.5f * i, 0.0f, 0.5f * j);
+        map_points.emplace_back(0.0f, 0.5f * i, 0.5f * j);
+        map_points.emplace_back(0.5f * i, 0.5f * j, 0.0f);
+      }
+    tree->build(map_points);
+    normals.resize(map_points.size());
+    NormalParams np;
+    np.radius = 1.2f;
+    normals_ok = estimate_normals(tree->tree, np, normals).status == NormalsStatus::kOk;
+    scan.assign(map_points.begin(), map_points.begin() + 600);
+    hints.resize(scan.size());
+  }
+  AuditFrame frame() {
+    AuditFrame f;
+    f.scan = scan;
+    f.search_scan = scan;
+    f.map = IcpTarget{map_points, normals, &tree->tree, nullptr, nullptr};
+    f.icp_hints = hints;
+    f.probe = StageProbe{&AuditMarks::mark, &marks};
+    return f;
+  }
+};
+
 // An audit is insurance: in a period that fused map clouds (map_busy) it takes the smaller busy
 // quota, or with none neither starts nor advances and resumes in the next quiet period.
 TEST(BasinAudit, WaitsOutPeriodsThatFusedMapClouds) {
-  std::vector<Vec3f> map_points;
-  for (int i = 0; i < 40; ++i)
-    for (int j = 0; j < 15; ++j) {
-      map_points.emplace_back(0.5f * i, 0.0f, 0.5f * j);
-      map_points.emplace_back(0.0f, 0.5f * i, 0.5f * j);
-      map_points.emplace_back(0.5f * i, 0.5f * j, 0.0f);
-    }
-  auto tree = std::make_unique<KdTreeStorage<Vec3f, 4096>>();
-  tree->build(map_points);
-  std::vector<Vec3f> normals(map_points.size());
-  NormalParams np;
-  np.radius = 1.2f;
-  ASSERT_EQ(estimate_normals(tree->tree, np, normals).status, NormalsStatus::kOk);
-  const IcpTarget map{map_points, normals, &tree->tree, nullptr, nullptr};
-  std::vector<Vec3f> scan(map_points.begin(), map_points.begin() + 600);
-  std::vector<std::uint32_t> hints(scan.size());
-
+  AuditScene scene;
+  ASSERT_TRUE(scene.normals_ok);
+  AuditMarks& marks = scene.marks;
   LocalizerParams params;
   params.audit_period_frames = 1;
   params.audit_work_per_period = 1000;  // a job over many periods
   params.audit_work_per_busy_period = 0;
   auto audit = std::make_unique<BasinAudit>();
   audit->configure(params);
-  AuditMarks marks;
   LocalizerCounters counters;
-  AuditFrame f;
-  f.scan = scan;
-  f.search_scan = scan;
-  f.map = map;
-  f.icp_hints = hints;
-  f.probe = StageProbe{&AuditMarks::mark, &marks};
+  AuditFrame f = scene.frame();
 
   f.map_busy = true;
   for (std::uint32_t k = 0; k < 3; ++k) {
@@ -78,6 +94,44 @@ TEST(BasinAudit, WaitsOutPeriodsThatFusedMapClouds) {
   f.frame = 6;
   audit->step(f, counters);
   EXPECT_EQ(marks.audit, 3) << "a busy quota: started in a busy period";
+}
+
+
+// A new track (power-up, or after a lost one) is audited after audit_first_frames tracked frames
+// (a start-up search on a map missing a unit's shares can accept an alias); later audits come
+// every audit_period_frames.
+TEST(BasinAudit, NewTrackIsAuditedEarly) {
+  AuditScene scene;
+  ASSERT_TRUE(scene.normals_ok);
+  LocalizerParams params;
+  params.audit_period_frames = 30;
+  params.audit_first_frames = 5;
+  params.audit_work_per_period = 0;  // each audit in one period
+  auto audit = std::make_unique<BasinAudit>();
+  audit->configure(params);
+  LocalizerCounters counters;
+  AuditFrame f = scene.frame();
+  std::vector<std::uint32_t> audited;
+  for (std::uint32_t k = 0; k < 70; ++k) {
+    f.frame = k;
+    if (audit->step(f, counters).audited) audited.push_back(k);
+  }
+  ASSERT_GE(audited.size(), 2u);
+  EXPECT_EQ(audited[0], 4u) << "the fifth tracked frame";
+  EXPECT_EQ(audited[1], 34u) << "then every 30";
+  audit->cancel();  // track lost: the next track is new
+  f.frame = 100;
+  for (std::uint32_t k = 0; k < 5; ++k, ++f.frame) {
+    EXPECT_EQ(audit->step(f, counters).audited, k == 4) << "tracked frame " << k << " of the new track";
+  }
+  params.audit_first_frames = 30;  // no early audit: the first after a whole period
+  audit->configure(params);
+  std::uint32_t first = 0;
+  for (std::uint32_t k = 0; k < 40 && first == 0; ++k) {
+    f.frame = 200 + k;
+    if (audit->step(f, counters).audited) first = k + 1;
+  }
+  EXPECT_EQ(first, 30u);
 }
 
 }  // namespace

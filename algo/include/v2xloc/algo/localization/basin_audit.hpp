@@ -22,6 +22,7 @@ namespace v2xloc {
 struct AuditFrame {
   Pose3d tracked = Pose3d::Identity();   // this frame's tracking registration (ok)
   std::span<const Vec3f> scan{};         // registration scan (body frame, downsampled)
+  std::span<const Vec3f> tracking_scan{};  // its subsample the tracking ICP registers
   std::span<const Vec3f> search_scan{};  // its subsample for the pose search
   IcpTarget map{};
   Vec3d sensor_in_body = Vec3d::Zero();
@@ -45,11 +46,21 @@ class BasinAudit {
  public:
   void configure(const LocalizerParams& params);
   AuditOutcome step(const AuditFrame& frame, LocalizerCounters& counters);
-  // Tracking was lost: a running search no longer describes the track.
-  void cancel() { running_ = false; }
+  // Tracking was lost: a running search no longer describes the track, and the next track is
+  // audited early (see first_audit_due()).
+  void cancel() {
+    running_ = false;
+    frames_since_audit_ = first_audit_due();
+  }
 
  private:
   void start(const AuditFrame& f);
+  // A new track was accepted by a search, possibly on a map still missing sources (shares lost
+  // at start-up): its first audit is due after audit_first_frames tracked frames, not a whole
+  // audit_period_frames.
+  std::uint32_t first_audit_due() const {
+    return params_.audit_period_frames > params_.audit_first_frames ? params_.audit_period_frames - params_.audit_first_frames : 0u;
+  }
   AuditOutcome finish(const AuditFrame& f, LocalizerCounters& counters) const;
   // Refines the nominated basin on the full scan; true when it still differs from the tracked
   // pose and beats it by audit_full_switch_ratio.
