@@ -22,6 +22,7 @@ void BasinAudit::configure(const LocalizerParams& params) {
   params_ = params;
   running_ = false;
   frames_since_audit_ = first_audit_due();
+  first_of_track_ = true;
 }
 
 AuditOutcome BasinAudit::step(const AuditFrame& f, LocalizerCounters& counters) {
@@ -29,9 +30,11 @@ AuditOutcome BasinAudit::step(const AuditFrame& f, LocalizerCounters& counters) 
   if (running_ && f.frame - started_frame_ > params_.audit_max_frames) running_ = false;
   // Periods that fused map clouds have spent part of their spare work: the audit is insurance, it
   // takes a smaller quota there or waits (the frames it pauses count towards audit_max_frames).
+  // A new track's first audit takes all the room the period has left: until it ends, an alias
+  // accepted on an incomplete map is the output (~25 frames on the fixed quotas).
   const std::uint32_t fixed = f.map_busy ? params_.audit_work_per_busy_period : params_.audit_work_per_period;
-  const std::uint64_t quota = fixed < f.work_cap ? fixed : f.work_cap;
-  const bool paused = (f.map_busy && fixed == 0) || f.work_cap == 0;
+  const std::uint64_t quota = first_of_track_ ? f.work_cap : (fixed < f.work_cap ? fixed : f.work_cap);
+  const bool paused = (!first_of_track_ && f.map_busy && fixed == 0) || f.work_cap == 0;
   if (!running_) {
     if (params_.audit_period_frames == 0 || ++frames_since_audit_ < params_.audit_period_frames) return {};
     if (paused || !f.room_to_start) return {};  // due: starts in the next period with room
@@ -52,6 +55,7 @@ AuditOutcome BasinAudit::step(const AuditFrame& f, LocalizerCounters& counters) 
   counters.audit_work += job_.work() - before;
   if (done) {
     running_ = false;
+    first_of_track_ = false;
     out = finish(f, counters);
   }
   f.probe(LocalizerStage::kTracking);

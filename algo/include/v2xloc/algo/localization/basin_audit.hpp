@@ -51,6 +51,7 @@ class BasinAudit {
   void cancel() {
     running_ = false;
     frames_since_audit_ = first_audit_due();
+    first_of_track_ = true;
   }
 
  private:
@@ -68,6 +69,7 @@ class BasinAudit {
 
   LocalizerParams params_{};
   std::uint32_t frames_since_audit_ = 0;
+  bool first_of_track_ = true;  // the next audit is the track's first (it takes the period's room)
   PoseSearch job_{};
   PoseSearchParams search_params_{};
   bool running_ = false;

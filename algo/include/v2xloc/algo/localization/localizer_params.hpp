@@ -126,9 +126,10 @@ struct LocalizerParams {
   // [frames] from one basin audit's end to the next start while tracking (0: off); an audit
   // costs ~270 M instructions in all, so every 3 s keeps its share of a period near 8 M
   std::uint32_t audit_period_frames = 30;
-  // [frames] a new track's first audit starts after this many tracked frames: a start-up search
-  // on a map that lost a unit's shares can accept an alias the full map refutes (TUNING.md)
-  std::uint32_t audit_first_frames = 5;
+  // [frames] a new track's first audit starts after this many tracked frames, with all the room
+  // the period budget has left: a start-up search on a map that lost a unit's shares can accept
+  // an alias the full map refutes (TUNING.md "Basin audit of a new track")
+  std::uint32_t audit_first_frames = 1;
   double audit_radius = 8.0;              // [m] basin audit: search disc around the tracked pose
   // [work units/period] the audit's pose search runs beside tracking, this much work per tracked
   // frame (pose_search.hpp: ~110 instructions a unit, so ~10 M; 0: the whole search in one frame)
