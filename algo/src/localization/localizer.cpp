@@ -67,7 +67,7 @@ MapInsertResult Localizer::on_map_cloud(const MapCloudInput& in) {
                        r.status == MapInsertStatus::kBackgroundMismatch;
   if (checked) {
     const PeriodWorkParams& w = params_.work;
-    work_.add(w.map_cloud_point * r.input_points + r.units_vetted * w.map_vetting + (r.cells_rebuilt ? w.cells_rebuild : 0.0) +
+    work_.add(w.map_cloud_point * (r.input_points - r.input_thinned) + r.units_vetted * w.map_vetting + (r.cells_rebuilt ? w.cells_rebuild : 0.0) +
               (r.background_checked ? w.background_check : 0.0));
   }
   return r;

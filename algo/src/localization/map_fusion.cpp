@@ -87,11 +87,16 @@ SourceCells::Mask MapFusion::trusted_bits(std::size_t slot) const {
 }
 
 void MapFusion::mark_source_cells(std::size_t slot, std::size_t first) {
+  mark_cells(static_cast<SourceCells::Mask>(1u << slot), first);
+}
+
+void MapFusion::mark_cells(SourceCells::Mask sources, std::size_t first) {
   const double cells[3] = {0.5 * params_.inlier_distance, params_.overlap_cell, params_.agent_fill_cell};
-  const auto bit = static_cast<SourceCells::Mask>(1u << slot);
   const std::uint64_t dropped_before = cells_.dropped();
   for (std::size_t i = first; i < num_points_; ++i) {
-    if (point_source_[i] != slot) continue;
+    const std::uint32_t source = point_source_[i];
+    if (((sources >> source) & 1u) == 0) continue;
+    const auto bit = static_cast<SourceCells::Mask>(1u << source);
     for (std::int32_t level = kInlierLevel; level <= kFillLevel; ++level) {
       std::int32_t key[3];
       const bool keyed = cells[level] > 0.0 && SourceCells::cell_key(points_[i], cells[level], level, key);
@@ -101,10 +106,26 @@ void MapFusion::mark_source_cells(std::size_t slot, std::size_t first) {
   counters_.reference_cells_dropped += cells_.dropped() - dropped_before;
 }
 
-void MapFusion::clear_source_cells(std::size_t slot) {
-  const auto bit = static_cast<SourceCells::Mask>(1u << slot);
+// A point keeps its cells' slots until the table is rebuilt: the sources' bits are set again
+// through them, no key hashed (the cells of a thinned source's remaining points).
+void MapFusion::remark_cells(SourceCells::Mask sources) {
   for (std::size_t i = 0; i < num_points_; ++i) {
-    if (point_source_[i] != slot) continue;
+    const std::uint32_t source = point_source_[i];
+    if (((sources >> source) & 1u) == 0) continue;
+    const auto bit = static_cast<SourceCells::Mask>(1u << source);
+    for (std::uint32_t c : point_cells_[i]) cells_.set_at(c, bit);
+  }
+}
+
+void MapFusion::clear_source_cells(std::size_t slot) {
+  clear_cells(static_cast<SourceCells::Mask>(1u << slot));
+}
+
+void MapFusion::clear_cells(SourceCells::Mask sources) {
+  for (std::size_t i = 0; i < num_points_; ++i) {
+    const std::uint32_t source = point_source_[i];
+    if (((sources >> source) & 1u) == 0) continue;
+    const auto bit = static_cast<SourceCells::Mask>(1u << source);
     for (std::uint32_t c : point_cells_[i]) cells_.remove_at(c, bit);
   }
 }
@@ -113,9 +134,11 @@ void MapFusion::clear_source_cells(std::size_t slot) {
 bool MapFusion::rebuild_cells_if_crowded() {
   if (!cells_.needs_rebuild()) return false;
   cells_.clear();
+  SourceCells::Mask trusted = 0;
   for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
-    if (sources_[s].active && sources_[s].trusted) mark_source_cells(s, 0);
+    if (sources_[s].active && sources_[s].trusted) trusted = static_cast<SourceCells::Mask>(trusted | (1u << s));
   }
+  mark_cells(trusted, 0);  // one pass over the map for every surveyed source
   return true;
 }
 
@@ -224,7 +247,14 @@ void MapFusion::stage_candidate(const Mat4d& world_T_sensor, std::span<const Vec
   staging_.clear();
   const Mat3d R = world_T_sensor.topLeftCorner<3, 3>();
   const Vec3d t = world_T_sensor.topRightCorner<3, 1>();
-  for (const Vec3f& p : points) {
+  const std::size_t cap = params_.max_input_points;
+  const std::size_t stride = cap > 0 && points.size() > cap ? (points.size() + cap - 1) / cap : 1;
+  if (stride > 1) {
+    r.input_thinned = static_cast<std::uint32_t>(points.size() - (points.size() + stride - 1) / stride);
+    counters_.input_points_thinned += r.input_thinned;
+  }
+  for (std::size_t i = 0; i < points.size(); i += stride) {
+    const Vec3f& p = points[i];
     if (!p.allFinite()) {
       ++r.non_finite_dropped;
       continue;
@@ -286,12 +316,14 @@ bool MapFusion::passes_consistency(std::size_t own_slot, bool trusted, MapInsert
 std::uint32_t MapFusion::cut_sources(std::size_t share, std::size_t except) {
   bool over[config::kMaxMapSources] = {};
   bool any = false;
+  SourceCells::Mask remark = 0;  // surveyed sources thinned: their bits set again from the kept points
   for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
     over[s] = s != except && sources_[s].active && sources_[s].points > share;
     any |= over[s];
-    if (over[s] && sources_[s].trusted) clear_source_cells(s);  // marked again from the kept points
+    if (over[s] && sources_[s].trusted) remark = static_cast<SourceCells::Mask>(remark | (1u << s));
   }
   if (!any) return 0;
+  clear_cells(remark);
   std::size_t seen[config::kMaxMapSources] = {};
   std::size_t n = 0;  // stable compaction, as remove_source_points
   for (std::size_t i = 0; i < num_points_; ++i) {
@@ -301,10 +333,9 @@ std::uint32_t MapFusion::cut_sources(std::size_t share, std::size_t except) {
   const auto dropped = static_cast<std::uint32_t>(num_points_ - n);
   num_points_ = n;
   for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
-    if (!over[s]) continue;
-    sources_[s].points = static_cast<std::uint32_t>(share);
-    if (sources_[s].trusted) mark_source_cells(s, 0);
+    if (over[s]) sources_[s].points = static_cast<std::uint32_t>(share);
   }
+  remark_cells(remark);
   return dropped;
 }
 

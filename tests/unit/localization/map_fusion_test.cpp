@@ -167,6 +167,7 @@ TEST(MapFusion, CapacityAndSourceSlotOverflowCounted) {
   params.check_consistency = false;
   params.voxel_size = 0.2;
   params.max_coarsen_steps = 0;  // cut, not re-voxelised (FullMapSharedEvenlyBetweenSources, below)
+  params.max_input_points = 0;   // every input point staged (InputOverTheLimitReadWithAStride, below)
   MapFusion& map = fresh_map(params);
   // One flat cloud larger than the map: 0.2 m grid over N x N cells.
   const int n = static_cast<int>(std::sqrt(double(config::kMaxMapPoints))) + 20;
@@ -270,6 +271,7 @@ TEST(MapFusion, CloudOverTheCapacityIsCoarsenedNotCut) {
   MapFusionParams params;
   params.check_consistency = false;
   params.voxel_size = 0.2;
+  params.max_input_points = 0;
   MapFusion& map = fresh_map(params);
   const int n = static_cast<int>(std::sqrt(double(config::kMaxMapPoints))) + 20;  // 0.2 m grid, > capacity
   std::vector<Vec3f> big;
@@ -286,6 +288,33 @@ TEST(MapFusion, CloudOverTheCapacityIsCoarsenedNotCut) {
   float hi = -1e9f;
   for (const Vec3f& p : out) hi = std::max(hi, p.y());
   EXPECT_GT(hi, 0.2f * static_cast<float>(n) - 0.5f);  // the last rows are kept
+}
+
+// A cloud of more than max_input_points is read with an even stride before staging (its cost is
+// linear in the points read), counted; it still spans its whole extent.
+TEST(MapFusion, InputOverTheLimitReadWithAStride) {
+  MapFusionParams params;
+  params.check_consistency = false;
+  params.voxel_size = 0.2;
+  params.max_input_points = 1000;
+  MapFusion& map = fresh_map(params);
+  std::vector<Vec3f> line;
+  for (int i = 0; i < 2500; ++i) line.emplace_back(0.05f * i, 0.0f, 0.0f);  // 125 m, 4 points a voxel
+  const auto r = map.insert(1, 0.0, Pose3d(Mat4d::Identity()), line, true);
+  EXPECT_EQ(r.input_points, 2500u);
+  EXPECT_EQ(r.input_thinned, 2500u - 834u);  // stride 3: points 0, 3, ..., 2499
+  EXPECT_EQ(map.counters().input_points_thinned, 2500u - 834u);
+  EXPECT_EQ(r.capacity_dropped, 0u);
+  EXPECT_GE(r.stored_points, 600u);  // 834 points 0.15 m apart in 0.2 m voxels
+  static FixedVector<Vec3f, config::kMaxMapPoints> out;
+  map.extract(out);
+  float hi = -1e9f;
+  for (const Vec3f& p : out) hi = std::max(hi, p.x());
+  EXPECT_GT(hi, 124.0f);  // the end of the line is kept
+  // At or under the limit: nothing skipped.
+  line.resize(1000);
+  const auto small = map.insert(2, 0.0, Pose3d(Mat4d::Identity()), line, true);
+  EXPECT_EQ(small.input_thinned, 0u);
 }
 
 // Consistency before trust: an agent shifted by as little as 0.25 m fits the infrastructure better

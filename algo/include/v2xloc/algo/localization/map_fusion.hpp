@@ -100,6 +100,11 @@ struct MapFusionParams {
   // this many times (then cut, counted). EMBEDDED: a 16k-point infrastructure cloud has ~12.6k
   // voxels at 0.2 m, ~9.2k at 0.4 m, ~4.9k at 0.8 m. Never needed with the host capacities.
   std::uint32_t max_coarsen_steps = 3;
+  // [points] a cloud with more points is read with an even stride down to this many before it is
+  // staged (counted): sources share max_points, so a source keeps a few thousand of them anyway,
+  // and staging, downsampling and marking a 131k-point cloud cost ~160 M instructions, over a
+  // whole period's budget. The recordings' clouds hold <= 16.2k points (0: no limit).
+  std::uint32_t max_input_points = 16384;
   // Infrastructure clouds of a unit with a surveyed background are checked against it (thresholds:
   // surveyed_background.hpp, measured in algo/TUNING.md); false skips that check.
   bool check_background = true;
@@ -132,6 +137,7 @@ struct MapInsertResult {
   bool quorum_checked = false;          // infrastructure checked by the full rule (>= 3 other units)
   std::uint32_t share_trimmed = 0;      // other sources' points thinned to the share to make room
   std::uint32_t coarsened = 0;          // voxel doublings to fit the candidate (max_coarsen_steps)
+  std::uint32_t input_thinned = 0;      // input points skipped by the max_input_points stride
   std::uint32_t units_vetted = 0;       // other infrastructure units checked by the quorum after this insert
   bool cells_rebuilt = false;           // the reference cells were rebuilt from every surveyed source
   bool background_checked = false;      // scored against the unit's surveyed background
@@ -163,6 +169,7 @@ struct MapFusionCounters {
   std::uint64_t points_dropped_capacity = 0;
   std::uint64_t points_trimmed_share = 0;   // stored points thinned to make room for a new cloud's share
   std::uint64_t clouds_coarsened = 0;       // clouds downsampled again with a coarser voxel
+  std::uint64_t input_points_thinned = 0;   // input points skipped by the max_input_points stride
   std::uint64_t non_finite_dropped = 0;
   std::uint64_t agent_points_covered = 0;   // agent points dropped where infrastructure sees
   std::uint64_t reference_cells_dropped = 0;  // reference cells not recorded (hash probes exhausted)
@@ -234,8 +241,13 @@ class MapFusion {
   // stored cloud is appended at the end) and records each point's cell slots; surveyed sources
   // only: the reference is the infrastructure.
   void mark_source_cells(std::size_t slot, std::size_t first);
+  // The same for every source in `sources` at once (one pass over the map).
+  void mark_cells(SourceCells::Mask sources, std::size_t first);
+  // Sets the sources' bits again through their points' recorded slots (no keys hashed).
+  void remark_cells(SourceCells::Mask sources);
   // Clears the source's bit through the recorded slots (no keys recomputed).
   void clear_source_cells(std::size_t slot);
+  void clear_cells(SourceCells::Mask sources);  // ... for every source in `sources`, one pass
   bool rebuild_cells_if_crowded();  // true when it rebuilt
   // Bits of the active surveyed sources other than `slot`: the reference a cloud is checked against.
   SourceCells::Mask trusted_bits(std::size_t slot) const;

@@ -40,6 +40,11 @@ class SourceCells {
   void remove_at(std::uint32_t slot, Mask bits) {
     if (slot < kSlots) cells_[slot].bits = static_cast<Mask>(cells_[slot].bits & ~bits);
   }
+  // Sets `bits` again in the cell at a slot add() returned (kNoCell: nothing): the cell keeps its
+  // key and slot until clear().
+  void set_at(std::uint32_t slot, Mask bits) {
+    if (slot < kSlots) cells_[slot].bits = static_cast<Mask>(cells_[slot].bits | bits);
+  }
   // Bits of the cell (0 when absent).
   Mask bits(const std::int32_t key[3]) const;
   // Any of `allowed` in the 27 cells around p's cell on that grid.
