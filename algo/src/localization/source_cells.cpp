@@ -28,8 +28,10 @@ void SourceCells::clear() {
 
 std::size_t SourceCells::find(const std::int32_t key[3]) const {
   const std::uint32_t hash = spatial_hash(key);
-  const std::size_t bit = seen_bit(hash);
-  if (((seen_[bit / 64] >> (bit % 64)) & 1u) == 0) return kSlots;  // never added
+  return seen(hash) ? probe(hash, key) : kSlots;
+}
+
+std::size_t SourceCells::probe(std::uint32_t hash, const std::int32_t key[3]) const {
   std::size_t found = kSlots;
   linear_probe(hash, kSlots, kMaxProbes, [&](std::size_t slot) {
     const Cell& c = cells_[slot];
@@ -71,15 +73,28 @@ SourceCells::Mask SourceCells::bits(const std::int32_t key[3]) const {
   return slot < kSlots ? cells_[slot].bits : Mask{0};
 }
 
+// The 27 hashes come from 9 per-axis products (spatial_hash is xor-separable); most cells around
+// a point were never added, and the seen bitmap turns those away before any probe.
 bool SourceCells::any_around(const Vec3f& p, double cell, std::int32_t level, Mask allowed) const {
   std::int32_t key[3];
   if (!cell_key(p, cell, level, key)) return false;
-  for (int dx = -1; dx <= 1; ++dx)
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dz = -1; dz <= 1; ++dz) {
-        const std::int32_t k[3] = {key[0] + dx, key[1] + dy, key[2] + 4 * dz};
-        if (bits(k) & allowed) return true;
+  std::uint32_t hx[3], hy[3], hz[3];
+  for (int d = 0; d < 3; ++d) {
+    hx[d] = spatial_hash_axis(0, key[0] + d - 1);
+    hy[d] = spatial_hash_axis(1, key[1] + d - 1);
+    hz[d] = spatial_hash_axis(2, key[2] + 4 * (d - 1));  // z carries the level in its low two bits
+  }
+  for (int dx = 0; dx < 3; ++dx)
+    for (int dy = 0; dy < 3; ++dy) {
+      const std::uint32_t hxy = hx[dx] ^ hy[dy];
+      for (int dz = 0; dz < 3; ++dz) {
+        const std::uint32_t hash = hxy ^ hz[dz];
+        if (!seen(hash)) continue;
+        const std::int32_t k[3] = {key[0] + dx - 1, key[1] + dy - 1, key[2] + 4 * (dz - 1)};
+        const std::size_t slot = probe(hash, k);
+        if (slot < kSlots && (cells_[slot].bits & allowed) != 0) return true;
       }
+    }
   return false;
 }
 

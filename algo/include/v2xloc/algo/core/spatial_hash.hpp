@@ -11,9 +11,14 @@
 namespace v2xloc {
 
 // Teschner et al. 2003, eq. (1) without the modulo; unsigned arithmetic (wraps, no overflow UB).
+// Xor-separable: the xor of spatial_hash_axis(0, x), (1, y) and (2, z), so a caller hashing a
+// block of neighbour keys multiplies once per axis value, not once per key.
+inline std::uint32_t spatial_hash_axis(int axis, std::int32_t v) {
+  constexpr std::uint32_t kPrimes[3] = {73856093u, 19349669u, 83492791u};
+  return static_cast<std::uint32_t>(v) * kPrimes[axis];
+}
 inline std::uint32_t spatial_hash(std::int32_t x, std::int32_t y, std::int32_t z) {
-  return (static_cast<std::uint32_t>(x) * 73856093u) ^ (static_cast<std::uint32_t>(y) * 19349669u) ^
-         (static_cast<std::uint32_t>(z) * 83492791u);
+  return spatial_hash_axis(0, x) ^ spatial_hash_axis(1, y) ^ spatial_hash_axis(2, z);
 }
 inline std::uint32_t spatial_hash(const std::int32_t key[3]) { return spatial_hash(key[0], key[1], key[2]); }
 

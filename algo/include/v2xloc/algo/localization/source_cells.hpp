@@ -62,6 +62,13 @@ class SourceCells {
   };
   // Slot of key, or kSlots when absent.
   std::size_t find(const std::int32_t key[3]) const;
+  // Slot of key by walking its probe chain (hash == spatial_hash(key)), or kSlots.
+  std::size_t probe(std::uint32_t hash, const std::int32_t key[3]) const;
+  // False proves the key of this hash was never added.
+  bool seen(std::uint32_t hash) const {
+    const std::size_t bit = seen_bit(hash);
+    return ((seen_[bit / 64] >> (bit % 64)) & 1u) != 0;
+  }
   // One bit per hash value modulo kSeenBits, set by add() until clear(): a clear bit proves the
   // key absent. 4 bits per slot: at most half the slots are used, so >= 7/8 of the bits are clear.
   static constexpr std::size_t kSeenBits = 4 * kSlots;
