@@ -107,7 +107,8 @@ void MapFusion::mark_cells(SourceCells::Mask sources, std::size_t first) {
 }
 
 // A point keeps its cells' slots until the table is rebuilt: the sources' bits are set again
-// through them, no key hashed (the cells of a thinned source's remaining points).
+// through them, no key hashed (the cells of a thinned source's remaining points). A cell that
+// found no slot when marked stays unrecorded (it was counted then).
 void MapFusion::remark_cells(SourceCells::Mask sources) {
   for (std::size_t i = 0; i < num_points_; ++i) {
     const std::uint32_t source = point_source_[i];
