@@ -20,7 +20,7 @@
 #include <CLI/CLI.hpp>
 
 #include "firmware/app/alloc_counter.hpp"
-#include "firmware/app/background_store.hpp"
+#include "firmware/wire/background_store.hpp"
 #include "firmware/app/emulated_wiring.hpp"
 #include "firmware/app/firmware_app.hpp"
 #include "firmware/app/configure_localizer.hpp"

@@ -40,7 +40,7 @@ v2xloc::Ekf g_ekf;
 v2xloc::FixedLagValidityGate g_fixed_lag_gate;
 v2xloc::CausalValidityGate g_causal_gate;
 v2xloc::TrajectoryBackfill g_backfill;
-// Surveyed backgrounds at the firmware's capacity (firmware/app/background_store.hpp), so the
+// Surveyed backgrounds at the firmware's capacity (firmware/wire/background_store.hpp), so the
 // image's static RAM counts them.
 std::uint32_t g_background_cells[v2xloc::config::kMaxBackgroundUnits][v2xloc::config::kMaxBackgroundCells];
 float g_sweep_times[kScenePoints];

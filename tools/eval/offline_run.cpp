@@ -18,6 +18,7 @@
 #include "firmware/wire/wire_conventions.hpp"
 #include "firmware/protocol/can_messages.hpp"
 #include "firmware/trust/background_file.hpp"
+#include "firmware/wire/background_store.hpp"
 #include "host_sim/cloud_io/point_cloud.hpp"
 #include "host_sim/common/text_file.hpp"
 #include "host_sim/recording/sim_trust.hpp"
@@ -27,41 +28,42 @@ namespace {
 
 Mat4d to_mat(const Eigen::Isometry3d& iso) { return iso.matrix(); }
 
-// The recording's surveyed backgrounds (its trust list's `background` lines), read and checked as
-// the firmware reads them (size cap, the list's digest, the sender), so that the in-process run
-// refuses the clouds the firmware refuses. A bad file fails the run, as it stops the firmware.
-// The cells live here until the next run: the localizer reads them until its next configure().
-std::vector<std::vector<std::uint32_t>> g_background_cells;
+// The recording's surveyed backgrounds (its trust list's `background` lines), read, checked and
+// kept as the firmware keeps them (firmware/wire/background_store.hpp: size cap, the list's
+// digest, the sender), so that the in-process run refuses the clouds the firmware refuses. A bad
+// file fails the run, as it stops the firmware. The store lives here until the next run: the
+// localizer reads it until its next configure().
+std::unique_ptr<firmware::BackgroundStore> g_backgrounds;
 
 bool provision_backgrounds(const sim::RecordingReader& reader, Localizer& localizer, std::size_t& loaded,
                            std::string& error) {
-  g_background_cells.clear();  // after configure(): the localizer holds none of them any more
+  g_backgrounds = std::make_unique<firmware::BackgroundStore>();  // after configure(): the old one is no longer read
   loaded = 0;
   const std::string list_path = reader.trust_list_path();
   if (list_path.empty()) return true;
   trust::TrustList list;
   if (!sim::load_trust_list(list_path, list, error)) return false;
   const std::filesystem::path dir = std::filesystem::path(list_path).parent_path();
-  g_background_cells.reserve(list.count);  // no reallocation while the localizer holds spans
   for (const trust::TrustedSigner& s : list.view()) {
     if (!s.has_background) continue;
     const std::string path = (dir / s.background_file.data()).string();
+    if (g_backgrounds->full()) {
+      error = path + ": more backgrounds than the firmware holds (" + std::to_string(firmware::BackgroundStore::kUnits) + ")";
+      return false;
+    }
     std::string bytes;
     if (!sim::read_text_file(path, trust::kMaxBackgroundFileBytes, bytes, error)) return false;
-    std::vector<std::uint32_t>& cells = g_background_cells.emplace_back(config::kMaxBackgroundCells);
-    trust::BackgroundInfo info;
-    const trust::BackgroundStatus status = trust::parse_background(
-        std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()), s, cells, info);
+    const trust::BackgroundStatus status = g_backgrounds->load(
+        s, std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()));
     if (status != trust::BackgroundStatus::kOk) {
       error = path + ": " + trust::to_string(status);
       return false;
     }
-    cells.resize(info.cells);
-    if (!localizer.set_background(info.sender_id, SurveyedBackground{info.cell_m, cells})) {
-      error = path + ": the localizer refused this background (not valid, or no background slot left)";
-      return false;
-    }
-    ++loaded;
+  }
+  loaded = g_backgrounds->provision(localizer);
+  if (loaded != g_backgrounds->count()) {
+    error = list_path + ": the localizer refused a surveyed background (not valid for it)";
+    return false;
   }
   return true;
 }

@@ -59,7 +59,7 @@ std::vector<MemoryEntry> memory_entries() {
   };
 #ifdef V2XLOC_INFO_HAS_MAP_FUSION
   entries.push_back({"MapFusion", sizeof(v2xloc::MapFusion), false});
-  // Caller-owned: the firmware's BackgroundStore (firmware/app/background_store.hpp).
+  // Caller-owned: the firmware's BackgroundStore (firmware/wire/background_store.hpp).
   entries.push_back({"Surveyed background cells", v2xloc::config::kMaxBackgroundUnits *
                                                       v2xloc::config::kMaxBackgroundCells * sizeof(std::uint32_t), false});
 #endif

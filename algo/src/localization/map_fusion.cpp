@@ -106,28 +106,25 @@ void MapFusion::mark_cells(SourceCells::Mask sources, std::size_t first) {
   counters_.reference_cells_dropped += cells_.dropped() - dropped_before;
 }
 
-// A point keeps its cells' slots until the table is rebuilt: the sources' bits are set again
-// through them, no key hashed (the cells of a thinned source's remaining points). A cell that
-// found no slot when marked stays unrecorded (it was counted then).
-void MapFusion::remark_cells(SourceCells::Mask sources) {
-  for (std::size_t i = 0; i < num_points_; ++i) {
-    const std::uint32_t source = point_source_[i];
-    if (((sources >> source) & 1u) == 0) continue;
-    const auto bit = static_cast<SourceCells::Mask>(1u << source);
-    for (std::uint32_t c : point_cells_[i]) cells_.set_at(c, bit);
-  }
-}
-
 void MapFusion::clear_source_cells(std::size_t slot) {
-  clear_cells(static_cast<SourceCells::Mask>(1u << slot));
+  set_recorded_cells(static_cast<SourceCells::Mask>(1u << slot), false);
 }
 
-void MapFusion::clear_cells(SourceCells::Mask sources) {
+// A point keeps its cells' slots until the table is rebuilt: its source's bit is set or cleared
+// through them, no key hashed (re-setting them restores a thinned source's remaining cells). A
+// cell that found no slot when marked stays unrecorded (it was counted then).
+void MapFusion::set_recorded_cells(SourceCells::Mask sources, bool set) {
   for (std::size_t i = 0; i < num_points_; ++i) {
     const std::uint32_t source = point_source_[i];
     if (((sources >> source) & 1u) == 0) continue;
     const auto bit = static_cast<SourceCells::Mask>(1u << source);
-    for (std::uint32_t c : point_cells_[i]) cells_.remove_at(c, bit);
+    for (std::uint32_t c : point_cells_[i]) {
+      if (set) {
+        cells_.set_at(c, bit);
+      } else {
+        cells_.remove_at(c, bit);
+      }
+    }
   }
 }
 
@@ -135,11 +132,7 @@ void MapFusion::clear_cells(SourceCells::Mask sources) {
 bool MapFusion::rebuild_cells_if_crowded() {
   if (!cells_.needs_rebuild()) return false;
   cells_.clear();
-  SourceCells::Mask trusted = 0;
-  for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
-    if (sources_[s].active && sources_[s].trusted) trusted = static_cast<SourceCells::Mask>(trusted | (1u << s));
-  }
-  mark_cells(trusted, 0);  // one pass over the map for every surveyed source
+  mark_cells(trusted_bits(config::kMaxMapSources), 0);  // every surveyed source, one pass over the map
   return true;
 }
 
@@ -324,7 +317,7 @@ std::uint32_t MapFusion::cut_sources(std::size_t share, std::size_t except) {
     if (over[s] && sources_[s].trusted) remark = static_cast<SourceCells::Mask>(remark | (1u << s));
   }
   if (!any) return 0;
-  clear_cells(remark);
+  set_recorded_cells(remark, false);
   std::size_t seen[config::kMaxMapSources] = {};
   std::size_t n = 0;  // stable compaction, as remove_source_points
   for (std::size_t i = 0; i < num_points_; ++i) {
@@ -336,7 +329,7 @@ std::uint32_t MapFusion::cut_sources(std::size_t share, std::size_t except) {
   for (std::size_t s = 0; s < config::kMaxMapSources; ++s) {
     if (over[s]) sources_[s].points = static_cast<std::uint32_t>(share);
   }
-  remark_cells(remark);
+  set_recorded_cells(remark, true);
   return dropped;
 }
 

@@ -1,7 +1,7 @@
 // The firmware's surveyed-background store: each file the trust list vouches for is kept in its
 // unit's static slot and handed to the localizer once; a refused file keeps nothing; the store
 // is bounded by config::kMaxBackgroundUnits.
-#include "firmware/app/background_store.hpp"
+#include "firmware/wire/background_store.hpp"
 
 #include <gtest/gtest.h>
 

@@ -140,29 +140,40 @@ std::unique_ptr<InputDecoder> decoder_trusting_infra() {
   return decoder;
 }
 
-PeriodOutcome run_one_period(int share_after_ego_reads) {
-  constexpr std::int64_t kT = 100'000'000;
-  hal::SimClock clock(0, kEpoch);
+// The firmware over one signed period (queue_signed_period at kT) on scripted links, its decoder
+// trusting the infrastructure signer, its localizer a recording port.
+struct SignedPeriodBench {
+  static constexpr std::int64_t kT = 100'000'000;
+  hal::SimClock clock{0, kEpoch};
   ScriptedCan can;
-  SimTimeCanBus sim_can(can, clock);
+  SimTimeCanBus sim_can{can, clock};
   ScriptedLink v2x, ego;
-  queue_signed_period(v2x, ego, can, kT);
-  v2x.gate = &ego;
-  v2x.after_reads = share_after_ego_reads;
-  can.gate = &ego;
-  can.after_reads = 1;
-
-  auto decoder = decoder_trusting_infra();
+  std::unique_ptr<InputDecoder> decoder = decoder_trusting_infra();
   RecordingPort port;
-  FirmwareApp app(FirmwareHal{sim_can, v2x, clock, nullptr, nullptr, &ego}, *decoder, port);
-  EXPECT_EQ(app.start(), hal::Status::kOk);
-  for (int k = 0; k < 10 && app.counters().frames_published == 0; ++k) app.poll_once();
+  FirmwareApp app{FirmwareHal{sim_can, v2x, clock, nullptr, nullptr, &ego}, *decoder, port};
+
+  SignedPeriodBench() { queue_signed_period(v2x, ego, can, kT); }
+  // Starts the firmware and polls until it publishes the period's frame (at most 10 polls).
+  hal::Status start_and_run_period() {
+    const hal::Status started = app.start();
+    for (int k = 0; k < 10 && app.counters().frames_published == 0; ++k) app.poll_once();
+    return started;
+  }
+};
+
+PeriodOutcome run_one_period(int share_after_ego_reads) {
+  SignedPeriodBench b;
+  b.v2x.gate = &b.ego;
+  b.v2x.after_reads = share_after_ego_reads;
+  b.can.gate = &b.ego;
+  b.can.after_reads = 1;
+  EXPECT_EQ(b.start_and_run_period(), hal::Status::kOk);
   PeriodOutcome out;
-  out.calls = port.calls;
-  out.accepted = app.decoder().verifier().counters().accepted;
-  out.future = app.decoder().verifier().counters().future;
-  out.published = app.counters().frames_published;
-  out.clock_ns = clock.monotonic_ns();
+  out.calls = b.port.calls;
+  out.accepted = b.app.decoder().verifier().counters().accepted;
+  out.future = b.app.decoder().verifier().counters().future;
+  out.published = b.app.counters().frames_published;
+  out.clock_ns = b.clock.monotonic_ns();
   return out;
 }
 
@@ -243,27 +254,18 @@ TEST(FirmwareSecurityDiagnostics, HeartbeatIsFollowedByTheRefusalCounts) {
 // A signed share that map fusion refuses as off its unit's surveyed background is counted and
 // reaches the vehicle bus in 0x302 with the next heartbeat.
 TEST(FirmwareSecurityDiagnostics, SurveyedBackgroundRefusalIsReportedOn0x302) {
-  constexpr std::int64_t kT = 100'000'000;
-  hal::SimClock clock(0, kEpoch);
-  ScriptedCan can;
-  SimTimeCanBus sim_can(can, clock);
-  ScriptedLink v2x, ego;
-  queue_signed_period(v2x, ego, can, kT);
-
-  auto decoder = decoder_trusting_infra();
-  RecordingPort port;
-  port.insert_status = MapInsertStatus::kBackgroundMismatch;
-  FirmwareApp app(FirmwareHal{sim_can, v2x, clock, nullptr, nullptr, &ego}, *decoder, port);
-  ASSERT_EQ(app.start(), hal::Status::kOk);
-  for (int k = 0; k < 10 && app.counters().frames_published == 0; ++k) app.poll_once();
+  SignedPeriodBench b;
+  b.port.insert_status = MapInsertStatus::kBackgroundMismatch;
+  FirmwareApp& app = b.app;
+  ASSERT_EQ(b.start_and_run_period(), hal::Status::kOk);
   ASSERT_EQ(app.counters().frames_published, 1u);
-  ASSERT_EQ(port.calls, "me");
+  ASSERT_EQ(b.port.calls, "me");
   EXPECT_EQ(app.counters().map_background_mismatch, 1u);
-  can.queue.push_back(make_sim_time_frame(1'100'000'000));
+  b.can.queue.push_back(make_sim_time_frame(1'100'000'000));
   app.poll_once();
   ASSERT_EQ(app.counters().heartbeats, 1u);
   int found = 0;
-  for (const hal::CanFrame& f : can.sent) {
+  for (const hal::CanFrame& f : b.can.sent) {
     if (f.id != protocol::kInputGuardsId) continue;
     protocol::InputGuards g;
     ASSERT_EQ(protocol::unpack(f, g), protocol::DecodeStatus::kOk);

@@ -243,13 +243,13 @@ class MapFusion {
   void mark_source_cells(std::size_t slot, std::size_t first);
   // The same for every source in `sources` at once (one pass over the map).
   void mark_cells(SourceCells::Mask sources, std::size_t first);
-  // Sets the sources' bits again through their points' recorded slots (no keys hashed).
-  void remark_cells(SourceCells::Mask sources);
   // Clears the source's bit through the recorded slots (no keys recomputed).
   void clear_source_cells(std::size_t slot);
-  void clear_cells(SourceCells::Mask sources);  // ... for every source in `sources`, one pass
+  // Sets (or clears) the bits of every source in `sources` through their points' recorded slots.
+  void set_recorded_cells(SourceCells::Mask sources, bool set);
   bool rebuild_cells_if_crowded();  // true when it rebuilt
-  // Bits of the active surveyed sources other than `slot`: the reference a cloud is checked against.
+  // Bits of the active surveyed sources other than `slot` (config::kMaxMapSources: all of them): the
+  // reference a cloud is checked against.
   SourceCells::Mask trusted_bits(std::size_t slot) const;
   // Fraction of candidate points near other sources' points (see header), excluding `slot`;
   // only trusted (infrastructure) sources are the reference. best_probe: the best fitness of the

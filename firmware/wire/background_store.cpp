@@ -1,4 +1,4 @@
-#include "firmware/app/background_store.hpp"
+#include "firmware/wire/background_store.hpp"
 
 namespace v2xloc::firmware {
 
