@@ -278,6 +278,11 @@ StartupStatus StartupSearch::accept(const StartupFrame& f, const Search& s, Regi
   const bool heading_agrees =
       f.course_known &&
       std::abs(det::wrap_pi(yaw_of(result.transform.topLeftCorner<3, 3>()) - f.course)) <= params_.heading_search_tolerance;
+  if (result.horizontal_constraint < params_.global_min_horizontal_constraint) {
+    ++counters.global_unconstrained;  // an along-street alias fits as well (see the parameter)
+    result.status = RegistrationStatus::kDegenerate;
+    return StartupStatus::kRejected;
+  }
   if (result.fitness < params_.global_min_fitness || result.inlier_rmse > params_.max_inlier_rmse ||
       (f.course_known && !heading_agrees) ||
       (params_.use_gnss && horizontal_distance(result.transform, f.gnss.enu) > s.region) ||

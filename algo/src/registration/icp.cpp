@@ -91,6 +91,16 @@ Mat6d information(const Pass& p) {
   return info;
 }
 
+// Smallest eigenvalue of the horizontal (tx, ty) block of the point-to-plane system over the
+// trace of its translational block (closed form for a symmetric 2x2).
+double horizontal_constraint(const Mat6d& h) {
+  const double trace = h(3, 3) + h(4, 4) + h(5, 5);
+  if (!(trace > 0.0)) return 0.0;
+  const double mean = 0.5 * (h(3, 3) + h(4, 4)), half_diff = 0.5 * (h(3, 3) - h(4, 4));
+  const double lambda_min = mean - std::sqrt(half_diff * half_diff + h(3, 4) * h(3, 4));
+  return lambda_min > 0.0 ? lambda_min / trace : 0.0;
+}
+
 enum class PassMode { kEvaluateOnly, kPointToPoint, kPointToPlane };
 
 // Float search bound that admits every point the double gate (d2 <= max_d2) accepts: the query
@@ -197,6 +207,7 @@ void fill_from_pass(const Pass& pass, RegistrationResult& result) {
   result.inlier_rmse = rmse(pass);
   result.inliers = pass.inliers;
   result.information = information(pass);
+  result.horizontal_constraint = horizontal_constraint(pass.h);
 }
 
 std::uint32_t count_nonfinite(std::span<const Vec3f> cloud) {

@@ -259,5 +259,53 @@ TEST(Icp, RejectsBadInputWithStatuses) {
   EXPECT_EQ(r.inlier_rmse, 0.0);
 }
 
+// A street between two facades: point-to-plane ICP matches only walls facing across it and the
+// road, so nothing holds the pose along the street (horizontal_constraint ~ 0); a cross wall at
+// the street's end does (the start-up search refuses solutions below its threshold).
+std::vector<Vec3f> street(bool cross_wall) {
+  std::vector<Vec3f> pts;
+  for (float x = -20.0f; x <= 20.0f; x += 0.25f) {
+    for (float y = -5.0f; y <= 5.0f; y += 0.25f) pts.emplace_back(x, y, 0.0f);  // road
+    for (float z = 0.25f; z <= 4.0f; z += 0.25f) {
+      pts.emplace_back(x, -5.0f, z);  // facades
+      pts.emplace_back(x, 5.0f, z);
+    }
+  }
+  if (cross_wall) {
+    for (float y = -5.0f; y <= 5.0f; y += 0.25f) {
+      for (float z = 0.25f; z <= 4.0f; z += 0.25f) pts.emplace_back(12.0f, y, z);
+    }
+  }
+  return pts;
+}
+
+TEST(Icp, HorizontalConstraintSeesAnUnconstrainedStreet) {
+  IcpParams params;
+  params.method = IcpMethod::kPointToPlane;
+  params.max_correspondence_distance = 1.0;
+  params.criteria.max_iterations = 30;
+  const Mat4d offset = rotation_zyx(0.01, 0.0, 0.0, Vec3d(0.2, 0.15, 0.05));
+  double measured[2] = {0.0, 0.0};
+  for (const bool cross : {false, true}) {
+    const TargetMap map(street(cross));
+    std::vector<Vec3f> source;
+    for (std::size_t i = 0; i < map.points.size(); i += 3) {
+      source.push_back((offset.topLeftCorner<3, 3>() * map.points[i].cast<double>() + offset.topRightCorner<3, 1>())
+                           .cast<float>());
+    }
+    const RegistrationResult r = icp(source, map.view(), Mat4d::Identity(), params);
+    ASSERT_EQ(r.status, RegistrationStatus::kOk) << to_string(r.status);
+    EXPECT_GE(r.horizontal_constraint, 0.0);
+    EXPECT_LE(r.horizontal_constraint, 0.5);
+    measured[cross ? 1 : 0] = r.horizontal_constraint;
+  }
+  EXPECT_LT(measured[0], 0.005) << "facades along x and the road leave x free";
+  EXPECT_GT(measured[1], 0.04) << "the cross wall holds x";
+  // Other methods carry no point-to-plane system.
+  params.method = IcpMethod::kPointToPoint;
+  const TargetMap map(street(true));
+  EXPECT_EQ(icp(map.points, map.view(false), Mat4d::Identity(), params).horizontal_constraint, 0.0);
+}
+
 }  // namespace
 }  // namespace v2xloc

@@ -91,6 +91,11 @@ struct LocalizerParams {
   double global_min_region = 30.0;    // [m] start-up region radius floor (canyon NLOS; TUNING.md)
   double global_max_vertical = 3.0;   // [m] RANSAC prior: hypothesis height off the road surface
   double global_min_fitness = 0.3;    // [0-1] start-up solution needs at least this ICP fitness
+  // [0-0.5] a start-up solution needs its final ICP constrained along both horizontal directions
+  // (RegistrationResult::horizontal_constraint): with too little of the map in view the scan's
+  // matched facades leave it free along the street and an alias metres away fits as well
+  // (TUNING.md "Along-street aliases": aliases 0.015-0.018, true poses 0.077-0.133). 0: off.
+  double global_min_horizontal_constraint = 0.04;
   std::uint32_t road_height_min_points = 50;  // [points] in the 0.2 m bin to output the road height
   double global_max_ambiguity = 0.85; // [0-1] runner-up / winner tight fitness above: ambiguous
   double max_inlier_rmse = 1e9;       // [m] registration above this RMSE fails (off; TUNING.md)

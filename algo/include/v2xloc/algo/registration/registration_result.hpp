@@ -48,6 +48,11 @@ struct RegistrationResult {
   std::uint32_t inliers = 0;               // inlier correspondences of the final transform
   bool converged = false;                  // a convergence criterion (not a cap) ended the loop
   Mat6d information = Mat6d::Zero();       // see header comment
+  // Point-to-plane ICP: the share of the translational constraint (sum of w n n^T over the final
+  // pass) along its weakest horizontal direction, lambda_min(xy block) / trace, in [0, 0.5]. Near
+  // 0 the matched surfaces (facades across a straight street, the road) leave the pose free
+  // along one horizontal direction: an along-street alias fits as well. 0 for other methods.
+  double horizontal_constraint = 0.0;
   std::uint32_t nonfinite_dropped = 0;     // NaN/Inf input points skipped
   std::uint32_t overflow_dropped = 0;      // inputs beyond a capacity, truncated
   std::uint32_t search_truncated = 0;      // k-d tree queries that hit the node-visit cap
