@@ -31,6 +31,7 @@ void StartupSearch::configure(const LocalizerParams& params) {
   job_kind_ = JobKind::kNone;
   finalist_count_ = 0;
   acquired_ = false;
+  region_scale_ = 1.0;
   job_.set_proximity_grid(params.search_on_proximity_grid ? &grid_ : nullptr);
 }
 
@@ -56,6 +57,7 @@ void StartupSearch::on_track_lost() {
   job_kind_ = JobKind::kNone;
   provisional_valid_ = false;
   frames_since_search_ = params_.global_retry_frames;
+  region_scale_ = 1.0;
 }
 
 void StartupSearch::nominate(std::uint32_t frame, const Pose3d& pose, const Pose3d& odom_T_body) {
@@ -70,7 +72,9 @@ void StartupSearch::nominate(std::uint32_t frame, const Pose3d& pose, const Pose
 bool StartupSearch::candidate_pose(std::uint32_t frame, const Pose3d& odom_T_body, Pose3d& pose) const {
   if (!candidate_.valid || !candidate_.output || frame - candidate_.frame > params_.global_confirm_window) {
     if (job_kind_ != JobKind::kExhaustive || !provisional_valid_) return false;
-    // The running search's best pose so far, carried from the frame it started at.
+    // The running search's best pose so far, carried from the frame it started at; from a widened
+    // search only inside the normal region (beyond it nothing but the scan match vouches for it).
+    if (horizontal_distance(provisional_, job_fix_) > job_floor_region_) return false;
     pose = Pose3d(provisional_ * se3_inverse(job_odom_) * odom_T_body.matrix());
     return true;
   }
@@ -124,6 +128,7 @@ StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& cou
   StartupSearchReport& r = out.report;
   r.searched = true;
   r.heading_used = job_heading_used_;
+  r.region = job_region_;
   r.best_tight = s.searched.best_tight_fitness;
   r.runner_up_tight = s.searched.runner_up_tight_fitness;
   r.best_conflicts = s.searched.best_conflicts;
@@ -133,6 +138,7 @@ StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& cou
   if (kind == JobKind::kExhaustive && params_.use_fpfh_ransac) fpfh_ransac(f, s);
   out.status = accept(f, s, out.registration, counters);
   if (out.status == StartupStatus::kStartFilter) acquired_ = true;
+  if (kind == JobKind::kExhaustive) widen_region(out.status, f.frame, s.searched.best);
   if (out.status == StartupStatus::kRejected && candidate_.valid && candidate_.frame == f.frame) keep_finalists(f);
   f.probe(LocalizerStage::kFusion);
   return out;
@@ -159,16 +165,42 @@ std::uint64_t StartupSearch::slice_budget(const StartupFrame& f) const {
 double StartupSearch::region_radius(const StartupFrame& f) const {
   double region = params_.global_gnss_gate_sigmas * (f.gnss.sigma * params_.ekf.gates.gnss_sigma_inflation + 1.0);
   if (region < params_.global_min_region) region = params_.global_min_region;
+  if (region_scale_ > 1.0) {
+    const double wide = region * region_scale_;
+    const double cap = params_.global_max_region > region ? params_.global_max_region : region;
+    region = wide < cap ? wide : cap;
+  }
   return region;
+}
+
+// An exhaustive search whose best pose matched nothing well (no candidate set, no filter started,
+// its best below global_min_fitness): the true pose may lie outside the region (a canyon fix
+// further off than the floor), so the next search looks wider. A search that matched, even one
+// refused as ambiguous, returns to the normal region. The work stays bounded: hypotheses grow
+// with the area (45 m: 2.25x), spread over periods like any search.
+void StartupSearch::widen_region(StartupStatus status, std::uint32_t frame, const RegistrationResult& best) {
+  const bool matched = best.ok() && best.fitness >= params_.global_min_fitness;
+  const bool found = matched || status == StartupStatus::kStartFilter || status == StartupStatus::kAccepted ||
+                     (candidate_.valid && candidate_.frame == frame);
+  region_scale_ = found ? 1.0 : region_scale_ * params_.global_region_growth;
+  if (!(region_scale_ < 1e3)) region_scale_ = 1e3;  // capped by global_max_region anyway
 }
 
 // (1) Exhaustive, GNSS-seeded search over position and heading; or, to confirm a candidate, the
 // candidate's search finalists carried here by the odometry, re-decided on this frame's scan.
 void StartupSearch::start_job(const StartupFrame& f, LocalizerCounters& counters) {
   job_region_ = region_radius(f);
+  job_fix_ = f.gnss.enu;
+  const double scale = region_scale_;
+  region_scale_ = 1.0;
+  job_floor_region_ = region_radius(f);
+  region_scale_ = scale;
   PoseSearchParams& sp = job_params_;
   sp = params_.search;
-  sp.radius = job_region_ < sp.radius ? job_region_ : sp.radius;
+  // A widened region (widen_region) may exceed the search's own radius, up to global_max_region.
+  const double radius_cap = region_scale_ > 1.0 && params_.global_max_region > sp.radius ? params_.global_max_region
+                                                                                       : sp.radius;
+  sp.radius = job_region_ < radius_cap ? job_region_ : radius_cap;
   sp.sensor_in_body = f.sensor_in_body;
   job_heading_used_ = f.course_known;
   if (f.course_known) {

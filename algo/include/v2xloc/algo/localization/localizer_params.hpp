@@ -89,13 +89,19 @@ struct LocalizerParams {
   double global_map_radius = 70.0;    // [m] map crop (and road-height disc) around the GNSS fix
   double global_gnss_gate_sigmas = 4.0;  // [sigma] start-up region radius in inflated GNSS sigmas (+1 m)
   double global_min_region = 30.0;    // [m] start-up region radius floor (canyon NLOS; TUNING.md)
+  // [m] after an exhaustive search that found nothing acceptable the next one searches a region
+  // global_region_growth times wider, up to this: a canyon fix can be further off than the floor
+  // (TUNING.md "Widening start-up region"); back to the floor once a candidate is found
+  double global_max_region = 45.0;
+  double global_region_growth = 1.5;
   double global_max_vertical = 3.0;   // [m] RANSAC prior: hypothesis height off the road surface
   double global_min_fitness = 0.3;    // [0-1] start-up solution needs at least this ICP fitness
   // [0-0.5] a start-up solution needs its final ICP constrained along both horizontal directions
   // (RegistrationResult::horizontal_constraint): with too little of the map in view the scan's
   // matched facades leave it free along the street and an alias metres away fits as well
-  // (TUNING.md "Along-street aliases": aliases 0.015-0.018, true poses 0.077-0.133). 0: off.
-  double global_min_horizontal_constraint = 0.04;
+  // (TUNING.md "Along-street aliases": aliases 0.015-0.018, true poses 0.077-0.133). 0: off; off
+  // in the EMBEDDED profile, whose thinner scans and map put true poses at 0.011-0.050.
+  double global_min_horizontal_constraint = config::kEmbeddedProfile ? 0.0 : 0.04;
   std::uint32_t road_height_min_points = 50;  // [points] in the 0.2 m bin to output the road height
   double global_max_ambiguity = 0.85; // [0-1] runner-up / winner tight fitness above: ambiguous
   double max_inlier_rmse = 1e9;       // [m] registration above this RMSE fails (off; TUNING.md)

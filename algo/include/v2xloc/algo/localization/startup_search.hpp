@@ -48,6 +48,7 @@ struct StartupFrame {
 struct StartupSearchReport {
   bool searched = false;
   bool heading_used = false;
+  double region = 0.0;  // [m] radius of the region searched around the GNSS fix
   double best_tight = 0.0, runner_up_tight = 0.0;
   double best_conflicts = -1.0, runner_up_conflicts = -1.0;
   Pose3d best_pose = Pose3d::Identity();
@@ -107,6 +108,7 @@ class StartupSearch {
     return !acquired_ && f.frame < params_.startup_first_frames && params_.startup_first_work_per_period > 0;
   }
   double region_radius(const StartupFrame& f) const;
+  void widen_region(StartupStatus status, std::uint32_t frame, const RegistrationResult& best);
   void start_job(const StartupFrame& f, LocalizerCounters& counters);
   void take_result(const StartupFrame& f, Search& s) const;
   void resolve_ambiguity(const StartupFrame& f, Search& s, LocalizerCounters& counters) const;
@@ -135,6 +137,9 @@ class StartupSearch {
   std::uint32_t job_frame_ = 0;
   Mat4d job_odom_ = Mat4d::Identity();
   double job_region_ = 0.0;
+  double region_scale_ = 1.0;        // grows after a search found nothing acceptable (widen_region)
+  double job_floor_region_ = 0.0;    // [m] the job's region before widening (provisional output)
+  Vec3d job_fix_ = Vec3d::Zero();    // the GNSS fix the job searches around
   PoseSearchParams job_params_{};
   bool job_heading_used_ = false;
   bool provisional_valid_ = false;   // the running search's best pose so far (output only)

@@ -1,0 +1,89 @@
+#include "v2xloc/algo/localization/startup_search.hpp"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <vector>
+
+#include "v2xloc/algo/registration/normals.hpp"
+#include "v2xloc/algo/search/kdtree.hpp"
+
+namespace v2xloc {
+namespace {
+
+// A corner of three orthogonal 20 m planes as the map; the scan is a part of it (body = world).
+struct CornerScene {
+  std::vector<Vec3f> map_points;
+  std::unique_ptr<KdTreeStorage<Vec3f, 4096>> tree = std::make_unique<KdTreeStorage<Vec3f, 4096>>();
+  std::vector<Vec3f> normals;
+  std::vector<Vec3f> scan;
+  std::vector<std::uint32_t> hints;
+
+  CornerScene() {
+    for (int i = 0; i < 40; ++i) {
+      for (int j = 0; j < 15; ++j) {
+        map_points.emplace_back(0.5f * i, 0.0f, 0.5f * j);
+        map_points.emplace_back(0.0f, 0.5f * i, 0.5f * j);
+        map_points.emplace_back(0.5f * i, 0.5f * j, 0.0f);
+      }
+    }
+    tree->build(map_points);
+    normals.resize(map_points.size());
+    NormalParams np;
+    np.radius = 1.2f;
+    estimate_normals(tree->tree, np, normals);
+    scan.assign(map_points.begin(), map_points.begin() + 900);
+    hints.resize(scan.size());
+  }
+  StartupFrame frame(std::uint32_t index, const Vec3d& fix) {
+    StartupFrame f;
+    f.frame = index;
+    f.t = 0.1 * index;
+    f.scan = scan;
+    f.search_scan = scan;
+    f.tracking_scan = scan;
+    f.map = IcpTarget{map_points, normals, &tree->tree, nullptr, nullptr};
+    f.gnss.valid = true;
+    f.gnss.enu = fix;
+    f.gnss.sigma = 3.0;
+    f.filter_needs_start = true;
+    f.icp_hints = hints;
+    return f;
+  }
+};
+
+// A canyon fix can be further off than the region's floor: a search that leaves nothing standing
+// makes the next one look wider (up to global_max_region), and a new track starts at the floor.
+TEST(StartupSearch, RegionWidensAfterASearchFindsNothing) {
+  CornerScene scene;
+  LocalizerParams params;
+  auto search = std::make_unique<StartupSearch>();
+  search->configure(params);
+  LocalizerCounters counters;
+  const Vec3d fix(300.0, 300.0, 0.0);  // no map anywhere near it: nothing can be found
+  std::vector<double> regions;
+  for (std::uint32_t frame = 0; frame < 40 && regions.size() < 3; ++frame) {
+    search->on_frame(true, Pose3d::Identity(), GnssFix{});
+    const StartupOutcome out = search->step(scene.frame(frame, fix), counters);
+    if (!out.report.searched) continue;
+    EXPECT_EQ(out.status, StartupStatus::kRejected);
+    regions.push_back(out.report.region);
+  }
+  ASSERT_EQ(regions.size(), 3u);
+  EXPECT_DOUBLE_EQ(regions[0], params.global_min_region);
+  EXPECT_DOUBLE_EQ(regions[1], params.global_min_region * params.global_region_growth);
+  EXPECT_DOUBLE_EQ(regions[2], params.global_max_region) << "capped";
+  EXPECT_EQ(counters.global_accepted, 0u);
+
+  search->on_track_lost();  // a new track: back to the floor
+  for (std::uint32_t frame = 40; frame < 80; ++frame) {
+    search->on_frame(true, Pose3d::Identity(), GnssFix{});
+    const StartupOutcome out = search->step(scene.frame(frame, fix), counters);
+    if (!out.report.searched) continue;
+    EXPECT_DOUBLE_EQ(out.report.region, params.global_min_region);
+    break;
+  }
+}
+
+}  // namespace
+}  // namespace v2xloc
