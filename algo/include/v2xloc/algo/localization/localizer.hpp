@@ -57,8 +57,10 @@ class Localizer {
   // stored cloud is recent, reference_map.hpp); lets the caller skip the share's signature check.
   bool wants_map_cloud(std::uint32_t source_id, double t) const { return map_.wants(source_id, t); }
   // How many map clouds the next period should fuse at most (the caller's share schedule applies
-  // its own cap too): map_clouds_per_period_tracking while tracking, else no limit.
+  // its own cap too): map_clouds_per_period_tracking while tracking; none until the first
+  // acquisition is over once a map exists (defer_map_clouds_first_search); else no limit.
   std::uint32_t map_clouds_per_period() const {
+    if (params_.defer_map_clouds_first_search && map_.ready() && startup_.first_acquisition_pending(frame_)) return 0;
     return filter_.can_track() && params_.map_clouds_per_period_tracking > 0 ? params_.map_clouds_per_period_tracking
                                                                              : ~std::uint32_t{0};
   }

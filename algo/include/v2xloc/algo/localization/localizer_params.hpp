@@ -45,6 +45,12 @@ struct LocalizerParams {
   // schedule allows more at start-up, when the map is still being assembled; 0: no limit). One
   // fused cloud is ~20 M instructions (TUNING.md "Quiet periods").
   std::uint32_t map_clouds_per_period_tracking = 1;
+  // Until the first acquisition is over (its searches' slices ignore the period budget; at most
+  // startup_first_frames) the periods after the first map take no map clouds: they would reach
+  // the map only at its next rebuild anyway, and two of them (~55 M) on top of a search put
+  // start-up periods over 100 M (TUNING.md "Map clouds during the first acquisition"). Host
+  // profile only: the EMBEDDED map, rebuilt every second, missed them (Fused (lag) 0.020 -> 0.036 m).
+  bool defer_map_clouds_first_search = !config::kEmbeddedProfile;
   double map_refresh_quiet_wait = 0.5;  // [s] a due rebuild waits this long at most for a period without new clouds
   // [s] a source's cloud is fused at most this often (0: every cloud). The map is rebuilt at most
   // every map_refresh_period and takes each source's latest cloud, so of a 2 Hz source's clouds

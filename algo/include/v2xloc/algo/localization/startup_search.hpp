@@ -108,6 +108,13 @@ class StartupSearch {
     return !acquired_ && f.frame < params_.startup_first_frames && params_.startup_first_work_per_period > 0;
   }
   double region_radius(const StartupFrame& f) const;
+ public:
+  // The first acquisition is not over at this frame: its searches take their exception slice.
+  bool first_acquisition_pending(std::uint32_t frame) const {
+    return !acquired_ && frame < params_.startup_first_frames && params_.startup_first_work_per_period > 0;
+  }
+
+ private:
   void widen_region(StartupStatus status, std::uint32_t frame, const RegistrationResult& best);
   void start_job(const StartupFrame& f, LocalizerCounters& counters);
   void take_result(const StartupFrame& f, Search& s) const;
