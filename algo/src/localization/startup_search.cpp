@@ -98,7 +98,7 @@ StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& cou
     if (!f.gnss.valid || frames_since_search_ < params_.global_retry_frames) return out;
     // Its set-up (road height over the whole map, the proximity grid) is one piece: a search
     // starts in a period with room for it (the first acquisition does not wait).
-    if (!first_acquisition(f) && f.work != nullptr && f.work->left() < f.work->params().search_start) return out;
+    if (!first_acquisition_pending(f.frame) && f.work != nullptr && f.work->left() < f.work->params().search_start) return out;
     frames_since_search_ = 0;
     f.probe(LocalizerStage::kGlobalSearch);
     ++counters.global_searches;
@@ -158,19 +158,20 @@ std::uint64_t StartupSearch::slice_budget(const StartupFrame& f) const {
             : room >= static_cast<double>(quota) ? quota
                                                  : static_cast<std::uint64_t>(room);
   }
-  if (first_acquisition(f) && params_.startup_first_work_per_period > slice) slice = params_.startup_first_work_per_period;
+  if (first_acquisition_pending(f.frame) && params_.startup_first_work_per_period > slice) slice = params_.startup_first_work_per_period;
   return slice;
 }
 
-double StartupSearch::region_radius(const StartupFrame& f) const {
-  double region = params_.global_gnss_gate_sigmas * (f.gnss.sigma * params_.ekf.gates.gnss_sigma_inflation + 1.0);
-  if (region < params_.global_min_region) region = params_.global_min_region;
-  if (region_scale_ > 1.0) {
-    const double wide = region * region_scale_;
-    const double cap = params_.global_max_region > region ? params_.global_max_region : region;
-    region = wide < cap ? wide : cap;
-  }
-  return region;
+double StartupSearch::floor_region(const StartupFrame& f) const {
+  const double region = params_.global_gnss_gate_sigmas * (f.gnss.sigma * params_.ekf.gates.gnss_sigma_inflation + 1.0);
+  return region < params_.global_min_region ? params_.global_min_region : region;
+}
+
+double StartupSearch::widened(double floor) const {
+  if (!(region_scale_ > 1.0)) return floor;
+  const double wide = floor * region_scale_;
+  const double cap = params_.global_max_region > floor ? params_.global_max_region : floor;
+  return wide < cap ? wide : cap;
 }
 
 // An exhaustive search whose best pose matched nothing well (no candidate set, no filter started,
@@ -189,12 +190,9 @@ void StartupSearch::widen_region(StartupStatus status, std::uint32_t frame, cons
 // (1) Exhaustive, GNSS-seeded search over position and heading; or, to confirm a candidate, the
 // candidate's search finalists carried here by the odometry, re-decided on this frame's scan.
 void StartupSearch::start_job(const StartupFrame& f, LocalizerCounters& counters) {
-  job_region_ = region_radius(f);
+  job_floor_region_ = floor_region(f);
+  job_region_ = widened(job_floor_region_);
   job_fix_ = f.gnss.enu;
-  const double scale = region_scale_;
-  region_scale_ = 1.0;
-  job_floor_region_ = region_radius(f);
-  region_scale_ = scale;
   PoseSearchParams& sp = job_params_;
   sp = params_.search;
   // A widened region (widen_region) may exceed the search's own radius, up to global_max_region.

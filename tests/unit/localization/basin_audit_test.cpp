@@ -5,8 +5,7 @@
 #include <memory>
 #include <vector>
 
-#include "v2xloc/algo/registration/normals.hpp"
-#include "v2xloc/algo/search/kdtree.hpp"
+#include "corner_map.hpp"
 
 namespace v2xloc {
 namespace {
@@ -20,34 +19,20 @@ struct AuditMarks {
 
 // Three orthogonal walls as the map, the first 600 of their points as the scan.
 struct AuditScene {
-  std::vector<Vec3f> map_points;
-  std::unique_ptr<KdTreeStorage<Vec3f, 4096>> tree = std::make_unique<KdTreeStorage<Vec3f, 4096>>();
-  std::vector<Vec3f> normals;
+  testing::CornerMap map;
   std::vector<Vec3f> scan;
   std::vector<std::uint32_t> hints;
   AuditMarks marks;
-  bool normals_ok = false;
 
   AuditScene() {
-    for (int i = 0; i < 40; ++i)
-      for (int j = 0; j < 15; ++j) {
-        map_points.emplace_back(0.5f * i, 0.0f, 0.5f * j);
-        map_points.emplace_back(0.0f, 0.5f * i, 0.5f * j);
-        map_points.emplace_back(0.5f * i, 0.5f * j, 0.0f);
-      }
-    tree->build(map_points);
-    normals.resize(map_points.size());
-    NormalParams np;
-    np.radius = 1.2f;
-    normals_ok = estimate_normals(tree->tree, np, normals).status == NormalsStatus::kOk;
-    scan.assign(map_points.begin(), map_points.begin() + 600);
+    scan.assign(map.points.begin(), map.points.begin() + 600);
     hints.resize(scan.size());
   }
   AuditFrame frame() {
     AuditFrame f;
     f.scan = scan;
     f.search_scan = scan;
-    f.map = IcpTarget{map_points, normals, &tree->tree, nullptr, nullptr};
+    f.map = map.target();
     f.icp_hints = hints;
     f.probe = StageProbe{&AuditMarks::mark, &marks};
     return f;
@@ -58,7 +43,7 @@ struct AuditScene {
 // quota, or with none neither starts nor advances and resumes in the next quiet period.
 TEST(BasinAudit, WaitsOutPeriodsThatFusedMapClouds) {
   AuditScene scene;
-  ASSERT_TRUE(scene.normals_ok);
+  ASSERT_TRUE(scene.map.normals_ok);
   AuditMarks& marks = scene.marks;
   LocalizerParams params;
   params.audit_period_frames = 1;
@@ -112,7 +97,7 @@ TEST(BasinAudit, WaitsOutPeriodsThatFusedMapClouds) {
 // every audit_period_frames.
 TEST(BasinAudit, NewTrackIsAuditedEarly) {
   AuditScene scene;
-  ASSERT_TRUE(scene.normals_ok);
+  ASSERT_TRUE(scene.map.normals_ok);
   LocalizerParams params;
   params.audit_period_frames = 30;
   params.audit_first_frames = 5;

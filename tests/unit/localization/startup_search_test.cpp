@@ -5,34 +5,19 @@
 #include <memory>
 #include <vector>
 
-#include "v2xloc/algo/registration/normals.hpp"
-#include "v2xloc/algo/search/kdtree.hpp"
+#include "corner_map.hpp"
 
 namespace v2xloc {
 namespace {
 
-// A corner of three orthogonal 20 m planes as the map; the scan is a part of it (body = world).
+// The corner map; the scan is a part of it (body = world).
 struct CornerScene {
-  std::vector<Vec3f> map_points;
-  std::unique_ptr<KdTreeStorage<Vec3f, 4096>> tree = std::make_unique<KdTreeStorage<Vec3f, 4096>>();
-  std::vector<Vec3f> normals;
+  testing::CornerMap map;
   std::vector<Vec3f> scan;
   std::vector<std::uint32_t> hints;
 
   CornerScene() {
-    for (int i = 0; i < 40; ++i) {
-      for (int j = 0; j < 15; ++j) {
-        map_points.emplace_back(0.5f * i, 0.0f, 0.5f * j);
-        map_points.emplace_back(0.0f, 0.5f * i, 0.5f * j);
-        map_points.emplace_back(0.5f * i, 0.5f * j, 0.0f);
-      }
-    }
-    tree->build(map_points);
-    normals.resize(map_points.size());
-    NormalParams np;
-    np.radius = 1.2f;
-    estimate_normals(tree->tree, np, normals);
-    scan.assign(map_points.begin(), map_points.begin() + 900);
+    scan.assign(map.points.begin(), map.points.begin() + 900);
     hints.resize(scan.size());
   }
   StartupFrame frame(std::uint32_t index, const Vec3d& fix) {
@@ -42,7 +27,7 @@ struct CornerScene {
     f.scan = scan;
     f.search_scan = scan;
     f.tracking_scan = scan;
-    f.map = IcpTarget{map_points, normals, &tree->tree, nullptr, nullptr};
+    f.map = map.target();
     f.gnss.valid = true;
     f.gnss.enu = fix;
     f.gnss.sigma = 3.0;

@@ -85,6 +85,11 @@ class StartupSearch {
   // The unconfirmed candidate carried to this frame by the odometry, when it is a better
   // estimate than the GNSS fix.
   bool candidate_pose(std::uint32_t frame, const Pose3d& odom_T_body, Pose3d& pose) const;
+  // Power-up: no filter started yet, within startup_first_frames; the searches take at least
+  // startup_first_work_per_period (and the localizer takes no map clouds meanwhile).
+  bool first_acquisition_pending(std::uint32_t frame) const {
+    return !acquired_ && frame < params_.startup_first_frames && params_.startup_first_work_per_period > 0;
+  }
 
  private:
   struct Candidate {                 // an accepted but unconfirmed solution
@@ -103,18 +108,9 @@ class StartupSearch {
   enum class JobKind : std::uint8_t { kNone, kExhaustive, kFinalists };
 
   std::uint64_t slice_budget(const StartupFrame& f) const;
-  // Power-up: no filter started yet, within startup_first_frames (startup_first_work_per_period).
-  bool first_acquisition(const StartupFrame& f) const {
-    return !acquired_ && f.frame < params_.startup_first_frames && params_.startup_first_work_per_period > 0;
-  }
-  double region_radius(const StartupFrame& f) const;
- public:
-  // The first acquisition is not over at this frame: its searches take their exception slice.
-  bool first_acquisition_pending(std::uint32_t frame) const {
-    return !acquired_ && frame < params_.startup_first_frames && params_.startup_first_work_per_period > 0;
-  }
-
- private:
+  // The region around the fix before widening, and the same widened by region_scale_.
+  double floor_region(const StartupFrame& f) const;
+  double widened(double floor) const;
   void widen_region(StartupStatus status, std::uint32_t frame, const RegistrationResult& best);
   void start_job(const StartupFrame& f, LocalizerCounters& counters);
   void take_result(const StartupFrame& f, Search& s) const;
