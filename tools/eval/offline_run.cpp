@@ -310,10 +310,11 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
     const LocalizerCounters& c = stats.counters;
     std::fprintf(stderr,
                  "\n  global searches %u (accepted %u), tracking %u, registrations ok %u, fused %u, "
-                 "filter resets %u, confirmed %u, inconsistent %u, unconstrained %u, track losses %u, audits %u, basin switches %u, ambiguities resolved %u, stereo %u (fused %u), map rebuilds %u, map normals %u (refused %u); EKF: registrations fused %llu rejected %llu, GNSS fused %llu "
+                 "filter resets %u, confirmed %u, inconsistent %u, unconstrained %u, final ICP paused %u, track losses %u, audits %u, basin switches %u, ambiguities resolved %u, stereo %u (fused %u), map rebuilds %u, map normals %u (refused %u); EKF: registrations fused %llu rejected %llu, GNSS fused %llu "
                  "rejected %llu, too late %llu, invalid %llu, numeric %llu, history overflows %llu\n",
                  c.global_searches, c.global_accepted, c.tracking_registrations, c.registrations_ok,
                  c.registrations_fused, c.filter_resets, c.global_confirmed, c.global_inconsistent, c.global_unconstrained,
+                 c.global_final_icp_paused,
                  c.track_losses,
                  c.basin_audits, c.basin_switches, c.ambiguities_resolved, c.stereo_registrations, c.stereo_fused,
                  c.map_rebuilds, c.map_normals_computed, c.map_normals_refused,

@@ -139,7 +139,7 @@ void Localizer::run_odometry(const EgoScanInput& in) {
   const bool ok = r.status == OdometryStatus::kOk || r.status == OdometryStatus::kFirstFrame;
   if (!ok) ++counters_.odometry_failures;
   if (r.query_capped) ++counters_.odometry_query_capped;
-  if (r.fine_points_skipped > 0) ++counters_.odometry_frames_thinned;
+  if (r.fine_points_capped) ++counters_.odometry_frames_thinned;
   const Mat4d lidar_T_body = se3_inverse(body_T_lidar);
   output_.odometry_ok = ok;
   output_.odometry_pose = Pose3d(r.pose.matrix() * lidar_T_body);

@@ -81,12 +81,17 @@ OdometryResult LidarOdometry::register_voxelized_frame(std::span<const Vec3f> fi
   return register_fine(predicted_delta != nullptr ? &predicted_delta->matrix() : nullptr, r);
 }
 
-// An even subsample of at most max_fine_points (kept in order): the frame's set-up (coarse voxels,
-// their normals, the map update) is linear in its points.
+// Every fine_decimation-th point, and an even subsample of at most max_fine_points (kept in
+// order): the frame's set-up (coarse voxels, their normals, the map update) and its registration
+// are linear in its points.
 void LidarOdometry::thin_fine_frame(OdometryResult& r) {
   const std::size_t n = frame_fine_.size(), cap = params_.max_fine_points;
-  if (cap == 0 || n <= cap) return;
-  const std::size_t stride = (n + cap - 1) / cap;
+  std::size_t stride = params_.fine_decimation > 1 ? params_.fine_decimation : 1;
+  if (cap > 0 && (n + stride - 1) / stride > cap) {
+    stride = (n + cap - 1) / cap;
+    r.fine_points_capped = true;
+  }
+  if (stride <= 1) return;
   std::size_t kept = 0;
   for (std::size_t i = 0; i < n; i += stride) frame_fine_[kept++] = frame_fine_[i];
   frame_fine_.resize(kept);

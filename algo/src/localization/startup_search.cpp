@@ -16,19 +16,13 @@ double horizontal_distance(const Mat4d& pose, const Vec3d& enu) {
 
 }  // namespace
 
-struct StartupSearch::Search {
-  double region = 0.0;        // [m] radius around the GNSS fix the solution must lie in
-  PoseSearchParams params{};  // the pose search's, for this frame's region and course
-  PoseSearchResult searched{};  // carried to the current frame
-  RegistrationResult best{};  // the basin picked so far
-};
-
 void StartupSearch::configure(const LocalizerParams& params) {
   params_ = params;
   candidate_ = {};
   track_count_ = 0;
   frames_since_search_ = params.global_retry_frames;  // allow a search at the first frame
   job_kind_ = JobKind::kNone;
+  final_running_ = false;
   finalist_count_ = 0;
   acquired_ = false;
   region_scale_ = 1.0;
@@ -55,6 +49,7 @@ void StartupSearch::on_track_lost() {
   candidate_.valid = false;
   finalist_count_ = 0;
   job_kind_ = JobKind::kNone;
+  final_running_ = false;
   provisional_valid_ = false;
   frames_since_search_ = params_.global_retry_frames;
   region_scale_ = 1.0;
@@ -90,6 +85,7 @@ StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& cou
   if (job_kind_ != JobKind::kNone &&
       (job_track_broken_ || f.frame - job_frame_ >= params_.startup_max_frames)) {
     job_kind_ = JobKind::kNone;  // its result could not be carried here, or it took too long
+    final_running_ = false;
     provisional_valid_ = false;
     ++counters.global_searches_dropped;
   }
@@ -108,24 +104,45 @@ StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& cou
     f.probe(LocalizerStage::kGlobalSearch);
   }
   // This period's work, including the set-up start_job() did (a new job's work starts at 0).
-  const std::uint64_t before = started ? 0 : job_.work();
-  const bool finished = job_.step(f.map, slice_budget(f));
-  const std::uint64_t spent = job_.work() - before;
-  if (f.work != nullptr) f.work->add(static_cast<double>(spent) * f.work->params().search_unit);
-  counters.global_search_work += spent;
-  if (!finished) {
-    if (job_kind_ == JobKind::kExhaustive) provisional_valid_ = job_.provisional(provisional_);
+  if (!final_running_) {
+    const std::uint64_t before = started ? 0 : job_.work();
+    const bool finished = job_.step(f.map, slice_budget(f));
+    const std::uint64_t spent = job_.work() - before;
+    if (f.work != nullptr) f.work->add(static_cast<double>(spent) * f.work->params().search_unit);
+    counters.global_search_work += spent;
+    if (!finished) {
+      if (job_kind_ == JobKind::kExhaustive) provisional_valid_ = job_.provisional(provisional_);
+      out.status = StartupStatus::kSearching;
+      f.probe(LocalizerStage::kFusion);
+      return out;
+    }
+    finish_job(f, out.report, counters);
+  }
+  if (!continue_final_icp(f, counters)) {  // out of room: it goes on in the next period
+    ++counters.global_final_icp_paused;
     out.status = StartupStatus::kSearching;
     f.probe(LocalizerStage::kFusion);
     return out;
   }
   const JobKind kind = job_kind_;
   job_kind_ = JobKind::kNone;
+  final_running_ = false;
   provisional_valid_ = false;
-  Search s;
-  take_result(f, s);
-  resolve_ambiguity(f, s, counters);
-  StartupSearchReport& r = out.report;
+  out.status = accept(f, final_, out.registration, counters);
+  if (out.status == StartupStatus::kStartFilter) acquired_ = true;
+  if (kind == JobKind::kExhaustive) widen_region(out.status, f.frame, final_.searched.best);
+  if (out.status == StartupStatus::kRejected && candidate_.valid && candidate_.frame == f.frame) keep_finalists(f);
+  f.probe(LocalizerStage::kFusion);
+  return out;
+}
+
+// The period the job finishes in: its result carried here, the ambiguity check, the report,
+// FPFH + RANSAC, then the final ICP begins.
+void StartupSearch::finish_job(const StartupFrame& f, StartupSearchReport& r, LocalizerCounters& counters) {
+  final_ = Search{};
+  take_result(f, final_);
+  resolve_ambiguity(f, final_, counters);
+  const Search& s = final_;
   r.searched = true;
   r.heading_used = job_heading_used_;
   r.region = job_region_;
@@ -135,13 +152,62 @@ StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& cou
   r.runner_up_conflicts = s.searched.runner_up_conflicts;
   r.best_pose = Pose3d(s.searched.best.transform);
   r.runner_up_pose = Pose3d(s.searched.runner_up.transform);
-  if (kind == JobKind::kExhaustive && params_.use_fpfh_ransac) fpfh_ransac(f, s);
-  out.status = accept(f, s, out.registration, counters);
-  if (out.status == StartupStatus::kStartFilter) acquired_ = true;
-  if (kind == JobKind::kExhaustive) widen_region(out.status, f.frame, s.searched.best);
-  if (out.status == StartupStatus::kRejected && candidate_.valid && candidate_.frame == f.frame) keep_finalists(f);
-  f.probe(LocalizerStage::kFusion);
-  return out;
+  if (job_kind_ == JobKind::kExhaustive && params_.use_fpfh_ransac) fpfh_ransac(f, final_);
+  begin_final_icp(f, counters);
+}
+
+// (3) The tracking ICP from the pick, on this frame's tracking subsample (the registration scan
+// without one). Up to icp.max_work (~44 M instructions from a poor start): run in slices on a copy
+// of the scan; a scan larger than the copy is refined at once, as a tracking ICP would be.
+void StartupSearch::begin_final_icp(const StartupFrame& f, LocalizerCounters& counters) {
+  final_running_ = true;
+  final_frame_ = f.frame;
+  final_odom_ = f.odom_T_body.matrix();
+  final_scan_.clear();
+  final_run_ = IcpRun{};
+  final_run_.result = final_.best;  // not ok: nothing to refine (finished)
+  if (!final_.best.ok()) return;
+  const bool subsample = params_.startup_icp_on_tracking_scan && !f.tracking_scan.empty();
+  const std::span<const Vec3f> scan = subsample ? f.tracking_scan : f.scan;
+  if (scan.size() > final_scan_.capacity()) {
+    final_run_.result = icp(scan, f.map, final_.best.transform, params_.icp, f.icp_hints);
+    counters.global_search_work += final_run_.result.node_visits + (final_run_.result.iterations + 1) * scan.size();
+    if (f.work != nullptr) {
+      f.work->add(static_cast<double>(final_run_.result.node_visits + (final_run_.result.iterations + 1) * scan.size()) *
+                  f.work->params().search_unit);
+    }
+    return;
+  }
+  for (const Vec3f& p : scan) final_scan_.push_back(p);
+  icp_begin(final_run_, final_scan_.span(), f.map, final_.best.transform, params_.icp,
+            std::span<std::uint32_t>(final_hints_, final_scan_.size()));
+}
+
+// One period's slice of the final ICP, counted as search work: all the period has left, at least
+// the job's floor (a short piece: the job's quota keeps the search's steady share); whole without
+// a period budget and in the first acquisition. True once finished; out of icp.max_work in all
+// it ends kDidNotConverge, as icp() does.
+bool StartupSearch::continue_final_icp(const StartupFrame& f, LocalizerCounters& counters) {
+  if (final_run_.finished) return true;
+  const std::uint64_t cap = params_.icp.max_work > 0 ? params_.icp.max_work : ~std::uint64_t{0};
+  const std::uint64_t left = cap > final_run_.work ? cap - final_run_.work : 0;
+  std::uint64_t slice = ~std::uint64_t{0};
+  if (f.work != nullptr && f.work->params().search_unit > 0.0 && !first_acquisition_pending(f.frame)) {
+    const double room = f.work->left() / f.work->params().search_unit;
+    const std::uint64_t floor = params_.startup_min_work_per_period;
+    slice = room <= static_cast<double>(floor) ? floor : static_cast<std::uint64_t>(room);
+  }
+  const std::uint64_t before = final_run_.work;
+  bool finished = icp_continue(final_run_, final_scan_.span(), f.map, params_.icp, ~std::uint32_t{0},
+                               std::span<std::uint32_t>(final_hints_, final_scan_.size()), slice < left ? slice : left);
+  const std::uint64_t spent = final_run_.work - before;
+  if (f.work != nullptr) f.work->add(static_cast<double>(spent) * f.work->params().search_unit);
+  counters.global_search_work += spent;
+  if (!finished && final_run_.work >= cap) {
+    final_run_.result.status = RegistrationStatus::kDidNotConverge;  // out of work: as at the iteration cap
+    final_run_.finished = finished = true;
+  }
+  return finished;
 }
 
 // This period's slice: what the period has left (period_work.hpp), between the floor that keeps
@@ -291,16 +357,16 @@ void StartupSearch::fpfh_ransac(const StartupFrame& f, Search& s) {
   }
 }
 
-// Final refinement with the tracking ICP, then the acceptance checks. An accepted solution
-// starts a filter that needs it only once a second search confirms it.
+// (4) The acceptance checks on the final ICP's result (carried to this frame). An accepted
+// solution starts a filter that needs it only once a second search confirms it.
 StartupStatus StartupSearch::accept(const StartupFrame& f, const Search& s, RegistrationResult& result,
                                     LocalizerCounters& counters) {
   if (!s.best.ok()) {
     result = s.best;
     return StartupStatus::kRejected;
   }
-  const bool subsample = params_.startup_icp_on_tracking_scan && !f.tracking_scan.empty();
-  result = icp(subsample ? f.tracking_scan : f.scan, f.map, s.best.transform, params_.icp, f.icp_hints);
+  result = final_run_.result;
+  if (final_frame_ != f.frame) result.transform = result.transform * se3_inverse(final_odom_) * f.odom_T_body.matrix();
   if (!result.ok()) return StartupStatus::kRejected;
   const Mat4d& odom = f.odom_T_body.matrix();
   double track_distance = 0.0;

@@ -46,5 +46,35 @@ TEST(LidarOdometry, MapEvictsVoxelsBeyondRange) {
   for (const MapPoint& m : odom.map_points()) EXPECT_GT(m.x, 80.0f);
 }
 
+// A pre-voxelised frame keeps every fine_decimation-th point, then at most max_fine_points of
+// those (evenly): both thinnings are reported, the cap's separately (the localizer counts it).
+TEST(LidarOdometry, VoxelizedFrameThinning) {
+  static LidarOdometry odom;
+  std::vector<Vec3f> fine;
+  for (int i = -20; i < 20; ++i)
+    for (int j = -20; j < 20; ++j) fine.emplace_back(0.25f * i + 0.1f, 0.25f * j + 0.1f, -1.5f);  // 1,600 points
+  OdometryParams p;
+  p.fine_decimation = 2;
+  odom.configure(p);
+  odom.reset();
+  OdometryResult r = odom.register_voxelized_frame(fine);
+  EXPECT_EQ(r.fine_points_skipped, 800u);
+  EXPECT_FALSE(r.fine_points_capped);
+  EXPECT_EQ(r.status, OdometryStatus::kFirstFrame);
+  p.max_fine_points = 500;  // 800 after decimation > 500: every 4th point of the frame
+  odom.configure(p);
+  odom.reset();
+  r = odom.register_voxelized_frame(fine);
+  EXPECT_EQ(r.fine_points_skipped, 1200u);
+  EXPECT_TRUE(r.fine_points_capped);
+  p.fine_decimation = 1;
+  p.max_fine_points = 0;
+  odom.configure(p);
+  odom.reset();
+  r = odom.register_voxelized_frame(fine);
+  EXPECT_EQ(r.fine_points_skipped, 0u);
+  EXPECT_FALSE(r.fine_points_capped);
+}
+
 }  // namespace
 }  // namespace v2xloc

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "corner_map.hpp"
+#include "v2xloc/algo/localization/period_work.hpp"
 
 namespace v2xloc {
 namespace {
@@ -82,6 +83,64 @@ TEST(StartupSearch, FirstAcquisitionWindow) {
   params.startup_first_work_per_period = 0;  // no exception slice: nothing to make room for
   search->configure(params);
   EXPECT_FALSE(search->first_acquisition_pending(0));
+}
+
+// A finished search's final ICP (up to icp.max_work) keeps to the period budget like the search:
+// with little room left it runs over several periods, and its result is bit-identical to the
+// same ICP in one piece (no period budget).
+TEST(StartupSearch, FinalIcpRunsInSlicesWithTheSameResult) {
+  CornerScene scene;
+  for (Vec3f& p : scene.scan) p -= Vec3f(5.0f, 5.0f, 0.0f);  // the body 5 m out from both walls
+  LocalizerParams params;
+  params.startup_first_work_per_period = 0;  // no power-up exception: every period on the budget
+  params.work = LocalizerParams::default_work();
+  params.startup_work_per_period = 0;        // the search in one piece: it spends the period ...
+  params.startup_min_work_per_period = 200;  // ... and the final ICP's slices in a full period are a few points
+  const Vec3d fix(7.0, 3.0, 0.0);
+  struct Run {
+    StartupOutcome outcome;
+    std::uint32_t searched_frame = 0, outcome_frame = 0;
+    LocalizerCounters counters;
+  };
+  const auto run = [&](bool budget) {
+    Run r;
+    auto search = std::make_unique<StartupSearch>();
+    search->configure(params);
+    bool searched = false;
+    for (std::uint32_t frame = 0; frame < 60; ++frame) {
+      search->on_frame(true, Pose3d::Identity(), GnssFix{});
+      PeriodWork work;
+      work.configure(params.work);
+      work.add(params.work.budget - params.work.search_start - 1e5);  // room to start a search, little more
+      StartupFrame f = scene.frame(frame, fix);
+      if (budget) f.work = &work;
+      const StartupOutcome out = search->step(f, r.counters);
+      if (out.report.searched && !searched) {
+        searched = true;
+        r.searched_frame = frame;
+      }
+      if (out.status == StartupStatus::kRejected || out.status == StartupStatus::kStartFilter) {
+        r.outcome = out;
+        r.outcome_frame = frame;
+        return r;
+      }
+    }
+    return r;
+  };
+  const Run whole = run(false);
+  const Run sliced = run(true);
+  ASSERT_TRUE(whole.outcome.registration.ok());
+  EXPECT_EQ(whole.counters.global_final_icp_paused, 0u);
+  EXPECT_EQ(whole.outcome_frame, whole.searched_frame) << "in one piece: in the period the search finished";
+  EXPECT_GT(sliced.counters.global_final_icp_paused, 0u);
+  EXPECT_GT(sliced.outcome_frame, sliced.searched_frame) << "the final ICP went on in later periods";
+  // The odometry stands still here: the carried result is the ICP's own, bit for bit.
+  EXPECT_EQ(sliced.outcome.status, whole.outcome.status);
+  EXPECT_EQ(sliced.outcome.registration.status, whole.outcome.registration.status);
+  EXPECT_TRUE(sliced.outcome.registration.transform == whole.outcome.registration.transform);
+  EXPECT_EQ(sliced.outcome.registration.fitness, whole.outcome.registration.fitness);
+  EXPECT_EQ(sliced.outcome.registration.inlier_rmse, whole.outcome.registration.inlier_rmse);
+  EXPECT_EQ(sliced.outcome.registration.iterations, whole.outcome.registration.iterations);
 }
 
 }  // namespace

@@ -216,6 +216,10 @@ struct LocalizerParams {
     // [points] the recordings' frames hold ~7k 0.5 m points; a noise-filled sweep 32k (55 M of
     // set-up: coarse voxels, normals, map update)
     p.max_fine_points = 16384;
+    // Every 2nd 0.5 v point (host): odometry -5.6 M a period, SLAM column 0.015-0.065 m (was
+    // 0.024-0.088), Fused within ~1 mm (TUNING.md "Odometry on every 2nd point"); every 3rd
+    // broke Sim 3 (SLAM 0.47 m)
+    p.fine_decimation = config::kEmbeddedProfile ? 1u : 2u;
     p.convergence = 1e-3;  // [m, rad] |d xi| stop; 1e-4 ran ~2 more iterations for nothing (TUNING.md)
     return p;
   }

@@ -129,6 +129,7 @@ struct LocalizerCounters {
   std::uint32_t filter_resets = 0;             // filter restarted at a registration
   std::uint32_t global_confirmed = 0;          // global solutions confirmed by a second search
   std::uint32_t global_inconsistent = 0;       // second search disagreed: candidate replaced
+  std::uint32_t global_final_icp_paused = 0;   // periods a search's final ICP ran out of room in (it resumes)
   std::uint32_t global_unconstrained = 0;      // solutions refused: free along one horizontal direction
   std::uint32_t track_losses = 0;              // filter dropped (GNSS divergence or basin audit)
   std::uint32_t basin_audits = 0;              // exhaustive checks of the tracked basin

@@ -54,6 +54,8 @@ struct OdometryParams {
   // [points] a pre-voxelised frame (register_voxelized_frame) is thinned evenly to at most this
   // many 0.5 v points (0: none; the localizer sets one for its period budget).
   std::uint32_t max_fine_points = 0;
+  // [points] a pre-voxelised frame keeps every k-th 0.5 v point (1: all), before max_fine_points.
+  std::uint32_t fine_decimation = 1;
 };
 
 enum class OdometryStatus : std::uint8_t {
@@ -74,7 +76,8 @@ struct OdometryResult {
   std::uint32_t iterations = 0;
   bool converged = false;
   bool query_capped = false;          // max_queries ended the iterations
-  std::uint32_t fine_points_skipped = 0;  // 0.5 v points left out by max_fine_points
+  std::uint32_t fine_points_skipped = 0;  // 0.5 v points left out (fine_decimation, max_fine_points)
+  bool fine_points_capped = false;        // max_fine_points thinned the frame further
   std::uint32_t source_points = 0;    // 1.5 v points registered
   std::uint32_t correspondences = 0;
   std::uint32_t map_points = 0;

@@ -104,7 +104,12 @@ class StartupSearch {
     bool gnss = false;
   };
   static constexpr std::size_t kTrackFrames = 32;
-  struct Search;                     // one search's intermediate results (startup_search.cpp)
+  struct Search {                    // one finished search's results
+    double region = 0.0;             // [m] radius around the GNSS fix the solution must lie in
+    PoseSearchParams params{};       // the pose search's, for this frame's region and course
+    PoseSearchResult searched{};     // carried to the frame the job finished in
+    RegistrationResult best{};       // the basin picked so far
+  };
   enum class JobKind : std::uint8_t { kNone, kExhaustive, kFinalists };
 
   std::uint64_t slice_budget(const StartupFrame& f) const;
@@ -113,6 +118,9 @@ class StartupSearch {
   double widened(double floor) const;
   void widen_region(StartupStatus status, std::uint32_t frame, const RegistrationResult& best);
   void start_job(const StartupFrame& f, LocalizerCounters& counters);
+  void finish_job(const StartupFrame& f, StartupSearchReport& report, LocalizerCounters& counters);
+  void begin_final_icp(const StartupFrame& f, LocalizerCounters& counters);
+  bool continue_final_icp(const StartupFrame& f, LocalizerCounters& counters);
   void take_result(const StartupFrame& f, Search& s) const;
   void resolve_ambiguity(const StartupFrame& f, Search& s, LocalizerCounters& counters) const;
   void keep_finalists(const StartupFrame& f);
@@ -151,6 +159,16 @@ class StartupSearch {
   Mat4d finalists_[kPoseSearchRefine];
   std::uint32_t finalist_count_ = 0;
   double finalists_ground_z_ = 0.0;
+  // The finished job's pick (final_) refined by the tracking ICP in slices like the job's (a whole
+  // one costs up to icp.max_work): on a copy of the tracking subsample of the frame the job
+  // finished in (final_frame_, final_odom_), its result carried from there by the odometry.
+  bool final_running_ = false;
+  Search final_{};
+  IcpRun final_run_{};
+  std::uint32_t final_frame_ = 0;
+  Mat4d final_odom_ = Mat4d::Identity();
+  FixedVector<Vec3f, config::kMaxSearchPoints> final_scan_;
+  std::uint32_t final_hints_[config::kMaxSearchPoints];
   FixedVector<Vec3f, config::kMaxMapPoints> map_crop_;
   RegistrationWorkspace workspace_;
 };
