@@ -5,7 +5,8 @@
 // filter only when a second search within global_confirm_window frames agrees with it through
 // the odometry (the candidate); that search may re-decide only the first one's finalists
 // (global_confirm_finalists). The search is a job: startup_work_per_period bounds its work per
-// frame, its result is carried to the frame it finishes in by the odometry. Owns all its state:
+// frame, its result is carried to the frame it finishes in by the odometry; its final ICP then
+// takes what the periods have left, its result carried the same way. Owns all its state:
 // the job, the candidate, the track of recent odometry / GNSS positions, the retry spacing and
 // the FPFH + RANSAC workspace. One entry point per frame (step), everything it reads in a
 // StartupFrame.
