@@ -155,7 +155,9 @@ struct LocalizerParams {
   // audit pauses there). While tracking most periods fuse one (sources paced to ~1 Hz, one a period).
   std::uint32_t audit_work_per_busy_period = 45000;
   std::uint32_t audit_max_frames = 60;    // [frames] a search not finished within this is dropped (it pauses in busy periods)
-  std::uint32_t audit_refine_candidates = 10;  // [hypotheses] the audit refines (<= kPoseSearchRefine)
+  // [hypotheses] the audit refines (<= kPoseSearchRefine): 5 as the start-up search; 10 cost twice
+  // the ICP work for the same verdicts on the 12 recordings and the fault and rogue runs (TUNING.md)
+  std::uint32_t audit_refine_candidates = 5;
   double audit_switch_ratio = 1.15;       // [ratio] audit pose's tight fitness over tracked: switch
   double audit_full_switch_ratio = 1.15;  // [ratio] ... and again on the full scan after ICP: switch
   std::uint32_t track_frames = 30;        // [frames] GNSS track compared (<= kTrackFrames)
