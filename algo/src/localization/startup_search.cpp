@@ -171,11 +171,9 @@ void StartupSearch::begin_final_icp(const StartupFrame& f, LocalizerCounters& co
   const std::span<const Vec3f> scan = subsample ? f.tracking_scan : f.scan;
   if (scan.size() > final_scan_.capacity()) {
     final_run_.result = icp(scan, f.map, final_.best.transform, params_.icp, f.icp_hints);
-    counters.global_search_work += final_run_.result.node_visits + (final_run_.result.iterations + 1) * scan.size();
-    if (f.work != nullptr) {
-      f.work->add(static_cast<double>(final_run_.result.node_visits + (final_run_.result.iterations + 1) * scan.size()) *
-                  f.work->params().search_unit);
-    }
+    const std::uint64_t work = final_run_.result.node_visits + (final_run_.result.iterations + 1) * scan.size();
+    counters.global_search_work += work;
+    if (f.work != nullptr) f.work->add(static_cast<double>(work) * f.work->params().search_unit);
     return;
   }
   for (const Vec3f& p : scan) final_scan_.push_back(p);
