@@ -6,6 +6,7 @@
 
 #include "v2xloc/algo/core/det_math.hpp"
 #include "v2xloc/algo/core/spatial_hash.hpp"
+#include "v2xloc/algo/core/unroll.hpp"
 
 namespace v2xloc {
 
@@ -36,7 +37,7 @@ bool OdometryVoxelMap::voxel_key(const Vec3d& p, std::int32_t key[3]) const {
 }
 
 bool OdometryVoxelMap::voxel_key(const Vec3d& p, std::int32_t key[3], double quotient[3]) const {
-  for (int i = 0; i < 3; ++i) {
+  V2XLOC_UNROLL_AXES for (int i = 0; i < 3; ++i) {
     const double q = p(i) / voxel_size_;
     if (!(q > -1073741824.0 && q < 1073741824.0)) return false;  // |key| < 2^30
     key[i] = det::floor_to_int(q);  // libm's floor is a call on baseline x86-64
@@ -82,7 +83,7 @@ bool OdometryVoxelMap::nearest(const Vec3d& p, double max_d2, Vec3d& q, double& 
   if (!voxel_key(p, key, quotient)) return false;
   std::int32_t side[3];
   double gap2[3];  // squared distance from p to the neighbour voxel's face, per axis
-  for (int a = 0; a < 3; ++a) {
+  V2XLOC_UNROLL_AXES for (int a = 0; a < 3; ++a) {
     const double frac = quotient[a] - key[a];
     side[a] = frac < 0.5 ? -1 : 1;
     const double gap = (side[a] < 0 ? frac : 1.0 - frac) * voxel_size_;
@@ -120,7 +121,7 @@ bool OdometryVoxelMap::nearest(const Vec3d& p, double max_d2, Vec3d& q, double& 
 // points with d >= d2: the same result as scanning them all.
 void OdometryVoxelMap::scan_voxel(const Voxel& vx, const Vec3d& p, double& d2, const MapPoint*& best) const {
   double box[3];
-  for (int a = 0; a < 3; ++a) {
+  V2XLOC_UNROLL_AXES for (int a = 0; a < 3; ++a) {
     const double below = static_cast<double>(vx.lo[a]) - p(a);
     const double above = p(a) - static_cast<double>(vx.hi[a]);
     box[a] = below > 0.0 ? below : (above > 0.0 ? above : 0.0);
@@ -212,7 +213,7 @@ void OdometryVoxelMap::update(std::span<const Vec3f> frame, const Mat4d& pose, d
     const Vec3f m = transform(pose, frame[i]).cast<float>();
     map_[next][out.begin + out.count] = MapPoint{m.x(), m.y(), m.z()};
     ++out.count;
-    for (int a = 0; a < 3; ++a) {
+    V2XLOC_UNROLL_AXES for (int a = 0; a < 3; ++a) {
       out.lo[a] = std::min(out.lo[a], m[a]);
       out.hi[a] = std::max(out.hi[a], m[a]);
     }

@@ -6,6 +6,7 @@
 #include "v2xloc/algo/core/finite.hpp"
 #include "v2xloc/algo/core/spatial_hash.hpp"
 #include "v2xloc/algo/localization/deskew.hpp"
+#include "v2xloc/algo/core/unroll.hpp"
 
 namespace v2xloc {
 
@@ -71,7 +72,7 @@ void ScanIngest::accumulate(std::span<const Vec3f> points, const float* times, c
       for (int k = 0; k < 3; ++k) last_key[k] = key[k];
     }
     ++a->count;
-    for (int k = 0; k < 3; ++k) a->sum[k] += p[k];
+    V2XLOC_UNROLL_AXES for (int k = 0; k < 3; ++k) a->sum[k] += p[k];
     a->time_sum += t;
   }
 }

@@ -2,6 +2,7 @@
 
 #include "v2xloc/algo/core/det_math.hpp"
 #include "v2xloc/algo/core/spatial_hash.hpp"
+#include "v2xloc/algo/core/unroll.hpp"
 
 namespace v2xloc {
 
@@ -10,7 +11,7 @@ constexpr auto kMaxProbes = static_cast<std::uint32_t>(config::kVoxelMaxProbes);
 }  // namespace
 
 bool SourceCells::cell_key(const Vec3f& p, double cell, std::int32_t level, std::int32_t key[3]) {
-  for (int i = 0; i < 3; ++i) {
+  V2XLOC_UNROLL_AXES for (int i = 0; i < 3; ++i) {
     const double q = static_cast<double>(p(i)) / cell;
     if (!(q > -268435456.0 && q < 268435456.0)) return false;  // 2^28: z keeps 2 level bits
     key[i] = det::floor_to_int(q);

@@ -5,6 +5,7 @@
 
 #include "v2xloc/algo/core/finite.hpp"
 #include "v2xloc/algo/core/spatial_hash.hpp"
+#include "v2xloc/algo/core/unroll.hpp"
 
 namespace v2xloc {
 namespace {
@@ -23,7 +24,7 @@ void finite_min_bound(std::span<const Vec3f> points, double lo[3], std::uint32_t
       ++non_finite;
       continue;
     }
-    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], static_cast<double>(p[d]));
+    V2XLOC_UNROLL_AXES for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], static_cast<double>(p[d]));
   }
 }
 
@@ -31,7 +32,7 @@ void finite_min_bound(std::span<const Vec3f> points, double lo[3], std::uint32_t
 bool voxel_index_of(const Vec3f& p, const double origin[3], double voxel, VoxelIndex& index) {
   double ref[3];
   bool in_range = true;
-  for (int d = 0; d < 3; ++d) {
+  V2XLOC_UNROLL_AXES for (int d = 0; d < 3; ++d) {
     ref[d] = std::floor((static_cast<double>(p[d]) - origin[d]) / voxel);
     in_range = in_range && ref[d] >= 0.0 && ref[d] <= kMaxVoxelIndex;
   }
