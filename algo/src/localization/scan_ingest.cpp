@@ -5,8 +5,8 @@
 #include "v2xloc/algo/core/det_math.hpp"
 #include "v2xloc/algo/core/finite.hpp"
 #include "v2xloc/algo/core/spatial_hash.hpp"
-#include "v2xloc/algo/localization/deskew.hpp"
 #include "v2xloc/algo/core/unroll.hpp"
+#include "v2xloc/algo/localization/deskew.hpp"
 
 namespace v2xloc {
 

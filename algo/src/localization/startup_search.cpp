@@ -189,12 +189,9 @@ bool StartupSearch::continue_final_icp(const StartupFrame& f, LocalizerCounters&
   if (final_run_.finished) return true;
   const std::uint64_t cap = params_.icp.max_work > 0 ? params_.icp.max_work : ~std::uint64_t{0};
   const std::uint64_t left = cap > final_run_.work ? cap - final_run_.work : 0;
-  std::uint64_t slice = ~std::uint64_t{0};
-  if (f.work != nullptr && f.work->params().search_unit > 0.0 && !first_acquisition_pending(f.frame)) {
-    const double room = f.work->left() / f.work->params().search_unit;
-    const std::uint64_t floor = params_.startup_min_work_per_period;
-    slice = room <= static_cast<double>(floor) ? floor : static_cast<std::uint64_t>(room);
-  }
+  const std::uint64_t slice = first_acquisition_pending(f.frame)
+                                  ? ~std::uint64_t{0}
+                                  : room_slice(f, params_.startup_min_work_per_period, ~std::uint64_t{0});
   const std::uint64_t before = final_run_.work;
   bool finished = icp_continue(final_run_, final_scan_.span(), f.map, params_.icp, ~std::uint32_t{0},
                                std::span<std::uint32_t>(final_hints_, final_scan_.size()), slice < left ? slice : left);
@@ -214,16 +211,19 @@ bool StartupSearch::continue_final_icp(const StartupFrame& f, LocalizerCounters&
 std::uint64_t StartupSearch::slice_budget(const StartupFrame& f) const {
   const std::uint64_t quota = params_.startup_work_per_period;
   if (quota == 0) return ~std::uint64_t{0};
-  std::uint64_t slice = quota;
-  if (f.work != nullptr && f.work->params().search_unit > 0.0) {
-    const double room = f.work->left() / f.work->params().search_unit;
-    const std::uint64_t floor = params_.startup_min_work_per_period < quota ? params_.startup_min_work_per_period : quota;
-    slice = room <= static_cast<double>(floor) ? floor
-            : room >= static_cast<double>(quota) ? quota
-                                                 : static_cast<std::uint64_t>(room);
-  }
+  const std::uint64_t floor = params_.startup_min_work_per_period < quota ? params_.startup_min_work_per_period : quota;
+  std::uint64_t slice = room_slice(f, floor, quota);
   if (first_acquisition_pending(f.frame) && params_.startup_first_work_per_period > slice) slice = params_.startup_first_work_per_period;
   return slice;
+}
+
+// What the period has left, in work units, between floor and cap; cap without a period budget.
+std::uint64_t StartupSearch::room_slice(const StartupFrame& f, std::uint64_t floor, std::uint64_t cap) const {
+  if (f.work == nullptr || !(f.work->params().search_unit > 0.0)) return cap;
+  const double room = f.work->left() / f.work->params().search_unit;
+  return room <= static_cast<double>(floor) ? floor
+         : room >= static_cast<double>(cap) ? cap
+                                            : static_cast<std::uint64_t>(room);
 }
 
 double StartupSearch::floor_region(const StartupFrame& f) const {

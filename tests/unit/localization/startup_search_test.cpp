@@ -93,7 +93,6 @@ TEST(StartupSearch, FinalIcpRunsInSlicesWithTheSameResult) {
   for (Vec3f& p : scene.scan) p -= Vec3f(5.0f, 5.0f, 0.0f);  // the body 5 m out from both walls
   LocalizerParams params;
   params.startup_first_work_per_period = 0;  // no power-up exception: every period on the budget
-  params.work = LocalizerParams::default_work();
   params.startup_work_per_period = 0;        // the search in one piece: it spends the period ...
   params.startup_min_work_per_period = 200;  // ... and the final ICP's slices in a full period are a few points
   const Vec3d fix(7.0, 3.0, 0.0);

@@ -114,6 +114,7 @@ class StartupSearch {
   enum class JobKind : std::uint8_t { kNone, kExhaustive, kFinalists };
 
   std::uint64_t slice_budget(const StartupFrame& f) const;
+  std::uint64_t room_slice(const StartupFrame& f, std::uint64_t floor, std::uint64_t cap) const;
   // The region around the fix before widening, and the same widened by region_scale_.
   double floor_region(const StartupFrame& f) const;
   double widened(double floor) const;
