@@ -96,7 +96,7 @@ const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
     const bool may_build = !w.enabled || rebuild_deferred_ >= w.max_deferred_rebuild_steps ||
                            work_.left(tracking_forecast_) >= step;
     if (map_.refresh(in.t, normals, may_build)) ++counters_.map_rebuilds;
-    if (map_.stepped()) work_.add(params_.work.rebuild_step);
+    work_.add(params_.work.rebuild_step * map_.steps_run());
     if (!may_build && map_.build_due(in.t)) {
       ++rebuild_deferred_;
       ++counters_.rebuild_steps_deferred;

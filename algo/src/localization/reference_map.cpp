@@ -70,7 +70,7 @@ bool ReferenceMap::refresh(double t, LazyNormalCounters& normals, bool may_build
   normals = targets_[active_].lazy.new_period(params_.map_normals_per_period);
   busy_ = fused_this_period_;
   fused_this_period_ = false;
-  stepped_ = false;
+  steps_run_ = 0;
   fusion_.expire(t);
   if (!may_build && ready_) return false;
   // One build step per period while a map is in use; the first one is built at once.
@@ -78,7 +78,7 @@ bool ReferenceMap::refresh(double t, LazyNormalCounters& normals, bool may_build
   bool finished = false;
   for (std::uint32_t s = 0; s < steps; ++s) {
     const bool more = build_step(t, finished);
-    stepped_ = stepped_ || more || finished;
+    if (more || finished) ++steps_run_;
     if (!more) break;
   }
   return finished;

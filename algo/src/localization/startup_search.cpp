@@ -106,7 +106,8 @@ StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& cou
   // This period's work, including the set-up start_job() did (a new job's work starts at 0).
   if (!final_running_) {
     const std::uint64_t before = started ? 0 : job_.work();
-    const bool finished = job_.step(f.map, slice_budget(f));
+    const bool score_whole = params_.startup_first_score_whole && first_acquisition_pending(f.frame);
+    const bool finished = job_.step(f.map, slice_budget(f), score_whole);
     const std::uint64_t spent = job_.work() - before;
     if (f.work != nullptr) f.work->add(static_cast<double>(spent) * f.work->params().search_unit);
     counters.global_search_work += spent;
@@ -183,13 +184,13 @@ void StartupSearch::begin_final_icp(const StartupFrame& f, LocalizerCounters& co
 
 // One period's slice of the final ICP, counted as search work: all the period has left, at least
 // the job's floor (a short piece: the job's quota keeps the search's steady share); whole without
-// a period budget and in the first acquisition. True once finished; out of icp.max_work in all
+// a period budget and under the power-up exception (first_exempt). True once finished; out of icp.max_work in all
 // it ends kDidNotConverge, as icp() does.
 bool StartupSearch::continue_final_icp(const StartupFrame& f, LocalizerCounters& counters) {
   if (final_run_.finished) return true;
   const std::uint64_t cap = params_.icp.max_work > 0 ? params_.icp.max_work : ~std::uint64_t{0};
   const std::uint64_t left = cap > final_run_.work ? cap - final_run_.work : 0;
-  const std::uint64_t slice = first_acquisition_pending(f.frame)
+  const std::uint64_t slice = first_exempt(f.frame)
                                   ? ~std::uint64_t{0}
                                   : room_slice(f, params_.startup_min_work_per_period, ~std::uint64_t{0});
   const std::uint64_t before = final_run_.work;
@@ -207,13 +208,13 @@ bool StartupSearch::continue_final_icp(const StartupFrame& f, LocalizerCounters&
 
 // This period's slice: what the period has left (period_work.hpp), between the floor that keeps
 // the search moving in crowded periods and the fixed quota (all of it without a period budget).
-// Until the first acquisition, at least startup_first_work_per_period.
+// Under the power-up exception, at least startup_first_work_per_period.
 std::uint64_t StartupSearch::slice_budget(const StartupFrame& f) const {
   const std::uint64_t quota = params_.startup_work_per_period;
   if (quota == 0) return ~std::uint64_t{0};
   const std::uint64_t floor = params_.startup_min_work_per_period < quota ? params_.startup_min_work_per_period : quota;
   std::uint64_t slice = room_slice(f, floor, quota);
-  if (first_acquisition_pending(f.frame) && params_.startup_first_work_per_period > slice) slice = params_.startup_first_work_per_period;
+  if (first_exempt(f.frame) && params_.startup_first_work_per_period > slice) slice = params_.startup_first_work_per_period;
   return slice;
 }
 
@@ -272,6 +273,7 @@ void StartupSearch::start_job(const StartupFrame& f, LocalizerCounters& counters
     ++counters.heading_searches;
   }
   sp.provisional = params_.startup_output_provisional && params_.startup_work_per_period > 0;
+  sp.provisional_scored = sp.provisional && params_.startup_first_score_whole && first_acquisition_pending(f.frame);
   job_frame_ = f.frame;
   job_odom_ = f.odom_T_body.matrix();
   job_track_broken_ = false;

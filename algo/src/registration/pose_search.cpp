@@ -21,6 +21,23 @@ constexpr std::uint64_t kHypothesisUnits = 2;  // a hypothesis's own set-up and 
 
 PoseSearch g_search;  // search_pose()'s job: ~40 kB, static
 
+// The lattice form of scoring (proximity_grid.hpp cell_xy / near_cell): hypotheses a whole number
+// of grid cells apart put a score point into its cell at the search's centre shifted by whole
+// cells, so each score point's cell is taken once per heading and each hypothesis only adds its
+// offset (~10 instructions a lookup instead of ~60). Shared by the PoseSearch instances (one
+// thread), filled for the job that scores (owner, job number). A cell's edge counts with the
+// real-valued position: a point within rounding of a cell edge may fall on the other side
+// than the float query of near() puts it.
+struct LatticeCell {
+  std::int32_t x = 0, y = 0;
+};
+constexpr std::size_t kLatticeCells = 4096;  // headings x score points (24 x 96 by default)
+LatticeCell g_lattice[kLatticeCells];
+const PoseSearch* g_lattice_owner = nullptr;
+std::uint64_t g_lattice_job = 0;
+std::uint64_t g_jobs_started = 0;
+constexpr std::uint32_t kLatticeLookupsPerUnit = 3;  // ~33 instructions a lookup with its loop (callgrind)
+
 bool same_basin(const Candidate& a, const Candidate& b, const PoseSearchParams& params) {
   const double dx = a.x - b.x, dy = a.y - b.y;
   return dx * dx + dy * dy < params.distinct_distance * params.distinct_distance &&
@@ -199,6 +216,7 @@ void PoseSearch::start(std::span<const Vec3f> scan_body, const IcpTarget& map, c
                        const PoseSearchParams& params) {
   params_ = params;
   center_ = center;
+  job_number_ = ++g_jobs_started;
   if (!copy_scan(scan_body, map)) return;
   // Fixed subsample of above-ground points (every k-th), in body coordinates, in scan order.
   const std::span<const Vec3f> body = scan_body.first(scan_count_);
@@ -268,9 +286,10 @@ void PoseSearch::start_from_poses(std::span<const Vec3f> scan_body, const IcpTar
   phase_ = Phase::kRefine;
 }
 
-bool PoseSearch::step(const IcpTarget& map, std::uint64_t budget) {
+bool PoseSearch::step(const IcpTarget& map, std::uint64_t budget, bool score_whole) {
   // From the previous step's end (or the job's start, so that start()'s own work counts here).
   const std::uint64_t stop = budget > ~std::uint64_t{0} - step_from_ ? ~std::uint64_t{0} : step_from_ + budget;
+  if (score_whole && phase_ == Phase::kScore) score_hypotheses(map, ~std::uint64_t{0});
   if (phase_ != Phase::kDone && (map.tree == nullptr || map.points.empty())) {
     result_.best.status = RegistrationStatus::kInvalidInput;  // the map went away mid-search
     phase_ = Phase::kDone;
@@ -298,6 +317,12 @@ void PoseSearch::score_hypotheses(const IcpTarget& map, std::uint64_t stop) {
   // The proximity bitmap built at start(): same question, looser answer (a hit may be up to a
   // few cells farther), ~30x cheaper.
   const ProximityGrid* grid = grid_ != nullptr && grid_->ready() && grid_->valid() ? grid_ : nullptr;
+  // Every hypothesis puts a score point at the same height: its grid plane is looked up once.
+  std::int64_t plane[kMaxScorePoints];
+  for (std::uint32_t i = 0; i < score_count_ && grid != nullptr; ++i) {
+    plane[i] = grid->plane_offset(static_cast<float>(score_pts_[i].z() + result_.ground_z));
+  }
+  const std::int64_t lattice = grid != nullptr ? lattice_step(*grid) : 0;
   for (; iy_ <= cells_; ++iy_, ix_ = -cells_) {
     for (; ix_ <= cells_; ++ix_, yaw_index_ = 0) {
       const double ox = ix_ * params_.step, oy = iy_ * params_.step;
@@ -312,15 +337,37 @@ void PoseSearch::score_hypotheses(const IcpTarget& map, std::uint64_t stop) {
         const double c = tabled ? yaw_cos_[yaw_index_] : det::cos(yaw);
         const double s = tabled ? yaw_sin_[yaw_index_] : det::sin(yaw);
         const double x = center_.x() + ox, y = center_.y() + oy;
-        std::uint32_t hits = 0;
-        for (std::uint32_t i = 0; i < score_count_; ++i) {
-          const Vec3f& p = score_pts_[i];
-          const Vec3f q(static_cast<float>(c * p.x() - s * p.y() + x), static_cast<float>(s * p.x() + c * p.y() + y),
-                        static_cast<float>(p.z() + result_.ground_z));
-          hits += (grid != nullptr ? grid->near(q) : map.tree->any_within(q, d2max_f, &work_)) ? 1u : 0u;
+        // Exact pruning: a hypothesis that cannot beat the full list's worst changes nothing
+        // (keep_distinct_best), so its scoring stops once even all remaining points could not.
+        const std::int64_t to_beat = worst_kept_hits();
+        std::uint32_t hits = 0, scored = 0;
+        if (lattice > 0) {
+          const LatticeCell* cells = &g_lattice[static_cast<std::size_t>(yaw_index_) * score_count_];
+          const std::int64_t dx = ix_ * lattice, dy = iy_ * lattice;
+          const std::uint32_t n = score_count_;
+          for (; scored < n && static_cast<std::int64_t>(hits + (n - scored)) > to_beat; ++scored) {
+            hits += grid->near_cell(cells[scored].x + dx, cells[scored].y + dy, plane[scored]) ? 1u : 0u;
+          }
         }
-        work_ += kHypothesisUnits +
-                 (grid != nullptr ? (score_count_ + kGridLookupsPerUnit - 1) / kGridLookupsPerUnit : score_count_);
+        for (std::uint32_t i = 0; i < score_count_ && lattice <= 0; ++i) {
+          if (static_cast<std::int64_t>(hits + (score_count_ - i)) <= to_beat) break;
+          const Vec3f& p = score_pts_[i];
+          const float qx = static_cast<float>(c * p.x() - s * p.y() + x);
+          const float qy = static_cast<float>(s * p.x() + c * p.y() + y);
+          if (grid != nullptr) {
+            hits += grid->near_in_plane(qx, qy, plane[i]) ? 1u : 0u;
+          } else {
+            const Vec3f q(qx, qy, static_cast<float>(p.z() + result_.ground_z));
+            hits += map.tree->any_within(q, d2max_f, &work_) ? 1u : 0u;
+          }
+          ++scored;
+        }
+        const std::uint32_t per_unit = lattice > 0 ? kLatticeLookupsPerUnit : kGridLookupsPerUnit;
+        work_ += kHypothesisUnits + (grid != nullptr ? (scored + per_unit - 1) / per_unit : scored);
+        if (scored < score_count_) {
+          ++result_.hypotheses_pruned;
+          continue;
+        }
         keep_distinct_best(top_, Candidate{static_cast<double>(hits) / score_count_, x, y, yaw}, params_);
       }
     }
@@ -329,6 +376,43 @@ void PoseSearch::score_hypotheses(const IcpTarget& map, std::uint64_t stop) {
   candidate_ = 0;
   refining_fine_ = false;
   run_started_ = false;
+}
+
+// Grid cells between neighbouring hypotheses when the lattice form applies (step a whole number
+// of the grid's cells, the table large enough), the table filled for this job; else 0.
+std::int64_t PoseSearch::lattice_step(const ProximityGrid& grid) {
+  const double ratio = params_.step / grid.cell();
+  const double whole = std::floor(ratio + 0.5);
+  if (!(whole >= 1.0 && whole <= 1e6 && std::abs(ratio - whole) <= 1e-9 * whole)) return 0;
+  if (static_cast<std::size_t>(params_.yaw_steps) * score_count_ > kLatticeCells) return 0;
+  if (g_lattice_owner != this || g_lattice_job != job_number_) {
+    for (std::uint32_t k = 0; k < params_.yaw_steps; ++k) {
+      const double yaw = 2.0 * det::kPi * k / params_.yaw_steps;
+      const bool tabled = k < kMaxYawTable;
+      const double c = tabled ? yaw_cos_[k] : det::cos(yaw);
+      const double s = tabled ? yaw_sin_[k] : det::sin(yaw);
+      for (std::uint32_t i = 0; i < score_count_; ++i) {
+        const Vec3f& p = score_pts_[i];
+        std::int64_t x = 0, y = 0;
+        grid.cell_xy(c * p.x() - s * p.y() + center_.x(), s * p.x() + c * p.y() + center_.y(), x, y);
+        // Beyond +-2^30 cells is far outside the grid whatever the offset (<= 2^21 cells).
+        constexpr std::int64_t kFar = std::int64_t{1} << 30;
+        g_lattice[k * score_count_ + i] = {static_cast<std::int32_t>(x < -kFar ? -kFar : (x > kFar ? kFar : x)),
+                                           static_cast<std::int32_t>(y < -kFar ? -kFar : (y > kFar ? kFar : y))};
+      }
+    }
+    g_lattice_owner = this;
+    g_lattice_job = job_number_;
+  }
+  return static_cast<std::int64_t>(whole);
+}
+
+// Hits of the kept list's worst entry (scores are hits / score_count_, exact for the integer
+// counts), -1 while the list has room: a hypothesis needs more hits than this to be kept.
+std::int64_t PoseSearch::worst_kept_hits() const {
+  const double worst = top_[kPoseSearchRefine - 1].score;
+  if (!(worst >= 0.0)) return -1;
+  return static_cast<std::int64_t>(std::floor(worst * score_count_ + 0.5));
 }
 
 // Refine the best hypotheses (coarse then fine ICP). Aliased poses along a straight canyon
@@ -413,10 +497,14 @@ bool PoseSearch::rate_pose(const IcpTarget& map, const Mat4d& pose, double& conf
 }
 
 bool PoseSearch::provisional(Mat4d& pose) const {
-  // Refined poses only: the best-scored hypothesis alone can be an alias along the street
-  // (algo/TUNING.md, start-up).
-  if (!(provisional_tight_ > 0.0)) return false;
-  pose = provisional_pose_;
+  // Refined poses first: the best-scored hypothesis alone can be an alias along the street
+  // (algo/TUNING.md, start-up); it stands in only with provisional_scored, once scoring is over.
+  if (provisional_tight_ > 0.0) {
+    pose = provisional_pose_;
+    return true;
+  }
+  if (!params_.provisional_scored || phase_ == Phase::kScore || phase_ == Phase::kDone || !(top_[0].score >= 0.0)) return false;
+  pose = pose_of(top_[0].x, top_[0].y, result_.ground_z, top_[0].yaw);
   return true;
 }
 

@@ -36,6 +36,7 @@ void ProximityGrid::begin(std::span<const Vec3f> map_points, const Vec3d& center
                           const Vec3d& half_extent, const ProximityGridParams& params) {
   points_ = map_points;
   for (int a = 0; a < 3; ++a) limit_[a] = 0.0;
+  cells_x_ = cells_y_ = 0;
   total_work_ = work_done_ = cursor_ = carry_ = 0;
   marked_ = outside_ = non_finite_ = 0;
   pass_ = passes_ = r_ = 0;
@@ -149,6 +150,8 @@ void ProximityGrid::advance() {
   }
   if (phase_ == Phase::kDone) {  // open the queries
     for (int a = 0; a < 3; ++a) limit_[a] = static_cast<double>(dims_[a]);
+    cells_x_ = dims_[0];
+    cells_y_ = dims_[1];
   }
 }
 

@@ -71,8 +71,9 @@ TEST(StartupSearch, RegionWidensAfterASearchFindsNothing) {
   }
 }
 
-// The localizer takes no map clouds while the first acquisition is pending (its searches ignore
-// the period budget): that window ends at startup_first_frames, or with the filter's start.
+// The localizer takes no map clouds while the first acquisition is pending (its searches' first
+// slices score every hypothesis): that window ends at startup_first_frames, or with the filter's
+// start.
 TEST(StartupSearch, FirstAcquisitionWindow) {
   LocalizerParams params;
   auto search = std::make_unique<StartupSearch>();
@@ -80,7 +81,7 @@ TEST(StartupSearch, FirstAcquisitionWindow) {
   EXPECT_TRUE(search->first_acquisition_pending(0));
   EXPECT_TRUE(search->first_acquisition_pending(params.startup_first_frames - 1));
   EXPECT_FALSE(search->first_acquisition_pending(params.startup_first_frames));
-  params.startup_first_work_per_period = 0;  // no exception slice: nothing to make room for
+  params.startup_first_frames = 0;  // no power-up window at all
   search->configure(params);
   EXPECT_FALSE(search->first_acquisition_pending(0));
 }

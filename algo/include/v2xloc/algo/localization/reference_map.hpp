@@ -41,7 +41,7 @@ class ReferenceMap {
   // normals: the map normals computed / refused (cap) in the period that ends here.
   // may_build false: expiry only, the build waits (the period has no room for a step).
   bool refresh(double t, LazyNormalCounters& normals, bool may_build = true);
-  bool stepped() const { return stepped_; }  // refresh() ran a build step this period
+  std::uint32_t steps_run() const { return steps_run_; }  // build steps refresh() ran this period (the first map: all)
   // A build step would run at t (a rebuild in progress, or one due); after refresh() of that period.
   bool build_due(double t) const;
   // The next build step will finish the tree and put the new target to use (its normals are then
@@ -88,7 +88,7 @@ class ReferenceMap {
   double built_t_ = -1e300;
   bool ready_ = false;
   bool fused_this_period_ = false;  // a cloud was handed to map fusion since the last refresh()
-  bool stepped_ = false;
+  std::uint32_t steps_run_ = 0;
   // Last cloud time handed to map fusion per source id (pacing of sources with no stored cloud);
   // full: the oldest entry gives way (pacing then fails open: more checks, never a lost cloud).
   struct Attempt {

@@ -86,10 +86,10 @@ class StartupSearch {
   // The unconfirmed candidate carried to this frame by the odometry, when it is a better
   // estimate than the GNSS fix.
   bool candidate_pose(std::uint32_t frame, const Pose3d& odom_T_body, Pose3d& pose) const;
-  // Power-up: no filter started yet, within startup_first_frames; the searches take at least
-  // startup_first_work_per_period (and the localizer takes no map clouds meanwhile).
+  // Power-up: no filter started yet, within startup_first_frames (the localizer takes no map
+  // clouds meanwhile; the searches' first slices score every hypothesis).
   bool first_acquisition_pending(std::uint32_t frame) const {
-    return !acquired_ && frame < params_.startup_first_frames && params_.startup_first_work_per_period > 0;
+    return !acquired_ && frame < params_.startup_first_frames;
   }
 
  private:
@@ -114,6 +114,10 @@ class StartupSearch {
   enum class JobKind : std::uint8_t { kNone, kExhaustive, kFinalists };
 
   std::uint64_t slice_budget(const StartupFrame& f) const;
+  // Power-up exception (startup_first_work_per_period > 0): the slices ignore the budget.
+  bool first_exempt(std::uint32_t frame) const {
+    return first_acquisition_pending(frame) && params_.startup_first_work_per_period > 0;
+  }
   std::uint64_t room_slice(const StartupFrame& f, std::uint64_t floor, std::uint64_t cap) const;
   // The region around the fix before widening, and the same widened by region_scale_.
   double floor_region(const StartupFrame& f) const;

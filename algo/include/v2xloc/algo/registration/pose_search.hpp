@@ -82,6 +82,10 @@ struct PoseSearchParams {
   // Judge each refined pose as it comes (rays, tight fitness) so that provisional() names the
   // best so far while the search runs over several periods (costs ~1 fitness pass a candidate).
   bool provisional = false;
+  // ... and before any is refined, once every hypothesis is scored, the best-scored one (within
+  // a grid step and half a yaw step of its basin's bottom; power-up, where the alternative is
+  // the GNSS fix).
+  bool provisional_scored = false;
   // Scoring on a proximity grid (set_proximity_grid): a score point hits when a map point lies
   // in a cell within ceil(grid_reach / grid_cell) cells of its own on every axis, a cube that
   // stands for the score_distance sphere (1 m cells, reach 1: 3 m cube ~ the 2 m sphere's volume).
@@ -92,6 +96,7 @@ struct PoseSearchParams {
 struct PoseSearchResult {
   RegistrationResult best;         // refined best hypothesis (status kOk when found)
   std::uint32_t hypotheses = 0;    // scored
+  std::uint32_t hypotheses_pruned = 0;  // of them, stopped early: they could not enter the list
   double best_score = 0.0;         // coarse score of the winning hypothesis
   double ground_z = 0.0;           // [m] map ground height used for the hypotheses
   double best_tight_fitness = 0.0;       // winner's fitness at select_distance
@@ -149,7 +154,8 @@ class PoseSearch {
   // same selection (ray check, tight fitness, runner-up). At most kPoseSearchRefine poses.
   void start_from_poses(std::span<const Vec3f> scan_body, const IcpTarget& map, std::span<const Mat4d> poses,
                         double ground_z, const PoseSearchParams& params);
-  bool step(const IcpTarget& map, std::uint64_t budget);
+  // score_whole: the scoring phase, if under way, finishes in this step whatever the budget.
+  bool step(const IcpTarget& map, std::uint64_t budget, bool score_whole = false);
   // Score hypotheses on this caller-owned proximity grid (proximity_grid.hpp), built by start()
   // over the searched region, instead of the map's k-d tree (nullptr: the tree).
   void set_proximity_grid(ProximityGrid* grid) { grid_ = grid; }
@@ -162,13 +168,16 @@ class PoseSearch {
   // The refined poses that reached the selection (not dropped by fitness or rays), winner
   // first; valid once done(). Returns how many were written (<= out.size()).
   std::uint32_t finalists(std::span<Mat4d> out) const;
-  // With params.provisional: the best pose refined so far (world_T_body); false before any.
+  // With params.provisional: the best pose refined so far (world_T_body); false before any
+  // (with provisional_scored: the best-scored hypothesis once scoring is over).
   bool provisional(Mat4d& pose) const;
 
  private:
   enum class Phase : std::uint8_t { kScore, kRefine, kSelect, kDone };
   static constexpr std::uint32_t kMaxScorePoints = 512;
   void score_hypotheses(const IcpTarget& map, std::uint64_t stop);
+  std::int64_t worst_kept_hits() const;
+  std::int64_t lattice_step(const ProximityGrid& grid);
   void refine_candidate(const IcpTarget& map, std::uint64_t stop);
   void select_candidate(const IcpTarget& map);
   void finish();
@@ -188,6 +197,7 @@ class PoseSearch {
   Phase phase_ = Phase::kDone;
   std::uint64_t work_ = 0;
   std::uint64_t step_from_ = 0;                   // work_ when the current step began
+  std::uint64_t job_number_ = 0;                  // start()s so far, all instances (the lattice table's owner)
   Vec3f scan_[config::kMaxSearchPoints];
   std::uint32_t hints_[config::kMaxSearchPoints];
   std::size_t scan_count_ = 0;

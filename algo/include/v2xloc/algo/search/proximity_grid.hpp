@@ -48,6 +48,7 @@
 // ceil(total_work() / budget) step() calls. Sliced builds give the same bits as build().
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -103,6 +104,43 @@ class ProximityGrid {
     return ((word >> (ix & 63u)) & 1u) != 0;
   }
 
+  // near() split for many queries at one height (the pose search's hypotheses share the road
+  // height): the word offset of qz's cell plane, -1 outside the grid (or before ready()); then
+  // near_in_plane(qx, qy, offset) == near(q) for every q at that height.
+  std::int64_t plane_offset(float qz) const {
+    const double uz = (static_cast<double>(qz) - origin_[2]) * inv_cell_;
+    if (!(uz >= 0.0 && uz < limit_[2])) return -1;
+    return static_cast<std::int64_t>(static_cast<std::uint32_t>(uz) * plane_words_);
+  }
+  bool near_in_plane(float qx, float qy, std::int64_t plane) const {
+    const double ux = (static_cast<double>(qx) - origin_[0]) * inv_cell_;
+    const double uy = (static_cast<double>(qy) - origin_[1]) * inv_cell_;
+    if (plane < 0 || !(ux >= 0.0 && ux < limit_[0] && uy >= 0.0 && uy < limit_[1])) return false;
+    const auto ix = static_cast<std::uint32_t>(ux);
+    const auto iy = static_cast<std::uint32_t>(uy);
+    const std::uint64_t word = words_[static_cast<std::uint32_t>(plane) + iy * row_words_ + (ix >> 6u)];
+    return ((word >> (ix & 63u)) & 1u) != 0;
+  }
+
+  // The same for queries that move over a lattice of whole cells (the pose search's hypotheses,
+  // a grid step apart): the cell of (x, y) as integers, floor, possibly outside the grid ...
+  void cell_xy(double x, double y, std::int64_t& ix, std::int64_t& iy) const {
+    constexpr double kFar = 1e9;  // [cells] clamp: far outside is outside, and no overflow
+    double ux = std::floor((x - origin_[0]) * inv_cell_), uy = std::floor((y - origin_[1]) * inv_cell_);
+    ux = ux > kFar ? kFar : (ux < -kFar || !(ux == ux) ? -kFar : ux);
+    uy = uy > kFar ? kFar : (uy < -kFar || !(uy == uy) ? -kFar : uy);
+    ix = static_cast<std::int64_t>(ux);
+    iy = static_cast<std::int64_t>(uy);
+  }
+  // ... then near() of a point in cell (ix, iy) at the plane's height.
+  bool near_cell(std::int64_t ix, std::int64_t iy, std::int64_t plane) const {
+    // Negative indices wrap to huge unsigned ones: one compare per axis.
+    if (plane < 0 || static_cast<std::uint64_t>(ix) >= cells_x_ || static_cast<std::uint64_t>(iy) >= cells_y_) return false;
+    const auto x = static_cast<std::uint32_t>(ix);
+    const std::uint64_t word = words_[static_cast<std::uint32_t>(plane) + static_cast<std::uint32_t>(iy) * row_words_ + (x >> 6u)];
+    return ((word >> (x & 63u)) & 1u) != 0;
+  }
+
   // The part of the grid where near() has no false negative (u(q) in [r, n - r] on every axis,
   // shrunk by 2^-20 cells for rounding): there, !near(q) proves that no map point lies within
   // reach of q. False before ready() and for non-finite queries.
@@ -153,6 +191,7 @@ class ProximityGrid {
   double origin_[3] = {0.0, 0.0, 0.0};
   double inv_cell_ = 0.0;
   double limit_[3] = {0.0, 0.0, 0.0};  // query bounds in cells: dims once ready, else 0
+  std::uint64_t cells_x_ = 0, cells_y_ = 0;  // the same as integers (near_cell)
   double cell_ = 0.0;
   double reach_ = 0.0;
   std::uint64_t total_work_ = 0;
