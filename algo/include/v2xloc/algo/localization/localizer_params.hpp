@@ -121,16 +121,19 @@ struct LocalizerParams {
   std::uint32_t startup_work_per_period = 800000;
   std::uint32_t startup_min_work_per_period = 30000;
   // The first acquisition after power-up (until the filter first starts, at most
-  // startup_first_frames): its searches keep to the period budget like any other, except that
-  // their first slice scores every hypothesis (bounded: search.max_hypotheses x score_points
-  // lookups, ~15-40 M instructions) so that the best-scored pose is output from frame 0 until a
-  // refined one replaces it (README "Real time"; 0.5-2.1 m off on the 12 recordings, the refined
-  // one from frame 1). Meanwhile the localizer takes no map clouds past the first map.
+  // startup_first_frames); the localizer takes no map clouds past the first map meanwhile.
   std::uint32_t startup_first_frames = 10;  // [frames] since configure()
+  // [work units/period] its searches take at least this per period, budget or not: 1.5M runs the
+  // whole search and final ICP in frame 0 (~180-210 M instructions), whose refined pose is the
+  // output from frame 0. 0: the first acquisition keeps to the budget like any search (frame 0
+  // ~81-93 M on the 12 recordings in process, but through the firmware the Sim 0 and Sim 2 rows'
+  // first searches end unconverged and fall back to the GNSS fix: algo/TUNING.md, session 20).
+  std::uint32_t startup_first_work_per_period = 1500000;
+  // Within the budget (startup_first_work_per_period 0), the searches' first slices score every
+  // hypothesis, budget or not (bounded: search.max_hypotheses x score_points lookups, ~5-15 M
+  // instructions) and the best-scored pose is output until a refined one replaces it (0.5-2.1 m
+  // off on the 12 recordings, the refined one from frame 1).
   bool startup_first_score_whole = true;
-  // [work units/period] before session 20 the first acquisition took at least this per period,
-  // budget or not (1.5M: its whole search and final ICP in frame 0, ~200 M instructions); 0: off.
-  std::uint32_t startup_first_work_per_period = 0;
   std::uint32_t startup_max_frames = 20;  // [frames] a search job not finished within this is dropped
   // While a spread search runs, output its best refined pose so far (not localized, not fused).
   bool startup_output_provisional = true;
