@@ -280,6 +280,10 @@ void StartupSearch::start_job(const StartupFrame& f, LocalizerCounters& counters
   provisional_valid_ = false;
   const bool confirm_finalists = params_.global_confirm_finalists && finalist_count_ > 0 && candidate_.valid &&
                                  f.frame - candidate_.frame <= params_.global_confirm_window;
+  // The GNSS region a result must lie in: around this fix, or for a confirming search around the
+  // fix its candidate's search started from (both checked where they were taken).
+  region_fix_ = confirm_finalists ? candidate_.region_fix : f.gnss.enu;
+  region_odom_ = confirm_finalists ? candidate_.region_odom : job_odom_;
   if (!confirm_finalists) {
     job_kind_ = JobKind::kExhaustive;
     job_.start(f.search_scan, f.map, f.gnss.enu, sp);
@@ -359,6 +363,16 @@ void StartupSearch::fpfh_ransac(const StartupFrame& f, Search& s) {
 
 // (4) The acceptance checks on the final ICP's result (carried to this frame). An accepted
 // solution starts a filter that needs it only once a second search confirms it.
+// [m] a pose of this frame (world_T_body; odom_T_body its odometry pose) from the fix the
+// search's region is centred on, taken back by the odometry to the frame that fix belongs to: the
+// region is where the search looked. A search spread over frames finishes when a canyon fix may
+// have jumped by the region's size (firmware, Sim 2 / 2_infra: 24 m off at the search's start, 32
+// m four frames later, when the confirming search started).
+double StartupSearch::distance_from_region_fix(const Mat4d& pose, const Mat4d& odom_T_body) const {
+  if (odom_T_body == region_odom_) return horizontal_distance(pose, region_fix_);
+  return horizontal_distance(Mat4d(pose * se3_inverse(odom_T_body) * region_odom_), region_fix_);
+}
+
 StartupStatus StartupSearch::accept(const StartupFrame& f, const Search& s, RegistrationResult& result,
                                     LocalizerCounters& counters) {
   if (!s.best.ok()) {
@@ -381,7 +395,7 @@ StartupStatus StartupSearch::accept(const StartupFrame& f, const Search& s, Regi
   }
   if (result.fitness < params_.global_min_fitness || result.inlier_rmse > params_.max_inlier_rmse ||
       (f.course_known && !heading_agrees) ||
-      (params_.use_gnss && horizontal_distance(result.transform, f.gnss.enu) > s.region) ||
+      (params_.use_gnss && distance_from_region_fix(result.transform, odom) > s.region) ||
       (track_known && track_distance > params_.track_max_distance)) {
     result.status = RegistrationStatus::kDidNotConverge;
     return StartupStatus::kRejected;
@@ -419,6 +433,8 @@ bool StartupSearch::confirm(std::uint32_t frame, const Mat4d& pose, const Mat4d&
   candidate_.pose = pose;
   candidate_.odom = odom_T_body;
   candidate_.output = output;
+  candidate_.region_fix = region_fix_;
+  candidate_.region_odom = region_odom_;
   return false;
 }
 

@@ -126,7 +126,13 @@ bool road_height_near(std::span<const Vec3f> map, const Vec3d& center, double ra
 }
 
 double ray_conflict_ratio(std::span<const Vec3f> scan_body, const IcpTarget& map, const Mat4d& pose,
-                          double ground_z, const PoseSearchParams& params, std::uint64_t* work) {
+                          double ground_z, const PoseSearchParams& params, std::uint64_t* work,
+                          const ProximityGrid* free_space) {
+  // A proximity grid over the same map with at least the conflict radius' reach proves most
+  // samples (free space) empty in O(1); the k-d tree answers the rest. The same verdicts.
+  if (free_space != nullptr && !(free_space->ready() && free_space->valid() && free_space->reach() >= params.conflict_radius)) {
+    free_space = nullptr;
+  }
   if (map.tree == nullptr || !(params.conflict_step > 0.0) || params.conflict_rays == 0) return -1.0;
   const Vec3d& s = params.sensor_in_body;
   const double min_range2 = params.conflict_min_range * params.conflict_min_range;
@@ -158,8 +164,13 @@ double ray_conflict_ratio(std::span<const Vec3f> scan_body, const IcpTarget& map
       if (along >= free) break;
       const Vec3d q = origin + along * dir;
       if (q.z() < floor_z) continue;
+      const Vec3f qf = q.cast<float>();
+      if (free_space != nullptr && free_space->none_within_reach(qf)) {
+        if (work != nullptr) *work += 1;
+        continue;
+      }
       Neighbor nb{0, 0.0f};
-      const KdQueryResult qr = map.tree->nearest_within(q.cast<float>(), r2, hint, nb);
+      const KdQueryResult qr = map.tree->nearest_within(qf, r2, hint, nb);
       if (work != nullptr) *work += 1 + qr.node_visits;
       if (qr.count > 0) {
         ++conflicts;
@@ -186,6 +197,8 @@ bool PoseSearch::copy_scan(std::span<const Vec3f> scan_body, const IcpTarget& ma
   step_from_ = 0;
   phase_ = Phase::kDone;
   from_given_ = false;
+  for (std::int8_t& r : rated_) r = -1;
+  grid_source_ = {};  // a grid serves the ray checks of the job that built it only
   if (map.tree == nullptr || map.points.empty() || scan_body.empty() || !(params_.step > 0.0) ||
       params_.yaw_steps == 0) {
     result_.best.status = RegistrationStatus::kInvalidInput;
@@ -266,6 +279,7 @@ void PoseSearch::build_grid(const IcpTarget& map) {
   gp.cell = params_.grid_cell;
   gp.reach = params_.grid_reach;
   grid_->build(map.points, center, half, gp);
+  grid_source_ = map.points;
   work_ += grid_->total_work() / kGridBuildPerUnit;
 }
 
@@ -469,15 +483,20 @@ void PoseSearch::refine_candidate(const IcpTarget& map, std::uint64_t stop) {
     refined.status = RegistrationStatus::kDidNotConverge;  // slid out of the prior
   }
   if (refined.ok() && refined.fitness > best_fitness_) best_fitness_ = refined.fitness;
-  if (params_.provisional && refined.ok()) judge_provisional(map, refined);
+  if (params_.provisional && refined.ok()) judge_provisional(map, refined, candidate_);
   ++candidate_;
 }
 
 // The best refined pose so far by the selection's own measures (rays, tight fitness), for a
 // caller that outputs something while the search goes on; the final selection is unchanged.
-void PoseSearch::judge_provisional(const IcpTarget& map, const RegistrationResult& refined) {
+// Its measures are kept for the selection (select_candidate), which would compute the same.
+void PoseSearch::judge_provisional(const IcpTarget& map, const RegistrationResult& refined, std::uint32_t i) {
   double conflicts = -1.0, tight = -1.0;
-  if (rate_pose(map, refined.transform, conflicts, tight) && tight > provisional_tight_) {
+  const bool rated = rate_pose(map, refined.transform, conflicts, tight);
+  rated_[i] = rated ? 1 : 0;
+  judged_conflicts_[i] = conflicts;
+  judged_tight_[i] = tight;
+  if (rated && tight > provisional_tight_) {
     provisional_tight_ = tight;
     provisional_pose_ = refined.transform;
   }
@@ -487,7 +506,9 @@ void PoseSearch::judge_provisional(const IcpTarget& map, const RegistrationResul
 // (when max_conflicts is on) and, unless its rays cross the map (false), the tight fitness.
 bool PoseSearch::rate_pose(const IcpTarget& map, const Mat4d& pose, double& conflicts, double& tight) {
   if (params_.max_conflicts > 0.0) {
-    conflicts = ray_conflict_ratio(scan(), map, pose, result_.ground_z, params_, &work_);
+    // The scoring grid answers for free space while the map is the one it was built on.
+    const bool same_map = grid_ != nullptr && map.points.data() == grid_source_.data() && map.points.size() == grid_source_.size();
+    conflicts = ray_conflict_ratio(scan(), map, pose, result_.ground_z, params_, &work_, same_map ? grid_ : nullptr);
     if (conflicts > params_.max_conflicts) return false;
   }
   const RegistrationResult fit = evaluate_registration(scan(), map, pose, params_.select_distance);
@@ -522,7 +543,15 @@ void PoseSearch::select_candidate(const IcpTarget& map) {
   tight_[i] = -1.0;
   conflicts_[i] = -1.0;
   if (!r.ok() || r.fitness < best_fitness_ - kPoseSearchFitnessMargin) return;
-  if (!rate_pose(map, r.transform, conflicts_[i], tight_[i])) {
+  bool rated = false;
+  if (rated_[i] >= 0) {  // judged already (provisional)
+    rated = rated_[i] == 1;
+    conflicts_[i] = judged_conflicts_[i];
+    tight_[i] = judged_tight_[i];
+  } else {
+    rated = rate_pose(map, r.transform, conflicts_[i], tight_[i]);
+  }
+  if (!rated) {
     ++result_.conflict_rejected;
     return;
   }

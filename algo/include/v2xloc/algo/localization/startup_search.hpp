@@ -99,6 +99,8 @@ class StartupSearch {
     Mat4d pose = Mat4d::Identity();  // world_T_body
     Mat4d odom = Mat4d::Identity();  // odom_T_body at that frame
     bool output = false;             // unambiguous: a better estimate than the GNSS fix
+    Vec3d region_fix = Vec3d::Zero();          // its search's region centre (the GNSS fix) ...
+    Mat4d region_odom = Mat4d::Identity();     // ... and odom_T_body when that fix was taken
   };
   struct TrackSample {               // per frame: odometry and latest GNSS position (2-D)
     double odom_x = 0.0, odom_y = 0.0, gnss_x = 0.0, gnss_y = 0.0;
@@ -128,6 +130,7 @@ class StartupSearch {
   void begin_final_icp(const StartupFrame& f, LocalizerCounters& counters);
   bool continue_final_icp(const StartupFrame& f, LocalizerCounters& counters);
   void take_result(const StartupFrame& f, Search& s) const;
+  double distance_from_region_fix(const Mat4d& pose, const Mat4d& odom_T_body) const;
   void resolve_ambiguity(const StartupFrame& f, Search& s, LocalizerCounters& counters) const;
   void keep_finalists(const StartupFrame& f);
   void fpfh_ransac(const StartupFrame& f, Search& s);
@@ -157,6 +160,9 @@ class StartupSearch {
   double region_scale_ = 1.0;        // grows after a search found nothing acceptable (widen_region)
   double job_floor_region_ = 0.0;    // [m] the job's region before widening (provisional output)
   Vec3d job_fix_ = Vec3d::Zero();    // the GNSS fix the job searches around
+  // The GNSS region a result must lie in (accept): its centre and the odometry pose at that fix.
+  Vec3d region_fix_ = Vec3d::Zero();
+  Mat4d region_odom_ = Mat4d::Identity();
   PoseSearchParams job_params_{};
   bool job_heading_used_ = false;
   bool provisional_valid_ = false;   // the running search's best pose so far (output only)

@@ -111,8 +111,11 @@ struct PoseSearchResult {
 
 // The ray conflict ratio above for one pose (world_T_body); -1 when no ray qualifies.
 // work (optional): incremented by the work units spent (one per sample plus the nodes visited).
+// free_space (optional): a proximity grid over the same map points, reach >= conflict_radius;
+// samples it proves empty skip the k-d tree (the same ratio).
 double ray_conflict_ratio(std::span<const Vec3f> scan_body, const IcpTarget& map, const Mat4d& pose,
-                          double ground_z, const PoseSearchParams& params, std::uint64_t* work = nullptr);
+                          double ground_z, const PoseSearchParams& params, std::uint64_t* work = nullptr,
+                          const ProximityGrid* free_space = nullptr);
 
 // [m] height bin of road_height: the road height (the hypotheses' z) is a bin centre, within
 // 0.1 m of the road's points, far inside the coarse ICP's gate, which refines it.
@@ -183,7 +186,7 @@ class PoseSearch {
   void finish();
   bool copy_scan(std::span<const Vec3f> scan_body, const IcpTarget& map);
   void build_grid(const IcpTarget& map);
-  void judge_provisional(const IcpTarget& map, const RegistrationResult& refined);
+  void judge_provisional(const IcpTarget& map, const RegistrationResult& refined, std::uint32_t i);
   bool rate_pose(const IcpTarget& map, const Mat4d& pose, double& conflicts, double& tight);
   std::uint32_t refine_count() const {
     return params_.refine_candidates < kPoseSearchRefine ? params_.refine_candidates : kPoseSearchRefine;
@@ -192,6 +195,7 @@ class PoseSearch {
 
   PoseSearchParams params_{};
   ProximityGrid* grid_ = nullptr;
+  std::span<const Vec3f> grid_source_{};  // the map points grid_ was built on
   Vec3d center_ = Vec3d::Zero();
   PoseSearchResult result_{};
   Phase phase_ = Phase::kDone;
@@ -222,6 +226,11 @@ class PoseSearch {
   double tight_[kPoseSearchRefine] = {};
   double conflicts_[kPoseSearchRefine] = {};
   double best_tight_ = -1.0;
+  // judge_provisional's measures of refined candidate i (rated_: -1 not judged, 0 its rays cross
+  // the map, 1 rated), reused by the selection.
+  std::int8_t rated_[kPoseSearchRefine] = {};
+  double judged_conflicts_[kPoseSearchRefine] = {};
+  double judged_tight_[kPoseSearchRefine] = {};
   double provisional_tight_ = -1.0;
   Mat4d provisional_pose_ = Mat4d::Identity();
   std::uint32_t winner_ = kPoseSearchRefine;
