@@ -106,8 +106,7 @@ StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& cou
   // This period's work, including the set-up start_job() did (a new job's work starts at 0).
   if (!final_running_) {
     const std::uint64_t before = started ? 0 : job_.work();
-    const bool score_whole = params_.startup_first_score_whole && first_acquisition_pending(f.frame);
-    const bool finished = job_.step(f.map, slice_budget(f), score_whole);
+    const bool finished = job_.step(f.map, slice_budget(f), first_scores_whole(f.frame));
     const std::uint64_t spent = job_.work() - before;
     if (f.work != nullptr) f.work->add(static_cast<double>(spent) * f.work->params().search_unit);
     counters.global_search_work += spent;
@@ -273,7 +272,7 @@ void StartupSearch::start_job(const StartupFrame& f, LocalizerCounters& counters
     ++counters.heading_searches;
   }
   sp.provisional = params_.startup_output_provisional && params_.startup_work_per_period > 0;
-  sp.provisional_scored = sp.provisional && params_.startup_first_score_whole && first_acquisition_pending(f.frame);
+  sp.provisional_scored = sp.provisional && first_scores_whole(f.frame);
   job_frame_ = f.frame;
   job_odom_ = f.odom_T_body.matrix();
   job_track_broken_ = false;
@@ -361,8 +360,6 @@ void StartupSearch::fpfh_ransac(const StartupFrame& f, Search& s) {
   }
 }
 
-// (4) The acceptance checks on the final ICP's result (carried to this frame). An accepted
-// solution starts a filter that needs it only once a second search confirms it.
 // [m] a pose of this frame (world_T_body; odom_T_body its odometry pose) from the fix the
 // search's region is centred on, taken back by the odometry to the frame that fix belongs to: the
 // region is where the search looked. A search spread over frames finishes when a canyon fix may
@@ -373,6 +370,8 @@ double StartupSearch::distance_from_region_fix(const Mat4d& pose, const Mat4d& o
   return horizontal_distance(Mat4d(pose * se3_inverse(odom_T_body) * region_odom_), region_fix_);
 }
 
+// (4) The acceptance checks on the final ICP's result (carried to this frame). An accepted
+// solution starts a filter that needs it only once a second search confirms it.
 StartupStatus StartupSearch::accept(const StartupFrame& f, const Search& s, RegistrationResult& result,
                                     LocalizerCounters& counters) {
   if (!s.best.ok()) {

@@ -25,7 +25,7 @@ PoseSearch g_search;  // search_pose()'s job: ~40 kB, static
 // of grid cells apart put a score point into its cell at the search's centre shifted by whole
 // cells, so each score point's cell is taken once per heading and each hypothesis only adds its
 // offset (~33 instructions a lookup with its loop instead of ~65). Shared by the PoseSearch instances (one
-// thread), filled for the job that scores (owner, job number). A cell's edge counts with the
+// thread), filled for the job that scores (its job number). A cell's edge counts with the
 // real-valued position: a point within rounding of a cell edge may fall on the other side
 // than the float query of near() puts it.
 struct LatticeCell {
@@ -33,9 +33,8 @@ struct LatticeCell {
 };
 constexpr std::size_t kLatticeCells = 4096;  // headings x score points (24 x 96 by default)
 LatticeCell g_lattice[kLatticeCells];
-const PoseSearch* g_lattice_owner = nullptr;
-std::uint64_t g_lattice_job = 0;
-std::uint64_t g_jobs_started = 0;
+std::uint64_t g_lattice_job = 0;    // the job the table is filled for (PoseSearch::job_number_)
+std::uint64_t g_jobs_started = 0;   // start()s of every PoseSearch: job numbers are unique
 constexpr std::uint32_t kLatticeLookupsPerUnit = 3;  // ~33 instructions a lookup with its loop (callgrind)
 
 bool same_basin(const Candidate& a, const Candidate& b, const PoseSearchParams& params) {
@@ -331,12 +330,12 @@ void PoseSearch::score_hypotheses(const IcpTarget& map, std::uint64_t stop) {
   // The proximity bitmap built at start(): same question, looser answer (a hit may be up to a
   // few cells farther), ~30x cheaper.
   const ProximityGrid* grid = grid_ != nullptr && grid_->ready() && grid_->valid() ? grid_ : nullptr;
+  const std::int64_t lattice = grid != nullptr ? lattice_step(*grid) : 0;
   // Every hypothesis puts a score point at the same height: its grid plane is looked up once.
   std::int64_t plane[kMaxScorePoints];
-  for (std::uint32_t i = 0; i < score_count_ && grid != nullptr; ++i) {
+  for (std::uint32_t i = 0; i < score_count_ && lattice > 0; ++i) {
     plane[i] = grid->plane_offset(static_cast<float>(score_pts_[i].z() + result_.ground_z));
   }
-  const std::int64_t lattice = grid != nullptr ? lattice_step(*grid) : 0;
   for (; iy_ <= cells_; ++iy_, ix_ = -cells_) {
     for (; ix_ <= cells_; ++ix_, yaw_index_ = 0) {
       const double ox = ix_ * params_.step, oy = iy_ * params_.step;
@@ -363,25 +362,16 @@ void PoseSearch::score_hypotheses(const IcpTarget& map, std::uint64_t stop) {
             hits += grid->near_cell(cells[scored].x + dx, cells[scored].y + dy, plane[scored]) ? 1u : 0u;
           }
         }
-        for (std::uint32_t i = 0; i < score_count_ && lattice <= 0; ++i) {
-          if (static_cast<std::int64_t>(hits + (score_count_ - i)) <= to_beat) break;
-          const Vec3f& p = score_pts_[i];
-          const float qx = static_cast<float>(c * p.x() - s * p.y() + x);
-          const float qy = static_cast<float>(s * p.x() + c * p.y() + y);
-          if (grid != nullptr) {
-            hits += grid->near_in_plane(qx, qy, plane[i]) ? 1u : 0u;
-          } else {
-            const Vec3f q(qx, qy, static_cast<float>(p.z() + result_.ground_z));
-            hits += map.tree->any_within(q, d2max_f, &work_) ? 1u : 0u;
-          }
-          ++scored;
+        for (; lattice <= 0 && scored < score_count_ && static_cast<std::int64_t>(hits + (score_count_ - scored)) > to_beat;
+             ++scored) {
+          const Vec3f& p = score_pts_[scored];
+          const Vec3f q(static_cast<float>(c * p.x() - s * p.y() + x), static_cast<float>(s * p.x() + c * p.y() + y),
+                        static_cast<float>(p.z() + result_.ground_z));
+          hits += (grid != nullptr ? grid->near(q) : map.tree->any_within(q, d2max_f, &work_)) ? 1u : 0u;
         }
         const std::uint32_t per_unit = lattice > 0 ? kLatticeLookupsPerUnit : kGridLookupsPerUnit;
         work_ += kHypothesisUnits + (grid != nullptr ? (scored + per_unit - 1) / per_unit : scored);
-        if (scored < score_count_) {
-          ++result_.hypotheses_pruned;
-          continue;
-        }
+        if (scored < score_count_) continue;  // pruned
         keep_distinct_best(top_, Candidate{static_cast<double>(hits) / score_count_, x, y, yaw}, params_);
       }
     }
@@ -399,7 +389,7 @@ std::int64_t PoseSearch::lattice_step(const ProximityGrid& grid) {
   const double whole = std::floor(ratio + 0.5);
   if (!(whole >= 1.0 && whole <= 1e6 && std::abs(ratio - whole) <= 1e-9 * whole)) return 0;
   if (static_cast<std::size_t>(params_.yaw_steps) * score_count_ > kLatticeCells) return 0;
-  if (g_lattice_owner != this || g_lattice_job != job_number_) {
+  if (g_lattice_job != job_number_) {
     for (std::uint32_t k = 0; k < params_.yaw_steps; ++k) {
       const double yaw = 2.0 * det::kPi * k / params_.yaw_steps;
       const bool tabled = k < kMaxYawTable;
@@ -415,7 +405,6 @@ std::int64_t PoseSearch::lattice_step(const ProximityGrid& grid) {
                                            static_cast<std::int32_t>(y < -kFar ? -kFar : (y > kFar ? kFar : y))};
       }
     }
-    g_lattice_owner = this;
     g_lattice_job = job_number_;
   }
   return static_cast<std::int64_t>(whole);
@@ -491,13 +480,12 @@ void PoseSearch::refine_candidate(const IcpTarget& map, std::uint64_t stop) {
 // caller that outputs something while the search goes on; the final selection is unchanged.
 // Its measures are kept for the selection (select_candidate), which would compute the same.
 void PoseSearch::judge_provisional(const IcpTarget& map, const RegistrationResult& refined, std::uint32_t i) {
-  double conflicts = -1.0, tight = -1.0;
-  const bool rated = rate_pose(map, refined.transform, conflicts, tight);
+  conflicts_[i] = -1.0;
+  tight_[i] = -1.0;
+  const bool rated = rate_pose(map, refined.transform, conflicts_[i], tight_[i]);
   rated_[i] = rated ? 1 : 0;
-  judged_conflicts_[i] = conflicts;
-  judged_tight_[i] = tight;
-  if (rated && tight > provisional_tight_) {
-    provisional_tight_ = tight;
+  if (rated && tight_[i] > provisional_tight_) {
+    provisional_tight_ = tight_[i];
     provisional_pose_ = refined.transform;
   }
 }
@@ -540,17 +528,14 @@ void PoseSearch::select_candidate(const IcpTarget& map) {
   }
   const std::uint32_t i = candidate_++;
   const RegistrationResult& r = refined_[i];
-  tight_[i] = -1.0;
-  conflicts_[i] = -1.0;
-  if (!r.ok() || r.fitness < best_fitness_ - kPoseSearchFitnessMargin) return;
-  bool rated = false;
-  if (rated_[i] >= 0) {  // judged already (provisional)
-    rated = rated_[i] == 1;
-    conflicts_[i] = judged_conflicts_[i];
-    tight_[i] = judged_tight_[i];
-  } else {
-    rated = rate_pose(map, r.transform, conflicts_[i], tight_[i]);
+  const bool judged = rated_[i] >= 0;  // by judge_provisional: conflicts_[i], tight_[i] hold its measures
+  const bool in_margin = r.ok() && r.fitness >= best_fitness_ - kPoseSearchFitnessMargin;
+  if (!judged || !in_margin) {
+    tight_[i] = -1.0;
+    conflicts_[i] = -1.0;
   }
+  if (!in_margin) return;
+  const bool rated = judged ? rated_[i] == 1 : rate_pose(map, r.transform, conflicts_[i], tight_[i]);
   if (!rated) {
     ++result_.conflict_rejected;
     return;

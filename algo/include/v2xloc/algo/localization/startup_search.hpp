@@ -120,6 +120,10 @@ class StartupSearch {
   bool first_exempt(std::uint32_t frame) const {
     return first_acquisition_pending(frame) && params_.startup_first_work_per_period > 0;
   }
+  // Power-up: a search's first slice scores every hypothesis (startup_first_score_whole).
+  bool first_scores_whole(std::uint32_t frame) const {
+    return params_.startup_first_score_whole && first_acquisition_pending(frame);
+  }
   std::uint64_t room_slice(const StartupFrame& f, std::uint64_t floor, std::uint64_t cap) const;
   // The region around the fix before widening, and the same widened by region_scale_.
   double floor_region(const StartupFrame& f) const;

@@ -96,7 +96,6 @@ struct PoseSearchParams {
 struct PoseSearchResult {
   RegistrationResult best;         // refined best hypothesis (status kOk when found)
   std::uint32_t hypotheses = 0;    // scored
-  std::uint32_t hypotheses_pruned = 0;  // of them, stopped early: they could not enter the list
   double best_score = 0.0;         // coarse score of the winning hypothesis
   double ground_z = 0.0;           // [m] map ground height used for the hypotheses
   double best_tight_fitness = 0.0;       // winner's fitness at select_distance
@@ -201,7 +200,7 @@ class PoseSearch {
   Phase phase_ = Phase::kDone;
   std::uint64_t work_ = 0;
   std::uint64_t step_from_ = 0;                   // work_ when the current step began
-  std::uint64_t job_number_ = 0;                  // start()s so far, all instances (the lattice table's owner)
+  std::uint64_t job_number_ = 0;                  // unique over all instances (the lattice table's owner)
   Vec3f scan_[config::kMaxSearchPoints];
   std::uint32_t hints_[config::kMaxSearchPoints];
   std::size_t scan_count_ = 0;
@@ -226,11 +225,9 @@ class PoseSearch {
   double tight_[kPoseSearchRefine] = {};
   double conflicts_[kPoseSearchRefine] = {};
   double best_tight_ = -1.0;
-  // judge_provisional's measures of refined candidate i (rated_: -1 not judged, 0 its rays cross
-  // the map, 1 rated), reused by the selection.
+  // Refined candidate i judged by judge_provisional (its measures already in conflicts_[i] and
+  // tight_[i]): -1 not judged, 0 its rays cross the map, 1 rated. The selection reuses them.
   std::int8_t rated_[kPoseSearchRefine] = {};
-  double judged_conflicts_[kPoseSearchRefine] = {};
-  double judged_tight_[kPoseSearchRefine] = {};
   double provisional_tight_ = -1.0;
   Mat4d provisional_pose_ = Mat4d::Identity();
   std::uint32_t winner_ = kPoseSearchRefine;

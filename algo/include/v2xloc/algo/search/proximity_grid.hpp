@@ -104,26 +104,15 @@ class ProximityGrid {
     return ((word >> (ix & 63u)) & 1u) != 0;
   }
 
-  // near() split for many queries at one height (the pose search's hypotheses share the road
-  // height): the word offset of qz's cell plane, -1 outside the grid (or before ready()); then
-  // near_in_plane(qx, qy, offset) == near(q) for every q at that height.
+  // For many queries at one height (the pose search's hypotheses share the road height): the
+  // word offset of qz's cell plane, -1 outside the grid (or before ready()), for near_cell.
   std::int64_t plane_offset(float qz) const {
     const double uz = (static_cast<double>(qz) - origin_[2]) * inv_cell_;
     if (!(uz >= 0.0 && uz < limit_[2])) return -1;
     return static_cast<std::int64_t>(static_cast<std::uint32_t>(uz) * plane_words_);
   }
-  bool near_in_plane(float qx, float qy, std::int64_t plane) const {
-    const double ux = (static_cast<double>(qx) - origin_[0]) * inv_cell_;
-    const double uy = (static_cast<double>(qy) - origin_[1]) * inv_cell_;
-    if (plane < 0 || !(ux >= 0.0 && ux < limit_[0] && uy >= 0.0 && uy < limit_[1])) return false;
-    const auto ix = static_cast<std::uint32_t>(ux);
-    const auto iy = static_cast<std::uint32_t>(uy);
-    const std::uint64_t word = words_[static_cast<std::uint32_t>(plane) + iy * row_words_ + (ix >> 6u)];
-    return ((word >> (ix & 63u)) & 1u) != 0;
-  }
-
-  // The same for queries that move over a lattice of whole cells (the pose search's hypotheses,
-  // a grid step apart): the cell of (x, y) as integers, floor, possibly outside the grid ...
+  // Queries that move over a lattice of whole cells (the pose search's hypotheses, a grid step
+  // apart): the cell of (x, y) as integers, floor, possibly outside the grid ...
   void cell_xy(double x, double y, std::int64_t& ix, std::int64_t& iy) const {
     constexpr double kFar = 1e9;  // [cells] clamp: far outside is outside, and no overflow
     double ux = std::floor((x - origin_[0]) * inv_cell_), uy = std::floor((y - origin_[1]) * inv_cell_);
