@@ -307,9 +307,11 @@ bool PoseSearch::step(const IcpTarget& map, std::uint64_t budget, bool score_who
     phase_ = Phase::kDone;
   }
   if (score_whole && phase_ == Phase::kScore) score_hypotheses(map, ~std::uint64_t{0});
+  while (score_whole && phase_ == Phase::kClimb) climb_candidate(map);
   while (phase_ != Phase::kDone && work_ < stop) {
     switch (phase_) {
       case Phase::kScore: score_hypotheses(map, stop); break;
+      case Phase::kClimb: climb_candidate(map); break;
       case Phase::kRefine: refine_candidate(map, stop); break;
       case Phase::kSelect: select_candidate(map); break;
       case Phase::kDone: break;
@@ -376,10 +378,36 @@ void PoseSearch::score_hypotheses(const IcpTarget& map, std::uint64_t stop) {
       }
     }
   }
-  phase_ = Phase::kRefine;
+  phase_ = params_.climb_points > 0 ? Phase::kClimb : Phase::kRefine;
   candidate_ = 0;
   refining_fine_ = false;
   run_started_ = false;
+}
+
+// One kept hypothesis climbed to its basin's bottom (basin_climb.hpp); after the last, the list
+// ranked again, one per basin first.
+void PoseSearch::climb_candidate(const IcpTarget& map) {
+  if (candidate_ >= kPoseSearchRefine) {
+    // Climbs that end a step apart (diagonal included) found the same bottom.
+    rank_basins(top_, params_.basin_distance, params_.distinct_yaw, 1.5 * params_.climb_step);
+    phase_ = Phase::kRefine;
+    candidate_ = 0;
+    return;
+  }
+  Candidate& h = top_[candidate_++];
+  if (!(h.score >= 0.0)) return;
+  const ProximityGrid* grid = grid_ != nullptr && grid_->ready() && grid_->valid() ? grid_ : nullptr;
+  BasinClimbParams cp;
+  cp.points = params_.climb_points;
+  cp.rounds = params_.climb_rounds;
+  cp.step = params_.climb_step;
+  cp.min_height = params_.min_height;
+  cp.score_distance = params_.score_distance;
+  cp.ground_z = result_.ground_z;
+  ClimbWork w;
+  climb_pose(ClimbTarget{scan(), grid, grid != nullptr ? nullptr : map.tree}, h, cp, &w);
+  work_ += grid != nullptr ? (w.lookups + kGridLookupsPerUnit - 1) / kGridLookupsPerUnit : w.lookups + w.node_visits;
+  work_ += kHypothesisUnits;
 }
 
 // Grid cells between neighbouring hypotheses when the lattice form applies (step a whole number
@@ -431,7 +459,7 @@ void PoseSearch::refine_candidate(const IcpTarget& map, std::uint64_t stop) {
   }
   const Candidate& cand = top_[candidate_];
   RegistrationResult& refined = refined_[candidate_];
-  if (cand.score < 0.0) {
+  if (cand.score < 0.0 || cand.score < params_.refine_min_score_ratio * top_[0].score) {
     refined.status = RegistrationStatus::kDidNotConverge;
     ++candidate_;
     return;
@@ -512,7 +540,10 @@ bool PoseSearch::provisional(Mat4d& pose) const {
     pose = provisional_pose_;
     return true;
   }
-  if (!params_.provisional_scored || phase_ == Phase::kScore || phase_ == Phase::kDone || !(top_[0].score >= 0.0)) return false;
+  if (!params_.provisional_scored || phase_ == Phase::kScore || phase_ == Phase::kClimb || phase_ == Phase::kDone ||
+      !(top_[0].score >= 0.0)) {
+    return false;
+  }
   pose = pose_of(top_[0].x, top_[0].y, result_.ground_z, top_[0].yaw);
   return true;
 }

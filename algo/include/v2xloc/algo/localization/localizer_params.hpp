@@ -280,12 +280,16 @@ struct LocalizerParams {
     p.icp.criteria.relative_fitness = 1e-3;  // [-] the coarse ICP only picks the basin
     p.icp.criteria.relative_rmse = 1e-3;     // [m]
     p.icp.kernel.type = RobustKernelType::kTukey;
-    p.icp.kernel.scale = 1.0;       // [m] Tukey scale of the coarse ICP
+    // [m] Tukey scale of the coarse ICP = its gate: a hypothesis starts up to ~2 m from its basin's
+    // bottom, and at 1 m the residuals that would pull it there weighed nothing (TUNING.md)
+    p.icp.kernel.scale = 2.0;
     p.yaw_steps = 24;               // [headings] 15 deg apart; the coarse ICP pulls in +-7.5 deg
     p.step = 3.0;                   // [m] position grid spacing
     p.radius = 30.0;                // [m] = global_min_region (bounded work: ~8k hypotheses)
     p.score_points = 96;            // [points] scan points scored per hypothesis
     p.refine_candidates = 5;        // [hypotheses] the best distinct ones refined by ICP
+    p.climb_points = 256;           // [points] the kept hypotheses climb to their basins' bottoms (TUNING.md)
+    p.refine_min_score_ratio = 0.8; // [0-1] and only those within 20 % of the best climbed score are refined
     // [points] the ICPs run on every 4th search point; EMBEDDED scans (4,096 ingest voxels) are
     // too thin for that: all of them (TUNING.md)
     p.refine_points = config::kEmbeddedProfile ? 0u : 256u;
