@@ -221,6 +221,7 @@ bool PoseSearch::copy_scan(std::span<const Vec3f> scan_body, const IcpTarget& ma
   best_fitness_ = 0.0;
   winner_ = kPoseSearchRefine;
   provisional_tight_ = -1.0;
+  leader_coarse_ok_ = false;
   return true;
 }
 
@@ -308,6 +309,10 @@ bool PoseSearch::step(const IcpTarget& map, std::uint64_t budget, bool score_who
   }
   if (score_whole && phase_ == Phase::kScore) score_hypotheses(map, ~std::uint64_t{0});
   while (score_whole && phase_ == Phase::kClimb) climb_candidate(map);
+  // At power-up the output until a refined pose exists: the best hypothesis' coarse ICP.
+  while (score_whole && params_.provisional_scored && phase_ == Phase::kRefine && candidate_ == 0 && !refining_fine_) {
+    refine_candidate(map, ~std::uint64_t{0});
+  }
   while (phase_ != Phase::kDone && work_ < stop) {
     switch (phase_) {
       case Phase::kScore: score_hypotheses(map, stop); break;
@@ -485,6 +490,11 @@ void PoseSearch::refine_candidate(const IcpTarget& map, std::uint64_t stop) {
   if (!refining_fine_) {
     coarse_ = run_.result;
     if (coarse_.ok()) {
+      // The best-scored hypothesis' coarse ICP: nearer its basin's bottom than the hypothesis.
+      if (candidate_ == 0 && !from_given_) {
+        leader_coarse_ = coarse_.transform;
+        leader_coarse_ok_ = true;
+      }
       refining_fine_ = true;
       return;
     }
@@ -544,7 +554,7 @@ bool PoseSearch::provisional(Mat4d& pose) const {
       !(top_[0].score >= 0.0)) {
     return false;
   }
-  pose = pose_of(top_[0].x, top_[0].y, result_.ground_z, top_[0].yaw);
+  pose = leader_coarse_ok_ ? leader_coarse_ : pose_of(top_[0].x, top_[0].y, result_.ground_z, top_[0].yaw);
   return true;
 }
 

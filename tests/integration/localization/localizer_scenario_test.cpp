@@ -159,7 +159,7 @@ TEST(LocalizerScenario, ShortDriveFusesToCentimetres) {
   std::printf("spread search: first result %d, first output on the map %d, filter from %d, fused %.3f m, "
               "fused (lag) %.4f m, fused (valid) %.4f m\n", first_result, first_on_map, spread_first,
               sm.unaligned.fused, sm.unaligned.fused_lag, sm.unaligned.fused_valid);
-  EXPECT_GE(first_result, 2) << "a one-period search would report at frame 0";
+  EXPECT_GE(first_result, 1) << "a one-period search would report at frame 0";
   ASSERT_GE(first_on_map, 0);
   EXPECT_LE(first_on_map, 10);
   ASSERT_GE(spread_first, 0);
@@ -173,9 +173,8 @@ TEST(LocalizerScenario, ShortDriveFusesToCentimetres) {
   // refreshes; the audit never starts; a pose comes out every frame and the track holds.
   eval::RunOptions starved = options;
   starved.params.work.budget = 1.0;
-  // (The first acquisition keeps its power-up exemption, startup_first_work_per_period: with no
-  // room its refinement would get only the search's floor and not finish within
-  // startup_max_frames; this run is about the map and the audit holding a track.)
+  // (The first acquisition has no room either: its first slice scores, climbs and refines the
+  // best hypothesis' coarse pose whatever the budget, the search's floor carries the rest.)
   std::vector<eval::FrameRecord> starved_records;
   ASSERT_TRUE(eval::run_offline(reader, g_localizer, starved, starved_records, stats, error)) << error;
   ASSERT_EQ(starved_records.size(), 50u);

@@ -328,14 +328,14 @@ TEST(WorstCase, AdversarialPeriods) {
 }
 
 // Power-up: the first map and the first acquisition's search counted from the first period.
-// Default: the power-up exemption (startup_first_work_per_period) runs the whole search in
-// period 0, over the budget (a known gap: InstructionBudget's ceiling); within the budget
-// (exemption off) its first slice scores every hypothesis and every period fits. A pose comes
-// out every frame in both.
+// Default (startup_first_work_per_period 0): within the budget, the search's first slice scores
+// and climbs every hypothesis and every period fits. The opt-in power-up exemption (1.5M units a
+// period) runs the whole search in period 0, over the budget (a known gap: InstructionBudget's
+// ceiling). A pose comes out every frame in both.
 TEST(WorstCase, PowerUpFirstAcquisition) {
   for (const bool exempt : {true, false}) {
     LocalizerParams params;
-    if (!exempt) params.startup_first_work_per_period = 0;
+    params.startup_first_work_per_period = exempt ? 1500000u : 0u;
     Drive d(exempt ? "power_up_exempt" : "power_up_within_budget", Scene::kCanyon, params);
     for (int i = 0; i < 6; ++i) {
       Period p;
@@ -357,14 +357,26 @@ TEST(WorstCase, LostTrackSearchedFrom30mWrongFix) {
   Drive d("setup");
   d.warm_up(1);  // brings the map
   d.past_first_acquisition();
+  // The track is lost: scans with nothing in range (a blinded LiDAR) while the fix drifts 30 m
+  // off, until the localizer searches again (uncounted; bounded).
+  bool searching = false;
+  for (int i = 0; i < 40 && !searching; ++i) {
+    Period p;
+    p.scan.assign(1, Vec3f(1000.0f, 0.0f, 0.0f));  // beyond max_range: an empty sweep
+    p.gnss_error = Vec3d(30.0, 0.0, 0.0);
+    searching = d.run(std::move(p), false).mode == LocalizationMode::kGlobalSearch;
+  }
+  ASSERT_TRUE(searching) << "the blinded track was never searched again";
   d.set_name("search_from_30m_wrong_fix");
-  // GNSS 30 m off from the start: the periods until the track is found run the search.
+  // The LiDAR back, GNSS still 30 m off: the periods until the track is found run the search.
+  int searched = 0;
   for (int i = 0; i < 4; ++i) {
     Period p;
     p.clouds.push_back(d.infra_cloud());
     p.gnss_error = Vec3d(30.0, 0.0, 0.0);
-    d.run(std::move(p), true);
+    searched += d.run(std::move(p), true).mode == LocalizationMode::kGlobalSearch ? 1 : 0;
   }
+  EXPECT_GE(searched, 1);
 }
 
 }  // namespace

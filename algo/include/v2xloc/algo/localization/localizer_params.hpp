@@ -123,16 +123,16 @@ struct LocalizerParams {
   // The first acquisition after power-up (until the filter first starts, at most
   // startup_first_frames); the localizer takes no map clouds past the first map meanwhile.
   std::uint32_t startup_first_frames = 10;  // [frames] since configure()
-  // [work units/period] its searches take at least this per period, budget or not: 1.5M runs the
-  // whole search and final ICP in frame 0 (~180-210 M instructions), whose refined pose is the
-  // output from frame 0. 0: the first acquisition keeps to the budget like any search (frame 0
-  // ~81-93 M on the 12 recordings in process, but through the firmware the Sim 0 and Sim 2 rows'
-  // first searches end unconverged and fall back to the GNSS fix: algo/TUNING.md, session 20).
-  std::uint32_t startup_first_work_per_period = 1500000;
-  // Within the budget (startup_first_work_per_period 0), the searches' first slices score every
-  // hypothesis, budget or not (bounded: search.max_hypotheses x score_points lookups, ~5-15 M
-  // instructions) and the best-scored pose is output until a refined one replaces it (0.5-2.1 m
-  // off on the 12 recordings, the refined one from frame 1).
+  // [work units/period] 0: the first acquisition keeps to the period budget like any search
+  // (frame 0 81-97 M instructions on the 12 recordings), its climbed best hypothesis the output
+  // until a refined pose replaces it (algo/TUNING.md, "Basin climb"). > 0: its searches take at
+  // least this per period, budget or not (1.5M: the whole search and final ICP in frame 0,
+  // ~105-160 M instructions, the refined pose the output from frame 0).
+  std::uint32_t startup_first_work_per_period = 0;
+  // Within the budget (startup_first_work_per_period 0), the searches' first slices score and
+  // climb every hypothesis, budget or not (bounded: search.max_hypotheses x score_points lookups
+  // plus the climbs, ~8-20 M instructions) and the best climbed pose is output until a refined
+  // one replaces it (0.1-1.2 m off on the 12 recordings, the refined one from frame 1-2).
   bool startup_first_score_whole = true;
   std::uint32_t startup_max_frames = 20;  // [frames] a search job not finished within this is dropped
   // While a spread search runs, output its best refined pose so far (not localized, not fused).
@@ -286,7 +286,7 @@ struct LocalizerParams {
     p.yaw_steps = 24;               // [headings] 15 deg apart; the coarse ICP pulls in +-7.5 deg
     p.step = 3.0;                   // [m] position grid spacing
     p.radius = 30.0;                // [m] = global_min_region (bounded work: ~8k hypotheses)
-    p.score_points = 96;            // [points] scan points scored per hypothesis
+    p.score_points = 64;            // [points] scan points scored per hypothesis (the climb re-ranks on 256)
     p.refine_candidates = 5;        // [hypotheses] the best distinct ones refined by ICP
     p.climb_points = 256;           // [points] the kept hypotheses climb to their basins' bottoms (TUNING.md)
     p.refine_min_score_ratio = 0.8; // [0-1] and only those within 20 % of the best climbed score are refined
