@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -21,8 +22,10 @@
 #if __has_include(<valgrind/callgrind.h>)
 #include <valgrind/callgrind.h>
 #define WC_DUMP(label) CALLGRIND_DUMP_STATS_AT(label)
+#define WC_UNDER_VALGRIND() (RUNNING_ON_VALGRIND != 0)
 #else
 #define WC_DUMP(label) ((void)(label))
+#define WC_UNDER_VALGRIND() false
 #endif
 
 namespace v2xloc::worst_case {
@@ -96,6 +99,7 @@ class Drive {
 
   // One 100 ms period; returns the frame output. counted: bracketed by callgrind dumps.
   const LocalizerFrameOutput& run(Period p, bool counted) {
+    const auto started = std::chrono::steady_clock::now();
     t_ += 0.1;
     if (p.scan.empty()) p.scan = canyon_scan();
     for (MapCloudInput& c : p.clouds) c.t = t_;
@@ -132,6 +136,10 @@ class Drive {
     in.body_T_lidar = body_T_lidar();
     const LocalizerFrameOutput& out = g_localizer.on_ego_scan(in);
     ++frames_;
+    if (counted && !WC_UNDER_VALGRIND()) {  // host wall time of the period (inputs, map clouds, scan)
+      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
+      std::printf("host ms: %s period %d %.2f\n", name_.c_str(), period_, ms);
+    }
     if (counted) {
       g_stage_dumps.mark(LocalizerStage::kIdle);  // the rest of the period
       ++period_;
