@@ -40,20 +40,28 @@ std::uint32_t rotate_subsample(std::span<const Vec3f> scan_body, double yaw, con
   return n;
 }
 
+// Where a climb looks points up, resolved once: the proximity grid when it is usable, else the
+// k-d tree within score_distance; neither: nothing to score.
+struct Lookup {
+  const ProximityGrid* grid = nullptr;
+  const KdTree<Vec3f>* tree = nullptr;
+  float d2max = 0.0f;
+  bool usable() const { return grid != nullptr || tree != nullptr; }
+};
+Lookup lookup_of(const ClimbTarget& target, const BasinClimbParams& params) {
+  const bool grid_ok = target.grid != nullptr && target.grid->ready() && target.grid->valid();
+  return Lookup{grid_ok ? target.grid : nullptr, grid_ok ? nullptr : target.tree,
+                squared_radius_not_above(params.score_distance)};
+}
+
 // Score of the rotated points placed at (x, y); -1 without points or map.
-double score_at(const ClimbTarget& target, std::uint32_t n, double x, double y, const BasinClimbParams& params,
-                ClimbWork* work) {
-  const ProximityGrid* grid =
-      target.grid != nullptr && target.grid->ready() && target.grid->valid() ? target.grid : nullptr;
-  if (n == 0 || (grid == nullptr && target.tree == nullptr)) return -1.0;
-  const double d2max = params.score_distance * params.score_distance;
-  float d2max_f = static_cast<float>(d2max);
-  if (static_cast<double>(d2max_f) > d2max) d2max_f = std::nextafter(d2max_f, 0.0f);
+double score_at(const Lookup& lookup, std::uint32_t n, double x, double y, ClimbWork* work) {
+  if (n == 0 || !lookup.usable()) return -1.0;
   std::uint32_t hits = 0;
   std::uint64_t visits = 0;
   for (std::uint32_t i = 0; i < n; ++i) {
     const Vec3f q(static_cast<float>(g_points[i].x + x), static_cast<float>(g_points[i].y + y), g_points[i].z);
-    hits += (grid != nullptr ? grid->near(q) : target.tree->any_within(q, d2max_f, &visits)) ? 1u : 0u;
+    hits += (lookup.grid != nullptr ? lookup.grid->near(q) : lookup.tree->any_within(q, lookup.d2max, &visits)) ? 1u : 0u;
   }
   if (work != nullptr) {
     work->lookups += n;
@@ -75,12 +83,13 @@ double peak_offset(double before, double at, double after) {
 
 double climb_score(const ClimbTarget& target, double x, double y, double yaw, const BasinClimbParams& params,
                    ClimbWork* work) {
-  return score_at(target, rotate_subsample(target.scan_body, yaw, params), x, y, params, work);
+  return score_at(lookup_of(target, params), rotate_subsample(target.scan_body, yaw, params), x, y, work);
 }
 
 void climb_pose(const ClimbTarget& target, PoseSearchCandidate& h, const BasinClimbParams& params, ClimbWork* work) {
+  const Lookup lookup = lookup_of(target, params);
   const std::uint32_t n = rotate_subsample(target.scan_body, h.yaw, params);
-  h.score = score_at(target, n, h.x, h.y, params, work);
+  h.score = score_at(lookup, n, h.x, h.y, work);
   if (!(h.score >= 0.0)) return;
   const std::uint32_t rounds = params.rounds < kMaxClimbRounds ? params.rounds : kMaxClimbRounds;
   for (std::uint32_t round = 0; round < rounds; ++round) {
@@ -92,7 +101,7 @@ void climb_pose(const ClimbTarget& target, PoseSearchCandidate& h, const BasinCl
       for (int dx = -1; dx <= 1; ++dx) {
         if (dx == 0 && dy == 0) continue;
         const double nx = h.x + dx * params.step, ny = h.y + dy * params.step;
-        const double score = score_at(target, n, nx, ny, params, work);
+        const double score = score_at(lookup, n, nx, ny, work);
         around[dy + 1][dx + 1] = score;
         if (score > best.score) best = PoseSearchCandidate{score, nx, ny, h.yaw};
       }

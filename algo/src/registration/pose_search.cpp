@@ -328,11 +328,9 @@ bool PoseSearch::step(const IcpTarget& map, std::uint64_t budget, bool score_who
 
 // Hypotheses in grid order (rows, columns, yaws), each costing score_count_ bounded queries.
 void PoseSearch::score_hypotheses(const IcpTarget& map, std::uint64_t stop) {
-  const double d2max = params_.score_distance * params_.score_distance;
   // A hit needs a map point within score_distance: any_within answers exactly that and stops at
   // the first one (the unbounded nearest of a point in free space visits most of the tree).
-  float d2max_f = static_cast<float>(d2max);
-  if (static_cast<double>(d2max_f) > d2max) d2max_f = std::nextafter(d2max_f, 0.0f);
+  const float d2max_f = squared_radius_not_above(params_.score_distance);
   const double r2 = params_.radius * params_.radius;
   // The proximity bitmap built at start(): same question, looser answer (a hit may be up to a
   // few cells farther), ~30x cheaper.
@@ -402,13 +400,9 @@ void PoseSearch::climb_candidate(const IcpTarget& map) {
   Candidate& h = top_[candidate_++];
   if (!(h.score >= 0.0)) return;
   const ProximityGrid* grid = grid_ != nullptr && grid_->ready() && grid_->valid() ? grid_ : nullptr;
-  BasinClimbParams cp;
-  cp.points = params_.climb_points;
-  cp.rounds = params_.climb_rounds;
-  cp.step = params_.climb_step;
-  cp.min_height = params_.min_height;
-  cp.score_distance = params_.score_distance;
-  cp.ground_z = result_.ground_z;
+  const BasinClimbParams cp{.points = params_.climb_points, .rounds = params_.climb_rounds, .step = params_.climb_step,
+                            .min_height = params_.min_height, .score_distance = params_.score_distance,
+                            .ground_z = result_.ground_z};
   ClimbWork w;
   climb_pose(ClimbTarget{scan(), grid, grid != nullptr ? nullptr : map.tree}, h, cp, &w);
   work_ += grid != nullptr ? (w.lookups + kGridLookupsPerUnit - 1) / kGridLookupsPerUnit : w.lookups + w.node_visits;

@@ -23,6 +23,7 @@
 // best-so-far result is returned and visit_cap_hit is set.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -31,6 +32,15 @@
 #include "v2xloc/algo/core/types.hpp"
 
 namespace v2xloc {
+
+// The float squared distance for "within radius" queries (any_within, nearest_within): radius^2
+// rounded down, never up, so that no point beyond the radius counts.
+inline float squared_radius_not_above(double radius) {
+  const double r2 = radius * radius;
+  float f = static_cast<float>(r2);
+  if (static_cast<double>(f) > r2) f = std::nextafter(f, 0.0f);
+  return f;
+}
 
 struct Neighbor {
   std::uint32_t index;      // into the span the tree was built over
