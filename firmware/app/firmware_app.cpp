@@ -24,7 +24,9 @@ std::uint8_t saturate_u8(std::uint64_t v) { return v > 255 ? 255 : static_cast<s
 
 FirmwareApp::FirmwareApp(const FirmwareHal& hal, InputDecoder& decoder, LocalizerPort& localizer,
                          const FirmwareConfig& config)
-    : hal_(hal), decoder_(decoder), localizer_(localizer), config_(config) {}
+    : hal_(hal), decoder_(decoder), localizer_(localizer), config_(config) {
+  decoder_.set_share_filter(&localizer_);  // shares the map would not fuse are not even hashed
+}
 
 hal::Status FirmwareApp::start() {
   start_ns_ = hal_.clock.monotonic_ns();
@@ -85,8 +87,10 @@ void FirmwareApp::apply_cloud(const DecodedCloud& decoded) {
       default: break;
     }
   } else if (decoded.kind == CloudKind::kEgoScan) {
+    localizer_.add_period_work(decoder_.take_trust_work());
     publish_pose(localizer_.on_ego_scan(decoded.ego), decoded.frame_index, decoded.gnss_used);
   } else if (decoded.kind == CloudKind::kEgoRejected) {
+    decoder_.take_trust_work();  // the period ends without a localizer frame
     // A pose every frame: the last one again (nothing new was fused), or "no pose" before any.
     ++counters_.ego_frames_held;
     publish_pose(has_output_ ? LocalizerFrameOutput(latest_) : LocalizerFrameOutput{}, decoded.frame_index, false);

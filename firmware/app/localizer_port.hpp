@@ -18,6 +18,8 @@ class LocalizerPort : public MapShareWanted {
   bool wants(std::uint32_t /*source_id*/, double /*t*/) const override { return true; }
   // Map shares to verify and fuse in the coming period (the schedule's cap applies as well).
   virtual std::uint32_t map_clouds_per_period() const { return ~std::uint32_t{0}; }
+  // This period's work outside the localizer (trust), for its period budget.
+  virtual void add_period_work(double /*instructions*/) {}
   virtual void on_vehicle(const VehicleInput& input) = 0;
   virtual void on_gnss(const GnssInput& input) = 0;
   virtual MapInsertResult on_map_cloud(const MapCloudInput& input) = 0;
@@ -36,6 +38,7 @@ class LocalizerAdapter final : public LocalizerPort {
   MapInsertResult on_map_cloud(const MapCloudInput& input) override { return localizer_.on_map_cloud(input); }
   bool wants(std::uint32_t source_id, double t) const override { return localizer_.wants_map_cloud(source_id, t); }
   std::uint32_t map_clouds_per_period() const override { return localizer_.map_clouds_per_period(); }
+  void add_period_work(double instructions) override { localizer_.add_period_work(instructions); }
   const LocalizerFrameOutput& on_ego_scan(const EgoScanInput& input) override {
     return localizer_.on_ego_scan(input);
   }

@@ -516,6 +516,7 @@ CloudStatus PointCloudReassembler::push(std::span<const std::uint8_t> datagram, 
   }
 
   std::size_t index = find_slot(h);
+  const bool opened = index == SIZE_MAX;
   if (index != SIZE_MAX) {
     if (!same_frame(storage_.slots[index].meta, h)) return count(CloudStatus::kInconsistent);
   } else {
@@ -533,7 +534,8 @@ CloudStatus PointCloudReassembler::push(std::span<const std::uint8_t> datagram, 
   ReassemblySlot& slot = storage_.slots[index];
   slot.points_received += h.points_in_fragment;
   ++slot.fragments_received;
-  last_accepted_ = AcceptedFragment{true, index, h.fragment_index, h.info.type, payload};
+  last_accepted_ = AcceptedFragment{true, index, h.fragment_index, h.info.type, payload, opened, h.info.sender_id,
+                                    h.info.timestamp_ns};
   if (slot.fragments_received < slot.meta.fragment_count) return count(CloudStatus::kOk);
   publish_completed(index, now_ns);
   return count(CloudStatus::kFrameComplete);

@@ -166,6 +166,9 @@ struct AcceptedFragment {
   std::uint16_t fragment_index = 0;
   CloudMessageType type = CloudMessageType::kEgoScan;
   std::span<const std::uint8_t> payload;
+  bool opened_frame = false;       // the first fragment of its frame to arrive (the slot was opened for it)
+  std::uint32_t sender_id = 0;     // the header's (self-declared) sender and time stamp
+  std::uint64_t timestamp_ns = 0;
 };
 
 struct ReassemblyCounters {

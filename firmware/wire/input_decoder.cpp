@@ -164,9 +164,20 @@ bool InputDecoder::on_datagram(std::span<const std::uint8_t> datagram, std::int6
   const protocol::AcceptedFragment& accepted = reassembler_.last_accepted();
   if (accepted.valid && accepted.type == protocol::CloudMessageType::kMapShare &&
       accepted.slot < kReassemblySlots && accepted.fragment_index < kMaxCloudFragments) {
-    // Hash what arrived, once per fragment (the share's signature covers these digests).
-    fragment_digests_[accepted.slot * kMaxCloudFragments + accepted.fragment_index] =
-        trust::fragment_digest(accepted.payload);
+    // A share the map would not fuse is decided on its first fragment and costs no hashing; the
+    // map's answer can only turn from "no" to "yes" when a source expires (>= 1.1 s later).
+    if (accepted.opened_frame) {
+      slot_paced_[accepted.slot] =
+          share_filter_ != nullptr &&
+          !share_filter_->wants(accepted.sender_id,
+                                localizer_time_s(static_cast<std::int64_t>(accepted.timestamp_ns), epoch_ns_));
+    }
+    if (!slot_paced_[accepted.slot]) {
+      // Hash what arrived, once per fragment (the share's signature covers these digests).
+      fragment_digests_[accepted.slot * kMaxCloudFragments + accepted.fragment_index] =
+          trust::fragment_digest(accepted.payload);
+      trust_work_ += kShareHashInstructionsPerByte * static_cast<double>(accepted.payload.size());
+    }
   }
   switch (s) {
     case protocol::CloudStatus::kFrameComplete:
@@ -231,6 +242,10 @@ DecodedCloud InputDecoder::queue_share(const protocol::ReassembledCloud& cloud, 
   if (cloud.slot >= kReassemblySlots || cloud.fragment_count > kMaxCloudFragments) {
     ++counters_.clouds_rejected;
     return kind(CloudKind::kRejected);
+  }
+  if (slot_paced_[cloud.slot]) {
+    ++counters_.shares_paced_on_arrival;
+    return kind(CloudKind::kMapPaced);
   }
   const std::span<const trust::Digest> fragments(&fragment_digests_[cloud.slot * kMaxCloudFragments],
                                                  cloud.fragment_count);
@@ -332,6 +347,7 @@ DecodedCloud InputDecoder::next_verified_share(const MapShareWanted* wanted) {
     if (k + 1 == kShareVerifyQueueCapacity) return out;
   }
   ++counters_.signature_verifications;
+  trust_work_ += kShareVerifyInstructions;
   const QueuedShare& q = queue_[at];
   const trust::ShareVerifyResult verdict = verifier_.complete(q.job);
   if (verdict.verdict != trust::ShareVerdict::kAccepted) {

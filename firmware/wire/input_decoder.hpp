@@ -43,7 +43,9 @@ enum class CanInputKind : std::uint8_t {
 // frame, nothing new fused).
 // kMapQueued: a map share passed the cheap trust checks and waits for its signature verification
 // (InputDecoder::next_verified_share()); nothing to fuse yet.
-enum class CloudKind : std::uint8_t { kNone, kEgoScan, kMapCloud, kRejected, kEgoRejected, kMapQueued };
+// kMapPaced: a map share the map would not fuse, known from its first fragment (the decoder's share
+// filter): neither hashed nor verified.
+enum class CloudKind : std::uint8_t { kNone, kEgoScan, kMapCloud, kRejected, kEgoRejected, kMapQueued, kMapPaced };
 
 // Which endpoint a datagram came in on. Ego sensors have their own socket: an ego scan on the V2X
 // endpoint, or a map share / signature on the ego endpoint, is rejected (counted) before it
@@ -98,6 +100,7 @@ struct DecoderCounters {
   std::uint64_t wrong_channel = 0;       // datagram type not allowed on the endpoint it came in on
   std::uint64_t shares_untrusted = 0;    // map shares the verifier refused (reasons: verifier counters)
   std::uint64_t shares_paced = 0;        // admitted shares the map did not need (source's last is recent): not verified
+  std::uint64_t shares_paced_on_arrival = 0;  // shares the map would not fuse, known at their first fragment: not hashed
   std::uint64_t shares_queued = 0;       // admitted shares put in the verification queue
   std::uint64_t shares_queue_dropped = 0;  // oldest waiting share dropped: queue full
   std::uint64_t signature_verifications = 0;  // ECDSA verifications run (<= kMax.. per period)
@@ -105,6 +108,13 @@ struct DecoderCounters {
   std::uint64_t can_repeated = 0;        // rolling counter did not advance: replayed / stuck frame, dropped
   std::uint64_t can_counter_gaps = 0;    // frames lost by the rolling counter (accepted, counted)
 };
+
+// Host instructions of the trust work the decoder does, for the period budget (callgrind, x86-64
+// -O2, mbedTLS 2.28 C code; tools/bench/share_cost.cpp): SHA-256 of a fragment's payload ~131 per
+// byte (168 k for a 1,280-byte fragment), one ECDSA P-256 verification 11.9 M (14 M for a key's
+// first).
+inline constexpr double kShareHashInstructionsPerByte = 131.0;
+inline constexpr double kShareVerifyInstructions = 12e6;
 
 class InputDecoder {
  public:
@@ -146,6 +156,18 @@ class InputDecoder {
   // The same, asking `wanted` (nullptr: all) whether the localizer would fuse the share before
   // its signature is verified: a share it would not (kPaced) costs no ECDSA (counted, not returned).
   DecodedCloud next_verified_share(const MapShareWanted* wanted);
+  // Asked on the first fragment of every map share: a share the map would not fuse (`wanted` says
+  // no for its header's sender and time) is neither hashed nor verified, and completes as
+  // kMapPaced (counted). A forged header can only get its own share dropped. nullptr: every share
+  // is hashed (the default).
+  void set_share_filter(const MapShareWanted* wanted) { share_filter_ = wanted; }
+  // Estimated instructions of the trust work (fragment hashing, ECDSA) since the last call: the
+  // caller adds them to the period's budget (Localizer::add_period_work) before the ego scan.
+  double take_trust_work() {
+    const double w = trust_work_;
+    trust_work_ = 0.0;
+    return w;
+  }
   // Opens a verification period at local_time_ns (decode_completed() does this for ego scans).
   void begin_verification_period(std::int64_t local_time_ns);
   void begin_verification_period() { begin_verification_period(completed_local_time_ns_); }
@@ -191,6 +213,9 @@ class InputDecoder {
   trust::MapShareVerifier verifier_{};
   // Per-fragment SHA-256 of map-share payloads as they arrived, by reassembly slot and index.
   std::array<trust::Digest, kReassemblySlots * kMaxCloudFragments> fragment_digests_{};
+  const MapShareWanted* share_filter_ = nullptr;
+  std::array<bool, kReassemblySlots> slot_paced_{};  // the share in this slot is not wanted: not hashed
+  double trust_work_ = 0.0;                          // [instructions] since take_trust_work()
   struct QueuedShare {
     trust::VerificationJob job{};
     double t = 0.0;

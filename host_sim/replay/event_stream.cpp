@@ -297,16 +297,6 @@ bool EventStream::next_frame(int i, std::vector<WireEvent>& out, std::string& er
   return true;
 }
 
-namespace {
-// The firmware asks its localizer before verifying a share (firmware/app/localizer_port.hpp, a
-// layer host_sim does not include).
-struct LocalizerWants final : firmware::MapShareWanted {
-  explicit LocalizerWants(const Localizer& l) : localizer(l) {}
-  bool wants(std::uint32_t source_id, double t) const override { return localizer.wants_map_cloud(source_id, t); }
-  const Localizer& localizer;
-};
-}  // namespace
-
 bool WireEventDecoder::feed(const WireEvent& event, DecodedFrame& frame) {
   const std::int64_t disciplined_ns = decoder_.epoch_ns() + event.time_ns;
   if (event.kind == WireEvent::Kind::kCan) {
@@ -319,15 +309,18 @@ bool WireEventDecoder::feed(const WireEvent& event, DecodedFrame& frame) {
   for (const auto& d : event.datagrams) {
     if (!decoder_.on_datagram(d, event.time_ns)) continue;
     const firmware::DecodedCloud decoded = decoder_.decode_completed();
+    double trust_work = 0.0;
     if (decoded.kind == firmware::CloudKind::kEgoScan || decoded.kind == firmware::CloudKind::kEgoRejected) {
       // As the firmware: at the period boundary, the shares waiting for verification first.
-      const LocalizerWants wanted(localizer_);
       const std::size_t shares = firmware::shares_this_period(localizer_.map_clouds_per_period());
       for (std::size_t k = 0; k < shares; ++k) {
-        const firmware::DecodedCloud share = decoder_.next_verified_share(&wanted);
+        const firmware::DecodedCloud share = decoder_.next_verified_share(&wanted_);
         if (share.kind == firmware::CloudKind::kNone) break;
         if (share.kind == firmware::CloudKind::kMapCloud) localizer_.on_map_cloud(share.map);
       }
+      // As the firmware: the period's trust work goes into the localizer's budget (a refused scan
+      // ends the period without it).
+      trust_work = decoder_.take_trust_work();
     }
     if (decoded.kind == firmware::CloudKind::kEgoRejected) {  // as the firmware: the last pose again
       frame.frame = static_cast<int>(decoded.frame_index);
@@ -338,6 +331,7 @@ bool WireEventDecoder::feed(const WireEvent& event, DecodedFrame& frame) {
       continue;
     }
     if (decoded.kind != firmware::CloudKind::kEgoScan) continue;
+    localizer_.add_period_work(trust_work);
     const LocalizerFrameOutput& out = localizer_.on_ego_scan(decoded.ego);
     frame.frame = static_cast<int>(decoded.frame_index);
     frame.output = out;

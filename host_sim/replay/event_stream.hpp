@@ -117,13 +117,28 @@ struct DecodedFrame {
 
 class WireEventDecoder {
  public:
-  WireEventDecoder(firmware::InputDecoder& decoder, Localizer& localizer) : decoder_(decoder), localizer_(localizer) {}
+  // As the firmware, the decoder asks the localizer whether it wants a share before hashing it.
+  WireEventDecoder(firmware::InputDecoder& decoder, Localizer& localizer)
+      : decoder_(decoder), localizer_(localizer), wanted_(localizer) {
+    decoder_.set_share_filter(&wanted_);
+  }
+  WireEventDecoder(const WireEventDecoder&) = delete;
+  WireEventDecoder& operator=(const WireEventDecoder&) = delete;
   // Returns true and fills `frame` when the event was an ego scan that produced an output.
   bool feed(const WireEvent& event, DecodedFrame& frame);
 
  private:
+  // The firmware asks its localizer before hashing or verifying a share
+  // (firmware/app/localizer_port.hpp, a layer host_sim does not include).
+  struct LocalizerWants final : firmware::MapShareWanted {
+    explicit LocalizerWants(const Localizer& l) : localizer(l) {}
+    bool wants(std::uint32_t source_id, double t) const override { return localizer.wants_map_cloud(source_id, t); }
+    const Localizer& localizer;
+  };
+
   firmware::InputDecoder& decoder_;
   Localizer& localizer_;
+  LocalizerWants wanted_;
   firmware::PoseFrameEncoder encoder_{};
   firmware::DiagnosticFrameEncoder diagnostic_encoder_{};
   LocalizerFrameOutput last_output_{};  // held for an ego scan refused for its time stamp

@@ -511,6 +511,57 @@ TEST(InputDecoder, SharesTheMapDoesNotWantCostNoSignatureCheck) {
   EXPECT_EQ(dec->shares_waiting(), 1u) << "the budget is spent: the last share waits for the next period";
 }
 
+// With a share filter, a share the map would not fuse is decided on its first fragment: none of its
+// fragments is hashed, it completes as kMapPaced (counted) and costs no signature check; a wanted
+// share is hashed, queued and verified. The trust work (hashing, ECDSA) is reported once per period.
+TEST(InputDecoder, UnwantedSharesAreNotHashedAndTrustWorkIsReported) {
+  struct OnlyEvenSenders final : MapShareWanted {
+    bool wants(std::uint32_t source_id, double t) const override {
+      EXPECT_DOUBLE_EQ(t, 0.5);  // the header's time, as the queue would judge it
+      ++asked;
+      return (source_id - kInfraSenderBase) % 2 == 0;
+    }
+    mutable int asked = 0;
+  };
+  auto dec = std::make_unique<InputDecoder>(kEpoch);
+  const OnlyEvenSenders wanted;
+  dec->set_share_filter(&wanted);
+  trust::TrustList list;
+  for (std::uint32_t k = 0; k < 2; ++k) test::add_signer(list, kInfraSenderBase + k, trust::SignerRole::kInfrastructure);
+  dec->provision_trust(list);
+  const std::vector<float> xyz = ramp_points(400);
+  std::size_t hashed_bytes = 0;
+  for (std::uint32_t k = 0; k < 2; ++k) {
+    const std::uint32_t sender = kInfraSenderBase + k;
+    const auto frags = fragment_cloud(protocol::CloudMessageType::kMapShare, sender, 0, 500'000'000, xyz, {});
+    ASSERT_GT(frags.size(), 1u);
+    dec->on_datagram(test::sign_share(frags, sender, kEpoch + 500'000'000), 500'000'000);
+    bool done = false;
+    for (const auto& f : frags) {
+      done = dec->on_datagram(f, 500'000'000);
+      if (k == 0) hashed_bytes += f.size() - protocol::pointcloud_wire::kHeaderBytes - protocol::pointcloud_wire::kTrailerBytes;
+    }
+    ASSERT_TRUE(done);
+    EXPECT_EQ(dec->decode_completed().kind, k == 0 ? CloudKind::kMapQueued : CloudKind::kMapPaced) << k;
+  }
+  EXPECT_EQ(wanted.asked, 2) << "asked once per share, on its first fragment";
+  EXPECT_EQ(dec->counters().shares_paced_on_arrival, 1u);
+  EXPECT_EQ(dec->counters().shares_queued, 1u);
+  const double hashing = kShareHashInstructionsPerByte * static_cast<double>(hashed_bytes);
+  EXPECT_DOUBLE_EQ(dec->take_trust_work(), hashing) << "only the wanted share's fragments were hashed";
+  EXPECT_DOUBLE_EQ(dec->take_trust_work(), 0.0) << "reported once";
+
+  const auto ego = fragment_cloud(protocol::CloudMessageType::kEgoScan, kEgoSenderId, 1, 600'000'000, ramp_points(50), {});
+  for (const auto& f : ego) dec->on_datagram(f, 600'000'000);
+  ASSERT_EQ(dec->decode_completed().kind, CloudKind::kEgoScan);
+  const DecodedCloud share = dec->next_verified_share(&wanted);
+  ASSERT_EQ(share.kind, CloudKind::kMapCloud);
+  EXPECT_EQ(share.map.source_id, kInfraSenderBase);
+  EXPECT_EQ(dec->next_verified_share(&wanted).kind, CloudKind::kNone);
+  EXPECT_EQ(dec->counters().signature_verifications, 1u);
+  EXPECT_DOUBLE_EQ(dec->take_trust_work(), kShareVerifyInstructions);
+}
+
 TEST(InputDecoder, EgoScanFromAnotherSenderIsRejectedAndCounted) {
   auto dec = std::make_unique<InputDecoder>(kEpoch);
   test::DecodedLog decoded;

@@ -64,6 +64,12 @@ class Localizer {
     return filter_.can_track() && params_.map_clouds_per_period_tracking > 0 ? params_.map_clouds_per_period_tracking
                                                                              : ~std::uint32_t{0};
   }
+  // Work the caller did in this period outside the localizer (the firmware's share hashing and
+  // signature checks), in estimated instructions: the deferrable stages (map rebuild, basin audit,
+  // search slices) take only what the period budget has left after it. Before on_ego_scan.
+  void add_period_work(double instructions) {
+    if (instructions > 0.0 && instructions < 1e12) work_.add(instructions);  // also refuses NaN
+  }
   // Processes one ego frame; the returned reference stays valid until the next call.
   const LocalizerFrameOutput& on_ego_scan(const EgoScanInput& input);
 
