@@ -38,7 +38,9 @@ bool parse_fault_spec(const std::string& spec, FaultSpec& out, std::string& erro
     bool ok = true;
     const auto prob = [&](double& field) { ok = to_double(value, 0.0, 1.0, field); };
     const auto secs = [&](double& field) { ok = to_double(value, 0.0, 1e6, field); };
-    if (key == "seed") {
+    if (key == "none" && eq == std::string::npos) {
+      // no fault (a baseline run that still reports the counts)
+    } else if (key == "seed") {
       ok = to_double(value, 0, 1e15, d);
       f.seed = static_cast<std::uint64_t>(d);
     } else if (key == "loss") prob(f.loss);

@@ -201,7 +201,7 @@ bool run_firmware(const sim::RecordingReader& reader, const FirmwareRunOptions& 
                  result.frames.size(), result.wall_seconds, result.can_frames_sent, result.datagrams_sent,
                  result.heartbeats, stats.can_decode_errors, result.firmware_exit_code);
   }
-  if (options.faults.any() || !options.quiet) {
+  if (options.faults.any() || options.report || !options.quiet) {
     // The firmware's own account of what it refused (trust, channel, time, CAN) and the injector's.
     const sim::replay::FaultStats& f = result.stream_stats.faults;
     std::fprintf(stderr, "  faults %s: shares lost %llu, datagrams dropped %llu reordered %llu duplicated %llu, delayed %llu,"

@@ -28,6 +28,7 @@ struct FirmwareRunOptions {
   double frame_timeout_s = 120.0;                         // per frame (lockstep)
   bool quiet = false;
   sim::replay::FaultSpec faults{};                        // --faults SPEC (fault_injection.hpp)
+  bool report = false;  // the firmware's and the injector's counts on stderr even when quiet (--faults given)
 };
 
 // Replays `reader` through the firmware and fills one record per frame. RunStats: seconds = wall

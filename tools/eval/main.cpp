@@ -96,6 +96,7 @@ struct EvalArgs {
   std::string plots_dir, estimates_dir, trace_dir;
   std::string firmware_path;              // --firmware: table from the firmware's CAN output
   v2xloc::sim::replay::FaultSpec faults;  // --faults SPEC (with --firmware)
+  bool faults_given = false;              // --faults, even "none": the counts are reported
   v2xloc::eval::RunOptions options;
 };
 
@@ -141,6 +142,7 @@ int parse_args(int argc, char** argv, EvalArgs& a) {
     std::string error;
     if (!fault_text.empty() && !v2xloc::sim::replay::parse_fault_spec(fault_text, a.faults, error))
       throw CLI::ValidationError("--faults", error);
+    a.faults_given = !fault_text.empty();
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
@@ -183,6 +185,7 @@ int main(int argc, char** argv) {
       fw.firmware_path = firmware_path;
       fw.max_frames = options.max_frames;
       fw.faults = faults;
+      fw.report = args.faults_given;
       fw.gnss_antenna_in_body = options.gnss_antenna_in_body;
       fw.quiet = options.quiet;
       ran = v2xloc::eval::run_firmware(reader, fw, records, row.stats, error);
