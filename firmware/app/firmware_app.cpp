@@ -263,7 +263,7 @@ protocol::InputGuards FirmwareApp::input_guards_now() const {
   g.can_counter_rejected = saturate(d.can_repeated);
   g.ego_time_rejected = saturate(d.ego_time_rejected);
   g.missing_signature = saturate(decoder_.verifier().counters().missing_signature);
-  const std::uint64_t off_background = counters_.map_background_mismatch;
+  const std::uint64_t off_background = counters_.map_background_mismatch + d.shares_off_background;
   g.background_mismatch = static_cast<std::uint8_t>(off_background > 15 ? 15 : off_background);  // a 4-bit signal
   return g;
 }

@@ -37,6 +37,10 @@ class LocalizerAdapter final : public LocalizerPort {
   void on_gnss(const GnssInput& input) override { localizer_.on_gnss(input); }
   MapInsertResult on_map_cloud(const MapCloudInput& input) override { return localizer_.on_map_cloud(input); }
   bool wants(std::uint32_t source_id, double t) const override { return localizer_.wants_map_cloud(source_id, t); }
+  bool fits_background(std::uint32_t source_id, const Mat4d& world_T_sensor,
+                       std::span<const Vec3f> points) const override {
+    return localizer_.map_cloud_fits_background(source_id, world_T_sensor, points);
+  }
   std::uint32_t map_clouds_per_period() const override { return localizer_.map_clouds_per_period(); }
   void add_period_work(double instructions) override { localizer_.add_period_work(instructions); }
   const LocalizerFrameOutput& on_ego_scan(const EgoScanInput& input) override {

@@ -106,10 +106,11 @@ void print_counters(const FirmwareApp& app) {
               (unsigned long long)d.can_repeated, (unsigned long long)d.can_counter_gaps,
               (unsigned long long)d.gnss_position_dropped, (unsigned long long)c.gnss_time_rejected);
   std::printf("v2xloc-firmware: map fusion of trusted shares: inconsistent %llu (infrastructure %llu) background_mismatch %llu"
-              " held_back %llu no_slot %llu stale %llu; paced (not needed, source's last recent) %llu on arrival (not hashed),"
+              " (off_background_before_signature %llu) held_back %llu no_slot %llu stale %llu; paced (not needed, source's last recent) %llu on arrival (not hashed),"
               " %llu before and %llu after the signature check\n",
               (unsigned long long)c.map_inconsistent, (unsigned long long)c.map_infra_inconsistent,
-              (unsigned long long)c.map_background_mismatch, (unsigned long long)c.map_held_back,
+              (unsigned long long)c.map_background_mismatch, (unsigned long long)d.shares_off_background,
+              (unsigned long long)c.map_held_back,
               (unsigned long long)c.map_no_slot, (unsigned long long)c.map_stale,
               (unsigned long long)d.shares_paced_on_arrival, (unsigned long long)d.shares_paced,
               (unsigned long long)c.map_paced);

@@ -78,6 +78,12 @@ struct DecodedCloud {
 class MapShareWanted {
  public:
   virtual bool wants(std::uint32_t source_id, double t) const = 0;
+  // Asked next for an infrastructure share: would its cloud pass its unit's surveyed background?
+  // One that would not is refused before its signature check (no ECDSA spent, counted).
+  virtual bool fits_background(std::uint32_t /*source_id*/, const Mat4d& /*world_T_sensor*/,
+                               std::span<const Vec3f> /*points*/) const {
+    return true;
+  }
 
  protected:
   ~MapShareWanted() = default;
@@ -101,6 +107,7 @@ struct DecoderCounters {
   std::uint64_t shares_untrusted = 0;    // map shares the verifier refused (reasons: verifier counters)
   std::uint64_t shares_paced = 0;        // admitted shares the map did not need (source's last is recent): not verified
   std::uint64_t shares_paced_on_arrival = 0;  // shares the map would not fuse, known at their first fragment: not hashed
+  std::uint64_t shares_off_background = 0;    // infrastructure shares off their unit's background: refused before ECDSA
   std::uint64_t shares_queued = 0;       // admitted shares put in the verification queue
   std::uint64_t shares_queue_dropped = 0;  // oldest waiting share dropped: queue full
   std::uint64_t signature_verifications = 0;  // ECDSA verifications run (<= kMax.. per period)
@@ -115,6 +122,8 @@ struct DecoderCounters {
 // first).
 inline constexpr double kShareHashInstructionsPerByte = 131.0;
 inline constexpr double kShareVerifyInstructions = 12e6;
+// A cloud scored on its unit's surveyed background (MapFusion::fits_background; PeriodWorkParams).
+inline constexpr double kShareBackgroundInstructions = 0.8e6;
 
 class InputDecoder {
  public:

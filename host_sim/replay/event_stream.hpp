@@ -133,6 +133,10 @@ class WireEventDecoder {
   struct LocalizerWants final : firmware::MapShareWanted {
     explicit LocalizerWants(const Localizer& l) : localizer(l) {}
     bool wants(std::uint32_t source_id, double t) const override { return localizer.wants_map_cloud(source_id, t); }
+    bool fits_background(std::uint32_t source_id, const Mat4d& world_T_sensor,
+                         std::span<const Vec3f> points) const override {
+      return localizer.map_cloud_fits_background(source_id, world_T_sensor, points);
+    }
     const Localizer& localizer;
   };
 

@@ -43,6 +43,14 @@ const SurveyedBackground* MapFusion::background(std::uint32_t source_id) const {
   return nullptr;
 }
 
+bool MapFusion::fits_background(std::uint32_t source_id, const Mat4d& world_T_sensor,
+                                std::span<const Vec3f> points) const {
+  const SurveyedBackground* b = params_.check_background ? background(source_id) : nullptr;
+  if (b == nullptr) return true;
+  const Mat3d sensor_R_world = world_T_sensor.topLeftCorner<3, 3>().transpose();
+  return check_background(*b, points, sensor_R_world, params_.background).consistent;
+}
+
 bool MapFusion::passes_background(const SurveyedBackground& background, const Mat4d& world_T_sensor,
                                   std::span<const Vec3f> points, MapInsertResult& r) {
   const Mat3d sensor_R_world = world_T_sensor.topLeftCorner<3, 3>().transpose();

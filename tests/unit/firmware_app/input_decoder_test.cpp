@@ -562,6 +562,55 @@ TEST(InputDecoder, UnwantedSharesAreNotHashedAndTrustWorkIsReported) {
   EXPECT_DOUBLE_EQ(dec->take_trust_work(), kShareVerifyInstructions);
 }
 
+// An infrastructure share the map would refuse as off its surveyed background is refused before
+// its ECDSA: counted, and its place in the period goes to the next share. Agents are not asked.
+TEST(InputDecoder, SharesOffTheirBackgroundCostNoSignatureCheck) {
+  struct SecondUnitIsOff final : MapShareWanted {
+    bool wants(std::uint32_t, double) const override { return true; }
+    bool fits_background(std::uint32_t source_id, const Mat4d& world_T_sensor,
+                         std::span<const Vec3f> points) const override {
+      EXPECT_EQ(points.size(), 100u);
+      EXPECT_DOUBLE_EQ(world_T_sensor(0, 3), 9.5);
+      asked.push_back(source_id);
+      return source_id != kInfraSenderBase + 1;
+    }
+    mutable std::vector<std::uint32_t> asked;
+  };
+  auto dec = std::make_unique<InputDecoder>(kEpoch);
+  trust::TrustList list;
+  test::add_signer(list, kInfraSenderBase, trust::SignerRole::kInfrastructure);
+  test::add_signer(list, kInfraSenderBase + 1, trust::SignerRole::kInfrastructure);
+  test::add_signer(list, kAgentSenderBase, trust::SignerRole::kAgent);
+  test::add_signer(list, kInfraSenderBase + 2, trust::SignerRole::kInfrastructure);
+  dec->provision_trust(list);
+  const std::vector<float> xyz = ramp_points(100);
+  for (const std::uint32_t sender : {kInfraSenderBase + 1, kAgentSenderBase, kInfraSenderBase, kInfraSenderBase + 2}) {
+    const auto frags = fragment_cloud(protocol::CloudMessageType::kMapShare, sender, 0, 500'000'000, xyz, {});
+    dec->on_datagram(test::sign_share(frags, sender, kEpoch + 500'000'000), 500'000'000);
+    bool done = false;
+    for (const auto& f : frags) done = dec->on_datagram(f, 500'000'000);
+    ASSERT_TRUE(done);
+    ASSERT_EQ(dec->decode_completed().kind, CloudKind::kMapQueued) << sender;
+  }
+  const auto ego = fragment_cloud(protocol::CloudMessageType::kEgoScan, kEgoSenderId, 1, 600'000'000, ramp_points(50), {});
+  for (const auto& f : ego) dec->on_datagram(f, 600'000'000);
+  ASSERT_EQ(dec->decode_completed().kind, CloudKind::kEgoScan);
+  const SecondUnitIsOff wanted;
+  std::vector<std::uint32_t> fused;
+  for (std::size_t guard = 0; guard < 10; ++guard) {
+    const DecodedCloud share = dec->next_verified_share(&wanted);
+    if (share.kind == CloudKind::kNone) break;
+    ASSERT_EQ(share.kind, CloudKind::kMapCloud);
+    fused.push_back(share.map.source_id);
+  }
+  static_assert(kMaxSignatureVerificationsPerPeriod == 2);
+  EXPECT_EQ(fused, (std::vector<std::uint32_t>{kAgentSenderBase, kInfraSenderBase}));
+  EXPECT_EQ(wanted.asked, (std::vector<std::uint32_t>{kInfraSenderBase + 1, kInfraSenderBase}));
+  EXPECT_EQ(dec->counters().shares_off_background, 1u);
+  EXPECT_EQ(dec->counters().signature_verifications, 2u);
+  EXPECT_EQ(dec->shares_waiting(), 1u) << "the budget is spent: the last share waits for the next period";
+}
+
 TEST(InputDecoder, EgoScanFromAnotherSenderIsRejectedAndCounted) {
   auto dec = std::make_unique<InputDecoder>(kEpoch);
   test::DecodedLog decoded;

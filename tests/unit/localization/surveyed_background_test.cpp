@@ -243,6 +243,27 @@ TEST_F(SurveyedBackgroundTest, MapFusionRejectsAndCountsMovedPoints) {
   EXPECT_EQ(map.insert(5, t, Pose3d(unit_->world_T_sensor), *genuine_, true).status, MapInsertStatus::kInserted);
 }
 
+// The verdict a caller can ask for before paying a share's signature check: insert()'s background
+// verdict, with nothing inserted or counted.
+TEST_F(SurveyedBackgroundTest, FitsBackgroundIsInsertsVerdictWithoutSideEffects) {
+  MapFusion& map = fresh_map();
+  ASSERT_TRUE(map.set_background(5, survey_->background()));
+  const Pose3d pose(unit_->world_T_sensor);
+  EXPECT_TRUE(map.fits_background(5, pose.matrix(), *genuine_));
+  for (const double d : {0.25, 3.0, 200.0}) {
+    EXPECT_FALSE(map.fits_background(5, pose.matrix(), unit_->moved(*genuine_, Vec3d(d, 0, 0)))) << d << " m";
+  }
+  EXPECT_TRUE(map.fits_background(6, pose.matrix(), unit_->moved(*genuine_, Vec3d(3.0, 0, 0))))
+      << "a unit without a background is not judged here";
+  EXPECT_EQ(map.counters().background_checked, 0u);
+  EXPECT_EQ(map.point_count(), 0u);
+  MapFusionParams off;
+  off.check_background = false;
+  map.configure(off);
+  ASSERT_TRUE(map.set_background(5, survey_->background()));
+  EXPECT_TRUE(map.fits_background(5, pose.matrix(), unit_->moved(*genuine_, Vec3d(3.0, 0, 0))));
+}
+
 TEST_F(SurveyedBackgroundTest, UnitsWithoutABackgroundAreHandledAsBefore) {
   const std::vector<Vec3f> moved = unit_->moved(*genuine_, Vec3d(3.0, 0, 0));
   // The same inserts into a map with no backgrounds and into one where only another unit has one.

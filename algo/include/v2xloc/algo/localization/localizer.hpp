@@ -56,6 +56,12 @@ class Localizer {
   // False when on_map_cloud would not fuse a cloud of this source and time (kPaced: the source's
   // stored cloud is recent, reference_map.hpp); lets the caller skip the share's signature check.
   bool wants_map_cloud(std::uint32_t source_id, double t) const { return map_.wants(source_id, t); }
+  // False when on_map_cloud would refuse this infrastructure cloud as off its unit's surveyed
+  // background (map_fusion.hpp); nothing is inserted or counted. Lets the caller skip its signature check.
+  bool map_cloud_fits_background(std::uint32_t source_id, const Mat4d& world_T_sensor,
+                                 std::span<const Vec3f> points) const {
+    return map_.fusion().fits_background(source_id, world_T_sensor, points);
+  }
   // How many map clouds the next period should fuse at most (the caller's share schedule applies
   // its own cap too): map_clouds_per_period_tracking while tracking; none until the first
   // acquisition is over once a map exists (defer_map_clouds_first_search); else no limit.

@@ -209,6 +209,10 @@ class MapFusion {
   bool set_background(std::uint32_t source_id, const SurveyedBackground& background);
   // The unit's background, else null.
   const SurveyedBackground* background(std::uint32_t source_id) const;
+  // The background verdict insert() would give an infrastructure cloud of source_id, without
+  // inserting or counting: true when the unit has no background or the check is off. Lets a caller
+  // refuse a share off its background before paying for its signature check.
+  bool fits_background(std::uint32_t source_id, const Mat4d& world_T_sensor, std::span<const Vec3f> points) const;
   // Evicts sources with now - timestamp > max_age; returns how many.
   std::uint32_t expire(double now);
   // Merged map on the voxel grid into `out` (cleared first).
