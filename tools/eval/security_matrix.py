@@ -49,7 +49,7 @@ FAULTS = [
 # Counters that record a refusal, a loss or an injected fault (the others move with any change).
 EVIDENCE = re.compile(r"rejected|mismatch|missing|unknown|future|replay|stale|timed_out|evicted|bad_|inconsistent|"
                       r"held_back|no_slot|dropped|lost|delayed|corrupt|rogue|repeated|gaps|too_old|skew|queue|"
-                      r"wrong_channel|malformed|truncated|duplicat|reordered|jumps|incomplete|invalid")
+                      r"wrong_channel|malformed|truncated|duplicat|reordered|jumps|incomplete|invalid|off_background")
 
 
 def counters(stderr):
