@@ -41,6 +41,7 @@ class LocalizerAdapter final : public LocalizerPort {
                        std::span<const Vec3f> points) const override {
     return localizer_.map_cloud_fits_background(source_id, world_T_sensor, points);
   }
+  bool awaiting_first_map() const override { return !localizer_.has_map(); }
   std::uint32_t map_clouds_per_period() const override { return localizer_.map_clouds_per_period(); }
   void add_period_work(double instructions) override { localizer_.add_period_work(instructions); }
   const LocalizerFrameOutput& on_ego_scan(const EgoScanInput& input) override {

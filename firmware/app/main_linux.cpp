@@ -95,12 +95,14 @@ void print_counters(const FirmwareApp& app) {
   std::printf("v2xloc-firmware: trust shares accepted %llu rejected %llu (missing_signature %llu unknown_signer %llu"
               " sender_mismatch %llu too_old %llu future %llu stamp_skew %llu replay %llu pose_mismatch %llu bad_signature %llu"
               " crypto_error %llu)"
-              " signatures %llu malformed %llu; wrong_channel %llu ego_time_rejected %llu ego_frames_held %llu\n",
+              " signatures %llu malformed %llu; ecdsa_runs %llu (checked_on_arrival %llu); wrong_channel %llu"
+              " ego_time_rejected %llu ego_frames_held %llu\n",
               (unsigned long long)v.accepted, (unsigned long long)v.rejected(), (unsigned long long)v.missing_signature,
               (unsigned long long)v.unknown_signer, (unsigned long long)v.sender_mismatch, (unsigned long long)v.too_old,
               (unsigned long long)v.future, (unsigned long long)v.stamp_skew, (unsigned long long)v.replay,
               (unsigned long long)v.pose_mismatch, (unsigned long long)v.bad_signature, (unsigned long long)v.crypto_error, (unsigned long long)v.signatures_rx,
-              (unsigned long long)v.signatures_malformed, (unsigned long long)d.wrong_channel,
+              (unsigned long long)v.signatures_malformed, (unsigned long long)d.signature_verifications,
+              (unsigned long long)d.signatures_checked_on_arrival, (unsigned long long)d.wrong_channel,
               (unsigned long long)d.ego_time_rejected, (unsigned long long)c.ego_frames_held);
   std::printf("v2xloc-firmware: can_repeated %llu can_counter_gaps %llu gnss_position_dropped %llu gnss_time_rejected %llu\n",
               (unsigned long long)d.can_repeated, (unsigned long long)d.can_counter_gaps,

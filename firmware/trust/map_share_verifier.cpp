@@ -160,13 +160,21 @@ ShareVerifyResult MapShareVerifier::check_time(const VerificationJob& job, std::
   return ShareVerifyResult{ShareVerdict::kAccepted, signer};
 }
 
+bool MapShareVerifier::check_signature(VerificationJob& job) {
+  if (job.signer_index >= list_.count) return false;
+  job.signature = verify_digest(list_.signers[job.signer_index].key, job.to_verify, job.sig.signature);
+  job.signature_checked = true;
+  return true;
+}
+
 ShareVerifyResult MapShareVerifier::complete(const VerificationJob& job) {
   if (job.signer_index >= list_.count) return reject(ShareVerdict::kUnknownSigner);  // re-provisioned since
   const TrustedSigner* signer = &list_.signers[job.signer_index];
   if (has_last_[job.signer_index] && job.sig.generation_time_ns <= last_generation_ns_[job.signer_index]) {
     return reject(ShareVerdict::kReplay, signer);
   }
-  const CryptoStatus c = verify_digest(signer->key, job.to_verify, job.sig.signature);
+  const CryptoStatus c =
+      job.signature_checked ? job.signature : verify_digest(signer->key, job.to_verify, job.sig.signature);
   if (c == CryptoStatus::kBadSignature || c == CryptoStatus::kBadKey) return reject(ShareVerdict::kBadSignature, signer);
   if (c != CryptoStatus::kOk) return reject(ShareVerdict::kCryptoError, signer);
   last_generation_ns_[job.signer_index] = job.sig.generation_time_ns;

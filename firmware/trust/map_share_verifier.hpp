@@ -81,6 +81,8 @@ struct VerificationJob {
   protocol::CloudSignature sig{};
   std::size_t signer_index = 0;  // into the trust list
   Digest to_verify{};            // signed_digest(sig, cloud digest)
+  bool signature_checked = false;              // check_signature() ran: complete() uses its result
+  CryptoStatus signature = CryptoStatus::kOk;  // that result
 };
 
 struct VerifierCounters {
@@ -121,7 +123,12 @@ class MapShareVerifier {
   ShareVerifyResult admit(const protocol::CloudFrameInfo& info, const Digest& digest, VerificationJob& job);
   // Generation time against the local (disciplined) clock: kTooOld, kFuture or kAccepted.
   ShareVerifyResult check_time(const VerificationJob& job, std::int64_t local_time_ns);
-  // Replay check (again: an earlier job may have advanced the signer) and the ECDSA verification.
+  // The ECDSA verification alone, ahead of complete() (it depends on nothing but the job): lets the
+  // caller run it when it has time; complete() then uses the stored result. Counted as a
+  // verification when it runs. False: job names no provisioned signer (nothing was checked).
+  bool check_signature(VerificationJob& job);
+  // Replay check (again: an earlier job may have advanced the signer) and the ECDSA verification
+  // (unless check_signature() already ran it).
   ShareVerifyResult complete(const VerificationJob& job);
   ShareVerifyResult verify(const protocol::CloudFrameInfo& info, const Digest& digest, std::int64_t local_time_ns);
   void expire(std::int64_t now_ns);

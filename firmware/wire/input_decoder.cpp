@@ -217,6 +217,7 @@ DecodedCloud InputDecoder::decode_completed(std::int64_t local_time_ns) {
 
 void InputDecoder::begin_verification_period(std::int64_t local_time_ns) {
   schedule_.begin_period();
+  checked_on_arrival_ = 0;
   period_time_ns_ = local_time_ns;
   for (std::size_t i = 0; i < schedule_.waiting(); ++i) {
     QueuedShare& q = queue_[schedule_.waiting_slot(i)];
@@ -268,6 +269,19 @@ DecodedCloud InputDecoder::queue_share(const protocol::ReassembledCloud& cloud, 
     queue_points_[at][i] = Vec3f(cloud.xyz[3u * i], cloud.xyz[3u * i + 1], cloud.xyz[3u * i + 2]);
   }
   ++counters_.shares_queued;
+  // Until the localizer has a map, a share's ECDSA runs as it completes, at most
+  // kMaxSignatureVerificationsPerPeriod a period (before the first scan no period runs: every
+  // queued share), instead of in the period that fuses it, which also builds the first map. Its
+  // verdict is used at the period boundary as every other share's, so only where the work falls
+  // changes, not the outcome.
+  const bool before_first_scan = ego_frames_ == 0;
+  const bool no_map = share_filter_ != nullptr && share_filter_->awaiting_first_map();
+  if ((before_first_scan || (no_map && checked_on_arrival_ < kMaxSignatureVerificationsPerPeriod)) &&
+      verifier_.check_signature(q.job)) {
+    ++checked_on_arrival_;
+    ++counters_.signature_verifications;
+    ++counters_.signatures_checked_on_arrival;
+  }
   return kind(CloudKind::kMapQueued);
 }
 
@@ -357,9 +371,11 @@ DecodedCloud InputDecoder::next_verified_share(const MapShareWanted* wanted) {
     schedule_.refund();  // no ECDSA was spent on it
     if (k + 1 == kShareVerifyQueueCapacity) return out;
   }
-  ++counters_.signature_verifications;
-  trust_work_ += kShareVerifyInstructions;
   const QueuedShare& q = queue_[at];
+  if (!q.job.signature_checked) ++counters_.signature_verifications;
+  // Charged to the period budget even when it ran before the first scan: which shares completed
+  // before it depends on which socket was read first, the budget must not.
+  trust_work_ += kShareVerifyInstructions;
   const trust::ShareVerifyResult verdict = verifier_.complete(q.job);
   if (verdict.verdict != trust::ShareVerdict::kAccepted) {
     ++counters_.shares_untrusted;

@@ -84,6 +84,9 @@ class MapShareWanted {
                                std::span<const Vec3f> /*points*/) const {
     return true;
   }
+  // True while the localizer has no map: the period that builds it is the heaviest, so the
+  // signatures of the shares it will fuse are checked earlier, as they complete.
+  virtual bool awaiting_first_map() const { return false; }
 
  protected:
   ~MapShareWanted() = default;
@@ -111,6 +114,7 @@ struct DecoderCounters {
   std::uint64_t shares_queued = 0;       // admitted shares put in the verification queue
   std::uint64_t shares_queue_dropped = 0;  // oldest waiting share dropped: queue full
   std::uint64_t signature_verifications = 0;  // ECDSA verifications run (<= kMax.. per period)
+  std::uint64_t signatures_checked_on_arrival = 0;  // of those: run as the share completed (no map yet)
   std::uint64_t ego_time_rejected = 0;   // ego scans dated implausibly far from the local clock / not newer
   std::uint64_t can_repeated = 0;        // rolling counter did not advance: replayed / stuck frame, dropped
   std::uint64_t can_counter_gaps = 0;    // frames lost by the rolling counter (accepted, counted)
@@ -172,6 +176,8 @@ class InputDecoder {
   void set_share_filter(const MapShareWanted* wanted) { share_filter_ = wanted; }
   // Estimated instructions of the trust work (fragment hashing, ECDSA) since the last call: the
   // caller adds them to the period's budget (Localizer::add_period_work) before the ego scan.
+  // An ECDSA run before the first scan is charged to the period that releases its share (the
+  // charge must not depend on the order two sockets were read in; it errs towards deferring).
   double take_trust_work() {
     const double w = trust_work_;
     trust_work_ = 0.0;
@@ -225,6 +231,7 @@ class InputDecoder {
   const MapShareWanted* share_filter_ = nullptr;
   std::array<bool, kReassemblySlots> slot_paced_{};  // the share in this slot is not wanted: not hashed
   double trust_work_ = 0.0;                          // [instructions] since take_trust_work()
+  std::size_t checked_on_arrival_ = 0;               // signatures checked on arrival this period
   struct QueuedShare {
     trust::VerificationJob job{};
     double t = 0.0;

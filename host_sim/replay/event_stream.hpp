@@ -137,6 +137,7 @@ class WireEventDecoder {
                          std::span<const Vec3f> points) const override {
       return localizer.map_cloud_fits_background(source_id, world_T_sensor, points);
     }
+    bool awaiting_first_map() const override { return !localizer.has_map(); }
     const Localizer& localizer;
   };
 

@@ -46,6 +46,13 @@ std::vector<float> ramp_points(std::size_t n) {
   return xyz;
 }
 
+// An ego scan opens the first period (before it, a share's signature is checked as it completes).
+void open_first_period(InputDecoder& dec, std::int64_t now_ns) {
+  const auto ego = fragment_cloud(protocol::CloudMessageType::kEgoScan, kEgoSenderId, 0, now_ns, ramp_points(50), {});
+  for (const auto& f : ego) dec.on_datagram(f, now_ns);
+  ASSERT_EQ(dec.decode_completed().kind, CloudKind::kEgoScan);
+}
+
 TEST(InputDecoder, VehicleFrameDecodesWithTimeAndBadFramesAreCounted) {
   auto dec = std::make_unique<InputDecoder>(kEpoch);
   test::DecodedLog decoded;
@@ -411,6 +418,7 @@ TEST(InputDecoder, SignatureChecksAreBoundedPerPeriodAndQueued) {
   const std::vector<float> xyz = ramp_points(400);
   std::vector<float> tampered = xyz;
   tampered[3 * 399] += 0.01f;  // 5 quantization steps: different wire bytes, same header
+  open_first_period(*dec, 400'000'000);
   for (std::uint32_t k = 0; k < kSources; ++k) {
     const std::uint32_t sender = kInfraSenderBase + k;
     const auto frags = fragment_cloud(protocol::CloudMessageType::kMapShare, sender, 0, 500'000'000, xyz, {});
@@ -485,6 +493,7 @@ TEST(InputDecoder, SharesTheMapDoesNotWantCostNoSignatureCheck) {
   for (std::uint32_t k = 0; k < kSources; ++k) test::add_signer(list, kInfraSenderBase + k, trust::SignerRole::kInfrastructure);
   dec->provision_trust(list);
   const std::vector<float> xyz = ramp_points(100);
+  open_first_period(*dec, 400'000'000);
   for (std::uint32_t k = 0; k < kSources; ++k) {
     const std::uint32_t sender = kInfraSenderBase + k;
     const auto frags = fragment_cloud(protocol::CloudMessageType::kMapShare, sender, 0, 500'000'000, xyz, {});
@@ -531,6 +540,7 @@ TEST(InputDecoder, UnwantedSharesAreNotHashedAndTrustWorkIsReported) {
   dec->provision_trust(list);
   const std::vector<float> xyz = ramp_points(400);
   std::size_t hashed_bytes = 0;
+  open_first_period(*dec, 400'000'000);
   for (std::uint32_t k = 0; k < 2; ++k) {
     const std::uint32_t sender = kInfraSenderBase + k;
     const auto frags = fragment_cloud(protocol::CloudMessageType::kMapShare, sender, 0, 500'000'000, xyz, {});
@@ -584,6 +594,7 @@ TEST(InputDecoder, SharesOffTheirBackgroundCostNoSignatureCheck) {
   test::add_signer(list, kInfraSenderBase + 2, trust::SignerRole::kInfrastructure);
   dec->provision_trust(list);
   const std::vector<float> xyz = ramp_points(100);
+  open_first_period(*dec, 400'000'000);
   for (const std::uint32_t sender : {kInfraSenderBase + 1, kAgentSenderBase, kInfraSenderBase, kInfraSenderBase + 2}) {
     const auto frags = fragment_cloud(protocol::CloudMessageType::kMapShare, sender, 0, 500'000'000, xyz, {});
     dec->on_datagram(test::sign_share(frags, sender, kEpoch + 500'000'000), 500'000'000);
@@ -609,6 +620,78 @@ TEST(InputDecoder, SharesOffTheirBackgroundCostNoSignatureCheck) {
   EXPECT_EQ(dec->counters().shares_off_background, 1u);
   EXPECT_EQ(dec->counters().signature_verifications, 2u);
   EXPECT_EQ(dec->shares_waiting(), 1u) << "the budget is spent: the last share waits for the next period";
+}
+
+// Until the localizer has a map, a share's ECDSA runs as it completes, at most
+// kMaxSignatureVerificationsPerPeriod a period (before the first ego scan: every share); the period that fuses it
+// releases it on the same schedule as ever without verifying it again (a share whose signature
+// failed is still refused then), and charges it to its budget as ever.
+TEST(InputDecoder, SignaturesAreCheckedOnArrivalUntilTheFirstMap) {
+  struct MapPending final : MapShareWanted {
+    bool wants(std::uint32_t, double) const override { return true; }
+    bool awaiting_first_map() const override { return pending; }
+    bool pending = true;
+  };
+  static_assert(kMaxSignatureVerificationsPerPeriod == 2);
+  auto dec = std::make_unique<InputDecoder>(kEpoch);
+  MapPending map_pending;
+  dec->set_share_filter(&map_pending);
+  trust::TrustList list;
+  constexpr std::uint32_t kSources = 5;
+  for (std::uint32_t k = 0; k < kSources; ++k) test::add_signer(list, kInfraSenderBase + k, trust::SignerRole::kInfrastructure);
+  dec->provision_trust(list);
+  const std::vector<float> xyz = ramp_points(100);
+  std::vector<float> tampered = xyz;
+  tampered[3 * 99] += 0.01f;
+  const auto send = [&](std::uint32_t k, std::int64_t now_ns, bool tamper, std::uint32_t seq = 0) {
+    const std::uint32_t sender = kInfraSenderBase + k;
+    const auto frags = fragment_cloud(protocol::CloudMessageType::kMapShare, sender, seq, now_ns, xyz, {});
+    dec->on_datagram(test::sign_share(frags, sender, kEpoch + now_ns), now_ns);
+    const auto sent = tamper ? fragment_cloud(protocol::CloudMessageType::kMapShare, sender, seq, now_ns, tampered, {}) : frags;
+    bool done = false;
+    for (const auto& f : sent) done = dec->on_datagram(f, now_ns);
+    ASSERT_TRUE(done);
+    ASSERT_EQ(dec->decode_completed().kind, CloudKind::kMapQueued) << k;
+  };
+  const auto release_all = [&] {
+    std::vector<CloudKind> released;
+    for (std::size_t guard = 0; guard < 10; ++guard) {
+      const DecodedCloud share = dec->next_verified_share(&map_pending);
+      if (share.kind == CloudKind::kNone) break;
+      released.push_back(share.kind);
+    }
+    return released;
+  };
+  for (std::uint32_t k = 0; k < 3; ++k) send(k, 500'000'000, k == 0);
+  EXPECT_EQ(dec->counters().signatures_checked_on_arrival, 3u) << "before the first scan: all";
+  EXPECT_EQ(dec->counters().signature_verifications, 3u);
+  EXPECT_EQ(dec->verifier().counters().accepted, 0u) << "accepted only at a period boundary";
+
+  open_first_period(*dec, 600'000'000);
+  EXPECT_GT(dec->take_trust_work(), 0.0) << "the shares' hashing";
+  EXPECT_EQ(release_all(), (std::vector<CloudKind>{CloudKind::kRejected, CloudKind::kMapCloud}));
+  EXPECT_EQ(dec->verifier().counters().bad_signature, 1u);
+  EXPECT_EQ(dec->counters().signature_verifications, 3u) << "none verified twice";
+  EXPECT_DOUBLE_EQ(dec->take_trust_work(), 2 * kShareVerifyInstructions) << "charged where released, as ever";
+
+  send(3, 650'000'000, false);  // still no map: checked on arrival (two a period)
+  send(4, 650'000'000, false);
+  EXPECT_EQ(dec->counters().signatures_checked_on_arrival, 5u);
+  map_pending.pending = false;
+  send(0, 660'000'000, false, 1);  // the map exists: verified at its release, as ever
+  EXPECT_EQ(dec->counters().signatures_checked_on_arrival, 5u);
+  EXPECT_EQ(dec->counters().signature_verifications, 5u);
+  const auto ego = fragment_cloud(protocol::CloudMessageType::kEgoScan, kEgoSenderId, 1, 700'000'000, ramp_points(50), {});
+  for (const auto& f : ego) dec->on_datagram(f, 700'000'000);
+  ASSERT_EQ(dec->decode_completed().kind, CloudKind::kEgoScan);
+  EXPECT_EQ(release_all(), (std::vector<CloudKind>{CloudKind::kMapCloud, CloudKind::kMapCloud}));
+  EXPECT_EQ(dec->shares_waiting(), 2u);
+  EXPECT_EQ(dec->counters().signature_verifications, 5u) << "all released ones were checked on arrival";
+  const auto ego2 = fragment_cloud(protocol::CloudMessageType::kEgoScan, kEgoSenderId, 2, 800'000'000, ramp_points(50), {});
+  for (const auto& f : ego2) dec->on_datagram(f, 800'000'000);
+  ASSERT_EQ(dec->decode_completed().kind, CloudKind::kEgoScan);
+  EXPECT_EQ(release_all(), (std::vector<CloudKind>{CloudKind::kMapCloud, CloudKind::kMapCloud}));
+  EXPECT_EQ(dec->counters().signature_verifications, 6u) << "the last one, sent with a map, verified at release";
 }
 
 TEST(InputDecoder, EgoScanFromAnotherSenderIsRejectedAndCounted) {

@@ -62,6 +62,8 @@ class Localizer {
                                  std::span<const Vec3f> points) const {
     return map_.fusion().fits_background(source_id, world_T_sensor, points);
   }
+  // A reference map is built and in use (false before the first one, or after every source expired).
+  bool has_map() const { return map_.ready(); }
   // How many map clouds the next period should fuse at most (the caller's share schedule applies
   // its own cap too): map_clouds_per_period_tracking while tracking; none until the first
   // acquisition is over once a map exists (defer_map_clouds_first_search); else no limit.
