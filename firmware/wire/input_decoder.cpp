@@ -164,8 +164,9 @@ bool InputDecoder::on_datagram(std::span<const std::uint8_t> datagram, std::int6
   const protocol::AcceptedFragment& accepted = reassembler_.last_accepted();
   if (accepted.valid && accepted.type == protocol::CloudMessageType::kMapShare &&
       accepted.slot < kReassemblySlots && accepted.fragment_index < kMaxCloudFragments) {
-    // A share the map would not fuse is decided on its first fragment and costs no hashing; the
-    // map's answer can only turn from "no" to "yes" when a source expires (>= 1.1 s later).
+    // A share the map would not fuse is decided on its first fragment and costs no hashing. The
+    // map's answer turns from "no" to "yes" only when the source's stored cloud expires (3 s after
+    // a cloud at most 1.9 s older than this one) or is outvoted, rarely while a share waits.
     if (accepted.opened_frame) {
       slot_paced_[accepted.slot] =
           share_filter_ != nullptr &&
