@@ -355,15 +355,16 @@ DecodedCloud InputDecoder::next_verified_share(const MapShareWanted* wanted) {
     }
     const bool timely = verifier_.check_time(q.job, q.judge_time_ns).verdict == trust::ShareVerdict::kAccepted;
     const trust::TrustList& list = verifier_.trust_list();
-    const bool known = q.job.signer_index < list.count;  // else complete() refuses it
-    const std::uint32_t source = known ? list.signers[q.job.signer_index].sender_id : 0;
-    bool verify = timely && (wanted == nullptr || !known || wanted->wants(source, q.t));
+    // Unknown signer: complete() refuses it.
+    const trust::TrustedSigner* signer = q.job.signer_index < list.count ? &list.signers[q.job.signer_index] : nullptr;
+    bool verify = timely && (wanted == nullptr || signer == nullptr || wanted->wants(signer->sender_id, q.t));
     std::uint64_t* refused = timely ? &counters_.shares_paced : &counters_.shares_untrusted;
     // An infrastructure cloud off its unit's surveyed background would be refused by map fusion
     // anyway: refused here, it does not take one of the period's signature checks (the scoring,
     // ~0.8 M, is a fifteenth of one; map fusion scores a cloud that passes again).
-    if (verify && wanted != nullptr && known && list.signers[q.job.signer_index].role == trust::SignerRole::kInfrastructure &&
-        !wanted->fits_background(source, q.world_T_sensor, std::span<const Vec3f>(queue_points_[at].data(), q.point_count))) {
+    if (verify && wanted != nullptr && signer != nullptr && signer->role == trust::SignerRole::kInfrastructure &&
+        !wanted->fits_background(signer->sender_id, q.world_T_sensor,
+                                 std::span<const Vec3f>(queue_points_[at].data(), q.point_count))) {
       verify = false;
       refused = &counters_.shares_off_background;
     }

@@ -64,8 +64,11 @@ def counters(stderr):
                 if m:
                     out["fault: " + m.group(1)] = int(m.group(2))
         elif line.startswith("v2xloc-firmware:"):
+            # A name already seen on an earlier line (map fusion's and the search's "inconsistent",
+            # map fusion's and reassembly's "stale") is kept apart under its line's first word.
+            topic = line.split()[1].rstrip(":")
             for name, value in re.findall(r"([a-z][a-z_]*) (\d+)\b", line):
-                out[name] = out.get(name, 0) + int(value) if name in ("inconsistent",) else int(value)
+                out[name if name not in out else f"{topic}.{name}"] = int(value)
     return out
 
 

@@ -19,7 +19,6 @@ Budget: 100 M instructions per period (A53-class core at 10 Hz).
 import argparse
 import glob
 import json
-import math
 import os
 import re
 import shutil
@@ -27,21 +26,13 @@ import subprocess
 import sys
 import tempfile
 
-BUDGET = 100e6
+from frame_instructions import BUDGET, percentile  # same directory
 # Inclusive cost of these functions splits a period (names as callgrind_annotate prints them).
 GROUPS = {
     "localizer": re.compile(r"v2xloc::Localizer::(on_ego_scan|on_map_cloud|on_vehicle|on_gnss)\("),
     "ecdsa": re.compile(r"mbedtls_ecdsa_verify\b"),
     "sha256": re.compile(r"v2xloc::trust::fragment_digest\("),
 }
-
-
-def percentile(values, q):
-    if not values:
-        return 0
-    v = sorted(values)
-    k = max(1, math.ceil(q * len(v)))
-    return v[min(len(v), k) - 1]
 
 
 def total_of(path):

@@ -43,18 +43,21 @@ const SurveyedBackground* MapFusion::background(std::uint32_t source_id) const {
   return nullptr;
 }
 
+BackgroundScore MapFusion::score_on_background(const SurveyedBackground& background, const Mat4d& world_T_sensor,
+                                               std::span<const Vec3f> points) const {
+  const Mat3d sensor_R_world = world_T_sensor.topLeftCorner<3, 3>().transpose();
+  return check_background(background, points, sensor_R_world, params_.background);
+}
+
 bool MapFusion::fits_background(std::uint32_t source_id, const Mat4d& world_T_sensor,
                                 std::span<const Vec3f> points) const {
   const SurveyedBackground* b = params_.check_background ? background(source_id) : nullptr;
-  if (b == nullptr) return true;
-  const Mat3d sensor_R_world = world_T_sensor.topLeftCorner<3, 3>().transpose();
-  return check_background(*b, points, sensor_R_world, params_.background).consistent;
+  return b == nullptr || score_on_background(*b, world_T_sensor, points).consistent;
 }
 
 bool MapFusion::passes_background(const SurveyedBackground& background, const Mat4d& world_T_sensor,
                                   std::span<const Vec3f> points, MapInsertResult& r) {
-  const Mat3d sensor_R_world = world_T_sensor.topLeftCorner<3, 3>().transpose();
-  r.background = check_background(background, points, sensor_R_world, params_.background);
+  r.background = score_on_background(background, world_T_sensor, points);
   r.background_checked = true;
   ++counters_.background_checked;
   if (r.background.consistent) return true;

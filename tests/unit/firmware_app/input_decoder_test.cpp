@@ -46,11 +46,34 @@ std::vector<float> ramp_points(std::size_t n) {
   return xyz;
 }
 
-// An ego scan opens the first period (before it, a share's signature is checked as it completes).
-void open_first_period(InputDecoder& dec, std::int64_t now_ns) {
-  const auto ego = fragment_cloud(protocol::CloudMessageType::kEgoScan, kEgoSenderId, 0, now_ns, ramp_points(50), {});
+// An ego scan: a period boundary (the first one opens the first period; before it, a share's
+// signature is checked as it completes).
+void ego_scan(InputDecoder& dec, std::uint32_t seq, std::int64_t now_ns) {
+  const auto ego = fragment_cloud(protocol::CloudMessageType::kEgoScan, kEgoSenderId, seq, now_ns, ramp_points(50), {});
   for (const auto& f : ego) dec.on_datagram(f, now_ns);
   ASSERT_EQ(dec.decode_completed().kind, CloudKind::kEgoScan);
+}
+
+// A map share signed by `sender` and all its fragments, completed and queued.
+void queue_signed_share(InputDecoder& dec, std::uint32_t sender, std::int64_t now_ns, const std::vector<float>& xyz) {
+  const auto frags = fragment_cloud(protocol::CloudMessageType::kMapShare, sender, 0, now_ns, xyz, {});
+  dec.on_datagram(test::sign_share(frags, sender, kEpoch + now_ns), now_ns);
+  bool done = false;
+  for (const auto& f : frags) done = dec.on_datagram(f, now_ns);
+  ASSERT_TRUE(done);
+  ASSERT_EQ(dec.decode_completed().kind, CloudKind::kMapQueued) << sender;
+}
+
+// The source ids of the shares this period releases, each verified and fused.
+std::vector<std::uint32_t> fused_sources(InputDecoder& dec, const MapShareWanted& wanted) {
+  std::vector<std::uint32_t> fused;
+  for (std::size_t guard = 0; guard < 10; ++guard) {
+    const DecodedCloud share = dec.next_verified_share(&wanted);
+    if (share.kind == CloudKind::kNone) break;
+    EXPECT_EQ(share.kind, CloudKind::kMapCloud);
+    fused.push_back(share.map.source_id);
+  }
+  return fused;
 }
 
 TEST(InputDecoder, VehicleFrameDecodesWithTimeAndBadFramesAreCounted) {
@@ -418,7 +441,7 @@ TEST(InputDecoder, SignatureChecksAreBoundedPerPeriodAndQueued) {
   const std::vector<float> xyz = ramp_points(400);
   std::vector<float> tampered = xyz;
   tampered[3 * 399] += 0.01f;  // 5 quantization steps: different wire bytes, same header
-  open_first_period(*dec, 400'000'000);
+  ASSERT_NO_FATAL_FAILURE(ego_scan(*dec, 0, 400'000'000));
   for (std::uint32_t k = 0; k < kSources; ++k) {
     const std::uint32_t sender = kInfraSenderBase + k;
     const auto frags = fragment_cloud(protocol::CloudMessageType::kMapShare, sender, 0, 500'000'000, xyz, {});
@@ -493,28 +516,13 @@ TEST(InputDecoder, SharesTheMapDoesNotWantCostNoSignatureCheck) {
   for (std::uint32_t k = 0; k < kSources; ++k) test::add_signer(list, kInfraSenderBase + k, trust::SignerRole::kInfrastructure);
   dec->provision_trust(list);
   const std::vector<float> xyz = ramp_points(100);
-  open_first_period(*dec, 400'000'000);
+  ASSERT_NO_FATAL_FAILURE(ego_scan(*dec, 0, 400'000'000));
   for (std::uint32_t k = 0; k < kSources; ++k) {
-    const std::uint32_t sender = kInfraSenderBase + k;
-    const auto frags = fragment_cloud(protocol::CloudMessageType::kMapShare, sender, 0, 500'000'000, xyz, {});
-    dec->on_datagram(test::sign_share(frags, sender, kEpoch + 500'000'000), 500'000'000);
-    bool done = false;
-    for (const auto& f : frags) done = dec->on_datagram(f, 500'000'000);
-    ASSERT_TRUE(done);
-    ASSERT_EQ(dec->decode_completed().kind, CloudKind::kMapQueued) << k;
+    ASSERT_NO_FATAL_FAILURE(queue_signed_share(*dec, kInfraSenderBase + k, 500'000'000, xyz));
   }
-  const auto ego = fragment_cloud(protocol::CloudMessageType::kEgoScan, kEgoSenderId, 1, 600'000'000, ramp_points(50), {});
-  for (const auto& f : ego) dec->on_datagram(f, 600'000'000);
-  ASSERT_EQ(dec->decode_completed().kind, CloudKind::kEgoScan);
+  ASSERT_NO_FATAL_FAILURE(ego_scan(*dec, 1, 600'000'000));
   const EverySecondSender wanted;
-  std::vector<std::uint32_t> fused;
-  for (std::size_t guard = 0; guard < 10; ++guard) {
-    const DecodedCloud share = dec->next_verified_share(&wanted);
-    if (share.kind == CloudKind::kNone) break;
-    ASSERT_EQ(share.kind, CloudKind::kMapCloud);
-    fused.push_back(share.map.source_id);
-  }
-  EXPECT_EQ(fused, (std::vector<std::uint32_t>{kInfraSenderBase, kInfraSenderBase + 2}));
+  EXPECT_EQ(fused_sources(*dec, wanted), (std::vector<std::uint32_t>{kInfraSenderBase, kInfraSenderBase + 2}));
   EXPECT_EQ(dec->counters().shares_paced, 1u);
   EXPECT_EQ(dec->counters().signature_verifications, 2u);
   EXPECT_EQ(dec->shares_waiting(), 1u) << "the budget is spent: the last share waits for the next period";
@@ -540,7 +548,7 @@ TEST(InputDecoder, UnwantedSharesAreNotHashedAndTrustWorkIsReported) {
   dec->provision_trust(list);
   const std::vector<float> xyz = ramp_points(400);
   std::size_t hashed_bytes = 0;
-  open_first_period(*dec, 400'000'000);
+  ASSERT_NO_FATAL_FAILURE(ego_scan(*dec, 0, 400'000'000));
   for (std::uint32_t k = 0; k < 2; ++k) {
     const std::uint32_t sender = kInfraSenderBase + k;
     const auto frags = fragment_cloud(protocol::CloudMessageType::kMapShare, sender, 0, 500'000'000, xyz, {});
@@ -561,9 +569,7 @@ TEST(InputDecoder, UnwantedSharesAreNotHashedAndTrustWorkIsReported) {
   EXPECT_DOUBLE_EQ(dec->take_trust_work(), hashing) << "only the wanted share's fragments were hashed";
   EXPECT_DOUBLE_EQ(dec->take_trust_work(), 0.0) << "reported once";
 
-  const auto ego = fragment_cloud(protocol::CloudMessageType::kEgoScan, kEgoSenderId, 1, 600'000'000, ramp_points(50), {});
-  for (const auto& f : ego) dec->on_datagram(f, 600'000'000);
-  ASSERT_EQ(dec->decode_completed().kind, CloudKind::kEgoScan);
+  ASSERT_NO_FATAL_FAILURE(ego_scan(*dec, 1, 600'000'000));
   const DecodedCloud share = dec->next_verified_share(&wanted);
   ASSERT_EQ(share.kind, CloudKind::kMapCloud);
   EXPECT_EQ(share.map.source_id, kInfraSenderBase);
@@ -594,28 +600,14 @@ TEST(InputDecoder, SharesOffTheirBackgroundCostNoSignatureCheck) {
   test::add_signer(list, kInfraSenderBase + 2, trust::SignerRole::kInfrastructure);
   dec->provision_trust(list);
   const std::vector<float> xyz = ramp_points(100);
-  open_first_period(*dec, 400'000'000);
+  ASSERT_NO_FATAL_FAILURE(ego_scan(*dec, 0, 400'000'000));
   for (const std::uint32_t sender : {kInfraSenderBase + 1, kAgentSenderBase, kInfraSenderBase, kInfraSenderBase + 2}) {
-    const auto frags = fragment_cloud(protocol::CloudMessageType::kMapShare, sender, 0, 500'000'000, xyz, {});
-    dec->on_datagram(test::sign_share(frags, sender, kEpoch + 500'000'000), 500'000'000);
-    bool done = false;
-    for (const auto& f : frags) done = dec->on_datagram(f, 500'000'000);
-    ASSERT_TRUE(done);
-    ASSERT_EQ(dec->decode_completed().kind, CloudKind::kMapQueued) << sender;
+    ASSERT_NO_FATAL_FAILURE(queue_signed_share(*dec, sender, 500'000'000, xyz));
   }
-  const auto ego = fragment_cloud(protocol::CloudMessageType::kEgoScan, kEgoSenderId, 1, 600'000'000, ramp_points(50), {});
-  for (const auto& f : ego) dec->on_datagram(f, 600'000'000);
-  ASSERT_EQ(dec->decode_completed().kind, CloudKind::kEgoScan);
+  ASSERT_NO_FATAL_FAILURE(ego_scan(*dec, 1, 600'000'000));
   const SecondUnitIsOff wanted;
-  std::vector<std::uint32_t> fused;
-  for (std::size_t guard = 0; guard < 10; ++guard) {
-    const DecodedCloud share = dec->next_verified_share(&wanted);
-    if (share.kind == CloudKind::kNone) break;
-    ASSERT_EQ(share.kind, CloudKind::kMapCloud);
-    fused.push_back(share.map.source_id);
-  }
   static_assert(kMaxSignatureVerificationsPerPeriod == 2);
-  EXPECT_EQ(fused, (std::vector<std::uint32_t>{kAgentSenderBase, kInfraSenderBase}));
+  EXPECT_EQ(fused_sources(*dec, wanted), (std::vector<std::uint32_t>{kAgentSenderBase, kInfraSenderBase}));
   EXPECT_EQ(wanted.asked, (std::vector<std::uint32_t>{kInfraSenderBase + 1, kInfraSenderBase}));
   EXPECT_EQ(dec->counters().shares_off_background, 1u);
   EXPECT_EQ(dec->counters().signature_verifications, 2u);
@@ -667,7 +659,7 @@ TEST(InputDecoder, SignaturesAreCheckedOnArrivalUntilTheFirstMap) {
   EXPECT_EQ(dec->counters().signature_verifications, 3u);
   EXPECT_EQ(dec->verifier().counters().accepted, 0u) << "accepted only at a period boundary";
 
-  open_first_period(*dec, 600'000'000);
+  ASSERT_NO_FATAL_FAILURE(ego_scan(*dec, 0, 600'000'000));
   EXPECT_GT(dec->take_trust_work(), 0.0) << "the shares' hashing";
   EXPECT_EQ(release_all(), (std::vector<CloudKind>{CloudKind::kRejected, CloudKind::kMapCloud}));
   EXPECT_EQ(dec->verifier().counters().bad_signature, 1u);
@@ -681,15 +673,11 @@ TEST(InputDecoder, SignaturesAreCheckedOnArrivalUntilTheFirstMap) {
   send(0, 660'000'000, false, 1);  // the map exists: verified at its release, as ever
   EXPECT_EQ(dec->counters().signatures_checked_on_arrival, 5u);
   EXPECT_EQ(dec->counters().signature_verifications, 5u);
-  const auto ego = fragment_cloud(protocol::CloudMessageType::kEgoScan, kEgoSenderId, 1, 700'000'000, ramp_points(50), {});
-  for (const auto& f : ego) dec->on_datagram(f, 700'000'000);
-  ASSERT_EQ(dec->decode_completed().kind, CloudKind::kEgoScan);
+  ASSERT_NO_FATAL_FAILURE(ego_scan(*dec, 1, 700'000'000));
   EXPECT_EQ(release_all(), (std::vector<CloudKind>{CloudKind::kMapCloud, CloudKind::kMapCloud}));
   EXPECT_EQ(dec->shares_waiting(), 2u);
   EXPECT_EQ(dec->counters().signature_verifications, 5u) << "all released ones were checked on arrival";
-  const auto ego2 = fragment_cloud(protocol::CloudMessageType::kEgoScan, kEgoSenderId, 2, 800'000'000, ramp_points(50), {});
-  for (const auto& f : ego2) dec->on_datagram(f, 800'000'000);
-  ASSERT_EQ(dec->decode_completed().kind, CloudKind::kEgoScan);
+  ASSERT_NO_FATAL_FAILURE(ego_scan(*dec, 2, 800'000'000));
   EXPECT_EQ(release_all(), (std::vector<CloudKind>{CloudKind::kMapCloud, CloudKind::kMapCloud}));
   EXPECT_EQ(dec->counters().signature_verifications, 6u) << "the last one, sent with a map, verified at release";
 }

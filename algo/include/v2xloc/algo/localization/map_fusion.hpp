@@ -235,6 +235,9 @@ class MapFusion {
     SurveyedBackground background{};
   };
 
+  // A cloud's score on a background, in its sensor frame (no counting).
+  BackgroundScore score_on_background(const SurveyedBackground& background, const Mat4d& world_T_sensor,
+                                      std::span<const Vec3f> points) const;
   // The background verdict on a trusted cloud (r filled; false: rejected and counted).
   bool passes_background(const SurveyedBackground& background, const Mat4d& world_T_sensor,
                          std::span<const Vec3f> points, MapInsertResult& r);
