@@ -35,6 +35,7 @@ struct Field {
 
 struct Header {
   std::vector<Field> fields;
+  double time_offset = 0.0;  // ReadOptions::time_offset_s
   bool has_width = false;
   bool has_points = false;
   std::uint64_t width = 0;
@@ -59,7 +60,7 @@ int role_of(const std::string& name) {
   if (name == "y") return kY;
   if (name == "z") return kZ;
   if (name == "intensity") return kIntensity;
-  if (name == "t" || name == "time") return kTime;
+  if (name == "t" || name == "time" || name == "timestamp") return kTime;
   if (name == "normal_x") return kNx;
   if (name == "normal_y") return kNy;
   if (name == "normal_z") return kNz;
@@ -246,7 +247,8 @@ void fill_cloud_by_column(const Header& h, std::size_t n, Column&& column, Point
 template <typename Getter>
 void fill_cloud(const Header& h, std::size_t n, Getter&& value, PointCloud& out) {
   fill_cloud_by_column(h, n, [&](int f, float* dst, std::size_t stride) {
-    for (std::size_t i = 0; i < n; ++i) dst[i * stride] = static_cast<float>(value(i, f));
+    const double offset = f == h.role_field[kTime] ? h.time_offset : 0.0;
+    for (std::size_t i = 0; i < n; ++i) dst[i * stride] = static_cast<float>(value(i, f) - offset);
   }, out);
 }
 
@@ -379,7 +381,8 @@ bool read_compressed(std::span<const std::uint8_t> bytes, const Header& h, Point
 // planes[k * n + i], the value scaled as the other readers' getters do (scale x stored, in double,
 // then float). The byte gather is unrolled at compile time.
 template <typename T>
-void unshuffle_column(const std::uint8_t* planes, std::size_t n, double scale, float* dst, std::size_t stride) {
+void unshuffle_column(const std::uint8_t* planes, std::size_t n, double scale, double offset, float* dst,
+                      std::size_t stride) {
   using Bits = std::conditional_t<sizeof(T) == 1, std::uint8_t,
                std::conditional_t<sizeof(T) == 2, std::uint16_t,
                std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>>>;
@@ -388,7 +391,7 @@ void unshuffle_column(const std::uint8_t* planes, std::size_t n, double scale, f
   };
   for (std::size_t i = 0; i < n; ++i) {
     const Bits bits = gather(i, std::make_index_sequence<sizeof(T)>{});
-    dst[i * stride] = static_cast<float>(scale * static_cast<double>(std::bit_cast<T>(bits)));
+    dst[i * stride] = static_cast<float>(scale * static_cast<double>(std::bit_cast<T>(bits)) - offset);
   }
 }
 
@@ -414,17 +417,18 @@ bool read_shuffled_zlib(std::span<const std::uint8_t> bytes, const Header& h, Po
   fill_cloud_by_column(h, n, [&](int fi, float* dst, std::size_t stride) {
     const Field& f = h.fields[static_cast<std::size_t>(fi)];  // a role field: COUNT 1 (parse_header)
     const std::uint8_t* block = planes.get() + h.points * f.byte_offset;
+    const double offset = fi == h.role_field[kTime] ? h.time_offset : 0.0;
     switch (f.scalar) {
-      case Scalar::kI8: return unshuffle_column<std::int8_t>(block, n, f.scale, dst, stride);
-      case Scalar::kU8: return unshuffle_column<std::uint8_t>(block, n, f.scale, dst, stride);
-      case Scalar::kI16: return unshuffle_column<std::int16_t>(block, n, f.scale, dst, stride);
-      case Scalar::kU16: return unshuffle_column<std::uint16_t>(block, n, f.scale, dst, stride);
-      case Scalar::kI32: return unshuffle_column<std::int32_t>(block, n, f.scale, dst, stride);
-      case Scalar::kU32: return unshuffle_column<std::uint32_t>(block, n, f.scale, dst, stride);
-      case Scalar::kI64: return unshuffle_column<std::int64_t>(block, n, f.scale, dst, stride);
-      case Scalar::kU64: return unshuffle_column<std::uint64_t>(block, n, f.scale, dst, stride);
-      case Scalar::kF32: return unshuffle_column<float>(block, n, f.scale, dst, stride);
-      case Scalar::kF64: return unshuffle_column<double>(block, n, f.scale, dst, stride);
+      case Scalar::kI8: return unshuffle_column<std::int8_t>(block, n, f.scale, offset, dst, stride);
+      case Scalar::kU8: return unshuffle_column<std::uint8_t>(block, n, f.scale, offset, dst, stride);
+      case Scalar::kI16: return unshuffle_column<std::int16_t>(block, n, f.scale, offset, dst, stride);
+      case Scalar::kU16: return unshuffle_column<std::uint16_t>(block, n, f.scale, offset, dst, stride);
+      case Scalar::kI32: return unshuffle_column<std::int32_t>(block, n, f.scale, offset, dst, stride);
+      case Scalar::kU32: return unshuffle_column<std::uint32_t>(block, n, f.scale, offset, dst, stride);
+      case Scalar::kI64: return unshuffle_column<std::int64_t>(block, n, f.scale, offset, dst, stride);
+      case Scalar::kU64: return unshuffle_column<std::uint64_t>(block, n, f.scale, offset, dst, stride);
+      case Scalar::kF32: return unshuffle_column<float>(block, n, f.scale, offset, dst, stride);
+      case Scalar::kF64: return unshuffle_column<double>(block, n, f.scale, offset, dst, stride);
     }
   }, out);
   return true;
@@ -437,6 +441,7 @@ bool parse_pcd(std::span<const std::uint8_t> bytes, PointCloud& out, std::string
   out.clear();
   Header h;
   if (!parse_header(bytes, h, error)) return false;
+  h.time_offset = options.time_offset_s;
   if (h.points > options.max_points) {
     error = "POINTS " + std::to_string(h.points) + " exceeds the limit of " +
             std::to_string(options.max_points);

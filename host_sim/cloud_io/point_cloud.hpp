@@ -43,6 +43,9 @@ struct ReadOptions {
   bool drop_non_finite = false;
   // Headers claiming more points than this are rejected before anything is allocated.
   std::size_t max_points = 50'000'000;
+  // [s] subtracted from every per-point time in double before it is stored as float: a sensor's
+  // absolute stamps (a `timestamp` field in unix seconds) become times since the scan's stamp.
+  double time_offset_s = 0.0;
 };
 
 struct ReadStats {

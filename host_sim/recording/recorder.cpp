@@ -21,9 +21,7 @@
 #include "host_sim/vehicle/vehicle_signals.hpp"
 #endif
 #if V2XLOC_SIM_HAVE_CANLOG
-#include "firmware/protocol/can_messages.hpp"
-#include "host_sim/canlog/can_layout.hpp"
-#include "host_sim/canlog/candump_log.hpp"
+#include "host_sim/recording/can_log_writer.hpp"
 #endif
 
 #include <algorithm>
@@ -352,106 +350,24 @@ std::vector<GnssFix> record_gnss(Session& s, RecordingSummary& summary, TopViewD
 #endif
 
 #if V2XLOC_SIM_HAVE_GNSS && V2XLOC_SIM_HAVE_CANLOG && V2XLOC_SIM_HAVE_VEHICLE
-struct TimedCanFrame {
-  std::int64_t us;
-  int order;  // tie-break at equal stamps: vehicle motion, then latitude, longitude, status, velocity, DOP, time
-  hal::CanFrame frame;
-};
-
-// Vehicle motion (wheel speed, yaw rate) at the vehicle rate from host_sim/vehicle's model.
-void append_vehicle_frames(const Session& s, std::vector<TimedCanFrame>& out) {
+// CAN log: vehicle motion (wheel speed, yaw rate from host_sim/vehicle's model) at the vehicle rate
+// and the GNSS fixes (host_sim/recording/can_log_writer.hpp).
+void write_can_log(Session& s, const std::vector<GnssFix>& fixes, RecordingSummary& summary, Json& can_json) {
   const RecorderConfig& cfg = s.cfg;
   const Scenario& sc = s.scenario();
   VehicleSignalSimulator veh(VehicleSignalConfig{}, derive_seed(cfg.seed, {kVehicle}));
   const int nv = static_cast<int>(std::floor(sc.duration * cfg.vehicle_rate_hz + 1e-9));
+  std::vector<VehicleSignals> vehicle;
   for (int k = 0; k < nv; ++k) {
     const double tv = k / cfg.vehicle_rate_hz;
     const VehicleState st = sc.ego.state(tv);
-    const VehicleSignals sig = veh.sample(tv, st.speed, st.yaw_rate);
-    protocol::VehicleMotion vm;
-    vm.wheel_speed_mps = sig.wheel_speed_mps;
-    vm.yaw_rate_rps = sig.yaw_rate_rps;
-    vm.speed_valid = sig.speed_valid;
-    vm.yaw_rate_valid = sig.yaw_rate_valid;
-    vm.counter = static_cast<std::uint8_t>(sig.counter % protocol::kCounterModulo);
-    out.push_back({candump_timestamp_us(cfg.time_origin_unix_s + tv), 0, protocol::pack(vm)});
+    vehicle.push_back(veh.sample(tv, st.speed, st.yaw_rate));
   }
-}
-
-// GPS week and time of week of a unix time (GPS epoch 1980-01-06, 18 leap seconds since 2017).
-protocol::GnssTime gps_time(double unix_t) {
-  const double gps_s = unix_t - 315964800.0 + 18.0;
-  protocol::GnssTime td;
-  td.week = static_cast<std::uint16_t>(std::floor(gps_s / 604800.0));
-  td.time_of_week_s = gps_s - 604800.0 * td.week;
-  return td;
-}
-
-// Each GNSS fix as the CAN layout 2 group (tools/dbc/v2xloc.dbc): latitude and longitude (valid
-// fixes only), status, velocity, DOP and time. The status, velocity, DOP and time counters step
-// once per fix; the position id's once per frame (twice per fix).
-void append_gnss_frames(const Session& s, const std::vector<GnssFix>& fixes, std::vector<TimedCanFrame>& out) {
-  std::uint8_t gnss_counter = 0, position_counter = 0;
-  const auto next = [](std::uint8_t& c) {
-    const std::uint8_t now = c;
-    c = static_cast<std::uint8_t>((c + 1) % protocol::kCounterModulo);
-    return now;
-  };
-  for (const GnssFix& f : fixes) {
-    const double unix_t = s.cfg.time_origin_unix_s + f.t;
-    const std::int64_t us = candump_timestamp_us(unix_t);
-    protocol::GnssStatus status;
-    status.alt_m = f.alt_m;
-    status.h_acc_m = f.h_acc_m;
-    status.v_acc_m = f.v_acc_m;
-    status.num_sats = static_cast<std::uint8_t>(std::clamp(f.num_sats, 0, 63));
-    status.fix_type = f.valid ? protocol::GnssFixType::kFix3D : protocol::GnssFixType::kNoFix;
-    status.counter = next(gnss_counter);
-    protocol::GnssVelocity vel;
-    vel.vel_east_mps = f.vel_east;
-    vel.vel_north_mps = f.vel_north;
-    vel.vel_up_mps = f.vel_up;
-    vel.speed_acc_mps = f.speed_acc_mps;
-    vel.valid = f.velocity_valid;
-    vel.counter = status.counter;
-    protocol::GnssDop dop{f.hdop, f.pdop, status.counter};
-    protocol::GnssTime td = gps_time(unix_t);
-    td.counter = status.counter;
-    if (f.valid) {
-      const protocol::GnssPosition lat{protocol::GnssPositionHalf::kLatitude, f.lat_deg, next(position_counter)};
-      const protocol::GnssPosition lon{protocol::GnssPositionHalf::kLongitude, f.lon_deg, next(position_counter)};
-      out.push_back({us, 1, protocol::pack(lat)});
-      out.push_back({us, 2, protocol::pack(lon)});
-    }
-    out.push_back({us, 3, protocol::pack(status)});
-    out.push_back({us, 4, protocol::pack(vel)});
-    out.push_back({us, 5, protocol::pack(dop)});
-    out.push_back({us, 6, protocol::pack(td)});
+  if (!write_gnss_vehicle_can_log((s.root / "gnss_vehicle.log").string(), "gnss_vehicle.log", cfg.time_origin_unix_s,
+                                  vehicle, fixes, can_json, s.err)) {
+    s.errors.push_back(s.err);
   }
-}
-
-// CAN log: vehicle motion at 100 Hz and the GNSS fixes (position, status, velocity, DOP, time),
-// merged in time order, time stamps = time_origin_unix_s + t.
-void write_can_log(Session& s, const std::vector<GnssFix>& fixes, RecordingSummary& summary, Json& can_json) {
-  std::vector<TimedCanFrame> out;
-  append_vehicle_frames(s, out);
-  append_gnss_frames(s, fixes, out);
-  std::stable_sort(out.begin(), out.end(), [](const TimedCanFrame& a, const TimedCanFrame& b) {
-    return a.us < b.us || (a.us == b.us && a.order < b.order);
-  });
-  std::ofstream log(s.root / "gnss_vehicle.log", std::ios::binary);
-  CandumpWriter writer(log, "can0");
-  for (const auto& e : out) writer.write(e.us, e.frame);
-  if (!log) s.errors.push_back("cannot write gnss_vehicle.log");
   summary.has_can_log = true;
-  can_json = Json::object();
-  can_json["file"] = "gnss_vehicle.log";
-  can_json["format"] = "candump -L: (unix_seconds.microseconds) can0 ID#HEXDATA";
-  can_json["frames"] = writer.frames_written();
-  can_json["vehicle_motion"] = "0x120 at 100 Hz (wheel speed, yaw rate)";
-  can_json["gnss"] = kCanLayoutGnssFrames;
-  can_json["layout_version"] = kCanLayoutVersion;
-  can_json["codec"] = "firmware/protocol/can_messages.hpp";
 }
 #endif
 

@@ -126,6 +126,36 @@ bool Fields::path(const char* key, std::string& out, bool required) const {
   return true;
 }
 
+// frame_stamps_s (optional): one finite stamp per frame, strictly increasing.
+bool read_frame_stamps(const Fields& top, int frame_count, std::vector<double>& out) {
+  const Json* stamps = top.find("frame_stamps_s");
+  if (stamps == nullptr) return true;
+  if (!stamps->is_array() || stamps->size() != static_cast<std::size_t>(frame_count))
+    return top.fail("frame_stamps_s", "want an array of frame_count stamps");
+  for (const Json& v : *stamps) {
+    const double t = v.is_number() ? v.get<double>() : std::nan("");
+    if (!std::isfinite(t) || std::abs(t) > 1e7 || (!out.empty() && !(t > out.back())))
+      return top.fail("frame_stamps_s", "stamps must be finite, within 1e7 s and strictly increasing");
+    out.push_back(t);
+  }
+  return true;
+}
+
+// gnss.antenna_in_body (optional): [x, y, z] metres, each within 100 m of the body origin.
+bool read_gnss_antenna(const Fields& top, bool& has, Eigen::Vector3d& out) {
+  const Json* gnss = top.find("gnss");
+  if (gnss == nullptr || !gnss->is_object() || !gnss->contains("antenna_in_body")) return true;
+  const Json& a = (*gnss)["antenna_in_body"];
+  if (!a.is_array() || a.size() != 3) return top.fail("gnss.antenna_in_body", "want [x, y, z]");
+  for (int k = 0; k < 3; ++k) {
+    const double v = a[static_cast<std::size_t>(k)].is_number() ? a[static_cast<std::size_t>(k)].get<double>() : std::nan("");
+    if (!std::isfinite(v) || std::abs(v) > 100.0) return top.fail("gnss.antenna_in_body", "want finite metres within 100 m");
+    out[k] = v;
+  }
+  has = true;
+  return true;
+}
+
 }  // namespace
 
 bool RecordingReader::parse_index_pattern(const std::string& text, IndexPattern& out, std::string& error) {
@@ -230,6 +260,8 @@ bool RecordingReader::parse_manifest(const std::string& text, std::string& error
     return false;
   scenario_ = static_cast<int>(id);
   frame_count_ = static_cast<int>(count);
+  if (!read_frame_stamps(top, frame_count_, frame_stamps_) || !read_gnss_antenna(top, has_gnss_antenna_, gnss_antenna_))
+    return false;
   if (top.find("seed")) {  // written as a JSON number; an integer up to 2^53 survives a double
     double seed = 0.0;
     if (!top.number("seed", 0.0, 9007199254740992.0, seed)) return false;

@@ -65,7 +65,11 @@ class RecordingReader {
   const std::string& permutation() const { return permutation_; }
   int frame_count() const { return frame_count_; }
   double frame_rate() const { return frame_rate_; }
-  double frame_time(int i) const { return i / frame_rate_; }
+  // Stamp of frame i [s]: manifest frame_stamps_s when given (a real sensor's stamps jitter),
+  // otherwise i / frame_rate_hz.
+  double frame_time(int i) const {
+    return frame_stamps_.empty() ? i / frame_rate_ : frame_stamps_[static_cast<std::size_t>(i)];
+  }
   double time_origin_unix() const { return time_origin_unix_; }
   double origin_lat_deg() const { return origin_lat_deg_; }
   double origin_lon_deg() const { return origin_lon_deg_; }
@@ -78,6 +82,13 @@ class RecordingReader {
   // Ego LiDAR scan of frame i: sensor frame, per-point time relative to frame_time(i).
   bool ego_scan(int i, cloud_io::PointCloud& out, std::string& error) const;
   const Eigen::Isometry3d& ego_lidar_mount() const { return ego_lidar_mount_; }  // sensor -> body
+
+  // GNSS antenna in the body frame (manifest gnss.antenna_in_body); false when the manifest does not say.
+  bool gnss_antenna_in_body(Eigen::Vector3d& out) const {
+    if (!has_gnss_antenna_) return false;
+    out = gnss_antenna_;
+    return true;
+  }
 
   // Ground truth ego body pose (body -> ENU) at the frame stamps and at 100 Hz.
   const std::vector<TimedPose>& ground_truth() const { return gt_; }
@@ -133,6 +144,9 @@ class RecordingReader {
   std::string permutation_;
   int frame_count_ = 0;
   double frame_rate_ = 10.0;
+  std::vector<double> frame_stamps_;
+  bool has_gnss_antenna_ = false;
+  Eigen::Vector3d gnss_antenna_ = Eigen::Vector3d::Zero();
   double time_origin_unix_ = 0;
   double origin_lat_deg_ = 0, origin_lon_deg_ = 0, origin_alt_m_ = 0;
   std::uint64_t seed_ = 1;

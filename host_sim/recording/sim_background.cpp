@@ -49,6 +49,16 @@ bool render_background(const World& static_world, const LidarConfig& cfg, const 
     render_lidar_sweep(static_world, cfg, [&](double) { return sensor_to_enu; }, 0.0, -1, rng, scan);
     for (const LidarPoint& p : scan.points) points.push_back(p.p);
   }
+  if (!background_from_points(points, max_cells, out, error)) {
+    error = cfg.name + ": " + error;
+    return false;
+  }
+  return true;
+}
+
+bool background_from_points(const std::vector<Eigen::Vector3f>& points, std::size_t max_cells, SimBackground& out,
+                            std::string& error) {
+  out = SimBackground{};
   out.returns = points.size();
   // Finest cell first; a scene with more cells than the firmware holds gets coarser cells, not
   // fewer (a thinned background would leave genuine points without their cell).
@@ -60,8 +70,7 @@ bool render_background(const World& static_world, const LidarConfig& cfg, const 
     cell *= 1.125;
   }
   if (out.cells.empty() || out.cells.size() > max_cells) {
-    error = cfg.name + ": background has " + std::to_string(out.cells.size()) + " cells (want 1.." +
-            std::to_string(max_cells) + ")";
+    error = "background has " + std::to_string(out.cells.size()) + " cells (want 1.." + std::to_string(max_cells) + ")";
     return false;
   }
   return true;

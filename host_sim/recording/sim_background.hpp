@@ -39,6 +39,11 @@ bool render_background(const World& static_world, const LidarConfig& cfg, const 
                        std::uint64_t seed, std::size_t unit, std::size_t max_cells, SimBackground& out,
                        std::string& error);
 
+// The background of a unit's static returns `points` (sensor frame): cells at kBackgroundCellM,
+// grown until at most max_cells. False: no point in the key span (error set).
+bool background_from_points(const std::vector<Eigen::Vector3f>& points, std::size_t max_cells, SimBackground& out,
+                            std::string& error);
+
 // Writes `bg` as dir/background_file_name(sensor) and names it on `signer` (file + SHA-256).
 bool write_background(const std::string& dir, const std::string& sensor, const SimBackground& bg,
                       trust::TrustedSigner& signer, std::string& error);

@@ -3,6 +3,7 @@
 //   v2xloc-dataset dair-v2x-c ROOT [--voxel M] [--seed N] [--limit N] [--json]
 // Layouts: tools/dataset/kitti_sequence.hpp and tools/dataset/dair_v2x.hpp.
 // Exit 0 done, 1 the run worked but a pair failed to register (dair), 2 usage / unusable input.
+#include "tools/dataset/dair_recording.hpp"
 #include "tools/dataset/dair_v2x.hpp"
 #include "tools/dataset/kitti_run.hpp"
 
@@ -47,6 +48,23 @@ int main(int argc, char** argv) {
   dair_cmd->add_option("--success-rotation", dair.success_rotation_deg,
                        "summary: a pair succeeds within this rotation error [deg]");
   dair_cmd->add_flag("--json", json, "print one JSON object instead of the table");
+  DairRecordingOptions recording;
+  dair_cmd->add_option("--recording", recording.out_dir,
+                       "write the cooperative sequence as a v2xloc recording in this folder (no registration)");
+  dair_cmd->add_option("--batch", recording.batch, "with --recording: the vehicle-side batch_id (sequence) to convert");
+  dair_cmd->add_option("--noise-seed", recording.seed, "with --recording: seed of the GNSS and vehicle-signal noise");
+  dair_cmd->add_option("--gnss-epoch-hour", recording.gnss_epoch_hour,
+                       "with --recording: constellation time of the drive [h after the simulator's epoch]")
+      ->check(CLI::Range(0.0, 24.0));
+  dair_cmd->add_option("--gnss-canyon-setback", recording.gnss_canyon_setback_m,
+                       "with --recording: the drive's start before the simulated intersection [m]")
+      ->check(CLI::Range(0.0, 120.0));
+  dair_cmd->add_option("--background-min-share", recording.background_min_share,
+                       "with --recording: share of the roadside sweeps that must hit a cell for the background")
+      ->check(CLI::Range(0.0, 1.0));
+  bool no_offset = false;
+  dair_cmd->add_flag("--no-system-error-offset", no_offset,
+                     "with --recording: leave cooperative/data_info.json's system_error_offset off the roadside pose");
 
   try {
     app.parse(argc, argv);
@@ -70,6 +88,17 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (*seed_opt) dair.seed = seed;
+  if (!recording.out_dir.empty()) {
+    recording.root = dair.root;
+    recording.system_error_offset = !no_offset;
+    DairRecordingSummary summary;
+    if (!write_dair_recording(recording, summary, error)) {
+      std::fprintf(stderr, "v2xloc-dataset dair-v2x-c: %s\n", error.c_str());
+      return 2;
+    }
+    std::printf("%s: %s\n", recording.out_dir.c_str(), summary.one_line().c_str());
+    return 0;
+  }
   DairRunResult result;
   if (!run_dair(dair, result, error)) {
     std::fprintf(stderr, "v2xloc-dataset dair-v2x-c: %s\n", error.c_str());

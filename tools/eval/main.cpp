@@ -163,7 +163,7 @@ int main(int argc, char** argv) {
   const std::string &plots_dir = args.plots_dir, &estimates_dir = args.estimates_dir, &trace_dir = args.trace_dir;
   const std::string& firmware_path = args.firmware_path;
   const v2xloc::sim::replay::FaultSpec& faults = args.faults;
-  const v2xloc::eval::RunOptions& options = args.options;
+  const v2xloc::eval::RunOptions& common_options = args.options;
 
   std::vector<v2xloc::eval::RowReport> rows;
   for (const std::string& dir : dirs) {
@@ -173,6 +173,8 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "v2xloc-eval: %s: %s\n", dir.c_str(), error.c_str());
       return 1;
     }
+    v2xloc::eval::RunOptions options = common_options;
+    reader.gnss_antenna_in_body(options.gnss_antenna_in_body);  // the recording's lever arm where it says
     v2xloc::eval::RowReport row;
     row.sim = reader.scenario();
     row.permutation = reader.permutation();
@@ -196,7 +198,8 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "v2xloc-eval: %s: %s\n", dir.c_str(), error.c_str());
       return 1;
     }
-    row.metrics = v2xloc::eval::compute_metrics(records);
+    const double map_from = reader.map_clouds().empty() ? 0.0 : reader.map_clouds().front().stamp;
+    row.metrics = v2xloc::eval::compute_metrics(records, map_from);
     if (!firmware_path.empty()) v2xloc::eval::mark_columns_not_on_can(row.metrics);
     const std::string name = "sim" + std::to_string(row.sim) + "_" + row.permutation;
     if (!plots_dir.empty() && !v2xloc::eval::write_plot_data(plots_dir, name, reader, records, error)) {

@@ -59,6 +59,24 @@ std::string stages_text(const StageMs& ms) {
   return out;
 }
 
+// Per row: relative error over 1 s (fused, odometry, GNSS) and the map-to-truth offset the valid
+// registrations imply (on real data: the cooperative calibration's error).
+std::string drift_and_offset_text(const std::vector<RowReport>& rows) {
+  std::string out = "RPE 1 s (fused / odometry / GNSS) and the offset valid registrations imply (x y z, spread; yaw):\n";
+  char buf[320];
+  for (const RowReport& r : rows) {
+    const RelativeErrors& e = r.metrics.rpe_1s;
+    const OffsetEstimate& o = r.metrics.offset;
+    std::snprintf(buf, sizeof buf,
+                  "  %-4d %-16s RPE %6.3f / %6.3f / %6.3f m   offset (%6.3f %6.3f %6.3f) m spread %.3f m, yaw %6.2f "
+                  "deg spread %.2f deg over %d frames\n",
+                  r.sim, r.permutation.c_str(), e.fused, e.slam, e.gps, o.mean.x(), o.mean.y(), o.mean.z(), o.spread,
+                  o.yaw_mean_deg, o.yaw_spread_deg, o.frames);
+    out += buf;
+  }
+  return out;
+}
+
 }  // namespace
 
 std::string format_timing(const std::vector<RowReport>& rows) {
@@ -119,6 +137,15 @@ std::string format_table(const std::vector<RowReport>& rows, bool aligned) {
     out += buf;
   }
   out += " m\n";
+  for (const RowReport& r : rows) {
+    if (r.metrics.frames_before_map == 0) continue;
+    std::snprintf(buf, sizeof buf,
+                  "Sim %d %s: the %d frames before the first map cloud (no map; the output is the GNSS fix) are not in "
+                  "the columns\n",
+                  r.sim, r.permutation.c_str(), r.metrics.frames_before_map);
+    out += buf;
+  }
+  if (!aligned) out += drift_and_offset_text(rows);
   return out;
 }
 
@@ -128,6 +155,7 @@ std::string format_json(const std::vector<RowReport>& rows) {
     Json row = {{"sim", r.sim},
                 {"perm", r.permutation},
                 {"frames", r.metrics.frames},
+                {"frames_before_map", r.metrics.frames_before_map},
                 {"valid_frames", r.metrics.valid_frames},
                 {"reg_ok_frames", r.metrics.reg_ok_frames},
                 {"first_localized_frame", r.metrics.first_localized_frame},
@@ -163,6 +191,15 @@ std::string format_json(const std::vector<RowReport>& rows) {
                    {"tracking_work_capped", c.tracking_work_capped},
                    {"rebuild_steps_deferred", c.rebuild_steps_deferred},
                    {"audit_periods_starved", c.audit_periods_starved}};
+    row["rpe_1s"] = {{"fused", number(r.metrics.rpe_1s.fused)},
+                     {"slam", number(r.metrics.rpe_1s.slam)},
+                     {"gps", number(r.metrics.rpe_1s.gps)}};
+    const OffsetEstimate& o = r.metrics.offset;
+    row["offset"] = {{"frames", o.frames},
+                     {"mean_m", {o.mean.x(), o.mean.y(), o.mean.z()}},
+                     {"spread_m", o.spread},
+                     {"yaw_mean_deg", o.yaw_mean_deg},
+                     {"yaw_spread_deg", o.yaw_spread_deg}};
     row["unaligned"] = columns_json(r.metrics.unaligned);
     row["aligned"] = columns_json(r.metrics.aligned);
     out_rows.push_back(std::move(row));

@@ -1,0 +1,655 @@
+#include "tools/dataset/dair_recording.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <nlohmann/json.hpp>
+
+#include "host_sim/cloud_io/pcd.hpp"
+#include "host_sim/common/rng.hpp"
+#include "host_sim/common/text_file.hpp"
+#include "host_sim/gnss/gnss_simulator.hpp"
+#include "host_sim/recording/can_log_writer.hpp"
+#include "host_sim/recording/pose_io.hpp"
+#include "host_sim/recording/sim_background.hpp"
+#include "host_sim/recording/sim_trust.hpp"
+#include "host_sim/vehicle/vehicle_signals.hpp"
+#include "host_sim/world/intersection_world.hpp"
+#include "tools/dataset/dair_v2x.hpp"
+#include "v2xloc/algo/core/config.hpp"
+#include "v2xloc/algo/core/geodesy.hpp"
+
+namespace v2xloc::dataset {
+namespace {
+
+namespace fs = std::filesystem;
+using InJson = nlohmann::json;
+using sim::Json;
+using Iso = Eigen::Isometry3d;
+
+constexpr const char* kRoadsideSensor = "infra_0";
+constexpr double kFramePeriodS = 0.1;            // both LiDARs sweep at 10 Hz
+constexpr double kInnerLaneM = 1.75;            // the simulated street's inner lane, right of its axis
+constexpr double kBackgroundVoxelM = 0.25;       // static-cell test of the roadside sweeps
+// Noise streams (derive_seed keys), apart from the simulator's recorder streams.
+enum Stream : std::uint64_t { kGnssStream = 16, kVehicleStream = 17 };
+
+struct VehicleFrame {
+  std::string id, pcd;
+  std::int64_t stamp_us = 0;
+  Iso world_T_lidar = Iso::Identity();
+};
+
+struct RoadsideFrame {
+  std::string id, pcd;
+  std::int64_t stamp_us = 0;
+  Iso world_T_sensor = Iso::Identity();
+};
+
+bool parse_json_file(const std::string& path, InJson& out, std::string& error) {
+  std::ifstream in(path);
+  if (!in) {
+    error = "cannot open '" + path + "'";
+    return false;
+  }
+  out = InJson::parse(in, nullptr, /*allow_exceptions=*/false);
+  if (out.is_discarded()) {
+    error = "'" + path + "' is not valid JSON";
+    return false;
+  }
+  return true;
+}
+
+// A string field of a data_info entry ("" when absent or not a string).
+std::string text_of(const InJson& e, const char* key) {
+  return e.is_object() && e.contains(key) && e[key].is_string() ? e[key].get<std::string>() : std::string();
+}
+
+// Microsecond stamps are strings in the release ("1626240238805763"); numbers are accepted too.
+bool stamp_of(const InJson& e, std::int64_t& us) {
+  if (!e.is_object() || !e.contains("pointcloud_timestamp")) return false;
+  const InJson& v = e["pointcloud_timestamp"];
+  if (v.is_number_integer()) {
+    us = v.get<std::int64_t>();
+    return us > 0;
+  }
+  if (!v.is_string()) return false;
+  const std::string s = v.get<std::string>();
+  const auto r = std::from_chars(s.data(), s.data() + s.size(), us);
+  return r.ec == std::errc() && r.ptr == s.data() + s.size() && us > 0;
+}
+
+bool read_transform(const std::string& path, Iso& out, std::string& error) {
+  Mat4d m;
+  if (!read_lidar_i2v(path, m, error)) return false;
+  out.matrix() = m;
+  return true;
+}
+
+// A path from data_info, relative to its side's folder; refused when it leaves the folder.
+bool side_path(const std::string& side_dir, const std::string& relative, std::string& out, std::string& error) {
+  if (relative.empty() || relative.front() == '/' || relative.find("..") != std::string::npos) {
+    error = side_dir + ": data_info path '" + relative + "' must be relative and stay inside the folder";
+    return false;
+  }
+  out = side_dir + "/" + relative;
+  return true;
+}
+
+bool read_vehicle_frames(const std::string& root, const std::string& batch, std::vector<VehicleFrame>& frames,
+                         std::string& chosen_batch, std::string& error) {
+  const std::string dir = root + "/vehicle-side";
+  InJson info;
+  if (!parse_json_file(dir + "/data_info.json", info, error)) return false;
+  if (!info.is_array()) {
+    error = dir + "/data_info.json: expected an array of frames";
+    return false;
+  }
+  std::map<std::string, int> batches;
+  for (const InJson& e : info) ++batches[text_of(e, "batch_id")];
+  chosen_batch = batch;
+  if (chosen_batch.empty()) {
+    if (batches.size() != 1) {
+      error = dir + "/data_info.json holds " + std::to_string(batches.size()) + " sequences (batch_id); pick one with --batch";
+      return false;
+    }
+    chosen_batch = batches.begin()->first;
+  } else if (!batches.count(chosen_batch)) {
+    error = dir + "/data_info.json has no batch_id '" + chosen_batch + "'";
+    return false;
+  }
+  for (const InJson& e : info) {
+    if (text_of(e, "batch_id") != chosen_batch) continue;
+    VehicleFrame f;
+    f.id = fs::path(text_of(e, "pointcloud_path")).stem().string();
+    std::string novatel, lidar;
+    if (!stamp_of(e, f.stamp_us)) {
+      error = dir + "/data_info.json frame " + f.id + ": pointcloud_timestamp missing or not microseconds";
+      return false;
+    }
+    if (!side_path(dir, text_of(e, "pointcloud_path"), f.pcd, error) ||
+        !side_path(dir, text_of(e, "calib_novatel_to_world_path"), novatel, error) ||
+        !side_path(dir, text_of(e, "calib_lidar_to_novatel_path"), lidar, error))
+      return false;
+    if (!fs::is_regular_file(f.pcd)) continue;  // a folder may hold part of a sequence
+    Iso world_T_novatel, novatel_T_lidar;
+    if (!read_transform(novatel, world_T_novatel, error) || !read_transform(lidar, novatel_T_lidar, error)) return false;
+    f.world_T_lidar = world_T_novatel * novatel_T_lidar;
+    frames.push_back(std::move(f));
+  }
+  std::sort(frames.begin(), frames.end(), [](const VehicleFrame& a, const VehicleFrame& b) { return a.stamp_us < b.stamp_us; });
+  for (std::size_t i = 1; i < frames.size(); ++i) {
+    if (frames[i].stamp_us <= frames[i - 1].stamp_us) {
+      error = "vehicle frames " + frames[i - 1].id + " and " + frames[i].id + " share a time stamp";
+      return false;
+    }
+  }
+  if (frames.size() < 2) {
+    error = dir + ": sequence '" + chosen_batch + "' has fewer than two scans present";
+    return false;
+  }
+  return true;
+}
+
+// The roadside unit of the sequence: the (intersection, batch) of the roadside frames that
+// cooperative/data_info.json pairs with its vehicle frames; its system_error_offset (median).
+struct RoadsideChoice {
+  std::string intersection, batch;
+  double delta_x = 0.0, delta_y = 0.0;
+  int pairs = 0;
+};
+
+bool choose_roadside(const std::string& root, const std::vector<VehicleFrame>& vehicle, RoadsideChoice& out,
+                     std::string& error) {
+  InJson pairs, infra;
+  if (!parse_json_file(root + "/cooperative/data_info.json", pairs, error) ||
+      !parse_json_file(root + "/infrastructure-side/data_info.json", infra, error))
+    return false;
+  if (!pairs.is_array() || !infra.is_array()) {
+    error = root + ": cooperative and infrastructure-side data_info.json must be arrays";
+    return false;
+  }
+  std::map<std::string, const InJson*> infra_by_id;
+  for (const InJson& e : infra) infra_by_id[fs::path(text_of(e, "pointcloud_path")).stem().string()] = &e;
+  std::map<std::string, int> units;
+  std::vector<double> dx, dy;
+  for (const InJson& p : pairs) {
+    const std::string vid = fs::path(text_of(p, "vehicle_pointcloud_path")).stem().string();
+    if (std::none_of(vehicle.begin(), vehicle.end(), [&](const VehicleFrame& f) { return f.id == vid; })) continue;
+    const auto it = infra_by_id.find(fs::path(text_of(p, "infrastructure_pointcloud_path")).stem().string());
+    if (it == infra_by_id.end()) continue;
+    ++units[text_of(*it->second, "intersection_loc") + "\n" + text_of(*it->second, "batch_id")];
+    if (p.contains("system_error_offset") && p["system_error_offset"].is_object()) {
+      const InJson& o = p["system_error_offset"];
+      if (o.contains("delta_x") && o["delta_x"].is_number() && o.contains("delta_y") && o["delta_y"].is_number()) {
+        dx.push_back(o["delta_x"].get<double>());
+        dy.push_back(o["delta_y"].get<double>());
+      }
+    }
+  }
+  if (units.empty()) {
+    error = root + "/cooperative/data_info.json pairs none of the sequence's vehicle scans with a roadside frame";
+    return false;
+  }
+  const auto best = std::max_element(units.begin(), units.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+  const std::size_t cut = best->first.find('\n');
+  out.intersection = best->first.substr(0, cut);
+  out.batch = best->first.substr(cut + 1);
+  out.pairs = best->second;
+  const auto median = [](std::vector<double> v) {
+    if (v.empty()) return 0.0;
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  out.delta_x = median(dx);
+  out.delta_y = median(dy);
+  if (!std::isfinite(out.delta_x) || !std::isfinite(out.delta_y) || std::abs(out.delta_x) > 100 || std::abs(out.delta_y) > 100) {
+    error = root + "/cooperative/data_info.json: system_error_offset not finite or beyond 100 m";
+    return false;
+  }
+  return true;
+}
+
+bool read_roadside_frames(const std::string& root, const RoadsideChoice& unit, std::int64_t first_us,
+                          std::int64_t last_us, std::vector<RoadsideFrame>& frames, std::string& error) {
+  const std::string dir = root + "/infrastructure-side";
+  InJson info;
+  if (!parse_json_file(dir + "/data_info.json", info, error)) return false;
+  for (const InJson& e : info) {
+    if (text_of(e, "intersection_loc") != unit.intersection || text_of(e, "batch_id") != unit.batch) continue;
+    RoadsideFrame f;
+    f.id = fs::path(text_of(e, "pointcloud_path")).stem().string();
+    std::string calib;
+    if (!stamp_of(e, f.stamp_us)) {
+      error = dir + "/data_info.json frame " + f.id + ": pointcloud_timestamp missing or not microseconds";
+      return false;
+    }
+    if (f.stamp_us < first_us || f.stamp_us > last_us) continue;
+    if (!side_path(dir, text_of(e, "pointcloud_path"), f.pcd, error) ||
+        !side_path(dir, text_of(e, "calib_virtuallidar_to_world_path"), calib, error))
+      return false;
+    if (!fs::is_regular_file(f.pcd)) continue;
+    if (!read_transform(calib, f.world_T_sensor, error)) return false;
+    frames.push_back(std::move(f));
+  }
+  std::sort(frames.begin(), frames.end(), [](const RoadsideFrame& a, const RoadsideFrame& b) { return a.stamp_us < b.stamp_us; });
+  if (frames.empty()) {
+    error = dir + ": no roadside scan of " + unit.intersection + " during the drive";
+    return false;
+  }
+  return true;
+}
+
+double yaw_of(const Iso& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)); }
+
+Iso interpolate(const std::vector<sim::TimedPose>& poses, double t) {
+  if (!(t > poses.front().t)) return poses.front().pose;
+  if (t >= poses.back().t) return poses.back().pose;
+  const auto it = std::upper_bound(poses.begin(), poses.end(), t, [](double v, const sim::TimedPose& p) { return v < p.t; });
+  const sim::TimedPose& b = *it;
+  const sim::TimedPose& a = *(it - 1);
+  const double s = (t - a.t) / (b.t - a.t);
+  Iso out = Iso::Identity();
+  out.translation() = (1 - s) * a.pose.translation() + s * b.pose.translation();
+  out.linear() = Eigen::Quaterniond(a.pose.linear()).slerp(s, Eigen::Quaterniond(b.pose.linear())).toRotationMatrix();
+  return out;
+}
+
+// LiDAR height above the road: the median over 1 m cells 3-15 m around the sensor of each cell's
+// lowest return (most such cells hold road), negated.
+double lidar_height(const cloud_io::PointCloud& scan) {
+  std::map<std::pair<int, int>, float> lowest;
+  for (const Eigen::Vector3f& p : scan.points) {
+    const float r = p.head<2>().norm();
+    if (!p.allFinite() || r < 3.0f || r > 15.0f) continue;
+    const std::pair<int, int> key{static_cast<int>(std::floor(p.x())), static_cast<int>(std::floor(p.y()))};
+    const auto it = lowest.find(key);
+    if (it == lowest.end() || p.z() < it->second) lowest[key] = p.z();
+  }
+  std::vector<float> z;
+  for (const auto& kv : lowest) z.push_back(kv.second);
+  if (z.empty()) return 0.0;
+  std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2), z.end());
+  return -static_cast<double>(z[z.size() / 2]);
+}
+
+// Speed along the body x axis and yaw rate at each ground-truth stamp (central differences).
+struct Motion {
+  double speed = 0.0, yaw_rate = 0.0;
+};
+std::vector<Motion> motion_of(const std::vector<sim::TimedPose>& gt) {
+  std::vector<Motion> out(gt.size());
+  for (std::size_t i = 0; i < gt.size(); ++i) {
+    const std::size_t a = i == 0 ? 0 : i - 1, b = std::min(gt.size() - 1, i + 1);
+    const double dt = gt[b].t - gt[a].t;
+    const Eigen::Vector3d v = (gt[b].pose.translation() - gt[a].pose.translation()) / dt;
+    out[i].speed = v.dot(gt[i].pose.linear().col(0));
+    out[i].yaw_rate = std::remainder(yaw_of(gt[b].pose) - yaw_of(gt[a].pose), 2.0 * M_PI) / dt;
+  }
+  return out;
+}
+
+Motion motion_at(const std::vector<sim::TimedPose>& gt, const std::vector<Motion>& m, double t) {
+  if (!(t > gt.front().t)) return m.front();
+  if (t >= gt.back().t) return m.back();
+  const std::size_t b = static_cast<std::size_t>(
+      std::upper_bound(gt.begin(), gt.end(), t, [](double v, const sim::TimedPose& p) { return v < p.t; }) - gt.begin());
+  const double s = (t - gt[b - 1].t) / (gt[b].t - gt[b - 1].t);
+  return {(1 - s) * m[b - 1].speed + s * m[b].speed, (1 - s) * m[b - 1].yaw_rate + s * m[b].yaw_rate};
+}
+
+// The simulated canyon laid on the real intersection: recording frame -> simulator frame.
+struct CanyonFrame {
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  double rotation = 0.0;  // recording yaw of the simulator's x axis
+  Eigen::Vector3d to_sim(const Eigen::Vector3d& p) const {
+    const Eigen::Vector2d d = Eigen::Rotation2Dd(-rotation) * (p.head<2>() - centre);
+    return {d.x(), d.y(), p.z()};
+  }
+  Eigen::Vector3d rotate_to_sim(const Eigen::Vector3d& v) const {
+    const Eigen::Vector2d d = Eigen::Rotation2Dd(-rotation) * v.head<2>();
+    return {d.x(), d.y(), v.z()};
+  }
+  Eigen::Vector3d rotate_from_sim(const Eigen::Vector3d& v) const {
+    const Eigen::Vector2d d = Eigen::Rotation2Dd(rotation) * v.head<2>();
+    return {d.x(), d.y(), v.z()};
+  }
+};
+
+struct GnssResult {
+  std::vector<sim::GnssFix> fixes;
+  double mean_h_error = 0.0, max_h_error = 0.0;
+  int valid = 0;
+};
+
+GnssResult simulate_gnss(const DairRecordingOptions& o, const std::vector<sim::TimedPose>& gt100,
+                         const Eigen::Vector3d& antenna_in_body, const CanyonFrame& canyon,
+                         const GeodeticOrigin& origin, double duration) {
+  sim::IntersectionWorld iw;
+  sim::WorldConfig wc;
+  wc.seed = o.seed;  // the simulator's world of the same seed
+  sim::build_intersection_world(wc, iw);
+  iw.world.set_time(0.0);
+  sim::GnssConfig config;
+  config.epoch_offset_s = 3600.0 * o.gnss_epoch_hour;
+  sim::GnssSimulator receiver(config, iw.world, origin, sim::derive_seed(o.seed, {kGnssStream}));
+  GnssResult out;
+  const int n = static_cast<int>(std::floor(duration * o.gnss_rate_hz + 1e-9)) + 1;
+  double sum = 0.0;
+  for (int k = 0; k < n; ++k) {
+    const double t = k / o.gnss_rate_hz;
+    constexpr double kHalfStep = 0.005;  // s
+    const Eigen::Vector3d antenna = interpolate(gt100, t) * antenna_in_body;
+    const Eigen::Vector3d velocity = (interpolate(gt100, t + kHalfStep) * antenna_in_body -
+                                      interpolate(gt100, t - kHalfStep) * antenna_in_body) / (2.0 * kHalfStep);
+    const Eigen::Vector3d antenna_sim = canyon.to_sim(antenna);
+    sim::GnssFix fix = receiver.fix(t, antenna_sim, canyon.rotate_to_sim(velocity));
+    // The simulated error, rotated back onto the real antenna.
+    const Eigen::Vector3d estimate = antenna + canyon.rotate_from_sim(fix.enu_estimate - antenna_sim);
+    const Eigen::Vector3d vel = canyon.rotate_from_sim({fix.vel_east, fix.vel_north, fix.vel_up});
+    fix.enu_estimate = estimate;
+    fix.vel_east = vel.x();
+    fix.vel_north = vel.y();
+    fix.vel_up = vel.z();
+    const EcefToGeodeticResult g = ecef_to_geodetic(enu_to_ecef(origin, estimate));
+    fix.lat_deg = g.point.lat_deg;
+    fix.lon_deg = g.point.lon_deg;
+    fix.alt_m = g.point.alt_m;
+    if (fix.valid) {
+      const double e = (estimate - antenna).head<2>().norm();
+      sum += e;
+      out.max_h_error = std::max(out.max_h_error, e);
+      ++out.valid;
+    }
+    out.fixes.push_back(fix);
+  }
+  if (out.valid > 0) out.mean_h_error = sum / out.valid;
+  return out;
+}
+
+// Roadside background: the points of the voxels hit in at least kBackgroundMinShare of the sweeps
+// (what stands still), in the sensor frame.
+std::vector<Eigen::Vector3f> static_points(const std::vector<cloud_io::PointCloud>& sweeps, double min_share) {
+  struct Cell {
+    int last_sweep = -1, sweeps = 0;
+  };
+  std::map<std::array<int, 3>, Cell> cells;
+  const auto key = [](const Eigen::Vector3f& p) {
+    return std::array<int, 3>{static_cast<int>(std::floor(p.x() / kBackgroundVoxelM)),
+                              static_cast<int>(std::floor(p.y() / kBackgroundVoxelM)),
+                              static_cast<int>(std::floor(p.z() / kBackgroundVoxelM))};
+  };
+  for (std::size_t s = 0; s < sweeps.size(); ++s) {
+    for (const Eigen::Vector3f& p : sweeps[s].points) {
+      if (!p.allFinite()) continue;
+      Cell& c = cells[key(p)];
+      if (c.last_sweep != static_cast<int>(s)) {
+        c.last_sweep = static_cast<int>(s);
+        ++c.sweeps;
+      }
+    }
+  }
+  const int need = std::max(1, static_cast<int>(std::ceil(min_share * static_cast<double>(sweeps.size()))));
+  std::vector<Eigen::Vector3f> out;
+  for (const cloud_io::PointCloud& sweep : sweeps)
+    for (const Eigen::Vector3f& p : sweep.points)
+      if (p.allFinite() && cells[key(p)].sweeps >= need) out.push_back(p);
+  return out;
+}
+
+std::string frame_file(const std::string& dir, std::size_t index) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "/%06zu.pcdz", index);
+  return dir + buf;
+}
+
+// Intensity to [0, 1]: DAIR's vehicle LiDAR stores 0-255 as uint8, the roadside one as float
+// in the same range.
+void normalise_intensity(cloud_io::PointCloud& c) {
+  for (float& v : c.intensity) v = std::isfinite(v) ? std::clamp(v / 255.0f, 0.0f, 1.0f) : 0.0f;
+}
+
+}  // namespace
+
+std::string DairRecordingSummary::one_line() const {
+  char buf[400];
+  std::snprintf(buf, sizeof buf,
+                "%d scans over %.2f s, %d roadside clouds (first at %.2f s), LiDAR %.2f m above the road, GNSS "
+                "%d fixes h-error mean %.2f m max %.2f m, background %zu cells, %zu point times clamped",
+                frames, duration_s, roadside_clouds, first_roadside_s, lidar_height_m, gnss_valid_fixes,
+                gnss_mean_h_error_m, gnss_max_h_error_m, background_cells, times_clamped);
+  return buf;
+}
+
+bool write_dair_recording(const DairRecordingOptions& o, DairRecordingSummary& summary, std::string& error) {
+  summary = DairRecordingSummary{};
+  std::vector<VehicleFrame> vehicle;
+  std::string batch;
+  if (!read_vehicle_frames(o.root, o.batch, vehicle, batch, error)) return false;
+  RoadsideChoice unit;
+  if (!choose_roadside(o.root, vehicle, unit, error)) return false;
+  const std::int64_t t0_us = vehicle.front().stamp_us;
+  const std::int64_t end_us = vehicle.back().stamp_us + static_cast<std::int64_t>(kFramePeriodS * 1e6);
+  std::vector<RoadsideFrame> roadside;
+  if (!read_roadside_frames(o.root, unit, t0_us, end_us, roadside, error)) return false;
+  const auto seconds = [&](std::int64_t us) { return static_cast<double>(us - t0_us) * 1e-6; };
+
+  const fs::path out(o.out_dir);
+  std::error_code ec;
+  fs::create_directories(out / "ego_lidar", ec);
+  fs::create_directories(out / "infra" / kRoadsideSensor, ec);
+  if (ec) {
+    error = "cannot create " + o.out_dir + ": " + ec.message();
+    return false;
+  }
+
+  // The roadside pose as DAIR-V2X's calib_i2v composes it (offset on the world translation).
+  Iso roadside_world = roadside.front().world_T_sensor;
+  if (o.system_error_offset) roadside_world.translation() += Eigen::Vector3d(unit.delta_x, unit.delta_y, 0.0);
+  Eigen::Vector3d offset = roadside_world.translation().array().round();
+  offset.z() = std::round(vehicle.front().world_T_lidar.translation().z());
+  const auto shifted = [&](Iso T) {
+    T.translation() -= offset;
+    return T;
+  };
+  const Iso roadside_pose = shifted(roadside_world);
+
+  // Ego scans; the mount height from the first.
+  cloud_io::PointCloud scan;
+  cloud_io::ReadOptions read;
+  Iso mount = Iso::Identity();
+  std::vector<sim::TimedPose> gt;
+  std::vector<double> stamps;
+  const cloud_io::Quantisation quantisation{};
+  for (std::size_t i = 0; i < vehicle.size(); ++i) {
+    read.time_offset_s = static_cast<double>(vehicle[i].stamp_us) * 1e-6;
+    if (!cloud_io::read_pcd(vehicle[i].pcd, scan, error, read)) return false;
+    if (scan.time.size() != scan.points.size()) {
+      error = vehicle[i].pcd + ": no per-point timestamp field";
+      return false;
+    }
+    if (i == 0) {
+      summary.lidar_height_m = lidar_height(scan);
+      if (!(summary.lidar_height_m > 0.5 && summary.lidar_height_m < 5.0)) {
+        error = vehicle[i].pcd + ": no road found below the LiDAR (height " + std::to_string(summary.lidar_height_m) + " m)";
+        return false;
+      }
+      mount.translation() = Eigen::Vector3d(0.0, 0.0, summary.lidar_height_m);
+    }
+    for (float& t : scan.time) {
+      const float clamped = std::clamp(std::isfinite(t) ? t : 0.0f, 0.0f, static_cast<float>(kFramePeriodS) - 1e-6f);
+      summary.times_clamped += clamped != t ? 1 : 0;
+      t = clamped;
+    }
+    normalise_intensity(scan);
+    scan.normals.clear();
+    if (!cloud_io::write_quantised_pcd(frame_file((out / "ego_lidar").string(), i), scan, quantisation, error)) return false;
+    const double t = seconds(vehicle[i].stamp_us);
+    stamps.push_back(t);
+    gt.push_back({t, shifted(vehicle[i].world_T_lidar) * mount.inverse()});
+  }
+  summary.frames = static_cast<int>(vehicle.size());
+  summary.duration_s = stamps.back() + kFramePeriodS;
+
+  // Roadside clouds (shares) and the background of their static cells.
+  Json clouds = Json::array();
+  std::vector<cloud_io::PointCloud> sweeps;
+  for (std::size_t k = 0; k < roadside.size(); ++k) {
+    cloud_io::PointCloud cloud;
+    if (!cloud_io::read_pcd(roadside[k].pcd, cloud, error)) return false;
+    normalise_intensity(cloud);
+    cloud.time.clear();
+    cloud.normals.clear();
+    const std::string rel = frame_file(std::string("infra/") + kRoadsideSensor, k);
+    if (!cloud_io::write_quantised_pcd((out / rel).string(), cloud, quantisation, error)) return false;
+    Json e = Json::object();
+    e["sensor"] = kRoadsideSensor;
+    e["kind"] = "infra";
+    e["stamp_s"] = seconds(roadside[k].stamp_us);
+    e["file"] = rel;
+    e["points"] = cloud.points.size();
+    e["sensor_pose_enu"] = sim::pose_to_json(roadside_pose);
+    e["true_sensor_pose_enu"] = sim::pose_to_json(roadside_pose);
+    e["dair_frame"] = roadside[k].id;
+    clouds.push_back(std::move(e));
+    sweeps.push_back(std::move(cloud));
+  }
+  summary.roadside_clouds = static_cast<int>(roadside.size());
+  summary.first_roadside_s = seconds(roadside.front().stamp_us);
+
+  // Ground truth at the scan stamps and at 100 Hz.
+  std::vector<sim::TimedPose> gt100;
+  for (int k = 0; k * 0.01 <= stamps.back() + 1e-9; ++k) gt100.push_back({k * 0.01, interpolate(gt, k * 0.01)});
+  if (!sim::write_tum((out / "ground_truth.tum").string(), gt, error) ||
+      !sim::write_tum((out / "ground_truth_100hz.tum").string(), gt100, error))
+    return false;
+
+  // GNSS through the simulated canyon, vehicle signals from the truth, both on the CAN log.
+  const GeodeticOrigin origin = make_geodetic_origin(o.origin_lat_deg, o.origin_lon_deg, o.origin_alt_m);
+  Iso novatel_T_lidar_first = Iso::Identity();
+  {
+    // The antenna (NovAtel reference point) in the body frame, from the first scan's calibration.
+    const std::string dir = o.root + "/vehicle-side";
+    InJson info;
+    if (!parse_json_file(dir + "/data_info.json", info, error)) return false;
+    for (const InJson& e : info) {
+      if (fs::path(text_of(e, "pointcloud_path")).stem().string() != vehicle.front().id) continue;
+      std::string lidar;
+      if (!side_path(dir, text_of(e, "calib_lidar_to_novatel_path"), lidar, error) ||
+          !read_transform(lidar, novatel_T_lidar_first, error))
+        return false;
+    }
+  }
+  const Eigen::Vector3d antenna_in_body = mount * novatel_T_lidar_first.inverse().translation();
+  // The simulated street along the first heading, the drive starting in its inner lane
+  // gnss_canyon_setback_m before the simulated intersection (as the simulator's Sim 0 ego).
+  CanyonFrame canyon;
+  canyon.rotation = yaw_of(gt.front().pose);
+  const Eigen::Vector2d forward(std::cos(canyon.rotation), std::sin(canyon.rotation)), left(-forward.y(), forward.x());
+  canyon.centre = gt.front().pose.translation().head<2>() + o.gnss_canyon_setback_m * forward + kInnerLaneM * left;
+  const GnssResult gnss = simulate_gnss(o, gt100, antenna_in_body, canyon, origin, stamps.back());
+  summary.gnss_valid_fixes = gnss.valid;
+  summary.gnss_mean_h_error_m = gnss.mean_h_error;
+  summary.gnss_max_h_error_m = gnss.max_h_error;
+
+  const std::vector<Motion> motion = motion_of(gt);
+  sim::VehicleSignalSimulator signals(sim::VehicleSignalConfig{}, sim::derive_seed(o.seed, {kVehicleStream}));
+  std::vector<sim::VehicleSignals> vehicle_signals;
+  const int nv = static_cast<int>(std::floor(stamps.back() * o.vehicle_rate_hz + 1e-9)) + 1;
+  for (int k = 0; k < nv; ++k) {
+    const double t = k / o.vehicle_rate_hz;
+    const Motion m = motion_at(gt, motion, t);
+    vehicle_signals.push_back(signals.sample(t, m.speed, m.yaw_rate));
+  }
+  const double t0_unix = static_cast<double>(t0_us) * 1e-6;
+  Json can_json;
+  if (!sim::write_gnss_vehicle_can_log((out / "gnss_vehicle.log").string(), "gnss_vehicle.log", t0_unix, vehicle_signals,
+                                       gnss.fixes, can_json, error))
+    return false;
+
+  // Trust list: the roadside unit's test key, survey and background.
+  sim::SimSigner signer;
+  if (!sim::sim_signer("infra", kRoadsideSensor, signer)) {
+    error = "no test key for the roadside unit";
+    return false;
+  }
+  signer.surveyed = true;
+  signer.survey = sim::surveyed_pose(roadside_pose);
+  trust::TrustList list = sim::trust_list_of({signer});
+  sim::SimBackground background;
+  if (!sim::background_from_points(static_points(sweeps, o.background_min_share), config::kBackgroundFileCells, background, error) ||
+      !sim::write_background(o.out_dir, kRoadsideSensor, background, list.signers[0], error) ||
+      !sim::write_text_file((out / sim::kTrustListFile).string(), sim::trust_list_text(list), error))
+    return false;
+  summary.background_cells = background.cells.size();
+
+  // Manifest.
+  Json m = Json::object();
+  m["format"] = "v2xloc-recording";
+  m["format_version"] = 2;
+  m["scenario"] = Json{{"id", 100},
+                       {"name", "dair_v2x_c"},
+                       {"description", "DAIR-V2X-C cooperative sequence (real data), intersection " + unit.intersection}};
+  m["permutation"] = "real_1_infra";
+  m["seed"] = static_cast<double>(o.seed);
+  m["quick"] = false;
+  m["duration_s"] = summary.duration_s;
+  m["frame_rate_hz"] = 1.0 / kFramePeriodS;
+  m["frame_count"] = summary.frames;
+  m["frame_stamps_s"] = stamps;
+  m["time_origin_unix_s"] = t0_unix;
+  m["geodetic_origin"] = Json{{"lat_deg", o.origin_lat_deg}, {"lon_deg", o.origin_lon_deg}, {"alt_m", o.origin_alt_m},
+                              {"note", "nominal: the release does not georeference its world frame"}};
+  m["source"] = Json{{"dataset", "DAIR-V2X-C"},
+                     {"root", o.root},
+                     {"vehicle_batch", batch},
+                     {"roadside", unit.intersection + " batch " + unit.batch},
+                     {"pairs_in_sequence", unit.pairs},
+                     {"world_offset", std::vector<double>{offset.x(), offset.y(), offset.z()}},
+                     {"world_offset_note", "recording frame = DAIR world frame - world_offset"},
+                     {"system_error_offset_applied", o.system_error_offset},
+                     {"system_error_offset", Json{{"delta_x", unit.delta_x}, {"delta_y", unit.delta_y}}},
+                     {"ground_truth", "novatel_to_world * lidar_to_novatel * inverse(mount_in_body)"}};
+  m["units"] = Json{{"frame", "DAIR world frame (local, x east, y north, z up) shifted by source.world_offset"},
+                    {"body_frame", "vehicle LiDAR axes (x forward, y left, z up), origin on the road below it"},
+                    {"time", "seconds since the first vehicle scan; unix time = time_origin_unix_s + t"},
+                    {"pose", "[x, y, z, qx, qy, qz, qw], child frame in parent frame"},
+                    {"intensity", "[0, 1]: the sensors' 0-255 / 255"}};
+  m["files"] = Json{{"ego_scan_pattern", "ego_lidar/%06d.pcdz"},
+                    {"ego_scan_fields", "x y z intensity t; sensor frame at each point's firing time; t = seconds since the frame stamp"},
+                    {"frame_stamp", "frame_stamps_s"},
+                    {"ground_truth", "ground_truth.tum"},
+                    {"ground_truth_100hz", "ground_truth_100hz.tum"},
+                    {"can_log", "gnss_vehicle.log"},
+                    {"trust_list", sim::kTrustListFile}};
+  Json ego = Json{{"name", "ego_lidar"}, {"carrier", "ego"}, {"type", "lidar"}, {"model", "Hesai Pandar40 (40 beams)"},
+                  {"rate_hz", 1.0 / kFramePeriodS}, {"mount_in_body", sim::pose_to_json(mount)}};
+  Json infra = Json{{"name", kRoadsideSensor}, {"carrier", "infrastructure"}, {"type", "lidar"},
+                    {"rate_hz_published", 1.0 / kFramePeriodS}, {"surveyed_pose_enu", sim::pose_to_json(roadside_pose)},
+                    {"background_note", "cells its own sweeps of the drive hit in at least half of them"}};
+  m["sensors"] = Json::array({ego, infra});
+  m["map_clouds"] = Json{{"fields", "x y z intensity (quantised), sensor frame (DAIR virtual LiDAR)"},
+                         {"clouds", clouds}};
+  m["gnss"] = Json{{"model", "host_sim/gnss urban-canyon receiver along the true antenna path, the simulated "
+                             "intersection's buildings laid on this intersection"},
+                   {"rate_hz", o.gnss_rate_hz},
+                   {"epoch_offset_s", 3600.0 * o.gnss_epoch_hour},
+                   {"antenna_in_body", std::vector<double>{antenna_in_body.x(), antenna_in_body.y(), antenna_in_body.z()}},
+                   {"canyon_centre", std::vector<double>{canyon.centre.x(), canyon.centre.y()}},
+                   {"canyon_setback_m", o.gnss_canyon_setback_m},
+                   {"canyon_rotation_deg", canyon.rotation * 180.0 / M_PI},
+                   {"valid_fixes", gnss.valid},
+                   {"mean_horizontal_error_m", gnss.mean_h_error},
+                   {"max_horizontal_error_m", gnss.max_h_error}};
+  m["can_log"] = can_json;
+  return sim::write_text_file((out / "manifest.json").string(), m.dump(2) + "\n", error);
+}
+
+}  // namespace v2xloc::dataset
