@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The README's security tables, measured: attacks and faults replayed through the firmware.
+"""The security tables of docs/security.md, measured: attacks and faults replayed through the firmware.
 
 Each row runs `v2xloc-eval REC --firmware FW --faults SPEC --json` (the demo's wire path: scans over
 UDP, vehicle signals and GNSS over CAN, map shares signed and verified) and reports the fused error

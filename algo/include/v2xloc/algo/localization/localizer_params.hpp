@@ -30,54 +30,31 @@ struct LocalizerParams {
   float min_range = 3.0f;             // [m] returns closer than this are the ego body: dropped
   float max_range = 80.0f;            // [m] returns farther than this are sparse and noisy: dropped
   float registration_voxel = 0.5f;    // [m] ingest voxel (LiDAR frame): odometry's 0.5 v frame and the registration scan
-  // [points] the tracking ICP registers an even subsample of at most this many scan points
-  // (one nearest-neighbour query each per iteration; 0: all). 1,500 (was 3,000): tracking -44 %
-  // instructions, Fused (valid) within 1 mm on the 12 recordings (TUNING.md "Tracking subsample")
-  std::uint32_t tracking_points = 1500;
+  std::uint32_t tracking_points = 1500;  // [points] even scan subsample the tracking ICP registers (0: all; TUNING.md)
   double odometry_prediction_max_gap = 1.0;  // [s] frame gap up to which the signals predict odometry
 
   // ---- Reference map ----
   MapFusionParams map{};              // fused infrastructure + agent clouds (map_fusion.hpp)
-  // [s] rebuild map points / normals / tree at most this often (TUNING.md); the EMBEDDED profile's
-  // 8,192-point map keeps 1 s (at 2 s its Fused (lag) rose to 0.034 m on Sim 2 / 4_infra)
+  // [s] rebuild map points / tree / vicinity bitmap at most this often (host 2, EMBEDDED 1; TUNING.md)
   double map_refresh_period = config::kEmbeddedProfile ? 1.0 : 2.0;
-  // [clouds/period] map clouds the localizer takes per period while tracking (its caller's share
-  // schedule allows more at start-up, when the map is still being assembled; 0: no limit). One
-  // fused cloud is ~20 M instructions (TUNING.md "Quiet periods").
+  // [clouds/period] map clouds taken per period while tracking (start-up: the caller's schedule; 0: no limit)
   std::uint32_t map_clouds_per_period_tracking = 1;
-  // Until the first acquisition is over (its searches' slices ignore the period budget; at most
-  // startup_first_frames) the periods after the first map take no map clouds: they would reach
-  // the map only at its next rebuild anyway, and two of them (~55 M) on top of a search put
-  // start-up periods over 100 M (TUNING.md "Map clouds during the first acquisition"). Host
-  // profile only: the EMBEDDED map, rebuilt every second, missed them (Fused (lag) 0.020 -> 0.036 m).
+  // [switch] no map clouds after the first map until the first acquisition ends (host only; TUNING.md)
   bool defer_map_clouds_first_search = !config::kEmbeddedProfile;
   double map_refresh_quiet_wait = 0.5;  // [s] a due rebuild waits this long at most for a period without new clouds
-  // [s] a source's cloud is fused at most this often (0: every cloud). The map is rebuilt at most
-  // every map_refresh_period and takes each source's latest cloud, so of a 2 Hz source's clouds
-  // only every other one would ever reach a rebuild; checking and storing the others is wasted
-  // (TUNING.md). Just under the refresh period so a share of a 1 Hz (host: 0.5 Hz) cycle with
-  // jitter is never skipped.
+  // [s] a source's cloud is fused at most this often, just under map_refresh_period (0: every cloud)
   double map_cloud_interval = config::kEmbeddedProfile ? 0.9 : 1.9;
   float map_normal_radius = 0.6f;     // [m] normal estimation radius on the map (3 map voxels)
   std::uint32_t map_min_points = 100; // [points] a map with fewer is not registered against
-  // [points/period] a map rebuild runs beside the registration, one step per period (extract,
-  // then k-d tree and vicinity bitmap); registration keeps the previous map meanwhile. The first
-  // map is built at once (nothing to register against). Map normals are computed when an ICP
-  // first matches a point (registration/lazy_normals.hpp, ~4k instructions each), at most this
-  // many per period: a tracked frame needs ~1-3k on a fresh map, the start-up search more; past
-  // the cap a pair goes without its normal this period (counted).
+  // [normals/period] map normals computed on first ICP match (lazy_normals.hpp); past it a pair has none
   std::uint32_t map_normals_per_period = 8192;
-  // [point visits/period] the next map's k-d tree is built this much per period (a build
-  // visits ~N log2(N / leaf) points; 0: at once)
+  // [point visits/period] the next map's k-d tree is built this much per period (0: at once)
   std::uint32_t map_tree_work_per_period = 125000;
-  // [m] requested cell of the map's vicinity bitmap (search/proximity_grid.hpp; grows to fit the
-  // map's box in config::kProximityGridWords): ICP queries it proves empty within the gate skip
-  // the k-d tree (same matches); 0: off
+  // [m] vicinity bitmap cell (grows to fit the map); ICP queries it proves empty skip the tree (0: off)
   float map_vicinity_cell = 0.5f;
 
   // ---- Period budget ----
-  // Estimated instructions per period (period_work.hpp): a map rebuild step waits for a period
-  // with room (at most work.max_deferred_rebuild_steps), the basin audit takes what is left.
+  // [instructions] per-period estimate; rebuild steps and the audit take only what is left (period_work.hpp)
   PeriodWorkParams work = default_work();
 
   // ---- Odometry ----
@@ -85,85 +62,55 @@ struct LocalizerParams {
 
   // ---- Registration to the map ----
   IcpParams icp = default_icp();      // tracking ICP: point-to-plane from the EKF prediction
-  RegisterCloudsParams global = default_global();   // start-up FPFH + RANSAC (paper)
+  RegisterCloudsParams global = default_global();   // FPFH + RANSAC, used only with use_fpfh_ransac
   PoseSearchParams search = default_search();        // start-up GNSS-seeded exhaustive search
-  bool use_fpfh_ransac = false;       // also try FPFH + RANSAC at start-up; better ICP fitness wins
-  // [points] the pose search (start-up, audit) refines and compares its candidates on every k-th
-  // registration-scan point, <= config::kMaxSearchPoints; the accepted pose is refined again on
-  // the whole scan (this only picks the basin; a 0.5 m-voxel scan holds 5-20k points).
+  bool use_fpfh_ransac = false;       // [switch] also try FPFH + RANSAC at start-up (off); better ICP fitness wins
+  // [points] even scan subsample the pose search scores and refines on (<= config::kMaxSearchPoints)
   std::uint32_t search_points = 1024;
   double global_map_radius = 70.0;    // [m] map crop (and road-height disc) around the GNSS fix
   double global_gnss_gate_sigmas = 4.0;  // [sigma] start-up region radius in inflated GNSS sigmas (+1 m)
   double global_min_region = 30.0;    // [m] start-up region radius floor (canyon NLOS; TUNING.md)
-  // [m] after an exhaustive search that found nothing acceptable the next one searches a region
-  // global_region_growth times wider, up to this: a canyon fix can be further off than the floor
-  // (TUNING.md "Widening start-up region"); back to the floor once a candidate is found
-  double global_max_region = 45.0;
-  double global_region_growth = 1.5;
+  double global_max_region = 45.0;    // [m] start-up region radius ceiling after searches that matched nothing
+  double global_region_growth = 1.5;  // [ratio] region growth per such search; back to the floor on a match
   double global_max_vertical = 3.0;   // [m] RANSAC prior: hypothesis height off the road surface
   double global_min_fitness = 0.3;    // [0-1] start-up solution needs at least this ICP fitness
-  // [0-0.5] a start-up solution needs its final ICP constrained along both horizontal directions
-  // (RegistrationResult::horizontal_constraint): with too little of the map in view the scan's
-  // matched facades leave it free along the street and an alias metres away fits as well
-  // (TUNING.md "Along-street aliases": aliases 0.015-0.018, true poses 0.077-0.133). 0: off; off
-  // in the EMBEDDED profile, whose thinner scans and map put true poses at 0.011-0.050.
+  // [0-0.5] start-up solution's final-ICP horizontal constraint at least this (0: off; off on EMBEDDED)
   double global_min_horizontal_constraint = config::kEmbeddedProfile ? 0.0 : 0.04;
   std::uint32_t road_height_min_points = 50;  // [points] in the 0.2 m bin to output the road height
   double global_max_ambiguity = 0.85; // [0-1] runner-up / winner tight fitness above: ambiguous
-  double max_inlier_rmse = 1e9;       // [m] registration above this RMSE fails (off; TUNING.md)
+  double max_inlier_rmse = 1e9;       // [m] registration above this RMSE fails (1e9: off; TUNING.md)
   double tracking_max_sigma_xy = 0.5; // [m] EKF position sigma above which we search globally
   std::uint32_t max_failed_frames = 10;   // [frames] consecutive unfused registrations -> global search
   std::uint32_t global_retry_frames = 2;  // [frames] between two global searches (bounded cost)
-  // [work units/period] the start-up search runs as a job, at most this much work per period
-  // (pose_search.hpp: ~110 instructions a unit) and no more than the period budget has left
-  // (work), but at least startup_min_work_per_period; its result is carried to the frame it
-  // finishes in by the odometry (0: all at once)
-  std::uint32_t startup_work_per_period = 800000;
-  std::uint32_t startup_min_work_per_period = 30000;
-  // The first acquisition after power-up (until the filter first starts, at most
-  // startup_first_frames); the localizer takes no map clouds past the first map meanwhile.
-  std::uint32_t startup_first_frames = 10;  // [frames] since configure()
-  // [work units/period] 0: the first acquisition keeps to the period budget like any search
-  // (frame 0 81-97 M instructions on the 12 recordings), its climbed best hypothesis the output
-  // until a refined pose replaces it (algo/TUNING.md, "Basin climb"). > 0: its searches take at
-  // least this per period, budget or not (1.5M: the whole search and final ICP in frame 0,
-  // ~105-160 M instructions, the refined pose the output from frame 0).
+  std::uint32_t startup_work_per_period = 800000;    // [work units/period] search slice ceiling (0: all at once)
+  std::uint32_t startup_min_work_per_period = 30000;  // [work units/period] search slice floor, budget or not
+  std::uint32_t startup_first_frames = 10;  // [frames] since configure(): the first acquisition at most
+  // [work units/period] first-acquisition slice floor, budget or not (0: within the budget; TUNING.md)
   std::uint32_t startup_first_work_per_period = 0;
-  // Within the budget (startup_first_work_per_period 0), the searches' first slices score and
-  // climb every hypothesis, budget or not (bounded: search.max_hypotheses x score_points lookups
-  // plus the climbs, ~8-20 M instructions) and the best climbed pose is output until a refined
-  // one replaces it (0.1-1.2 m off on the 12 recordings, the refined one from frame 1-2).
+  // [switch] the first acquisition's first slice scores and climbs every hypothesis, budget or not
   bool startup_first_score_whole = true;
   std::uint32_t startup_max_frames = 20;  // [frames] a search job not finished within this is dropped
-  // While a spread search runs, output its best refined pose so far (not localized, not fused).
+  // [switch] output a running search's best pose so far (not localized, not fused)
   bool startup_output_provisional = true;
-  // The confirming search re-decides the candidate's search finalists (carried by the odometry)
-  // on its later scan instead of searching the whole region again.
+  // [switch] the confirming search re-decides the first search's finalists instead of the whole region
   bool global_confirm_finalists = true;
-  bool startup_icp_on_tracking_scan = true;  // an accepted pose's final ICP on the tracking subsample
-  // The start-up search scores its hypotheses on a proximity bitmap of the searched region (~35
-  // instructions a score point against ~1000 for the map's k-d tree; search.grid_cell).
+  bool startup_icp_on_tracking_scan = true;  // [switch] an accepted pose's final ICP on the tracking subsample
+  // [switch] score hypotheses on a proximity bitmap of the region (search.grid_cell), not the k-d tree
   bool search_on_proximity_grid = true;
   std::uint32_t global_confirm_window = 10;  // [frames] a second search within this confirms (0: off)
   double global_confirm_distance = 0.5;   // [m] confirmation: horizontal disagreement allowed
   double global_confirm_yaw = 0.035;      // [rad] confirmation: heading disagreement allowed (2 deg)
-  // [frames] from one basin audit's end to the next start while tracking (0: off); an audit
-  // costs ~270 M instructions in all, so every 3 s keeps its share of a period near 8 M
+  // [frames] from one basin audit's end to the next one's start while tracking (0: off)
   std::uint32_t audit_period_frames = 30;
-  // [frames] a new track's first audit starts after this many tracked frames, with all the room
-  // the period budget has left: a start-up search on a map that lost a unit's shares can accept
-  // an alias the full map refutes (TUNING.md "Basin audit of a new track")
+  // [frames] a new track's first audit starts after this many, with all the period's room left
   std::uint32_t audit_first_frames = 1;
   double audit_radius = 8.0;              // [m] basin audit: search disc around the tracked pose
-  // [work units/period] the audit's pose search runs beside tracking, this much work per tracked
-  // frame (pose_search.hpp: ~110 instructions a unit, so ~10 M; 0: the whole search in one frame)
+  // [work units/period] audit slice per tracked frame, at most the room left (0: whole search at once)
   std::uint32_t audit_work_per_period = 90000;
-  // [work units/period] ... in a period that fused a map cloud (~20 M of its budget spent; 0: the
-  // audit pauses there). While tracking most periods fuse one (sources paced to ~1 Hz, one a period).
+  // [work units/period] ... in a period that fused a map cloud (0: the audit pauses there)
   std::uint32_t audit_work_per_busy_period = 45000;
-  std::uint32_t audit_max_frames = 60;    // [frames] a search not finished within this is dropped (it pauses in busy periods)
-  // [hypotheses] the audit refines (<= kPoseSearchRefine): 5 as the start-up search; 10 cost twice
-  // the ICP work for the same verdicts on the 12 recordings and the fault and rogue runs (TUNING.md)
+  std::uint32_t audit_max_frames = 60;    // [frames] an audit not finished within this is dropped (pauses count)
+  // [hypotheses] the audit refines by ICP (<= kPoseSearchRefine; TUNING.md)
   std::uint32_t audit_refine_candidates = 5;
   double audit_switch_ratio = 1.15;       // [ratio] audit pose's tight fitness over tracked: switch
   double audit_full_switch_ratio = 1.15;  // [ratio] ... and again on the full scan after ICP: switch
@@ -204,52 +151,44 @@ struct LocalizerParams {
   bool use_vehicle_signals = true;    // fuse wheel speed / yaw rate; deskew and predict with them
   bool use_odometry = true;           // fuse the LiDAR odometry's relative motion
   bool deskew = true;                 // deskew scans with per-point times
-  // Evaluation only: a second filter fed every ok registration (no validity gate), for the paper's
-  // "Fused" column (LocalizerFrameOutput::fused_pose_ungated). The ECU leaves it off.
+  // [switch] evaluation only: an ungated second filter for the paper's "Fused" column (ECU: off)
   bool shadow_ungated_filter = false;
 
   static PeriodWorkParams default_work() {
     PeriodWorkParams p;  // per-unit costs: callgrind, x86-64 -O2, Sim 0 / 4_infra_2_agent (TUNING.md)
-    p.odometry_query = 2450.0;
-    p.tracking_query = 2300.0;
-    p.map_normal = 5000.0;
-    p.search_unit = 150.0;  // kPoseSearchWorkUnit's ~110 is a mean: slices measured up to ~170 a unit
+    p.odometry_query = 2450.0;  // [instructions] per odometry point and iteration
+    p.tracking_query = 2300.0;  // [instructions] per tracking ICP point and pass
+    p.map_normal = 5000.0;      // [instructions] per map normal
+    p.search_unit = 150.0;      // [instructions] per search unit: the dear end of the measured 77-170
     return p;
   }
   static OdometryParams default_odometry() {
     OdometryParams p;
-    // [queries] ~40 M instructions at ~2,450 a query: the recordings' frames need <= ~12.5k
-    // (capped in 2-15 frames a recording, Table 1 within 1 mm); a featureless corridor ran 50
-    // iterations (100 M)
+    // [point-iterations] per frame, ~40 M instructions; the rest counted odometry_query_capped
     p.max_queries = 16384;
-    // [points] the recordings' frames hold ~7k 0.5 m points; a noise-filled sweep 32k (55 M of
-    // set-up: coarse voxels, normals, map update)
+    // [points] a frame is thinned evenly to at most this many (counted odometry_frames_thinned)
     p.max_fine_points = 16384;
-    // Every 2nd 0.5 v point (host): odometry -5.6 M a period, SLAM column 0.015-0.065 m (was
-    // 0.024-0.088), Fused within ~1 mm (TUNING.md "Odometry on every 2nd point"); every 3rd
-    // broke Sim 3 (SLAM 0.47 m)
+    // [stride] every k-th 0.5 v point (host 2, EMBEDDED 1; TUNING.md)
     p.fine_decimation = config::kEmbeddedProfile ? 1u : 2u;
-    p.convergence = 1e-3;  // [m, rad] |d xi| stop; 1e-4 ran ~2 more iterations for nothing (TUNING.md)
+    p.convergence = 1e-3;  // [m, rad] stop once |d xi| is below this (TUNING.md)
     return p;
   }
   static IcpParams default_icp() {
     IcpParams p;
-    p.method = IcpMethod::kPointToPlane;
+    p.method = IcpMethod::kPointToPlane;  // [-] point-to-plane (map normals)
     p.max_correspondence_distance = 1.0;  // [m] tracking gate around the EKF prediction
     p.criteria.max_iterations = 20;       // [iterations] cap (one nearest-neighbour pass each)
-    // [-] stop once an iteration changes the fitness by < 1e-3 and the RMSE by < 1 mm (TUNING.md)
-    p.criteria.relative_fitness = 1e-3;
-    p.criteria.relative_rmse = 1e-3;      // [m]
-    p.kernel.type = RobustKernelType::kTukey;
+    p.criteria.relative_fitness = 1e-3;   // [-] stop below this fitness change ... (TUNING.md)
+    p.criteria.relative_rmse = 1e-3;      // [m] ... and below this RMSE change
+    p.kernel.type = RobustKernelType::kTukey;  // [-] robust kernel
     p.kernel.scale = 0.3;                 // [m] Tukey scale: residuals beyond it weigh nothing
-    // [work units] ~44 M instructions: the recordings' tracking ICPs stay below ~28 M; a
-    // featureless corridor (degenerate along it, every pass computing new map normals) took 175 M
+    // [work units] ~44 M instructions; past it kDidNotConverge, counted tracking_work_capped
     p.max_work = 400000;
     return p;
   }
   static RegisterCloudsParams default_global() {
     RegisterCloudsParams p;
-    p.mode = RegistrationMode::kGlobal;
+    p.mode = RegistrationMode::kGlobal;  // [-] FPFH + RANSAC, then ICP
     p.voxel_size = 1.0f;            // [m] the map is sparse far from the sensors: coarse descriptors
     p.mutual_filter = false;        // mutual matching leaves too few pairs on sparse maps
     p.ransac.prior.enabled = true;  // hypotheses must be level and inside the GNSS region
@@ -259,8 +198,7 @@ struct LocalizerParams {
   static ValidityGateParams default_gate() {
     ValidityGateParams p;
     p.min_fitness = 0.3;            // [0-1] a registration with a lower ICP fitness is not fused (TUNING.md)
-    // [m] a registration with a higher inlier RMSE is not fused: below the ~0.58 m of residuals
-    // spread evenly over the tracking ICP's 1 m gate, i.e. of a scan off the map's basin (TUNING.md)
+    // [m] a registration with a higher inlier RMSE is not fused (TUNING.md)
     p.max_rmse = 0.53;
     return p;
   }
@@ -274,14 +212,13 @@ struct LocalizerParams {
   }
   static PoseSearchParams default_search() {
     PoseSearchParams p;
-    p.icp.method = IcpMethod::kPointToPlane;
+    p.icp.method = IcpMethod::kPointToPlane;  // [-] coarse ICP: point-to-plane
     p.icp.max_correspondence_distance = 2.0;  // [m] coarse ICP gate: about half a grid cell's diagonal
     p.icp.criteria.max_iterations = 20;      // [iterations]
     p.icp.criteria.relative_fitness = 1e-3;  // [-] the coarse ICP only picks the basin
     p.icp.criteria.relative_rmse = 1e-3;     // [m]
-    p.icp.kernel.type = RobustKernelType::kTukey;
-    // [m] Tukey scale of the coarse ICP = its gate: a hypothesis starts up to ~2 m from its basin's
-    // bottom, and at 1 m the residuals that would pull it there weighed nothing (TUNING.md)
+    p.icp.kernel.type = RobustKernelType::kTukey;  // [-] robust kernel
+    // [m] coarse ICP's Tukey scale = its gate (TUNING.md)
     p.icp.kernel.scale = 2.0;
     p.yaw_steps = 24;               // [headings] 15 deg apart; the coarse ICP pulls in +-7.5 deg
     p.step = 3.0;                   // [m] position grid spacing
@@ -290,14 +227,13 @@ struct LocalizerParams {
     p.refine_candidates = 5;        // [hypotheses] the best distinct ones refined by ICP
     p.climb_points = 256;           // [points] the kept hypotheses climb to their basins' bottoms (TUNING.md)
     p.refine_min_score_ratio = 0.8; // [0-1] and only those within 20 % of the best climbed score are refined
-    // [points] the ICPs run on every 4th search point; EMBEDDED scans (4,096 ingest voxels) are
-    // too thin for that: all of them (TUNING.md)
+    // [points] candidates' ICPs on this many search points (host 256 = every 4th; EMBEDDED 0: all)
     p.refine_points = config::kEmbeddedProfile ? 0u : 256u;
     p.score_distance = 2.0;         // [m] score hit radius: half the grid cell's diagonal (TUNING.md)
     p.max_conflicts = 0.12;         // [0-1] ray conflict ratio above which a pose is no candidate (TUNING.md)
-    p.fine_icp = default_icp();
-    p.fine_icp.criteria.relative_fitness = 1e-5;  // [-] the search's candidates are compared on
-    p.fine_icp.criteria.relative_rmse = 1e-5;     // [m] their converged fitness: converge fully
+    p.fine_icp = default_icp();                   // [-] fine ICP: the tracking ICP's settings ...
+    p.fine_icp.criteria.relative_fitness = 1e-5;  // [-] ... converged fully: candidates compare fitness
+    p.fine_icp.criteria.relative_rmse = 1e-5;     // [m]
     return p;
   }
 };
