@@ -231,6 +231,7 @@ bool run_firmware(const sim::RecordingReader& reader, const FirmwareRunOptions& 
 void mark_columns_not_on_can(RowMetrics& metrics) {
   metrics.unaligned.fused_ungated = -1.0;
   metrics.aligned.fused_ungated = -1.0;
+  metrics.offset.has_yaw = false;  // 0x210 carries the registration's position only
 }
 
 }  // namespace v2xloc::eval

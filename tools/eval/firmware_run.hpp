@@ -48,7 +48,8 @@ bool records_from_outputs(const sim::RecordingReader& reader, const std::vector<
                           const Eigen::Vector3d& gnss_antenna_in_body, std::vector<FrameRecord>& records,
                           std::string& error);
 
-// Marks the columns the CAN interface does not carry as unavailable (null in JSON): fused_ungated.
+// Marks the columns the CAN interface does not carry as unavailable (null in JSON): fused_ungated,
+// the registration offset's yaw.
 void mark_columns_not_on_can(RowMetrics& metrics);
 
 }  // namespace v2xloc::eval

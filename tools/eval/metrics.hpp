@@ -40,6 +40,7 @@ struct OffsetEstimate {
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();  // [m]
   double spread = 0.0;                             // [m]
   double yaw_mean_deg = 0.0, yaw_spread_deg = 0.0;
+  bool has_yaw = true;  // false where the registration's rotation is not known (the firmware's CAN)
 };
 
 struct RowMetrics {

@@ -67,11 +67,14 @@ std::string drift_and_offset_text(const std::vector<RowReport>& rows) {
   for (const RowReport& r : rows) {
     const RelativeErrors& e = r.metrics.rpe_1s;
     const OffsetEstimate& o = r.metrics.offset;
-    std::snprintf(buf, sizeof buf,
-                  "  %-4d %-16s RPE %6.3f / %6.3f / %6.3f m   offset (%6.3f %6.3f %6.3f) m spread %.3f m, yaw %6.2f "
-                  "deg spread %.2f deg over %d frames\n",
-                  r.sim, r.permutation.c_str(), e.fused, e.slam, e.gps, o.mean.x(), o.mean.y(), o.mean.z(), o.spread,
-                  o.yaw_mean_deg, o.yaw_spread_deg, o.frames);
+    std::snprintf(buf, sizeof buf, "  %-4d %-16s RPE %6.3f / %6.3f / %6.3f m   offset (%6.3f %6.3f %6.3f) m spread %.3f m",
+                  r.sim, r.permutation.c_str(), e.fused, e.slam, e.gps, o.mean.x(), o.mean.y(), o.mean.z(), o.spread);
+    out += buf;
+    if (o.has_yaw) {
+      std::snprintf(buf, sizeof buf, ", yaw %6.2f deg spread %.2f deg", o.yaw_mean_deg, o.yaw_spread_deg);
+      out += buf;
+    }
+    std::snprintf(buf, sizeof buf, " over %d frames\n", o.frames);
     out += buf;
   }
   return out;
@@ -198,8 +201,8 @@ std::string format_json(const std::vector<RowReport>& rows) {
     row["offset"] = {{"frames", o.frames},
                      {"mean_m", {o.mean.x(), o.mean.y(), o.mean.z()}},
                      {"spread_m", o.spread},
-                     {"yaw_mean_deg", o.yaw_mean_deg},
-                     {"yaw_spread_deg", o.yaw_spread_deg}};
+                     {"yaw_mean_deg", o.has_yaw ? Json(o.yaw_mean_deg) : Json(nullptr)},
+                     {"yaw_spread_deg", o.has_yaw ? Json(o.yaw_spread_deg) : Json(nullptr)}};
     row["unaligned"] = columns_json(r.metrics.unaligned);
     row["aligned"] = columns_json(r.metrics.aligned);
     out_rows.push_back(std::move(row));

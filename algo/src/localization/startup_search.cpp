@@ -25,6 +25,8 @@ void StartupSearch::configure(const LocalizerParams& params) {
   final_running_ = false;
   finalist_count_ = 0;
   acquired_ = false;
+  first_search_started_ = false;
+  first_search_frame_ = 0;
   region_scale_ = 1.0;
   job_.set_proximity_grid(params.search_on_proximity_grid ? &grid_ : nullptr);
 }
@@ -96,6 +98,10 @@ StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& cou
     // starts in a period with room for it (the first acquisition does not wait).
     if (!first_acquisition_pending(f.frame) && f.work != nullptr && f.work->left() < f.work->params().search_start) return out;
     frames_since_search_ = 0;
+    if (!first_search_started_) {
+      first_search_started_ = true;
+      first_search_frame_ = f.frame;
+    }
     f.probe(LocalizerStage::kGlobalSearch);
     ++counters.global_searches;
     start_job(f, counters);

@@ -84,7 +84,7 @@ struct LocalizerParams {
   std::uint32_t global_retry_frames = 2;  // [frames] between two global searches (bounded cost)
   std::uint32_t startup_work_per_period = 800000;    // [work units/period] search slice ceiling (0: all at once)
   std::uint32_t startup_min_work_per_period = 30000;  // [work units/period] search slice floor, budget or not
-  std::uint32_t startup_first_frames = 10;  // [frames] since configure(): the first acquisition at most
+  std::uint32_t startup_first_frames = 10;  // [frames] since the first search: the first acquisition at most
   // [work units/period] first-acquisition slice floor, budget or not (0: within the budget; TUNING.md)
   std::uint32_t startup_first_work_per_period = 0;
   // [switch] the first acquisition's first slice scores and climbs every hypothesis, budget or not

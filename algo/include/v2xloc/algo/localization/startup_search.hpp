@@ -86,10 +86,12 @@ class StartupSearch {
   // The unconfirmed candidate carried to this frame by the odometry, when it is a better
   // estimate than the GNSS fix.
   bool candidate_pose(std::uint32_t frame, const Pose3d& odom_T_body, Pose3d& pose) const;
-  // Power-up: no filter started yet, within startup_first_frames (the localizer takes no map
-  // clouds meanwhile; the searches' first slices score every hypothesis).
+  // Power-up: no filter started yet, within startup_first_frames of the first search (the
+  // localizer takes no map clouds meanwhile; the searches' first slices score every hypothesis).
+  // Counted from the first search, not from configure(): the ECU may run for seconds before a
+  // map exists (no roadside unit in V2X range yet).
   bool first_acquisition_pending(std::uint32_t frame) const {
-    return !acquired_ && frame < params_.startup_first_frames;
+    return !acquired_ && (!first_search_started_ || frame - first_search_frame_ < params_.startup_first_frames);
   }
 
  private:
@@ -157,6 +159,8 @@ class StartupSearch {
   ProximityGrid grid_;               // the job's hypothesis scoring (search_on_proximity_grid)
   JobKind job_kind_ = JobKind::kNone;
   bool acquired_ = false;            // the filter was started once (the first acquisition is over)
+  bool first_search_started_ = false;
+  std::uint32_t first_search_frame_ = 0;  // the frame the first search started in
   bool job_track_broken_ = false;    // the odometry failed since the job started
   std::uint32_t job_frame_ = 0;
   Mat4d job_odom_ = Mat4d::Identity();
