@@ -85,9 +85,7 @@ struct LocalizerParams {
 
   // ---- Registration to the map ----
   IcpParams icp = default_icp();      // tracking ICP: point-to-plane from the EKF prediction
-  RegisterCloudsParams global = default_global();   // start-up FPFH + RANSAC (paper)
   PoseSearchParams search = default_search();        // start-up GNSS-seeded exhaustive search
-  bool use_fpfh_ransac = false;       // also try FPFH + RANSAC at start-up; better ICP fitness wins
   // [points] the pose search (start-up, audit) refines and compares its candidates on every k-th
   // registration-scan point, <= config::kMaxSearchPoints; the accepted pose is refined again on
   // the whole scan (this only picks the basin; a 0.5 m-voxel scan holds 5-20k points).
@@ -245,15 +243,6 @@ struct LocalizerParams {
     // [work units] ~44 M instructions: the recordings' tracking ICPs stay below ~28 M; a
     // featureless corridor (degenerate along it, every pass computing new map normals) took 175 M
     p.max_work = 400000;
-    return p;
-  }
-  static RegisterCloudsParams default_global() {
-    RegisterCloudsParams p;
-    p.mode = RegistrationMode::kGlobal;
-    p.voxel_size = 1.0f;            // [m] the map is sparse far from the sensors: coarse descriptors
-    p.mutual_filter = false;        // mutual matching leaves too few pairs on sparse maps
-    p.ransac.prior.enabled = true;  // hypotheses must be level and inside the GNSS region
-    p.ransac.prior.max_tilt = 0.087;  // [rad] 5 deg
     return p;
   }
   static ValidityGateParams default_gate() {
