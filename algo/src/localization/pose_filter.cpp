@@ -8,8 +8,8 @@ namespace v2xloc {
 
 void PoseFilter::configure(const LocalizerParams& params) {
   params_ = params;
-  ekf_ = Ekf(params.ekf);
-  shadow_ = Ekf(params.ekf);
+  ekf_.configure(params.ekf);
+  shadow_.configure(params.ekf);
   fixed_lag_gate_ = FixedLagValidityGate(params.gate);
   causal_gate_ = CausalValidityGate(params.gate);
   stereo_gate_ = CausalValidityGate(params.gate);
