@@ -79,21 +79,6 @@ PoseCovariance registration_covariance(const Mat6d& information, double inlier_r
 
 Ekf::Ekf(const EkfParams& params) : params_(params) {}
 
-void Ekf::configure(const EkfParams& params) {
-  params_ = params;
-  initialized_ = false;
-  time_ = 0.0;
-  x_ = EkfVector::Zero();
-  P_ = EkfCovariance::Zero();
-  counters_ = EkfCounters{};
-  replaying_ = false;
-  for (Event& e : log_) e = Event{};
-  log_size_ = 0;
-  for (Snapshot& s : snapshots_) s = Snapshot{};
-  snap_first_ = 0;
-  snap_count_ = 0;
-}
-
 void Ekf::initialize(double t, const EkfState& state, const EkfCovariance& covariance) {
   x_ = state.to_vector();
   x_(idx::kYaw) = det::wrap_pi(x_(idx::kYaw));

@@ -171,9 +171,6 @@ PoseCovariance registration_covariance(const Mat6d& information, double inlier_r
 class Ekf {
  public:
   explicit Ekf(const EkfParams& params = {});
-  // The same fresh filter, in place: `ekf = Ekf(params)` would build its ~100 KB history on the
-  // stack first (the target's stack is 64 KiB).
-  void configure(const EkfParams& params);
 
   // Starts (or restarts) the filter at time t [s]; clears the history.
   void initialize(double t, const EkfState& state, const EkfCovariance& covariance);
