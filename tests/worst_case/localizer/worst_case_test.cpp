@@ -352,7 +352,9 @@ TEST(WorstCase, AdversarialPeriods) {
     for (const MapSourceInfo& src : g_localizer.map().sources()) sources += src.active ? 1 : 0;
     EXPECT_GE(sources, 2u) << "the queued shares reached the map";
   }
-  if (g_fixture != nullptr) EXPECT_TRUE(writer.close()) << "writing the target fixture";
+  if (g_fixture != nullptr) {
+    EXPECT_TRUE(writer.close()) << "writing the target fixture";
+  }
 }
 
 // Power-up: the first map and the first acquisition's search counted from the first period.
