@@ -6,7 +6,7 @@ export DEBIAN_FRONTEND=noninteractive
 PKGS=(cmake ninja-build g++ pkg-config libeigen3-dev googletest libgtest-dev libgmock-dev
       libbenchmark-dev libgpiod-dev libhidapi-dev libsocketcan-dev can-utils
       python3 python3-numpy python3-can python3-open3d python3-matplotlib
-      g++-aarch64-linux-gnu qemu-user gcc-arm-none-eabi libstdc++-arm-none-eabi-newlib
+      g++-aarch64-linux-gnu qemu-user qemu-system-arm gcc-arm-none-eabi libstdc++-arm-none-eabi-newlib
       binutils-arm-none-eabi valgrind nodejs npm zlib1g-dev ca-certificates
       libmbedtls-dev nlohmann-json3-dev liblzf-dev libcli11-dev libpng-dev libdeflate-dev
       clang ccache libfuzzer-14-dev libclang-rt-14-dev llvm-14)

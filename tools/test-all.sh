@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The whole test suite, as CI runs it: host build + tests, ASan/UBSan tests, aarch64 cross build +
-# tests under qemu-aarch64, the bare-metal Cortex-R52 build with its link check, the installed
+# The whole test suite, as CI runs it: host build + tests, ASan/UBSan tests, the EMBEDDED profile's
+# tests, aarch64 cross build + tests under qemu-aarch64, the bare-metal Cortex-R52 build with its
+# link check and the whole localizer run as R52 code under QEMU (ctest label target), the installed
 # package's consumers and the fuzz targets.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -20,15 +21,22 @@ cmake --preset host-asan >/dev/null
 cmake --build --preset host-asan -j "$JOBS"
 ctest --preset host-asan
 
+step "host-embedded: build + tests in the EMBEDDED capacity profile"
+cmake --preset host-embedded >/dev/null
+cmake --build --preset host-embedded -j "$JOBS"
+ctest --preset host-embedded
+
 step "aarch64-linux: cross build + tests under qemu-aarch64"
 cmake --preset aarch64-linux >/dev/null
 cmake --build --preset aarch64-linux -j "$JOBS"
 ctest --preset aarch64-linux
 
-step "cortex-r52: bare-metal build + link check"
+step "cortex-r52: bare-metal build + link check + the localizer on the target under QEMU"
 cmake --preset cortex-r52 >/dev/null
 cmake --build --preset cortex-r52 -j "$JOBS"
 tools/check-baremetal.sh build/cortex-r52/bin/v2xloc_baremetal.elf
+# host-embedded's tools write the fixtures and the host reference (docs/target.md).
+ctest --preset target
 
 step "install: find_package(v2xloc) consumers for host, aarch64 (qemu) and Cortex-R52 (link)"
 ctest --test-dir build/host -L install --output-on-failure

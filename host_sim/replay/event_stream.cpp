@@ -301,8 +301,14 @@ bool WireEventDecoder::feed(const WireEvent& event, DecodedFrame& frame) {
   const std::int64_t disciplined_ns = decoder_.epoch_ns() + event.time_ns;
   if (event.kind == WireEvent::Kind::kCan) {
     const firmware::DecodedCan decoded = decoder_.decode_can(event.can, disciplined_ns);
-    if (decoded.kind == firmware::CanInputKind::kVehicle) localizer_.on_vehicle(decoded.vehicle);
-    if (decoded.kind == firmware::CanInputKind::kGnssFix) localizer_.on_gnss(decoded.gnss);
+    if (decoded.kind == firmware::CanInputKind::kVehicle) {
+      if (tap_ != nullptr) tap_->vehicle(decoded.vehicle);
+      localizer_.on_vehicle(decoded.vehicle);
+    }
+    if (decoded.kind == firmware::CanInputKind::kGnssFix) {
+      if (tap_ != nullptr) tap_->gnss(decoded.gnss);
+      localizer_.on_gnss(decoded.gnss);
+    }
     return false;
   }
   bool produced = false;
@@ -316,7 +322,9 @@ bool WireEventDecoder::feed(const WireEvent& event, DecodedFrame& frame) {
       for (std::size_t k = 0; k < shares; ++k) {
         const firmware::DecodedCloud share = decoder_.next_verified_share(&wanted_);
         if (share.kind == firmware::CloudKind::kNone) break;
-        if (share.kind == firmware::CloudKind::kMapCloud) localizer_.on_map_cloud(share.map);
+        if (share.kind != firmware::CloudKind::kMapCloud) continue;
+        if (tap_ != nullptr) tap_->map_cloud(share.map);
+        localizer_.on_map_cloud(share.map);
       }
       // As the firmware: the period's trust work goes into the localizer's budget (a refused scan
       // ends the period without it).
@@ -331,6 +339,10 @@ bool WireEventDecoder::feed(const WireEvent& event, DecodedFrame& frame) {
       continue;
     }
     if (decoded.kind != firmware::CloudKind::kEgoScan) continue;
+    if (tap_ != nullptr) {
+      tap_->period_work(trust_work);
+      tap_->ego_scan(decoded.ego);
+    }
     localizer_.add_period_work(trust_work);
     const LocalizerFrameOutput& out = localizer_.on_ego_scan(decoded.ego);
     frame.frame = static_cast<int>(decoded.frame_index);
@@ -345,12 +357,13 @@ bool WireEventDecoder::feed(const WireEvent& event, DecodedFrame& frame) {
 
 bool run_offline(const RecordingReader& reader, Localizer& localizer, firmware::InputDecoder& decoder,
                  const EventStreamConfig& config, const std::function<void(const DecodedFrame&)>& on_frame,
-                 std::string& error) {
+                 std::string& error, LocalizerInputTap* tap) {
   EventStream stream;
   if (!stream.open(reader, config, error)) return false;
   decoder.set_epoch_ns(stream.epoch_ns());
   decoder.provision_trust(stream.trust_list());
   WireEventDecoder wire(decoder, localizer);
+  wire.set_tap(tap);
   std::vector<WireEvent> events;
   for (int i = 0; i < stream.frame_count(); ++i) {
     events.clear();

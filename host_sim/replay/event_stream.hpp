@@ -115,6 +115,20 @@ struct DecodedFrame {
   firmware::DiagnosticFrames diagnostics{};
 };
 
+// Sees every localizer input WireEventDecoder applies, in order, just before it is applied (the
+// target fixture's writer records them: tools/target).
+class LocalizerInputTap {
+ public:
+  virtual void vehicle(const VehicleInput& input) = 0;
+  virtual void gnss(const GnssInput& input) = 0;
+  virtual void map_cloud(const MapCloudInput& input) = 0;
+  virtual void period_work(double instructions) = 0;
+  virtual void ego_scan(const EgoScanInput& input) = 0;
+
+ protected:
+  ~LocalizerInputTap() = default;
+};
+
 class WireEventDecoder {
  public:
   // As the firmware, the decoder asks the localizer whether it wants a share before hashing it.
@@ -126,6 +140,7 @@ class WireEventDecoder {
   WireEventDecoder& operator=(const WireEventDecoder&) = delete;
   // Returns true and fills `frame` when the event was an ego scan that produced an output.
   bool feed(const WireEvent& event, DecodedFrame& frame);
+  void set_tap(LocalizerInputTap* tap) { tap_ = tap; }
 
  private:
   // The firmware asks its localizer before hashing or verifying a share
@@ -147,12 +162,14 @@ class WireEventDecoder {
   firmware::PoseFrameEncoder encoder_{};
   firmware::DiagnosticFrameEncoder diagnostic_encoder_{};
   LocalizerFrameOutput last_output_{};  // held for an ego scan refused for its time stamp
+  LocalizerInputTap* tap_ = nullptr;
 };
 
 // The offline evaluator's loop: the whole event stream in-process. `decoder` is large (make it
 // with std::make_unique); its epoch is set from the recording. False + error on I/O failures.
+// tap (optional) sees every input applied.
 bool run_offline(const RecordingReader& reader, Localizer& localizer, firmware::InputDecoder& decoder,
                  const EventStreamConfig& config, const std::function<void(const DecodedFrame&)>& on_frame,
-                 std::string& error);
+                 std::string& error, LocalizerInputTap* tap = nullptr);
 
 }  // namespace v2xloc::sim::replay

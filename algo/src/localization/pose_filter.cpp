@@ -1,6 +1,7 @@
 #include "v2xloc/algo/localization/pose_filter.hpp"
 
 #include <cmath>
+#include <memory>
 
 #include "v2xloc/algo/core/rigid_motion.hpp"
 
@@ -8,8 +9,12 @@ namespace v2xloc {
 
 void PoseFilter::configure(const LocalizerParams& params) {
   params_ = params;
-  ekf_ = Ekf(params.ekf);
-  shadow_ = Ekf(params.ekf);
+  // Fresh filters built in place: `ekf_ = Ekf(...)` would first build each one's ~50 KB history
+  // on the stack (the bare-metal target's stack is 64 KiB, docs/target.md).
+  for (Ekf* ekf : {&ekf_, &shadow_}) {
+    std::destroy_at(ekf);
+    std::construct_at(ekf, params.ekf);
+  }
   fixed_lag_gate_ = FixedLagValidityGate(params.gate);
   causal_gate_ = CausalValidityGate(params.gate);
   stereo_gate_ = CausalValidityGate(params.gate);

@@ -80,7 +80,7 @@ bool StartupSearch::candidate_pose(std::uint32_t frame, const Pose3d& odom_T_bod
 }
 
 // One period of the search job (started when due), then, in the period it finishes: the
-// ambiguity check, FPFH + RANSAC, the final ICP and the acceptance checks the symmetric
+// ambiguity check, the final ICP and the acceptance checks the symmetric
 // intersection needs (inside the GNSS uncertainty region, enough of the scan explained).
 StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& counters) {
   StartupOutcome out;
@@ -143,7 +143,7 @@ StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& cou
 }
 
 // The period the job finishes in: its result carried here, the ambiguity check, the report,
-// FPFH + RANSAC, then the final ICP begins.
+// then the final ICP begins.
 void StartupSearch::finish_job(const StartupFrame& f, StartupSearchReport& r, LocalizerCounters& counters) {
   final_ = Search{};
   take_result(f, final_);
@@ -158,11 +158,10 @@ void StartupSearch::finish_job(const StartupFrame& f, StartupSearchReport& r, Lo
   r.runner_up_conflicts = s.searched.runner_up_conflicts;
   r.best_pose = Pose3d(s.searched.best.transform);
   r.runner_up_pose = Pose3d(s.searched.runner_up.transform);
-  if (job_kind_ == JobKind::kExhaustive && params_.use_fpfh_ransac) fpfh_ransac(f, final_);
   begin_final_icp(f, counters);
 }
 
-// (3) The tracking ICP from the pick, on this frame's tracking subsample (the registration scan
+// (2) The tracking ICP from the pick, on this frame's tracking subsample (the registration scan
 // without one). Up to icp.max_work (~44 M instructions from a poor start): run in slices on a copy
 // of the scan; a scan larger than the copy is refined at once, as a tracking ICP would be.
 void StartupSearch::begin_final_icp(const StartupFrame& f, LocalizerCounters& counters) {
@@ -343,29 +342,6 @@ void StartupSearch::keep_finalists(const StartupFrame& f) {
   for (std::uint32_t i = 0; i < finalist_count_; ++i) finalists_[i] = finalists_[i] * to_now;
 }
 
-// (2) The paper's FPFH + RANSAC against the map around the fix, with the same prior. It only
-// confirms the exhaustive search (same basin); alone it is not trusted in a canyon.
-void StartupSearch::fpfh_ransac(const StartupFrame& f, Search& s) {
-  map_crop_.clear();
-  const double r2 = params_.global_map_radius * params_.global_map_radius;
-  for (const Vec3f& p : f.map.points) {
-    const double dx = p.x() - f.gnss.enu.x(), dy = p.y() - f.gnss.enu.y();
-    if (dx * dx + dy * dy <= r2) map_crop_.push_back(p);
-  }
-  RegisterCloudsParams gp = params_.global;
-  gp.ransac.prior.center = Vec3d(f.gnss.enu.x(), f.gnss.enu.y(), s.searched.ground_z);
-  gp.ransac.prior.max_horizontal = s.region;
-  gp.ransac.prior.max_vertical = params_.global_max_vertical;
-  const RegisterCloudsResult coarse = register_clouds(f.scan, map_crop_.span(), gp, Mat4d::Identity(), workspace_);
-  if (!coarse.registration.ok()) return;
-  // On the search's points, so that its fitness compares with the search's candidates.
-  const RegistrationResult r = icp(f.search_scan, f.map, coarse.registration.transform, s.params.icp, f.icp_hints);
-  if (r.ok() && s.best.ok() && r.fitness > s.best.fitness &&
-      horizontal_distance(r.transform, s.best.transform.topRightCorner<3, 1>()) < s.params.distinct_distance) {
-    s.best = r;
-  }
-}
-
 // [m] a pose of this frame (world_T_body; odom_T_body its odometry pose) from the fix the
 // search's region is centred on, taken back by the odometry to the frame that fix belongs to: the
 // region is where the search looked. A search spread over frames finishes when a canyon fix may
@@ -376,7 +352,7 @@ double StartupSearch::distance_from_region_fix(const Mat4d& pose, const Mat4d& o
   return horizontal_distance(Mat4d(pose * se3_inverse(odom_T_body) * region_odom_), region_fix_);
 }
 
-// (4) The acceptance checks on the final ICP's result (carried to this frame). An accepted
+// (3) The acceptance checks on the final ICP's result (carried to this frame). An accepted
 // solution starts a filter that needs it only once a second search confirms it.
 StartupStatus StartupSearch::accept(const StartupFrame& f, const Search& s, RegistrationResult& result,
                                     LocalizerCounters& counters) {

@@ -10,12 +10,14 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <string>
 #include <vector>
 
 #include "firmware/wire/share_schedule.hpp"
 #include "tests/worst_case/localizer/worst_case_scene.hpp"
+#include "tools/target/fixture_writer.hpp"
 #include "v2xloc/algo/core/geodesy.hpp"
 #include "v2xloc/algo/localization/localizer.hpp"
 
@@ -32,6 +34,9 @@ namespace v2xloc::worst_case {
 namespace {
 
 Localizer g_localizer;  // hundreds of MB: static
+// With V2XLOC_TARGET_FIXTURE=FILE, AdversarialPeriods also writes its drive as a target fixture
+// (docs/target.md): every localizer input, counted periods labelled with their case, the others "setup".
+fixture::FixtureWriter* g_fixture = nullptr;
 
 // Under callgrind, a counted period is dumped stage by stage ("CASE period N STAGE"), so the
 // script can name the stage that spent a period's instructions.
@@ -68,6 +73,7 @@ class Drive {
     WC_DUMP("setup");
     origin_ = make_geodetic_origin(48.137, 11.575, 520.0);
     g_localizer.configure(params, origin_);
+    if (g_fixture != nullptr) g_fixture->configure(48.137, 11.575, 520.0);
     g_localizer.set_stage_probe(StageProbe{&StageDumps::on_mark, &g_stage_dumps});
     map_world_ = scene_points(scene_, Vec3d(0.0, 0.0, 0.0), 60.0, 0.2);
     infra_pose_ = pose_xy_yaw(0.0, 11.0, 5.0, 0.0);
@@ -108,11 +114,13 @@ class Drive {
     WC_DUMP("setup");
     g_stage_dumps.current = LocalizerStage::kIdle;
     g_stage_dumps.period = counted ? label : nullptr;
+    if (g_fixture != nullptr) g_fixture->label(counted ? name_ : "setup");
     for (int k = 0; k < 10; ++k) {
       VehicleInput v;
       v.t = t_ - 0.09 + 0.01 * k;
       v.wheel_speed = kSpeed;
       v.yaw_rate = 0.0;
+      if (g_fixture != nullptr) g_fixture->vehicle(v);
       g_localizer.on_vehicle(v);
     }
     const Vec3d fix = truth().topRightCorner<3, 1>() + p.gnss_error;
@@ -127,6 +135,7 @@ class Drive {
     gi.num_sats = 9;
     gi.hdop = 1.2;
     gi.valid = true;
+    if (g_fixture != nullptr) g_fixture->gnss(gi);
     g_localizer.on_gnss(gi);
     deliver_map_clouds(p.clouds);
     EgoScanInput in;
@@ -134,6 +143,7 @@ class Drive {
     in.points = std::span<const Vec3f>(p.scan.data(), p.scan.size());
     if (p.times.size() == p.scan.size()) in.point_times = std::span<const float>(p.times.data(), p.times.size());
     in.body_T_lidar = body_T_lidar();
+    if (g_fixture != nullptr) g_fixture->ego_scan(in);
     const LocalizerFrameOutput& out = g_localizer.on_ego_scan(in);
     ++frames_;
     if (counted && !WC_UNDER_VALGRIND()) {  // host wall time of the period (inputs, map clouds, scan)
@@ -184,6 +194,7 @@ class Drive {
         schedule_.refund();
         continue;
       }
+      if (g_fixture != nullptr) g_fixture->map_cloud(waiting_[slot]);
       g_localizer.on_map_cloud(waiting_[slot]);
       ++fused;
     }
@@ -210,6 +221,14 @@ class Drive {
 // One drive through every adversarial input (one warm-up, so the run stays cheap under
 // callgrind); a plain period between cases lets the localizer recover, uncounted.
 TEST(WorstCase, AdversarialPeriods) {
+  fixture::FixtureWriter writer;
+  if (const char* path = std::getenv("V2XLOC_TARGET_FIXTURE")) {
+    ASSERT_TRUE(writer.open(path)) << path;
+    g_fixture = &writer;
+  }
+  struct Detach {
+    ~Detach() { g_fixture = nullptr; }
+  } detach;
   Drive d("setup");
   d.warm_up(3);
   d.past_first_acquisition();
@@ -332,6 +351,9 @@ TEST(WorstCase, AdversarialPeriods) {
     std::size_t sources = 0;
     for (const MapSourceInfo& src : g_localizer.map().sources()) sources += src.active ? 1 : 0;
     EXPECT_GE(sources, 2u) << "the queued shares reached the map";
+  }
+  if (g_fixture != nullptr) {
+    EXPECT_TRUE(writer.close()) << "writing the target fixture";
   }
 }
 

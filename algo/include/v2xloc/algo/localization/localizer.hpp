@@ -4,7 +4,7 @@
 //   LidarOdometry       relative motion, predicted from the same signals
 //   ReferenceMap        infra/agent clouds fused (map_fusion) -> target: points, k-d tree, normals
 //   TrackingRegistration ICP from the filter's prediction, basin audit, stereo ICP
-//   StartupSearch       GNSS-seeded exhaustive search + FPFH/RANSAC, confirmation by a second search
+//   StartupSearch       GNSS-seeded exhaustive search, confirmation by a second search
 //   PoseFilter          validity gates -> EKF (wheel speed / yaw rate, GNSS, odometry, registrations)
 //   FrameOutput         the filter's pose, or before its start the GNSS fix on the road surface
 // Lost track (GNSS divergence, basin audit) -> start-up search again.

@@ -62,9 +62,7 @@ struct LocalizerParams {
 
   // ---- Registration to the map ----
   IcpParams icp = default_icp();      // tracking ICP: point-to-plane from the EKF prediction
-  RegisterCloudsParams global = default_global();   // FPFH + RANSAC, used only with use_fpfh_ransac
   PoseSearchParams search = default_search();        // start-up GNSS-seeded exhaustive search
-  bool use_fpfh_ransac = false;       // [switch] also try FPFH + RANSAC at start-up (off); better ICP fitness wins
   // [points] even scan subsample the pose search scores and refines on (<= config::kMaxSearchPoints)
   std::uint32_t search_points = 1024;
   double global_map_radius = 70.0;    // [m] map crop (and road-height disc) around the GNSS fix
@@ -184,15 +182,6 @@ struct LocalizerParams {
     p.kernel.scale = 0.3;                 // [m] Tukey scale: residuals beyond it weigh nothing
     // [work units] ~44 M instructions; past it kDidNotConverge, counted tracking_work_capped
     p.max_work = 400000;
-    return p;
-  }
-  static RegisterCloudsParams default_global() {
-    RegisterCloudsParams p;
-    p.mode = RegistrationMode::kGlobal;  // [-] FPFH + RANSAC, then ICP
-    p.voxel_size = 1.0f;            // [m] the map is sparse far from the sensors: coarse descriptors
-    p.mutual_filter = false;        // mutual matching leaves too few pairs on sparse maps
-    p.ransac.prior.enabled = true;  // hypotheses must be level and inside the GNSS region
-    p.ransac.prior.max_tilt = 0.087;  // [rad] 5 deg
     return p;
   }
   static ValidityGateParams default_gate() {

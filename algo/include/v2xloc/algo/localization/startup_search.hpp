@@ -1,15 +1,14 @@
 // The start-up (and lost-track) search: where on the map is the vehicle, with only the GNSS fix
-// to go by. A GNSS-seeded exhaustive pose search (pose_search.hpp), optionally confirmed by the
-// paper's FPFH + RANSAC, refined by the tracking ICP and checked against the GNSS region, the
-// course over ground and the GNSS track the odometry implies. An accepted solution starts the
-// filter only when a second search within global_confirm_window frames agrees with it through
-// the odometry (the candidate); that search may re-decide only the first one's finalists
-// (global_confirm_finalists). The search is a job: startup_work_per_period bounds its work per
-// frame, its result is carried to the frame it finishes in by the odometry; its final ICP then
-// takes what the periods have left, its result carried the same way. Owns all its state:
-// the job, the candidate, the track of recent odometry / GNSS positions, the retry spacing and
-// the FPFH + RANSAC workspace. One entry point per frame (step), everything it reads in a
-// StartupFrame.
+// to go by. A GNSS-seeded exhaustive pose search (pose_search.hpp), refined by the tracking ICP
+// and checked against the GNSS region, the course over ground and the GNSS track the odometry
+// implies. An accepted solution starts the filter only when a second search within
+// global_confirm_window frames agrees with it through the odometry (the candidate); that search
+// may re-decide only the first one's finalists (global_confirm_finalists). The search is a job:
+// startup_work_per_period bounds its work per frame, its result is carried to the frame it
+// finishes in by the odometry; its final ICP then takes what the periods have left, its result
+// carried the same way. Owns all its state: the job, the candidate, the track of recent odometry
+// / GNSS positions and the retry spacing. One entry point per frame (step), everything it reads
+// in a StartupFrame.
 #pragma once
 
 #include <cstdint>
@@ -22,7 +21,6 @@
 #include "v2xloc/algo/localization/stage_probe.hpp"
 #include "v2xloc/algo/registration/icp.hpp"
 #include "v2xloc/algo/registration/pose_search.hpp"
-#include "v2xloc/algo/registration/register_clouds.hpp"
 
 namespace v2xloc {
 
@@ -139,7 +137,6 @@ class StartupSearch {
   double distance_from_region_fix(const Mat4d& pose, const Mat4d& odom_T_body) const;
   void resolve_ambiguity(const StartupFrame& f, Search& s, LocalizerCounters& counters) const;
   void keep_finalists(const StartupFrame& f);
-  void fpfh_ransac(const StartupFrame& f, Search& s);
   StartupStatus accept(const StartupFrame& f, const Search& s, RegistrationResult& result,
                        LocalizerCounters& counters);
   bool confirm(std::uint32_t frame, const Mat4d& pose, const Mat4d& odom_T_body, bool output,
@@ -189,8 +186,6 @@ class StartupSearch {
   Mat4d final_odom_ = Mat4d::Identity();
   FixedVector<Vec3f, config::kMaxSearchPoints> final_scan_;
   std::uint32_t final_hints_[config::kMaxSearchPoints];
-  FixedVector<Vec3f, config::kMaxMapPoints> map_crop_;
-  RegistrationWorkspace workspace_;
 };
 
 }  // namespace v2xloc

@@ -1,0 +1,130 @@
+// The semihosting target image: the whole Localizer (EMBEDDED profile) as Cortex-R52 code, fed a
+// fixture's periods (firmware/fixture) from a host file. Per period it writes the output line the
+// host reference writes (format_period) plus the period's retired instructions and cycles in the
+// localizer's calls, read from the PMU; at the end the painted stack's high-water mark.
+//   usage (QEMU semihosting arguments): v2xloc_target.elf FIXTURE OUTPUT
+// Exit status: 0 after the fixture's kEnd, 2 on bad arguments or I/O, 3 on a malformed fixture;
+// a CPU exception ends the run with status 1 (startup.S). The host I/O is semihosting_io.cpp's.
+#include <cstdint>
+#include <cstring>
+
+#include "firmware/baremetal/target/pmu.hpp"
+#include "firmware/baremetal/target/semihosting_io.hpp"
+#include "firmware/fixture/fixture_player.hpp"
+#include "v2xloc/algo/localization/localizer.hpp"
+
+namespace {
+
+v2xloc::Localizer g_localizer;
+v2xloc::fixture::FixturePlayer g_player;
+
+// Sums the PMU counts over the localizer calls of one period.
+class PmuMeter final : public v2xloc::fixture::CallMeter {
+ public:
+  void begin() override {
+    i0_ = v2xloc::target::pmu_instructions();
+    c0_ = v2xloc::target::pmu_cycles();
+  }
+  void end() override {
+    const std::uint32_t i1 = v2xloc::target::pmu_instructions();
+    const std::uint32_t c1 = v2xloc::target::pmu_cycles();
+    instructions += i1 - i0_;  // one call stays far below 2^32
+    cycles += c1 - c0_;
+  }
+  std::uint64_t instructions = 0, cycles = 0;
+
+ private:
+  std::uint32_t i0_ = 0, c0_ = 0;
+};
+
+// The stack below main's frame is painted before the run; the lowest word changed since is the
+// high-water mark. The region lies between the semihosting heap (half of RAM up) and the stack
+// (top of RAM down), so painting it touches nothing live.
+constexpr std::uint32_t kPaint = 0x5afe57acu;
+constexpr std::uintptr_t kPaintBytes = 512 * 1024;
+constexpr std::uintptr_t kPaintMargin = 256;  // below the painting frame itself
+
+std::uintptr_t stack_pointer() {
+  std::uintptr_t sp;
+  asm volatile("mov %0, sp" : "=r"(sp));
+  return sp;
+}
+
+__attribute__((noinline)) std::uintptr_t paint_stack() {
+  const std::uintptr_t top = (stack_pointer() - kPaintMargin) & ~std::uintptr_t{7};
+  for (auto* p = reinterpret_cast<volatile std::uint32_t*>(top - kPaintBytes);
+       p < reinterpret_cast<volatile std::uint32_t*>(top); ++p) {
+    *p = kPaint;
+  }
+  return top;
+}
+
+std::uintptr_t stack_high_water(std::uintptr_t painted_top, std::uintptr_t main_sp) {
+  auto* p = reinterpret_cast<const volatile std::uint32_t*>(painted_top - kPaintBytes);
+  while (p < reinterpret_cast<const volatile std::uint32_t*>(painted_top) && *p == kPaint) ++p;
+  return main_sp - reinterpret_cast<std::uintptr_t>(p);
+}
+
+void put_u64(char* buf, std::uint64_t v) {
+  char digits[21];
+  int k = 20;
+  digits[k] = '\0';
+  do {
+    digits[--k] = static_cast<char>('0' + v % 10);
+    v /= 10;
+  } while (v != 0);
+  std::strcat(buf, digits + k);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  namespace io = v2xloc::target;
+  if (argc != 3) {
+    io::print("usage: v2xloc_target.elf FIXTURE OUTPUT\n");
+    return 2;
+  }
+  const std::uintptr_t main_sp = stack_pointer();
+  const std::uintptr_t painted_top = paint_stack();
+  if (!io::open_files(argv[1], argv[2])) return 2;
+  if (!g_player.open(io::fixture_source())) {
+    io::print("v2xloc target: not a fixture of this version\n");
+    return 3;
+  }
+  v2xloc::target::pmu_start();
+  PmuMeter meter;
+  char line[256];
+  for (;;) {
+    const v2xloc::fixture::Step step = g_player.step(g_localizer, meter);
+    if (step == v2xloc::fixture::Step::kEnd) break;
+    if (step == v2xloc::fixture::Step::kError) {
+      std::strcpy(line, "v2xloc target: fixture error after period ");
+      put_u64(line, g_player.period());
+      io::print(line);
+      io::print(": ");
+      io::print(g_player.error());
+      io::print("\n");
+      return 3;
+    }
+    if (step != v2xloc::fixture::Step::kPeriod) continue;
+    if (v2xloc::fixture::format_period(line, sizeof line - 64, g_player.period() - 1, g_player.label(),
+                                       g_player.output()) == 0) {
+      return 3;
+    }
+    std::strcat(line, " instr ");
+    put_u64(line, meter.instructions);
+    std::strcat(line, " cycles ");
+    put_u64(line, meter.cycles);
+    std::strcat(line, "\n");
+    io::write_output(line);
+    meter.instructions = meter.cycles = 0;
+  }
+  std::strcpy(line, "# stack_high_water ");
+  put_u64(line, stack_high_water(painted_top, main_sp));
+  std::strcat(line, " painted ");
+  put_u64(line, kPaintBytes);
+  std::strcat(line, "\n");
+  io::write_output(line);
+  io::print(line + 2);
+  return io::close_files() ? 0 : 2;
+}

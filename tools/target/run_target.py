@@ -1,0 +1,152 @@
+#!/usr/bin/env python3
+"""One `target` test: the whole localizer as Cortex-R52 code under QEMU against the host's bits.
+
+In a working folder of its own: (1) the inputs: a short recording made by v2xloc-sim and turned
+into a fixture by `v2xloc-fixture record` (the offline wire path's localizer calls), or the
+worst-case suite's adversarial drive (WorstCase.AdversarialPeriods with V2XLOC_TARGET_FIXTURE);
+(2) the host reference: `v2xloc-fixture play` in this EMBEDDED build; (3) the target run:
+`qemu-system-arm -M virt -cpu max -icount shift=0` with semihosting, under a timeout. Fails unless
+QEMU exits 0, every period's line equals the host's bit for bit (and, for a recording, the
+recording run's own lines), and every period outside "setup" retires <= --budget instructions.
+Exit 77 (ctest: skipped, with the reason) without qemu-system-arm or the target image.
+"""
+import argparse
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+
+QEMU = ["qemu-system-arm", "-M", "virt", "-cpu", "max", "-m", "128M", "-nographic", "-monitor", "none",
+        "-serial", "none", "-nic", "none", "-icount", "shift=0"]
+
+
+def run(cmd, cwd, timeout, log):
+    with open(log, "w") as f:
+        try:
+            return subprocess.run(cmd, cwd=cwd, stdout=f, stderr=subprocess.STDOUT, timeout=timeout).returncode
+        except subprocess.TimeoutExpired:
+            print(f"run_target: TIMEOUT after {timeout} s: {' '.join(cmd)}")
+            return None
+
+
+def need(ok, what, log=None):
+    if ok:
+        return
+    print(f"run_target: FAILED: {what}")
+    if log and os.path.exists(log):
+        print(open(log).read()[-4000:])
+    sys.exit(1)
+
+
+def pose_part(line):
+    """A period line without the target's counts: what must equal the host's."""
+    return line.split(" instr ")[0]
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--name", required=True)
+    ap.add_argument("--workdir", required=True)
+    ap.add_argument("--image", required=True, help="v2xloc_target.elf (cortex-r52 preset)")
+    ap.add_argument("--fixture-tool", required=True, help="v2xloc-fixture of this EMBEDDED build")
+    ap.add_argument("--sim", help="v2xloc-sim: make the recording with it")
+    ap.add_argument("--generate", nargs=argparse.REMAINDER, default=[],
+                    help="v2xloc-sim generate arguments (last option)")
+    ap.add_argument("--worst-case", help="test_worst_case_localizer: its adversarial drive is the fixture")
+    ap.add_argument("--budget", type=float, default=100e6, help="instructions per period outside 'setup'")
+    ap.add_argument("--timeout", type=int, default=900, help="seconds for the QEMU run")
+    ap.add_argument("--golden", help="committed host lines this run's must also equal")
+    ap.add_argument("--known-over", type=float, default=0.0,
+                    help="a known gap (docs/target.md): periods over --budget pass up to this ceiling, reported")
+    a = ap.parse_args()
+
+    if shutil.which("qemu-system-arm") is None:
+        print("run_target: SKIPPED: qemu-system-arm not installed (apt-get install qemu-system-arm)")
+        return 77
+    if not os.path.exists(a.image):
+        print(f"run_target: SKIPPED: no target image {a.image} (cmake --build --preset cortex-r52 first)")
+        return 77
+
+    wd = os.path.abspath(a.workdir)
+    shutil.rmtree(wd, ignore_errors=True)
+    os.makedirs(wd)
+    fixture, host, target, recorded = (os.path.join(wd, n) for n in ("inputs.fix", "host.txt", "target.txt", "recorded.txt"))
+
+    if a.worst_case:
+        env = dict(os.environ, V2XLOC_TARGET_FIXTURE=fixture)
+        log = os.path.join(wd, "worst_case.log")
+        with open(log, "w") as f:
+            rc = subprocess.run([a.worst_case, "--gtest_filter=WorstCase.AdversarialPeriods"], cwd=wd, env=env,
+                                stdout=f, stderr=subprocess.STDOUT, timeout=1200).returncode
+        need(rc == 0, "the worst-case drive that writes the fixture", log)
+    else:
+        need(a.sim and a.generate, "--sim and --generate, or --worst-case")
+        log = os.path.join(wd, "generate.log")
+        need(run([a.sim, "generate", *a.generate, "--out", "rec"], wd, 900, log) == 0, "v2xloc-sim generate", log)
+        log = os.path.join(wd, "record.log")
+        need(run([a.fixture_tool, "record", "rec", fixture, "--label", a.name, "--outputs", recorded], wd, 900, log) == 0,
+             "v2xloc-fixture record", log)
+        print(open(log).read().strip())
+
+    log = os.path.join(wd, "play.log")
+    need(run([a.fixture_tool, "play", fixture, host], wd, 900, log) == 0, "v2xloc-fixture play (host reference)", log)
+
+    log = os.path.join(wd, "qemu.log")
+    image = os.path.abspath(a.image)
+    cmd = QEMU + ["-semihosting-config", f"enable=on,target=native,arg={image},arg=inputs.fix,arg=target.txt",
+                  "-kernel", image]
+    rc = run(cmd, wd, a.timeout, log)
+    need(rc == 0, f"the target run (QEMU exit status {rc})", log)
+
+    host_lines = open(host).read().splitlines()
+    lines = open(target).read().splitlines()
+    periods = [l for l in lines if not l.startswith("#")]
+    summary = [l for l in lines if l.startswith("#")]
+    need(len(host_lines) > 0, "no periods in the host reference")
+    need(len(periods) == len(host_lines), f"{len(periods)} target periods, {len(host_lines)} host periods")
+    diff = [(h, t) for h, t in zip(host_lines, periods) if pose_part(t) != h]
+    for h, t in diff[:5]:
+        print(f"  host   {h}\n  target {pose_part(t)}")
+    need(not diff, f"{len(diff)} of {len(periods)} periods differ from the host's bits")
+    if not a.worst_case:
+        rec = open(recorded).read().splitlines()
+        need(rec == host_lines, "the fixture's host play differs from the recording's own run")
+    if a.golden:
+        need(open(a.golden).read().splitlines() == host_lines, f"host lines differ from the golden {a.golden}")
+
+    counted = []
+    for l in periods:
+        f = l.split()
+        instr, cycles = int(f[f.index("instr") + 1]), int(f[f.index("cycles") + 1])
+        counted.append((f[1], int(f[0]), instr, cycles))
+    inside = [c for c in counted if c[0] != "setup"]
+    over = [c for c in inside if c[2] > a.budget]
+    instr = [c[2] for c in inside]
+    cycles = [c[3] for c in inside]
+    print(f"run_target: {a.name}: {len(periods)} periods bit-identical to the host EMBEDDED build; "
+          f"{len(inside)} counted: instructions median {statistics.median(instr) / 1e6:.1f} M, "
+          f"max {max(instr) / 1e6:.1f} M (period {max(inside, key=lambda c: c[2])[1]}), "
+          f"cycles median {statistics.median(cycles) / 1e6:.1f} M max {max(cycles) / 1e6:.1f} M; "
+          + "; ".join(s[2:] for s in summary))
+    if a.worst_case:
+        cases = {}
+        for c in inside:
+            cases[c[0]] = max(cases.get(c[0], 0), c[2])
+        for name, worst in cases.items():
+            print(f"  {name:28s} max {worst / 1e6:7.1f} M")
+    setup = [c for c in counted if c[0] == "setup"]
+    if setup:
+        print(f"  setup periods (not budgeted): {len(setup)}, max {max(c[2] for c in setup) / 1e6:.1f} M")
+    for c in over[:10]:
+        print(f"  over the budget: {c[0]} period {c[1]}: {c[2] / 1e6:.1f} M")
+    if over and a.known_over > 0:
+        print(f"run_target: KNOWN GAP, NOT MET: {len(over)} of {len(inside)} periods over {a.budget / 1e6:.0f} M "
+              f"(max {max(instr) / 1e6:.1f} M); failing only above the ceiling {a.known_over / 1e6:.0f} M")
+        over = [c for c in over if c[2] > a.known_over]
+    need(not over, f"{len(over)} periods over {max(a.budget, a.known_over) / 1e6:.0f} M instructions")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
