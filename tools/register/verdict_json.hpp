@@ -51,7 +51,7 @@ inline nlohmann::ordered_json verdict_json(const RegistrationVerdict& v, const V
   thresholds["min_inliers"] = p.min_inliers;
   thresholds["max_tilt_deg"] = p.max_tilt_deg;
   thresholds["max_runner_up_ratio"] = p.max_runner_up_ratio;
-  thresholds["require_converged"] = p.require_converged;
+  thresholds["min_fitness_not_converged"] = p.min_fitness_not_converged;
   return Json{{"verdict", to_string(v.verdict)}, {"reasons", reasons}, {"evidence", evidence}, {"thresholds", thresholds}};
 }
 

@@ -38,7 +38,7 @@ RegistrationVerdict judge_registration(const RegistrationResult& result, const R
   if (!(result.fitness >= params.min_fitness)) reasons |= kVerdictLowFitness;
   if (result.inliers < params.min_inliers) reasons |= kVerdictFewInliers;
   if (!(e.tilt_deg <= params.max_tilt_deg)) reasons |= kVerdictTilted;
-  if (params.require_converged && !result.converged) reasons |= kVerdictNotConverged;
+  if (!result.converged && !(result.fitness >= params.min_fitness_not_converged)) reasons |= kVerdictNotConverged;
   if (runner_up != nullptr && runner_up->ok()) {
     e.has_runner_up = true;
     e.runner_up_fitness = runner_up->fitness;
