@@ -22,7 +22,7 @@
 #include "host_sim/recording/sim_trust.hpp"
 #include "host_sim/vehicle/vehicle_signals.hpp"
 #include "host_sim/world/intersection_world.hpp"
-#include "tools/dataset/dair_v2x.hpp"
+#include "tools/dataset/dair_calib.hpp"
 #include "v2xloc/algo/core/config.hpp"
 #include "v2xloc/algo/core/geodesy.hpp"
 
@@ -88,7 +88,7 @@ bool stamp_of(const InJson& e, std::int64_t& us) {
 
 bool read_transform(const std::string& path, Iso& out, std::string& error) {
   Mat4d m;
-  if (!read_lidar_i2v(path, m, error)) return false;
+  if (!read_dair_transform(path, m, error)) return false;
   out.matrix() = m;
   return true;
 }

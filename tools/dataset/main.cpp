@@ -1,8 +1,11 @@
 // v2xloc-dataset: the core on public dataset layouts.
 //   v2xloc-dataset kitti SEQ_DIR [--out POSES_TXT] [--poses GT_TXT] [--voxel M] [--json]
-//   v2xloc-dataset dair-v2x-c ROOT [--voxel M] [--seed N] [--limit N] [--json]
+//   v2xloc-dataset dair-v2x-c ROOT [--mode global|search|icp] [--prior none|gnss] [--voxel M]
+//                                  [--seed N] [--limit N] [--json]
 // Layouts: tools/dataset/kitti_sequence.hpp and tools/dataset/dair_v2x.hpp.
-// Exit 0 done, 1 the run worked but a pair failed to register (dair), 2 usage / unusable input.
+//   v2xloc-dataset dair-v2x-c ROOT --recording OUT [--batch ID]: the sequence as a v2xloc recording
+// Exit 0 done, 1 the run worked but a pair's verdict is not ok (dair; when none is ok, stderr says
+// why), 2 usage / unusable input.
 #include "tools/dataset/dair_recording.hpp"
 #include "tools/dataset/dair_v2x.hpp"
 #include "tools/dataset/kitti_run.hpp"
@@ -35,12 +38,26 @@ int main(int argc, char** argv) {
 
   DairOptions dair;
   std::uint64_t seed = 0;
+  std::string dair_mode = "global", dair_prior = "none";
   CLI::App* dair_cmd = app.add_subcommand(
-      "dair-v2x-c", "global registration of each infrastructure cloud to its vehicle cloud (no prior), "
-                    "scored against cooperative/calib/lidar_i2v");
+      "dair-v2x-c", "registration of each infrastructure cloud to its vehicle cloud with a verdict, scored against "
+                    "the dataset's transform (cooperative/calib/lidar_i2v, else the per-frame calibrations)");
   dair_cmd->add_option("ROOT", dair.root, "folder holding cooperative/, vehicle-side/, infrastructure-side/")
       ->required()->check(CLI::ExistingDirectory);
   dair_cmd->add_option("--voxel", dair.voxel, "registration voxel size [m]")->check(CLI::Range(0.05, 10.0));
+  dair_cmd->add_option("--mode", dair_mode,
+                       "global: FPFH + RANSAC + ICP (default); search: level search (x, y, yaw) + ICP; "
+                       "icp: ICP from the prior")
+      ->check(CLI::IsMember({"global", "search", "icp"}));
+  dair_cmd->add_option("--prior", dair_prior,
+                       "none (default) or gnss: the dataset's transform perturbed (--prior-translation, "
+                       "--prior-yaw, --prior-seed); search searches around it, icp starts from it")
+      ->check(CLI::IsMember({"none", "gnss"}));
+  dair_cmd->add_option("--prior-translation", dair.prior_translation_m, "GNSS-grade prior: position error [m]")
+      ->check(CLI::Range(0.0, 50.0));
+  dair_cmd->add_option("--prior-yaw", dair.prior_yaw_deg, "GNSS-grade prior: heading error [deg]")
+      ->check(CLI::Range(0.0, 45.0));
+  dair_cmd->add_option("--prior-seed", dair.prior_seed, "GNSS-grade prior: random seed");
   CLI::Option* seed_opt = dair_cmd->add_option("--seed", seed, "RANSAC random seed");
   dair_cmd->add_option("--limit", dair.limit, "register at most N pairs (0 = all)");
   dair_cmd->add_option("--success-translation", dair.success_translation_m,
@@ -99,12 +116,24 @@ int main(int argc, char** argv) {
     std::printf("%s: %s\n", recording.out_dir.c_str(), summary.one_line().c_str());
     return 0;
   }
+  dair.mode = dair_mode == "search" ? v2xloc::RegistrationMode::kLevelSearch
+              : dair_mode == "icp"  ? v2xloc::RegistrationMode::kIcpOnly
+                                    : v2xloc::RegistrationMode::kGlobal;
+  dair.prior = dair_prior == "gnss" ? DairPrior::kGnss : DairPrior::kNone;
+  if (dair.mode == v2xloc::RegistrationMode::kIcpOnly && dair.prior != DairPrior::kGnss) {
+    std::fprintf(stderr, "v2xloc-dataset dair-v2x-c: --mode icp needs a prior (--prior gnss)\n");
+    return 2;
+  }
   DairRunResult result;
   if (!run_dair(dair, result, error)) {
     std::fprintf(stderr, "v2xloc-dataset dair-v2x-c: %s\n", error.c_str());
     return 2;
   }
   std::fputs(json ? (dair_json(dair, result).dump() + "\n").c_str() : dair_table(dair, result).c_str(), stdout);
+  if (dair_summary(dair, result).ok == 0) {
+    std::fprintf(stderr, "v2xloc-dataset dair-v2x-c: %s\n", dair_nothing_registered(result).c_str());
+    return 1;
+  }
   for (const DairPairResult& r : result.pairs)
     if (r.status != "ok") return 1;
   return 0;

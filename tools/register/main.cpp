@@ -1,6 +1,7 @@
-// v2xloc-register SOURCE TARGET [--voxel M] [--init FILE_4x4] [--mode global|icp] [--seed N]
+// v2xloc-register SOURCE TARGET [--voxel M] [--init FILE_4x4] [--mode global|icp|search] [--seed N]
 // Reads two clouds, runs the allocation-free registration pipeline (algo/register_clouds) and
-// prints one JSON object (see register_cli.hpp). Exit 0 ok, 1 registration failed, 2 usage/IO.
+// prints one JSON object with its verdict (see register_cli.hpp). Exit 0 verdict ok, 1 unreliable
+// or failed, 2 usage/IO.
 #include "host_sim/cloud_io/cloud_io.hpp"
 #include "tools/register/register_cli.hpp"
 
@@ -28,6 +29,7 @@ std::uint64_t thread_cpu_ns() {
 
 // Several tens of MB: static, never on the stack.
 v2xloc::RegistrationWorkspace g_workspace;
+v2xloc::LevelSearchWorkspace g_search_workspace;
 
 }  // namespace
 
@@ -66,23 +68,22 @@ int main(int argc, char** argv) {
   }
   timings.read_target_ms = ms_since(t0);
 
-  RegisterCloudsParams params;
-  params.mode = options.mode;
-  if (options.voxel) params.voxel_size = *options.voxel;
-  if (options.seed) params.ransac.seed = *options.seed;
-  if (options.feature_visits) params.feature_search_visits = *options.feature_visits;
+  RegisterCloudsParams params = tools::register_params(options);
   if (source.has_viewpoint) params.source_viewpoint = source.sensor_origin;
   if (target.has_viewpoint) params.target_viewpoint = target.sensor_origin;
   params.clock = &thread_cpu_ns;
 
   t0 = thread_cpu_ns();
   const RegisterCloudsResult result =
-      register_clouds(source.points, target.points, params, initial, g_workspace);
+      register_clouds(source.points, target.points, params, initial, g_workspace, g_search_workspace);
   timings.registration_ms = static_cast<double>(thread_cpu_ns() - t0) * 1e-6;
   for (int i = 0; i < static_cast<int>(RegisterStage::kCount); ++i) {
     timings.stage_ms[i] = static_cast<double>(result.stats.ticks[i]) * 1e-6;  // ticks are ns
   }
 
-  std::fputs(tools::register_json(options, params, result, timings).c_str(), stdout);
-  return result.registration.ok() ? 0 : 1;
+  const VerdictParams verdict_params;
+  const RegistrationVerdict verdict = judge_registration(
+      result.registration, result.runner_up.ok() ? &result.runner_up : nullptr, verdict_params);
+  std::fputs(tools::register_json(options, params, result, timings, verdict, verdict_params).c_str(), stdout);
+  return verdict.verdict == Verdict::kOk ? 0 : 1;
 }

@@ -1,8 +1,10 @@
 #include "tools/register/register_cli.hpp"
+#include "tools/register/verdict_json.hpp"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -69,7 +71,7 @@ Json dropped_counts(const RegisterCloudsResult& result) {
 
 Json stage_ms(const RegisterTimings& timings) {
   static constexpr const char* kStageNames[] = {"downsample", "normals", "fpfh", "correspondences",
-                                                "ransac", "icp"};
+                                                "ransac", "icp", "search"};
   static_assert(std::size(kStageNames) == static_cast<std::size_t>(RegisterStage::kCount));
   Json out;
   out["read_source"] = ms(timings.read_source_ms);
@@ -86,13 +88,15 @@ namespace {
 // The command line, described once: parse_register_args and the usage text both come from it.
 struct RegisterCommandLine {
   CLI::App app{"Registers SOURCE onto TARGET with the allocation-free pipeline (algo/register_clouds) and\n"
-               "prints one JSON object. Exit 0: registered, 1: registration failed, 2: usage/IO error.",
+               "prints one JSON object with its verdict. Exit 0: verdict ok, 1: unreliable or failed, 2: usage/IO error.",
                "v2xloc-register"};
   std::string mode = "global";
   float voxel = 0.0f;
   std::string init_path;
   std::uint64_t seed = 0;
   std::size_t feature_visits = 0;
+  double search_radius = 0.0;
+  double search_yaw_deg = 0.0;
 
   explicit RegisterCommandLine(RegisterOptions& o) {
     app.add_option("SOURCE", o.source_path, ".pcd (ascii/binary/binary_compressed), .ply or KITTI .bin")->required();
@@ -100,8 +104,14 @@ struct RegisterCommandLine {
     app.add_option("--voxel", voxel, "voxel size in metres (default 0.5); other radii scale with it")
         ->check(CLI::PositiveNumber);
     app.add_option("--init", init_path, "4x4 row-major initial guess p_target = T p_source (--mode icp)");
-    app.add_option("--mode", mode, "global: FPFH + RANSAC + ICP (default); icp: ICP from --init")
-        ->check(CLI::IsMember({"global", "icp"}));
+    app.add_option("--mode", mode,
+                   "global: FPFH + RANSAC + ICP (default); icp: ICP from --init; search: level search (x, y, yaw "
+                   "lattice around --init, upright sensors) + ICP")
+        ->check(CLI::IsMember({"global", "icp", "search"}));
+    app.add_option("--search-radius", search_radius, "search: disc radius around --init [m] (default 80)")
+        ->check(CLI::PositiveNumber);
+    app.add_option("--search-yaw", search_yaw_deg, "search: heading window around --init, full width [deg] (default 360)")
+        ->check(CLI::Range(0.0, 360.0));
     app.add_option("--seed", seed, "RANSAC random seed");
     app.add_option("--feature-visits", feature_visits,
                    "node-visit budget per feature query (0 = exact, default; 24: approximate, ~2x faster matching)")
@@ -145,9 +155,30 @@ bool parse_register_args(const std::vector<std::string>& args, RegisterOptions& 
   if (cli.app.count("--init")) parsed.init_path = cli.init_path;
   if (cli.app.count("--seed")) parsed.seed = cli.seed;
   if (cli.app.count("--feature-visits")) parsed.feature_visits = cli.feature_visits;
-  parsed.mode = cli.mode == "icp" ? RegistrationMode::kIcpOnly : RegistrationMode::kGlobal;
+  if (cli.app.count("--search-radius")) parsed.search_radius = cli.search_radius;
+  if (cli.app.count("--search-yaw")) parsed.search_yaw_deg = cli.search_yaw_deg;
+  parsed.mode = cli.mode == "icp"      ? RegistrationMode::kIcpOnly
+                : cli.mode == "search" ? RegistrationMode::kLevelSearch
+                                       : RegistrationMode::kGlobal;
   options = parsed;
   return true;
+}
+
+RegisterCloudsParams register_params(const RegisterOptions& options) {
+  RegisterCloudsParams params;
+  params.mode = options.mode;
+  if (options.voxel) params.voxel_size = *options.voxel;
+  if (options.seed) params.ransac.seed = *options.seed;
+  if (options.feature_visits) params.feature_search_visits = *options.feature_visits;
+  if (options.search_radius) params.level.radius = *options.search_radius;
+  if (options.search_yaw_deg) {
+    params.level.yaw_span = *options.search_yaw_deg * 3.14159265358979323846 / 180.0;
+    // One heading a degree over a window (at least 3), 5 deg steps over the whole circle.
+    params.level.yaw_steps = *options.search_yaw_deg >= 360.0
+                                 ? 72u
+                                 : static_cast<std::uint32_t>(std::max(3.0, std::ceil(*options.search_yaw_deg) + 1.0));
+  }
+  return params;
 }
 
 bool read_matrix4(const std::string& path, Mat4d& matrix, std::string& error) {
@@ -185,10 +216,15 @@ bool read_matrix4(const std::string& path, Mat4d& matrix, std::string& error) {
 }
 
 std::string register_json(const RegisterOptions& options, const RegisterCloudsParams& params,
-                          const RegisterCloudsResult& result, const RegisterTimings& timings) {
+                          const RegisterCloudsResult& result, const RegisterTimings& timings,
+                          const RegistrationVerdict& verdict, const VerdictParams& verdict_params) {
   Json out;
   add_registration(out, result.registration);
-  out["mode"] = params.mode == RegistrationMode::kGlobal ? "global" : "icp";
+  out["status"] = verdict_status(verdict);
+  out["registration_status"] = to_string(result.registration.status);
+  out["verdict"] = verdict_json(verdict, verdict_params);
+  out["mode"] = params.mode == RegistrationMode::kGlobal ? "global"
+                : params.mode == RegistrationMode::kIcpOnly ? "icp" : "search";
   out["voxel"] = number(params.voxel_size);
   out["seed"] = params.ransac.seed;
   out["feature_search_visits"] = params.feature_search_visits;
@@ -200,6 +236,15 @@ std::string register_json(const RegisterOptions& options, const RegisterCloudsPa
   out["dropped"] = dropped_counts(result);
   out["ransac_validations"] = result.stats.ransac_validations;
   out["icp_iterations"] = result.stats.icp_iterations;
+  if (params.mode == RegistrationMode::kLevelSearch) {
+    Json& search = out["search"] = Json::object();
+    search["radius_m"] = params.level.radius;
+    search["yaw_span_deg"] = params.level.yaw_span * 180.0 / 3.14159265358979323846;
+    search["yaw_steps"] = params.level.yaw_steps;
+    search["hypotheses"] = result.stats.search_hypotheses;
+    search["refined"] = result.stats.search_refined;
+    if (result.runner_up.ok()) add_registration(search["runner_up"] = Json::object(), result.runner_up);
+  }
   out["ms"] = stage_ms(timings);
   // Invalid UTF-8 in a file name is replaced rather than thrown on: the result is still printed.
   return out.dump(-1, ' ', false, Json::error_handler_t::replace) + "\n";

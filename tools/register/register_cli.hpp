@@ -2,6 +2,7 @@
 #pragma once
 
 #include "v2xloc/algo/registration/register_clouds.hpp"
+#include "v2xloc/algo/registration/registration_verdict.hpp"
 
 #include <cstdint>
 #include <optional>
@@ -18,7 +19,12 @@ struct RegisterOptions {
   RegistrationMode mode = RegistrationMode::kGlobal;
   std::optional<std::uint64_t> seed;     // RANSAC PRNG seed
   std::optional<std::size_t> feature_visits;  // feature-query node-visit budget (0 = exact)
+  std::optional<double> search_radius;   // [m] level search disc (mode search)
+  std::optional<double> search_yaw_deg;  // [deg] level search heading window, full width (mode search)
 };
+
+// The parameters the options select (voxel, mode, seed, search window) over the defaults.
+RegisterCloudsParams register_params(const RegisterOptions& options);
 
 const char* register_usage();
 
@@ -37,12 +43,15 @@ struct RegisterTimings {
   double registration_ms = 0.0;  // whole register_clouds call, thread CPU time
 };
 
-// One JSON object (single line + newline): status, transform (4 rows), fitness, inlier_rmse,
+// One JSON object (single line + newline): status (the verdict's: "ok", "unreliable" or the
+// failed registration's status), verdict (registration_verdict.hpp: reasons, evidence,
+// thresholds), registration_status (the pipeline's own), transform (4 rows), fitness, inlier_rmse,
 // iterations, inliers, converged, coarse (RANSAC) result, point counts per stage, overflow
 // counters and per-stage milliseconds (rounded to 3 decimals). Written with nlohmann-json: other
 // doubles round-trip to the same bits, NaN/Inf are null, and bytes of a file name that are not
 // UTF-8 become U+FFFD.
 std::string register_json(const RegisterOptions& options, const RegisterCloudsParams& params,
-                          const RegisterCloudsResult& result, const RegisterTimings& timings);
+                          const RegisterCloudsResult& result, const RegisterTimings& timings,
+                          const RegistrationVerdict& verdict, const VerdictParams& verdict_params);
 
 }  // namespace v2xloc::tools

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "v2xloc/algo/core/det_math.hpp"
 #include "v2xloc/algo/core/symmetric_eigen.hpp"
 
 namespace v2xloc {
@@ -229,17 +230,76 @@ RegisterCloudsResult& refine_icp(Pipeline& p, std::span<const Vec3f> src, std::s
   return finish(p, fine.status);
 }
 
-}  // namespace
+// Whether two transforms lie in different basins: farther apart than the level search's
+// distinct distance, or turned by more than its distinct yaw.
+bool distinct(const Mat4d& a, const Mat4d& b, const LevelSearchParams& lp) {
+  const double dt = (a.topRightCorner<3, 1>() - b.topRightCorner<3, 1>()).norm();
+  const double yaw_a = det::atan2(a(1, 0), a(0, 0)), yaw_b = det::atan2(b(1, 0), b(0, 0));
+  return dt > lp.distinct_distance || std::abs(det::wrap_pi(yaw_a - yaw_b)) > lp.distinct_yaw;
+}
 
-RegisterCloudsResult register_clouds(std::span<const Vec3f> source, std::span<const Vec3f> target,
-                                     const RegisterCloudsParams& params, const Mat4d& initial,
-                                     RegistrationWorkspace& ws) {
+// 5'./6'. Level search around the initial guess, then coarse and final ICP of the best
+// hypotheses; the fittest final result wins, the fittest in another basin is the runner-up.
+RegisterCloudsResult& search_and_refine(Pipeline& p, std::span<const Vec3f> src, std::span<const Vec3f> tgt,
+                                        const Mat4d& initial, LevelSearchWorkspace& sws) {
+  const RegisterCloudsParams& params = p.params;
+  const LevelSearchResult ls = level_search(src, tgt, initial(0, 3), initial(1, 3),
+                                            det::atan2(initial(1, 0), initial(0, 0)), params.level, sws);
+  p.timer.lap(RegisterStage::kSearch);
+  p.out.stats.search_hypotheses = ls.hypotheses;
+  if (ls.status != LevelSearchStatus::kOk) {
+    return finish(p, ls.status == LevelSearchStatus::kNotEnoughPoints ? RegistrationStatus::kNotEnoughPoints
+                                                                     : RegistrationStatus::kInvalidInput);
+  }
+  if (ls.kept_count == 0) return finish(p, RegistrationStatus::kNoCorrespondences);
+  IcpParams coarse = params.icp;
+  coarse.max_correspondence_distance = params.level_coarse_icp_voxels * p.voxel;
+  coarse.kernel.scale = 0.5 * coarse.max_correspondence_distance;
+  IcpParams fine = params.icp;
+  fine.max_correspondence_distance = params.icp_distance_voxels * p.voxel;
+  fine.kernel.scale = params.icp_kernel_voxels * p.voxel;
+  IcpTarget view;
+  view.points = tgt;
+  view.normals = std::span<const Vec3f>(p.ws.target_normals, tgt.size());
+  view.tree = &p.ws.target_tree.tree;
+  const std::span<std::uint32_t> hints(p.ws.mutual_scratch, RegistrationWorkspace::kMaxPoints);
+  const std::uint32_t refine = params.level_refine < ls.kept_count ? params.level_refine : ls.kept_count;
+  RegistrationResult refined[kLevelSearchMaxKept];
+  std::uint32_t winner = kLevelSearchMaxKept;
+  for (std::uint32_t i = 0; i < refine; ++i) {
+    const RegistrationResult c = icp(src, view, ls.kept[i].transform, coarse, hints);
+    refined[i] = icp(src, view, c.status == RegistrationStatus::kOk ? c.transform : ls.kept[i].transform, fine, hints);
+    p.out.stats.icp_iterations += c.iterations + refined[i].iterations;
+    p.out.stats.search_cap_hits += c.search_truncated + refined[i].search_truncated;
+    if (refined[i].ok() && (winner == kLevelSearchMaxKept || refined[i].fitness > refined[winner].fitness)) winner = i;
+  }
+  p.out.stats.search_refined = refine;
+  p.timer.lap(RegisterStage::kIcp);
+  if (winner == kLevelSearchMaxKept) {
+    p.out.registration = refined[0];
+    return finish(p, refined[0].status);
+  }
+  for (std::uint32_t i = 0; i < refine; ++i) {
+    if (i == winner || !refined[i].ok() || !distinct(refined[i].transform, refined[winner].transform, params.level)) continue;
+    if (!p.out.runner_up.ok() || refined[i].fitness > p.out.runner_up.fitness) p.out.runner_up = refined[i];
+  }
+  p.out.coarse.status = RegistrationStatus::kOk;
+  p.out.coarse.transform = ls.kept[winner].transform;
+  p.out.coarse.fitness = ls.kept[winner].score;
+  p.out.registration = refined[winner];
+  return finish(p, refined[winner].status);
+}
+
+RegisterCloudsResult run(std::span<const Vec3f> source, std::span<const Vec3f> target,
+                         const RegisterCloudsParams& params, const Mat4d& initial, RegistrationWorkspace& ws,
+                         LevelSearchWorkspace* search_ws) {
   RegisterCloudsResult out;
   out.registration.transform = params.mode == RegistrationMode::kIcpOnly ? initial : Mat4d::Identity();
+  const bool search = params.mode == RegistrationMode::kLevelSearch;
   out.coarse.transform = out.registration.transform;
   out.stats.source_input = static_cast<std::uint32_t>(source.size());
   out.stats.target_input = static_cast<std::uint32_t>(target.size());
-  if (!params_valid(params, initial)) {
+  if (!params_valid(params, initial) || (search && search_ws == nullptr)) {
     out.registration.status = RegistrationStatus::kInvalidInput;
     out.coarse.status = out.registration.status;
     return out;
@@ -264,6 +324,7 @@ RegisterCloudsResult register_clouds(std::span<const Vec3f> source, std::span<co
   if (!describe(p, tgt, ws.target_tree, params.target_viewpoint, ws.target_normals, ftgt, fpfh_target)) {
     return finish(p, RegistrationStatus::kNotEnoughPoints);
   }
+  if (search) return search_and_refine(p, src, tgt, initial, *search_ws);
   if (!global) return refine_icp(p, src, tgt, initial);
   if (fpfh_source != FpfhStatus::kOk || fpfh_target != FpfhStatus::kOk) {
     return finish(p, RegistrationStatus::kInvalidInput);
@@ -275,6 +336,20 @@ RegisterCloudsResult register_clouds(std::span<const Vec3f> source, std::span<co
   const RegistrationResult& coarse = coarse_ransac(p, src, tgt);
   if (!coarse.ok()) return finish(p, coarse.status);
   return refine_icp(p, src, tgt, coarse.transform);
+}
+
+}  // namespace
+
+RegisterCloudsResult register_clouds(std::span<const Vec3f> source, std::span<const Vec3f> target,
+                                     const RegisterCloudsParams& params, const Mat4d& initial,
+                                     RegistrationWorkspace& ws) {
+  return run(source, target, params, initial, ws, nullptr);
+}
+
+RegisterCloudsResult register_clouds(std::span<const Vec3f> source, std::span<const Vec3f> target,
+                                     const RegisterCloudsParams& params, const Mat4d& initial,
+                                     RegistrationWorkspace& ws, LevelSearchWorkspace& search_ws) {
+  return run(source, target, params, initial, ws, &search_ws);
 }
 
 }  // namespace v2xloc

@@ -96,10 +96,14 @@ TEST(RegisterCli, JsonCarriesTransformBitsAndStages) {
   RegisterTimings t;
   t.stage_ms[static_cast<int>(RegisterStage::kIcp)] = 12.5;
   t.registration_ms = 1.23456;
-  nlohmann::ordered_json j = parse_line(register_json(o, params, r, t));
+  r.registration.inliers = 5000;
+  r.registration.converged = true;
+  const RegistrationVerdict verdict = judge_registration(r.registration, nullptr);
+  ASSERT_EQ(verdict.verdict, Verdict::kOk);
+  nlohmann::ordered_json j = parse_line(register_json(o, params, r, t, verdict, {}));
 
   const std::vector<std::string> top = {"status", "transform", "fitness", "inlier_rmse", "iterations",
-                                        "inliers", "converged", "mode", "voxel", "seed",
+                                        "inliers", "converged", "registration_status", "verdict", "mode", "voxel", "seed",
                                         "feature_search_visits", "source", "target", "coarse", "points",
                                         "dropped", "ransac_validations", "icp_iterations", "ms"};
   EXPECT_EQ(keys(j), top);
@@ -130,11 +134,12 @@ TEST(RegisterCli, JsonCarriesTransformBitsAndStages) {
                                       "search_cap_hits", "feature_queries_cut"}));
   EXPECT_EQ(keys(j["ms"]), (std::vector<std::string>{"read_source", "read_target", "downsample", "normals",
                                                      "fpfh", "correspondences", "ransac", "icp",
-                                                     "registration"}));
+                                                     "search", "registration"}));
   EXPECT_EQ(j["ms"]["icp"].get<double>(), 12.5);
   EXPECT_EQ(j["ms"]["registration"].get<double>(), 1.235);  // to the microsecond
   EXPECT_EQ(j["source"], "s\"q.pcd");
   EXPECT_EQ(j["target"], "t.pcd");
+  EXPECT_EQ(j["verdict"]["verdict"], "ok");
   EXPECT_EQ(keys(j["coarse"]), (std::vector<std::string>(top.begin(), top.begin() + 7)));
   EXPECT_EQ(j["coarse"]["status"], "invalid_input");
 }
@@ -143,7 +148,7 @@ TEST(RegisterCli, JsonWritesNonFiniteNumbersAsNull) {
   RegisterCloudsResult r;
   r.registration.fitness = std::numeric_limits<double>::quiet_NaN();
   r.registration.transform(1, 2) = std::numeric_limits<double>::infinity();
-  nlohmann::ordered_json j = parse_line(register_json({}, {}, r, {}));
+  nlohmann::ordered_json j = parse_line(register_json({}, {}, r, {}, {}, {}));
   EXPECT_TRUE(j["fitness"].is_null());
   EXPECT_TRUE(j["transform"][1][2].is_null());
   EXPECT_EQ(j["transform"][1][1].get<double>(), 1.0);
@@ -155,7 +160,7 @@ TEST(RegisterCli, JsonFileNamesWithQuotesBackslashesAndControlCharactersParseBac
   o.source_path += '\0';  // the embedded NUL of a std::string too
   o.source_path += "tail";
   o.target_path = "caf\xc3\xa9/\xe2\x82\xac.ply";  // UTF-8 passes through unchanged
-  const std::string text = register_json(o, {}, {}, {});
+  const std::string text = register_json(o, {}, {}, {}, {}, {});
   ASSERT_TRUE(nlohmann::json::accept(text)) << text;
   nlohmann::ordered_json j = parse_line(text);
   EXPECT_EQ(j["source"].get<std::string>(), o.source_path);
@@ -165,7 +170,7 @@ TEST(RegisterCli, JsonFileNamesWithQuotesBackslashesAndControlCharactersParseBac
 TEST(RegisterCli, JsonStaysValidForFileNamesThatAreNotUtf8) {
   RegisterOptions o;
   o.source_path = "latin1_\xe9t\xe9.pcd";  // a Linux path may hold any bytes but '/' and NUL
-  const std::string text = register_json(o, {}, {}, {});
+  const std::string text = register_json(o, {}, {}, {}, {}, {});
   ASSERT_TRUE(nlohmann::json::accept(text)) << text;
   EXPECT_EQ(parse_line(text)["source"], "latin1_\xef\xbf\xbdt\xef\xbf\xbd.pcd");  // U+FFFD each
 }

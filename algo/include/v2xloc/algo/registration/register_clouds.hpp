@@ -1,6 +1,8 @@
 // The registration pipeline as one call: voxel downsampling -> normals -> FPFH -> feature
 // correspondences -> RANSAC -> ICP (mode kGlobal), or downsampling -> normals -> ICP from an
-// initial guess (mode kIcpOnly). Parameters derive from the voxel size as in Open3D's global
+// initial guess (mode kIcpOnly), or downsampling -> target normals -> level search (x, y, yaw
+// lattice scored by occupancy overlap, level_search.hpp) -> ICP of the best hypotheses (mode
+// kLevelSearch, centred on the initial guess; needs the LevelSearchWorkspace overload). Parameters derive from the voxel size as in Open3D's global
 // registration tutorial (normals radius 2 voxels / 30 nn, FPFH 5 voxels / 100 nn, RANSAC
 // distance 1.5 voxels; final point-to-plane ICP gated at 1 voxel with Tukey's biweight at 0.5
 // voxel). In global mode each cloud is searched once per point (KdNeighborhoods) for its normals
@@ -21,6 +23,7 @@
 #include "v2xloc/algo/registration/correspondences.hpp"
 #include "v2xloc/algo/registration/fpfh.hpp"
 #include "v2xloc/algo/registration/icp.hpp"
+#include "v2xloc/algo/registration/level_search.hpp"
 #include "v2xloc/algo/search/kdtree.hpp"
 #include "v2xloc/algo/registration/normals.hpp"
 #include "v2xloc/algo/registration/ransac.hpp"
@@ -30,7 +33,7 @@
 
 namespace v2xloc {
 
-enum class RegistrationMode : std::uint8_t { kGlobal, kIcpOnly };
+enum class RegistrationMode : std::uint8_t { kGlobal, kIcpOnly, kLevelSearch };
 
 using TickClock = std::uint64_t (*)();
 
@@ -66,11 +69,18 @@ struct RegisterCloudsParams {
     p.kernel.type = RobustKernelType::kTukey;
     return p;
   }();
+  // Mode kLevelSearch: the lattice (radius, headings around the initial guess; defaults: no
+  // prior), then each kept hypothesis (at most level_refine) refined by a coarse ICP gated at
+  // level_coarse_icp_voxels (Tukey at half of it: the lattice leaves up to a step and half a
+  // heading step, ~2-3 m at 50 m) and the final ICP; the fittest wins.
+  LevelSearchParams level{};
+  std::uint32_t level_refine = 8;           // [hypotheses] <= kLevelSearchMaxKept
+  double level_coarse_icp_voxels = 3.0;     // [voxels]
   TickClock clock = nullptr;
 };
 
 enum class RegisterStage : std::uint8_t {
-  kDownsample, kNormals, kFpfh, kCorrespondences, kRansac, kIcp, kCount
+  kDownsample, kNormals, kFpfh, kCorrespondences, kRansac, kIcp, kSearch, kCount
 };
 
 struct RegisterStageStats {
@@ -88,11 +98,17 @@ struct RegisterStageStats {
   std::uint64_t search_cap_hits = 0;       // k-d tree queries stopped at the visit cap
   std::uint64_t feature_queries_cut = 0;   // feature queries stopped by feature_search_visits
   std::uint32_t neighborhoods_not_cached = 0;  // FPFH/normal lists re-searched (cache full)
+  std::uint64_t search_hypotheses = 0;     // level search: lattice hypotheses scored
+  std::uint32_t search_refined = 0;        // level search: hypotheses refined by ICP
 };
 
 struct RegisterCloudsResult {
   RegistrationResult registration;   // the final (ICP) result; nonfinite/overflow filled
-  RegistrationResult coarse;         // RANSAC result (global mode), else the initial guess
+  RegistrationResult coarse;         // RANSAC result (global mode), the winning lattice hypothesis
+                                     // (level search; fitness = its score), else the initial guess
+  // Level search: the fittest refined hypothesis in another basin than the winner (farther than
+  // level.distinct_distance or level.distinct_yaw); status kInvalidInput when there is none.
+  RegistrationResult runner_up;
   RegisterStageStats stats;
 };
 
@@ -129,8 +145,12 @@ struct RegistrationWorkspace {
 // p_target = result.registration.transform * p_source. `initial` is the ICP start in
 // kIcpOnly mode and ignored in kGlobal mode. Inputs longer than config::kMaxScanPoints are
 // truncated (counted in stats and overflow_dropped); NaN/Inf points are dropped and counted.
+// Mode kLevelSearch needs the overload with a LevelSearchWorkspace (kInvalidInput here).
 RegisterCloudsResult register_clouds(std::span<const Vec3f> source, std::span<const Vec3f> target,
                                      const RegisterCloudsParams& params, const Mat4d& initial,
                                      RegistrationWorkspace& workspace);
+RegisterCloudsResult register_clouds(std::span<const Vec3f> source, std::span<const Vec3f> target,
+                                     const RegisterCloudsParams& params, const Mat4d& initial,
+                                     RegistrationWorkspace& workspace, LevelSearchWorkspace& search_workspace);
 
 }  // namespace v2xloc
