@@ -20,7 +20,7 @@ step() { echo "[run-demo $(date +%H:%M:%S)] $*"; }
 
 step "building v2xloc-sim, v2xloc-eval, v2xloc-firmware, v2xloc-replay (preset host)"
 cmake --preset host >/dev/null
-cmake --build --preset host -j "$(nproc)" --target v2xloc-sim v2xloc-eval v2xloc-firmware v2xloc-replay
+cmake --build --preset host -j "$(nproc)" --target v2xloc-sim v2xloc-eval v2xloc-firmware v2xloc-replay v2xloc-dataset
 
 # One recording: written to DIR.partial and renamed when complete, so an interrupted run never
 # leaves a folder that looks reusable.
@@ -66,6 +66,19 @@ fi
 step "Table 1 from the firmware: each recording replayed through build/host/bin/v2xloc-firmware (one line per recording)"
 build/host/bin/v2xloc-eval --firmware build/host/bin/v2xloc-firmware "${dirs[@]}" \
   --plots "$OUT/plots" --estimates "$OUT/estimates" | tee "$OUT/table.txt"
+
+# The real drive (DAIR-V2X-C example, kept outside the repository for its licence) when present.
+DAIR=${V2XLOC_DAIR_ROOT:-../shared/data/dair_v2x_c_example}
+if [ -d "$DAIR" ]; then
+  step "real drive: $DAIR as a recording (out/real/sim100_real_1_infra: the table calls it Sim 100), replayed through the firmware"
+  rm -rf "$OUT/real/sim100_real_1_infra"
+  build/host/bin/v2xloc-dataset dair-v2x-c "$DAIR" --recording "$OUT/real/sim100_real_1_infra"
+  build/host/bin/v2xloc-eval --firmware build/host/bin/v2xloc-firmware "$OUT/real/sim100_real_1_infra" \
+    --plots "$OUT/plots" --estimates "$OUT/estimates" | tee "$OUT/real_table.txt"
+  dirs+=("$OUT/real/sim100_real_1_infra")
+else
+  step "real drive skipped: $DAIR absent (set V2XLOC_DAIR_ROOT to a DAIR-V2X-C cooperative folder)"
+fi
 
 step "writing $OUT/index.md"
 {

@@ -25,7 +25,7 @@ const char* to_string(ShareVerdict v) {
 
 bool matches_survey(const SurveyedPose& survey, const protocol::SensorPose& declared,
                     const MapShareVerifierConfig& config) {
-  double d2 = 0.0, dot = 0.0, norm2 = 0.0;
+  double d2 = 0.0, dot = 0.0, norm2 = 0.0, survey_norm2 = 0.0;
   for (int i = 0; i < 3; ++i) {
     const double d = declared.position_m[i] - survey.position_m[i];
     d2 += d * d;
@@ -33,12 +33,14 @@ bool matches_survey(const SurveyedPose& survey, const protocol::SensorPose& decl
   for (int i = 0; i < 4; ++i) {
     dot += declared.quaternion_xyzw[i] * survey.quaternion_xyzw[i];
     norm2 += declared.quaternion_xyzw[i] * declared.quaternion_xyzw[i];
+    survey_norm2 += survey.quaternion_xyzw[i] * survey.quaternion_xyzw[i];
   }
   const double tol = config.survey_position_tolerance_m;
   if (!(d2 <= tol * tol) || !(norm2 > 0.0) || !std::isfinite(norm2)) return false;  // NaN compares false
-  // Rotation angle between the two: 2 acos(|<q1, q2>|) with the declared one normalized (q and -q
-  // are the same rotation; the survey is unit length by the parser).
-  const double cos_half = std::fabs(dot) / std::sqrt(norm2);
+  // Rotation angle between the two: 2 acos(|<q1, q2>|) with both normalized (q and -q are the same
+  // rotation). The parser admits a survey off unit length by its tolerance (a surveyor's rotation
+  // matrix is orthonormal to ~1e-7, not exactly), more than the 0.05 deg test resolves unnormalized.
+  const double cos_half = std::fabs(dot) / std::sqrt(norm2 * survey_norm2);
   return cos_half >= std::cos(0.5 * config.survey_angle_tolerance_rad);
 }
 

@@ -86,10 +86,14 @@ bool stamp_of(const InJson& e, std::int64_t& us) {
   return r.ec == std::errc() && r.ptr == s.data() + s.size() && us > 0;
 }
 
+// Released rotations are orthonormal to ~1e-7, not exactly: projected onto SO(3) so that every
+// pose written (and the unit quaternion a survey or a share declares) is one rotation.
 bool read_transform(const std::string& path, Iso& out, std::string& error) {
   Mat4d m;
   if (!read_dair_transform(path, m, error)) return false;
-  out.matrix() = m;
+  out = Iso::Identity();
+  out.linear() = Eigen::Quaterniond(Eigen::Matrix3d(m.topLeftCorner<3, 3>())).normalized().toRotationMatrix();
+  out.translation() = m.topRightCorner<3, 1>();
   return true;
 }
 
