@@ -11,20 +11,6 @@ namespace {
 namespace fs = std::filesystem;
 using Json = nlohmann::json;
 
-bool parse_file(const std::string& path, Json& out, std::string& error) {
-  std::ifstream in(path);
-  if (!in) {
-    error = "cannot open '" + path + "'";
-    return false;
-  }
-  out = Json::parse(in, nullptr, /*allow_exceptions=*/false);
-  if (out.is_discarded()) {
-    error = "'" + path + "' is not valid JSON";
-    return false;
-  }
-  return true;
-}
-
 std::string joined(const fs::path& dir, const std::string& relative) {
   const fs::path p(relative);
   return p.is_absolute() ? relative : (dir / p).string();
@@ -45,7 +31,7 @@ bool load_side(const std::string& root, const char* side, const std::vector<cons
   std::error_code ec;
   if (!fs::is_regular_file(info_path, ec)) return true;
   Json info;
-  if (!parse_file(info_path.string(), info, error)) return false;
+  if (!read_dair_json(info_path.string(), info, error)) return false;
   if (!info.is_array()) {
     error = "'" + info_path.string() + "': expected a JSON array of frame entries";
     return false;
@@ -100,9 +86,23 @@ bool dair_number(const Json& value, double& out) {
   return std::isfinite(out);
 }
 
+bool read_dair_json(const std::string& path, nlohmann::json& out, std::string& error) {
+  std::ifstream in(path);
+  if (!in) {
+    error = "cannot open '" + path + "'";
+    return false;
+  }
+  out = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+  if (out.is_discarded()) {
+    error = "'" + path + "' is not valid JSON";
+    return false;
+  }
+  return true;
+}
+
 bool read_dair_transform(const std::string& path, Mat4d& transform, std::string& error) {
   Json j;
-  if (!parse_file(path, j, error)) return false;
+  if (!read_dair_json(path, j, error)) return false;
   if (j.is_object() && j.contains("transform")) j = j["transform"];
   if (!j.is_object() || !j.contains("rotation") || !j.contains("translation")) {
     error = "'" + path + "': expected {\"rotation\": 3x3, \"translation\": 3x1}";

@@ -59,6 +59,9 @@ class DairCalib {
   std::map<std::string, DairFrame> vehicle_, roadside_;
 };
 
+// A JSON file, parsed without exceptions: false + "cannot open" / "not valid JSON" otherwise.
+bool read_dair_json(const std::string& path, nlohmann::json& out, std::string& error);
+
 // One DAIR calib JSON ({"rotation": 3x3, "translation": 3x1 or 3}, optionally under "transform")
 // -> 4x4. Numbers may be strings. The rotation must be orthonormal within 1e-3, det > 0.
 bool read_dair_transform(const std::string& path, Mat4d& transform, std::string& error);

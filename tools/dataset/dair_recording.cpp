@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <vector>
 
@@ -53,20 +52,6 @@ struct RoadsideFrame {
   Iso world_T_sensor = Iso::Identity();
 };
 
-bool parse_json_file(const std::string& path, InJson& out, std::string& error) {
-  std::ifstream in(path);
-  if (!in) {
-    error = "cannot open '" + path + "'";
-    return false;
-  }
-  out = InJson::parse(in, nullptr, /*allow_exceptions=*/false);
-  if (out.is_discarded()) {
-    error = "'" + path + "' is not valid JSON";
-    return false;
-  }
-  return true;
-}
-
 // A string field of a data_info entry ("" when absent or not a string).
 std::string text_of(const InJson& e, const char* key) {
   return e.is_object() && e.contains(key) && e[key].is_string() ? e[key].get<std::string>() : std::string();
@@ -111,7 +96,7 @@ bool read_vehicle_frames(const std::string& root, const std::string& batch, std:
                          std::string& chosen_batch, std::string& error) {
   const std::string dir = root + "/vehicle-side";
   InJson info;
-  if (!parse_json_file(dir + "/data_info.json", info, error)) return false;
+  if (!read_dair_json(dir + "/data_info.json", info, error)) return false;
   if (!info.is_array()) {
     error = dir + "/data_info.json: expected an array of frames";
     return false;
@@ -173,8 +158,8 @@ struct RoadsideChoice {
 bool choose_roadside(const std::string& root, const std::vector<VehicleFrame>& vehicle, RoadsideChoice& out,
                      std::string& error) {
   InJson pairs, infra;
-  if (!parse_json_file(root + "/cooperative/data_info.json", pairs, error) ||
-      !parse_json_file(root + "/infrastructure-side/data_info.json", infra, error))
+  if (!read_dair_json(root + "/cooperative/data_info.json", pairs, error) ||
+      !read_dair_json(root + "/infrastructure-side/data_info.json", infra, error))
     return false;
   if (!pairs.is_array() || !infra.is_array()) {
     error = root + ": cooperative and infrastructure-side data_info.json must be arrays";
@@ -225,7 +210,7 @@ bool read_roadside_frames(const std::string& root, const RoadsideChoice& unit, s
                           std::int64_t last_us, std::vector<RoadsideFrame>& frames, std::string& error) {
   const std::string dir = root + "/infrastructure-side";
   InJson info;
-  if (!parse_json_file(dir + "/data_info.json", info, error)) return false;
+  if (!read_dair_json(dir + "/data_info.json", info, error)) return false;
   for (const InJson& e : info) {
     if (text_of(e, "intersection_loc") != unit.intersection || text_of(e, "batch_id") != unit.batch) continue;
     RoadsideFrame f;
@@ -542,7 +527,7 @@ bool write_dair_recording(const DairRecordingOptions& o, DairRecordingSummary& s
     // The antenna (NovAtel reference point) in the body frame, from the first scan's calibration.
     const std::string dir = o.root + "/vehicle-side";
     InJson info;
-    if (!parse_json_file(dir + "/data_info.json", info, error)) return false;
+    if (!read_dair_json(dir + "/data_info.json", info, error)) return false;
     for (const InJson& e : info) {
       if (fs::path(text_of(e, "pointcloud_path")).stem().string() != vehicle.front().id) continue;
       std::string lidar;

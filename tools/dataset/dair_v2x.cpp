@@ -10,29 +10,12 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 
 namespace v2xloc::dataset {
 namespace {
 
 namespace fs = std::filesystem;
 using Json = nlohmann::json;
-
-bool parse_json_file(const std::string& path, Json& out, std::string& error) {
-  std::ifstream in(path);
-  if (!in) {
-    error = "cannot open '" + path + "'";
-    return false;
-  }
-  out = Json::parse(in, nullptr, /*allow_exceptions=*/false);
-  if (out.is_discarded()) {
-    error = "'" + path + "' is not valid JSON";
-    return false;
-  }
-  return true;
-}
-
-bool number_at(const Json& j, double& v) { return dair_number(j, v); }
 
 std::string stem(const std::string& path) { return fs::path(path).stem().string(); }
 
@@ -112,34 +95,7 @@ Mat4d dair_gnss_prior(const Mat4d& reference, double translation_m, double yaw_d
 }
 
 bool read_lidar_i2v(const std::string& path, Mat4d& transform, std::string& error) {
-  Json j;
-  if (!parse_json_file(path, j, error)) return false;
-  if (j.is_object() && j.contains("transform")) j = j["transform"];
-  if (!j.is_object() || !j.contains("rotation") || !j.contains("translation")) {
-    error = "'" + path + "': expected {\"rotation\": 3x3, \"translation\": 3x1}";
-    return false;
-  }
-  const Json& r = j["rotation"];
-  const Json& t = j["translation"];
-  transform = Mat4d::Identity();
-  bool ok = r.is_array() && r.size() == 3 && t.is_array() && t.size() == 3;
-  for (std::size_t i = 0; ok && i < 3; ++i) {
-    ok = r[i].is_array() && r[i].size() == 3;
-    for (std::size_t k = 0; ok && k < 3; ++k) ok = number_at(r[i][k], transform(int(i), int(k)));
-    // translation: [[x],[y],[z]] in the release, [x,y,z] in some conversions.
-    const Json& ti = t[i].is_array() && t[i].size() == 1 ? t[i][0] : t[i];
-    if (ok) ok = number_at(ti, transform(int(i), 3));
-  }
-  if (!ok) {
-    error = "'" + path + "': rotation must be 3 rows of 3 numbers, translation 3 numbers";
-    return false;
-  }
-  const Mat3d rot = transform.topLeftCorner<3, 3>();
-  if ((rot.transpose() * rot - Mat3d::Identity()).cwiseAbs().maxCoeff() > 1e-3 || rot.determinant() < 0.0) {
-    error = "'" + path + "': rotation is not a rotation matrix";
-    return false;
-  }
-  return true;
+  return read_dair_transform(path, transform, error);
 }
 
 bool read_dair_pairs(const std::string& root, std::vector<DairPair>& pairs, std::size_t& missing,
@@ -157,7 +113,7 @@ bool read_dair_pairs(const std::string& root, std::vector<DairPair>& pairs, std:
     return false;
   }
   Json info;
-  if (!parse_json_file(info_path, info, error)) return false;
+  if (!read_dair_json(info_path, info, error)) return false;
   if (!info.is_array()) {
     error = "'" + info_path + "': expected a JSON array of pair entries";
     return false;
@@ -189,7 +145,7 @@ bool read_dair_pairs(const std::string& root, std::vector<DairPair>& pairs, std:
     if (!no_offset) {
       const Json& o = e["system_error_offset"];
       if (!o.is_object() || !o.contains("delta_x") || !o.contains("delta_y") ||
-          !number_at(o["delta_x"], p.delta_x) || !number_at(o["delta_y"], p.delta_y)) {
+          !dair_number(o["delta_x"], p.delta_x) || !dair_number(o["delta_y"], p.delta_y)) {
         error = where + ": system_error_offset needs numbers delta_x and delta_y";
         return false;
       }

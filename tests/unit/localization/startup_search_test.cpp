@@ -72,17 +72,30 @@ TEST(StartupSearch, RegionWidensAfterASearchFindsNothing) {
 }
 
 // The localizer takes no map clouds while the first acquisition is pending (its searches' first
-// slices score every hypothesis): that window ends at startup_first_frames, or with the filter's
-// start.
-TEST(StartupSearch, FirstAcquisitionWindow) {
+// slices score every hypothesis): that window opens with the first search, however late a map
+// arrives after power-up, and ends startup_first_frames later or with the filter's start.
+TEST(StartupSearch, FirstAcquisitionWindowOpensWithTheFirstSearch) {
+  CornerScene scene;
   LocalizerParams params;
   auto search = std::make_unique<StartupSearch>();
   search->configure(params);
   EXPECT_TRUE(search->first_acquisition_pending(0));
-  EXPECT_TRUE(search->first_acquisition_pending(params.startup_first_frames - 1));
-  EXPECT_FALSE(search->first_acquisition_pending(params.startup_first_frames));
-  params.startup_first_frames = 0;  // no power-up window at all
+  EXPECT_TRUE(search->first_acquisition_pending(500)) << "no search yet: no map or no fix so far";
+  LocalizerCounters counters;
+  constexpr std::uint32_t kFirstMapFrame = 22;  // e.g. the roadside unit comes into V2X range
+  search->on_frame(true, Pose3d::Identity(), GnssFix{});
+  StartupFrame f = scene.frame(kFirstMapFrame, Vec3d(7.0, 3.0, 0.0));
+  search->step(f, counters);
+  ASSERT_EQ(counters.global_searches, 1u);
+  EXPECT_TRUE(search->first_acquisition_pending(kFirstMapFrame + params.startup_first_frames - 1));
+  EXPECT_FALSE(search->first_acquisition_pending(kFirstMapFrame + params.startup_first_frames));
+
+  params.startup_first_frames = 0;  // no power-up window once a search ran
   search->configure(params);
+  search->on_frame(true, Pose3d::Identity(), GnssFix{});
+  LocalizerCounters again;
+  search->step(scene.frame(0, Vec3d(7.0, 3.0, 0.0)), again);
+  ASSERT_EQ(again.global_searches, 1u);
   EXPECT_FALSE(search->first_acquisition_pending(0));
 }
 
