@@ -1,8 +1,8 @@
 // Wire -> localizer inputs. CAN frames (vehicle motion, GNSS position/status/velocity/DOP/time) are decoded with
 // the DBC codec; point-cloud datagrams are reassembled and dequantized into an ego scan or a map
-// share. The decoder RETURNS typed inputs and never calls the localizer: the firmware loop
-// (firmware/app), the offline evaluator and the replayer's in-process path each hand them to their
-// localizer themselves, so every path applies exactly the firmware's quantization and decoding.
+// share. The decoder RETURNS typed inputs and never calls the localizer: the period driver
+// (period_driver.hpp) does, for the firmware loop, the replayer's in-process path and the
+// offline evaluator alike, so every path applies exactly the firmware's decoding and checks.
 //
 // Input order (the firmware's contract; every other path follows it): a completed cloud is handed
 // to the localizer only after every CAN frame received before its last fragment, so per ego frame
