@@ -100,9 +100,8 @@ std::size_t FirmwareApp::poll_pps() {
 std::size_t FirmwareApp::drain_datagrams() {
   // V2X first: the shares received before an ego scan reach its period boundary (the input order
   // the offline paths use: map clouds up to t, then the scan at t).
-  std::size_t n = drain_link(hal_.clouds, false);
-  if (hal_.ego != nullptr) n += drain_link(*hal_.ego, true);
-  return n;
+  const std::size_t n = drain_link(hal_.clouds, false);
+  return n + drain_link(hal_.ego, true);
 }
 
 std::size_t FirmwareApp::drain_link(hal::DatagramLink& link, bool ego_link) {
@@ -121,11 +120,7 @@ std::size_t FirmwareApp::drain_link(hal::DatagramLink& link, bool ego_link) {
     const std::int64_t now = hal_.clock.monotonic_ns();
     last_datagram_ns_ = now;
     const std::span<const std::uint8_t> bytes(datagram_buffer_.data(), info.size);
-    DatagramChannel channel = ego_link ? DatagramChannel::kEgo : DatagramChannel::kV2x;
-    if (hal_.ego == nullptr && info.size > 5 && !protocol::is_signature_datagram(bytes) &&
-        bytes[5] == static_cast<std::uint8_t>(protocol::CloudMessageType::kEgoScan)) {
-      channel = DatagramChannel::kEgo;  // legacy single socket
-    }
+    const DatagramChannel channel = ego_link ? DatagramChannel::kEgo : DatagramChannel::kV2x;
     if (!decoder_.on_datagram(bytes, now, disciplined(now), channel)) continue;
     // Input order: every CAN frame sent before this cloud's last fragment goes first; the clock
     // is read again after them (the emulated clock moves with the CAN link).

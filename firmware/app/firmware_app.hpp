@@ -23,11 +23,10 @@ namespace v2xloc::firmware {
 struct FirmwareHal {
   hal::CanBus& can;              // vehicle bus: GNSS + vehicle motion in, pose + heartbeat out
   hal::DatagramLink& clouds;     // UDP: V2X map shares (and their signatures)
+  hal::DatagramLink& ego;        // UDP: ego sensor scans, on their own endpoint
   hal::Clock& clock;
   hal::GpioLine* pps = nullptr;  // GNSS PPS input (optional)
   hal::GpioLine* led = nullptr;  // "localized" LED output (optional)
-  hal::DatagramLink* ego = nullptr;  // UDP: ego sensor scans on their own endpoint (null: legacy,
-                                     // one socket, classified by message type: spoofable)
 };
 
 struct FirmwareConfig {

@@ -467,7 +467,7 @@ int main(int argc, char** argv) {
   if (!open_cloud_link(options, b)) return 1;
   if (!provision_trust(options)) return 1;
   if (!(options.emulated ? open_emulated_backends(options, epoch_ns, b) : open_real_backends(options, b))) return 1;
-  static FirmwareApp app(FirmwareHal{*b.can, *b.cloud_link, *b.clock, b.pps, b.led, b.ego_link}, g_decoder, port);
+  static FirmwareApp app(FirmwareHal{*b.can, *b.cloud_link, *b.ego_link, *b.clock, b.pps, b.led}, g_decoder, port);
   if (app.start() != hal::Status::kOk) {
     std::fprintf(stderr, "v2xloc-firmware: CAN filter set-up failed\n");
     return 1;

@@ -147,7 +147,7 @@ class InputDecoder {
   bool on_datagram(std::span<const std::uint8_t> datagram, std::int64_t now_ns, std::int64_t local_time_ns,
                    DatagramChannel channel);
   // Emulation / offline convenience: local time = epoch + now_ns (the SimClock's relation), and
-  // the channel taken from the datagram's message type (single-socket legacy wiring).
+  // the channel taken from the datagram's message type (an offline event stream has no sockets).
   bool on_datagram(std::span<const std::uint8_t> datagram, std::int64_t now_ns);
   // The cloud the last datagram completed, as a localizer input (kNone when there is none; a
   // cloud is returned once). A map share is returned only when the verifier accepted it; its

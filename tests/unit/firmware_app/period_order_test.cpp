@@ -150,7 +150,7 @@ struct SignedPeriodBench {
   ScriptedLink v2x, ego;
   std::unique_ptr<InputDecoder> decoder = decoder_trusting_infra();
   RecordingPort port;
-  FirmwareApp app{FirmwareHal{sim_can, v2x, clock, nullptr, nullptr, &ego}, *decoder, port};
+  FirmwareApp app{FirmwareHal{sim_can, v2x, ego, clock, nullptr, nullptr}, *decoder, port};
 
   SignedPeriodBench() { queue_signed_period(v2x, ego, can, kT); }
   // Starts the firmware and polls until it publishes the period's frame (at most 10 polls).
@@ -220,7 +220,7 @@ TEST(FirmwareSecurityDiagnostics, HeartbeatIsFollowedByTheRefusalCounts) {
 
   auto decoder = std::make_unique<InputDecoder>(kEpoch);
   RecordingPort port;
-  FirmwareApp app(FirmwareHal{sim_can, v2x, clock, nullptr, nullptr, &ego}, *decoder, port);
+  FirmwareApp app(FirmwareHal{sim_can, v2x, ego, clock, nullptr, nullptr}, *decoder, port);
   ASSERT_EQ(app.start(), hal::Status::kOk);
   for (int k = 0; k < 10 && app.counters().frames_published == 0; ++k) app.poll_once();
   ASSERT_EQ(app.counters().frames_published, 1u);
