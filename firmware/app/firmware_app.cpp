@@ -24,9 +24,7 @@ std::uint8_t saturate_u8(std::uint64_t v) { return v > 255 ? 255 : static_cast<s
 
 FirmwareApp::FirmwareApp(const FirmwareHal& hal, InputDecoder& decoder, LocalizerPort& localizer,
                          const FirmwareConfig& config)
-    : hal_(hal), decoder_(decoder), localizer_(localizer), config_(config) {
-  decoder_.set_share_filter(&localizer_);  // shares the map would not fuse are not even hashed
-}
+    : hal_(hal), decoder_(decoder), driver_(decoder, localizer), config_(config) {}
 
 hal::Status FirmwareApp::start() {
   start_ns_ = hal_.clock.monotonic_ns();
@@ -57,44 +55,13 @@ std::size_t FirmwareApp::drain_can() {
       ++counters_.can_error_frames;
       continue;
     }
-    apply_can(decoder_.decode_can(rx.frame, disciplined(rx.timestamp_ns)), rx.timestamp_ns);
+    const DecodedCan decoded = driver_.on_can(rx.frame, disciplined(rx.timestamp_ns));
+    if (decoded.kind == CanInputKind::kGnssFix) {
+      last_gnss_ns_ = rx.timestamp_ns;
+      discipline_clock(rx.timestamp_ns);
+    }
   }
   return n;
-}
-
-void FirmwareApp::apply_can(const DecodedCan& decoded, std::int64_t rx_monotonic_ns) {
-  if (decoded.kind == CanInputKind::kVehicle) {
-    localizer_.on_vehicle(decoded.vehicle);
-  } else if (decoded.kind == CanInputKind::kGnssFix) {
-    localizer_.on_gnss(decoded.gnss);
-    last_gnss_ns_ = rx_monotonic_ns;
-    discipline_clock(rx_monotonic_ns);
-  }
-}
-
-void FirmwareApp::apply_cloud(const DecodedCloud& decoded) {
-  if (decoded.kind == CloudKind::kMapCloud) {
-    switch (localizer_.on_map_cloud(decoded.map).status) {
-      case MapInsertStatus::kRejectedInconsistent:
-        ++counters_.map_inconsistent;
-        if (!decoded.map.is_agent) ++counters_.map_infra_inconsistent;
-        break;
-      case MapInsertStatus::kHeldBack: ++counters_.map_held_back; break;
-      case MapInsertStatus::kBackgroundMismatch: ++counters_.map_background_mismatch; break;
-      case MapInsertStatus::kNoSourceSlot: ++counters_.map_no_slot; break;
-      case MapInsertStatus::kStale: ++counters_.map_stale; break;
-      case MapInsertStatus::kPaced: ++counters_.map_paced; break;
-      default: break;
-    }
-  } else if (decoded.kind == CloudKind::kEgoScan) {
-    localizer_.add_period_work(decoder_.take_trust_work());
-    publish_pose(localizer_.on_ego_scan(decoded.ego), decoded.frame_index, decoded.gnss_used);
-  } else if (decoded.kind == CloudKind::kEgoRejected) {
-    decoder_.take_trust_work();  // the period ends without a localizer frame
-    // A pose every frame: the last one again (nothing new was fused), or "no pose" before any.
-    ++counters_.ego_frames_held;
-    publish_pose(has_output_ ? LocalizerFrameOutput(latest_) : LocalizerFrameOutput{}, decoded.frame_index, false);
-  }
 }
 
 void FirmwareApp::discipline_clock(std::int64_t rx_monotonic_ns) {
@@ -133,9 +100,8 @@ std::size_t FirmwareApp::poll_pps() {
 std::size_t FirmwareApp::drain_datagrams() {
   // V2X first: the shares received before an ego scan reach its period boundary (the input order
   // the offline paths use: map clouds up to t, then the scan at t).
-  std::size_t n = drain_link(hal_.clouds, false);
-  if (hal_.ego != nullptr) n += drain_link(*hal_.ego, true);
-  return n;
+  const std::size_t n = drain_link(hal_.clouds, false);
+  return n + drain_link(hal_.ego, true);
 }
 
 std::size_t FirmwareApp::drain_link(hal::DatagramLink& link, bool ego_link) {
@@ -154,37 +120,20 @@ std::size_t FirmwareApp::drain_link(hal::DatagramLink& link, bool ego_link) {
     const std::int64_t now = hal_.clock.monotonic_ns();
     last_datagram_ns_ = now;
     const std::span<const std::uint8_t> bytes(datagram_buffer_.data(), info.size);
-    DatagramChannel channel = ego_link ? DatagramChannel::kEgo : DatagramChannel::kV2x;
-    if (hal_.ego == nullptr && info.size > 5 && !protocol::is_signature_datagram(bytes) &&
-        bytes[5] == static_cast<std::uint8_t>(protocol::CloudMessageType::kEgoScan)) {
-      channel = DatagramChannel::kEgo;  // legacy single socket
-    }
+    const DatagramChannel channel = ego_link ? DatagramChannel::kEgo : DatagramChannel::kV2x;
     if (!decoder_.on_datagram(bytes, now, disciplined(now), channel)) continue;
     // Input order: every CAN frame sent before this cloud's last fragment goes first; the clock
     // is read again after them (the emulated clock moves with the CAN link).
     drain_can();
-    const DecodedCloud decoded = decoder_.decode_completed(disciplined(hal_.clock.monotonic_ns()));
-    if (decoded.kind == CloudKind::kEgoScan || decoded.kind == CloudKind::kEgoRejected) {
-      close_period(ego_link);
-    }
-    apply_cloud(decoded);
+    const DecodedCloud decoded = driver_.take_completed(disciplined(hal_.clock.monotonic_ns()));
+    if (!PeriodDriver::closes_period(decoded)) continue;
+    // Shares already received on the V2X endpoint belong to this period whichever socket was read
+    // first (two sockets have no common order): the input order is then a function of the
+    // datagrams, not of the read timing.
+    if (ego_link) drain_link(hal_.clouds, false);
+    publish(driver_.close_period(decoded));
   }
   return n;
-}
-
-void FirmwareApp::close_period(bool ego_link) {
-  // Shares already received on the V2X endpoint belong to this period whichever socket was read
-  // first (two sockets have no common order): the input order is then a function of the
-  // datagrams, not of the read timing.
-  if (ego_link) drain_link(hal_.clouds, false);
-  // Period boundary: shares waiting for their signature check are verified now (at most
-  // kMaxSignatureVerificationsPerPeriod) and reach map fusion before this scan.
-  const std::size_t shares = shares_this_period(localizer_.map_clouds_per_period());
-  for (std::size_t k = 0; k < shares; ++k) {
-    const DecodedCloud share = decoder_.next_verified_share(&localizer_);
-    if (share.kind == CloudKind::kNone) break;
-    apply_cloud(share);
-  }
 }
 
 void FirmwareApp::send(const hal::CanFrame& frame) {
@@ -195,24 +144,21 @@ void FirmwareApp::send(const hal::CanFrame& frame) {
   }
 }
 
-void FirmwareApp::publish_pose(const LocalizerFrameOutput& out, std::uint32_t frame_index, bool gnss_used) {
-  latest_ = out;
-  has_output_ = true;
-  const PoseFrames frames = pose_encoder_.encode(out, frame_index, gnss_used);
-  send(frames.position);
-  send(frames.attitude);
-  send(frames.sigma);
+void FirmwareApp::publish(const PeriodOutput& period) {
+  send(period.pose.position);
+  send(period.pose.attitude);
+  send(period.pose.sigma);
   // Diagnostics (registration, gate decision, odometry) after the pose; odometry attitude last:
   // the replayer's lockstep waits for it.
-  const DiagnosticFrames diagnostics = diagnostic_encoder_.encode(out, frame_index);
-  send(diagnostics.registration_position);
-  send(diagnostics.registration_quality);
-  send(diagnostics.gate);
-  send(diagnostics.odometry_position);
-  send(diagnostics.odometry_attitude);
+  send(period.diagnostics.registration_position);
+  send(period.diagnostics.registration_quality);
+  send(period.diagnostics.gate);
+  send(period.diagnostics.odometry_position);
+  send(period.diagnostics.odometry_attitude);
   ++counters_.frames_published;
-  if (hal_.led != nullptr && out.localized != led_on_) {
-    led_on_ = out.localized;
+  const bool localized = period.output->localized;
+  if (hal_.led != nullptr && localized != led_on_) {
+    led_on_ = localized;
     hal_.led->set_value(led_on_);
     ++counters_.led_changes;
   }
@@ -221,9 +167,10 @@ void FirmwareApp::publish_pose(const LocalizerFrameOutput& out, std::uint32_t fr
 protocol::Heartbeat FirmwareApp::heartbeat_now() const {
   const std::int64_t now = hal_.clock.monotonic_ns();
   const DecoderCounters& d = decoder_.counters();
+  const PeriodCounters& p = driver_.counters();
   const protocol::ReassemblyCounters& r = decoder_.reassembly_counters();
   protocol::Heartbeat hb;
-  hb.state = localizer_state(has_output_ ? &latest_ : nullptr);
+  hb.state = localizer_state(driver_.latest());
   namespace err = protocol::heartbeat_error;
   hb.error_flags = static_cast<std::uint8_t>(
       (now - last_can_ns_ > config_.input_timeout_ns ? err::kCanTimeout : 0u) |
@@ -234,8 +181,8 @@ protocol::Heartbeat FirmwareApp::heartbeat_now() const {
   hb.can_rx_errors = saturate_u8(d.can_rejected + counters_.can_error_frames);
   hb.udp_dropped = saturate_u8(d.datagrams_rejected + counters_.datagrams_oversize + r.frames_timed_out +
                                r.frames_evicted + d.clouds_rejected + d.shares_untrusted + d.shares_queue_dropped + d.wrong_channel +
-                               d.ego_time_rejected + counters_.map_inconsistent + counters_.map_held_back +
-                               counters_.map_background_mismatch + counters_.map_no_slot);
+                               d.ego_time_rejected + p.map_inconsistent + p.map_held_back +
+                               p.map_background_mismatch + p.map_no_slot);
   hb.counter = heartbeat_counter_;
   return hb;
 }
@@ -263,7 +210,7 @@ protocol::InputGuards FirmwareApp::input_guards_now() const {
   g.can_counter_rejected = saturate(d.can_repeated);
   g.ego_time_rejected = saturate(d.ego_time_rejected);
   g.missing_signature = saturate(decoder_.verifier().counters().missing_signature);
-  const std::uint64_t off_background = counters_.map_background_mismatch + d.shares_off_background;
+  const std::uint64_t off_background = driver_.counters().map_background_mismatch + d.shares_off_background;
   g.background_mismatch = static_cast<std::uint8_t>(off_background > 15 ? 15 : off_background);  // a 4-bit signal
   return g;
 }

@@ -1,19 +1,18 @@
-// The ECU application loop: polls the HAL, decodes (InputDecoder), hands the decoded inputs to the
-// localizer (the only caller of the localizer in the firmware), publishes the fused pose and the
-// diagnostic frames on CAN after every ego scan, drives the "localized" LED, disciplines the clock
-// on GNSS PPS edges and sends a 1 Hz heartbeat. It only knows hal/ interfaces; main() picks backends.
-// Input order: before a completed cloud is handed to the localizer, every pending CAN frame is
-// decoded and applied first (the order firmware/wire/input_decoder.hpp defines).
+// The ECU application loop: polls the HAL, hands CAN frames and completed clouds to the period
+// driver (firmware/wire/period_driver.hpp: the order of a period, the share checks, the localizer
+// calls), sends the pose and diagnostic frames it publishes after every ego scan, drives the
+// "localized" LED, disciplines the clock on GNSS PPS edges and sends a 1 Hz heartbeat. It only
+// knows hal/ interfaces; main() picks backends. What is left here is transport: which socket is
+// read when, and which clock stamps an input.
 // No allocation: all buffers are members of static objects.
 #pragma once
 
 #include <array>
 #include <cstdint>
 
-#include "firmware/app/localizer_port.hpp"
-#include "firmware/wire/diagnostic_frames.hpp"
 #include "firmware/wire/input_decoder.hpp"
-#include "firmware/wire/pose_frames.hpp"
+#include "firmware/wire/localizer_port.hpp"
+#include "firmware/wire/period_driver.hpp"
 #include "hal/can_bus.hpp"
 #include "hal/clock.hpp"
 #include "hal/datagram_link.hpp"
@@ -24,11 +23,10 @@ namespace v2xloc::firmware {
 struct FirmwareHal {
   hal::CanBus& can;              // vehicle bus: GNSS + vehicle motion in, pose + heartbeat out
   hal::DatagramLink& clouds;     // UDP: V2X map shares (and their signatures)
+  hal::DatagramLink& ego;        // UDP: ego sensor scans, on their own endpoint
   hal::Clock& clock;
   hal::GpioLine* pps = nullptr;  // GNSS PPS input (optional)
   hal::GpioLine* led = nullptr;  // "localized" LED output (optional)
-  hal::DatagramLink* ego = nullptr;  // UDP: ego sensor scans on their own endpoint (null: legacy,
-                                     // one socket, classified by message type: spoofable)
 };
 
 struct FirmwareConfig {
@@ -55,14 +53,6 @@ struct FirmwareCounters {
   std::uint64_t pps_edges = 0;
   std::uint64_t clock_disciplined = 0;
   std::uint64_t gnss_time_rejected = 0;  // GNSS time implausible against the running clock: not applied
-  std::uint64_t map_inconsistent = 0;    // verified shares map fusion refused: disagree with the infrastructure
-  std::uint64_t map_infra_inconsistent = 0;  // of those, infrastructure shares (outvoted by the other units)
-  std::uint64_t map_held_back = 0;       // agent shares with too little overlap to be checked
-  std::uint64_t map_background_mismatch = 0;  // infrastructure shares off their unit's surveyed background
-  std::uint64_t map_no_slot = 0;         // per-role source cap reached
-  std::uint64_t map_stale = 0;           // not newer than the source's stored cloud
-  std::uint64_t map_paced = 0;           // not fused: the source's stored cloud is recent (map_cloud_interval)
-  std::uint64_t ego_frames_held = 0;     // ego scans refused for their time: last pose published again
   std::uint64_t led_changes = 0;
 };
 
@@ -77,6 +67,8 @@ class FirmwareApp {
   std::size_t poll_once();
 
   const FirmwareCounters& counters() const { return counters_; }
+  // Map fusion's answers and held frames (the period driver's counts).
+  const PeriodCounters& period_counters() const { return driver_.counters(); }
   const InputDecoder& decoder() const { return decoder_; }
   protocol::Heartbeat heartbeat_now() const;
   // The security diagnostics frames' contents (0x301, 0x302), sent with every heartbeat.
@@ -85,14 +77,11 @@ class FirmwareApp {
 
  private:
   std::size_t drain_can();
-  void apply_can(const DecodedCan& decoded, std::int64_t rx_monotonic_ns);
-  void apply_cloud(const DecodedCloud& decoded);
   std::size_t drain_datagrams();
   std::size_t drain_link(hal::DatagramLink& link, bool ego_link);
-  void close_period(bool ego_link);
   std::size_t poll_pps();
   void maybe_heartbeat();
-  void publish_pose(const LocalizerFrameOutput& out, std::uint32_t frame_index, bool gnss_used);
+  void publish(const PeriodOutput& period);
   void discipline_clock(std::int64_t rx_monotonic_ns);
   void send(const hal::CanFrame& frame);
   std::int64_t disciplined(std::int64_t monotonic_ns) const {
@@ -101,13 +90,9 @@ class FirmwareApp {
 
   FirmwareHal hal_;
   InputDecoder& decoder_;
-  LocalizerPort& localizer_;
+  PeriodDriver driver_;
   FirmwareConfig config_;
   FirmwareCounters counters_{};
-  PoseFrameEncoder pose_encoder_{};
-  DiagnosticFrameEncoder diagnostic_encoder_{};
-  LocalizerFrameOutput latest_{};
-  bool has_output_ = false;
   bool led_on_ = false;
   std::uint8_t heartbeat_counter_ = 0;
   std::int64_t start_ns_ = 0;

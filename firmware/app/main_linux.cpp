@@ -92,6 +92,7 @@ void print_counters(const FirmwareApp& app) {
               (unsigned long long)d.ego_scans, (unsigned long long)d.map_clouds, (unsigned long long)d.clouds_rejected,
               (unsigned long long)d.datagrams_rejected);
   const trust::VerifierCounters& v = app.decoder().verifier().counters();
+  const PeriodCounters& p = app.period_counters();
   std::printf("v2xloc-firmware: trust shares accepted %llu rejected %llu (missing_signature %llu unknown_signer %llu"
               " sender_mismatch %llu too_old %llu future %llu stamp_skew %llu replay %llu pose_mismatch %llu bad_signature %llu"
               " crypto_error %llu)"
@@ -103,19 +104,19 @@ void print_counters(const FirmwareApp& app) {
               (unsigned long long)v.pose_mismatch, (unsigned long long)v.bad_signature, (unsigned long long)v.crypto_error, (unsigned long long)v.signatures_rx,
               (unsigned long long)v.signatures_malformed, (unsigned long long)d.signature_verifications,
               (unsigned long long)d.signatures_checked_on_arrival, (unsigned long long)d.wrong_channel,
-              (unsigned long long)d.ego_time_rejected, (unsigned long long)c.ego_frames_held);
+              (unsigned long long)d.ego_time_rejected, (unsigned long long)p.ego_frames_held);
   std::printf("v2xloc-firmware: can_repeated %llu can_counter_gaps %llu gnss_position_dropped %llu gnss_time_rejected %llu\n",
               (unsigned long long)d.can_repeated, (unsigned long long)d.can_counter_gaps,
               (unsigned long long)d.gnss_position_dropped, (unsigned long long)c.gnss_time_rejected);
   std::printf("v2xloc-firmware: map fusion of trusted shares: inconsistent %llu (infrastructure %llu) background_mismatch %llu"
               " (off_background_before_signature %llu) held_back %llu no_slot %llu stale %llu; paced (not needed, source's last recent) %llu on arrival (not hashed),"
               " %llu before and %llu after the signature check\n",
-              (unsigned long long)c.map_inconsistent, (unsigned long long)c.map_infra_inconsistent,
-              (unsigned long long)c.map_background_mismatch, (unsigned long long)d.shares_off_background,
-              (unsigned long long)c.map_held_back,
-              (unsigned long long)c.map_no_slot, (unsigned long long)c.map_stale,
+              (unsigned long long)p.map_inconsistent, (unsigned long long)p.map_infra_inconsistent,
+              (unsigned long long)p.map_background_mismatch, (unsigned long long)d.shares_off_background,
+              (unsigned long long)p.map_held_back,
+              (unsigned long long)p.map_no_slot, (unsigned long long)p.map_stale,
               (unsigned long long)d.shares_paced_on_arrival, (unsigned long long)d.shares_paced,
-              (unsigned long long)c.map_paced);
+              (unsigned long long)p.map_paced);
   const LocalizerCounters& l = g_localizer.counters();
   std::printf("v2xloc-firmware: localizer searches %u (accepted %u confirmed %u inconsistent %u unconstrained %u dropped %u final_icp_paused %u) basin_audits %u"
               " switches %u track_losses %u filter_resets %u registrations %u (ok %u fused %u gate_rejected %u)"
@@ -466,7 +467,7 @@ int main(int argc, char** argv) {
   if (!open_cloud_link(options, b)) return 1;
   if (!provision_trust(options)) return 1;
   if (!(options.emulated ? open_emulated_backends(options, epoch_ns, b) : open_real_backends(options, b))) return 1;
-  static FirmwareApp app(FirmwareHal{*b.can, *b.cloud_link, *b.clock, b.pps, b.led, b.ego_link}, g_decoder, port);
+  static FirmwareApp app(FirmwareHal{*b.can, *b.cloud_link, *b.ego_link, *b.clock, b.pps, b.led}, g_decoder, port);
   if (app.start() != hal::Status::kOk) {
     std::fprintf(stderr, "v2xloc-firmware: CAN filter set-up failed\n");
     return 1;

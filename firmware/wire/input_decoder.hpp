@@ -1,8 +1,8 @@
 // Wire -> localizer inputs. CAN frames (vehicle motion, GNSS position/status/velocity/DOP/time) are decoded with
 // the DBC codec; point-cloud datagrams are reassembled and dequantized into an ego scan or a map
-// share. The decoder RETURNS typed inputs and never calls the localizer: the firmware loop
-// (firmware/app), the offline evaluator and the replayer's in-process path each hand them to their
-// localizer themselves, so every path applies exactly the firmware's quantization and decoding.
+// share. The decoder RETURNS typed inputs and never calls the localizer: the period driver
+// (period_driver.hpp) does, for the firmware loop, the replayer's in-process path and the
+// offline evaluator alike, so every path applies exactly the firmware's decoding and checks.
 //
 // Input order (the firmware's contract; every other path follows it): a completed cloud is handed
 // to the localizer only after every CAN frame received before its last fragment, so per ego frame
@@ -147,7 +147,7 @@ class InputDecoder {
   bool on_datagram(std::span<const std::uint8_t> datagram, std::int64_t now_ns, std::int64_t local_time_ns,
                    DatagramChannel channel);
   // Emulation / offline convenience: local time = epoch + now_ns (the SimClock's relation), and
-  // the channel taken from the datagram's message type (single-socket legacy wiring).
+  // the channel taken from the datagram's message type (an offline event stream has no sockets).
   bool on_datagram(std::span<const std::uint8_t> datagram, std::int64_t now_ns);
   // The cloud the last datagram completed, as a localizer input (kNone when there is none; a
   // cloud is returned once). A map share is returned only when the verifier accepted it; its

@@ -1,9 +1,8 @@
 // When a map share reaches map fusion: the firmware checks at most
 // kMaxSignatureVerificationsPerPeriod signatures per 10 Hz period and keeps at most
-// kShareVerifyQueueCapacity shares waiting (full: the oldest gives way). The in-process evaluator
-// has no signatures to check but hands its clouds to the localizer on the same schedule, so both
-// build the same map in the same periods. This class is that schedule and nothing else: a ring of
-// slot indices; each user keeps its own payload per slot. Allocation-free, bounded.
+// kShareVerifyQueueCapacity shares waiting (full: the oldest gives way). This class is that
+// schedule and nothing else: a ring of slot indices; its user (InputDecoder) keeps the payload per
+// slot. Allocation-free, bounded.
 #pragma once
 
 #include <cstddef>

@@ -5,15 +5,8 @@
 // runs one process per recording instead, on every core).
 // v2xloc-sim export-pcd RECORDING_DIR --out DIR [--encoding binary_compressed|binary|ascii]
 // writes standard float32 PCD copies of a recording's clouds (format 2 stores them quantised).
-// v2xloc-sim upgrade-can RECORDING_DIR rewrites a CAN layout 1 log (recorded before every GNSS frame
-// had a counter and a CRC) in the current layout beside the original and points the manifest at it.
-// v2xloc-sim upgrade-trust RECORDING_DIR [--no-background] writes the trust list with every
-// infrastructure unit's surveyed pose and background (recorded before trust lists carried them)
-// beside the original, likewise; --no-background: the surveys only.
-#include "host_sim/recording/can_log_upgrade.hpp"
 #include "host_sim/recording/pcd_export.hpp"
 #include "host_sim/recording/recorder.hpp"
-#include "host_sim/recording/trust_list_upgrade.hpp"
 
 #include <CLI/CLI.hpp>
 #include <unistd.h>
@@ -67,37 +60,6 @@ int run_export(const std::string& dir, const std::string& out, const std::string
   }
   std::printf("exported %d clouds (%.1f MB, PCD %s) to %s\n", summary.clouds, static_cast<double>(summary.bytes) / 1e6,
               encoding_name.c_str(), out.c_str());
-  return 0;
-}
-
-int run_upgrade_can(const std::string& dir) {
-  CanLogUpgrade result;
-  std::string error;
-  if (!upgrade_can_log(dir, result, error)) {
-    std::fprintf(stderr, "v2xloc-sim upgrade-can: %s\n", error.c_str());
-    return 1;
-  }
-  if (result.already_current) {
-    std::printf("%s: CAN log %s is already layout %d\n", dir.c_str(), result.log_file.c_str(), kCanLayoutVersion);
-    return 0;
-  }
-  std::printf("%s: CAN log converted to layout %d: %s (%zu frames; %zu position and %zu time frames split, %zu left as"
-              " they were); the manifest names it, the original is kept\n",
-              dir.c_str(), kCanLayoutVersion, result.log_file.c_str(), result.frames, result.conversion.positions,
-              result.conversion.times, result.conversion.kept);
-  return 0;
-}
-
-int run_upgrade_trust(const std::string& dir, bool backgrounds) {
-  TrustListUpgrade result;
-  std::string error;
-  if (!upgrade_trust_list(dir, backgrounds, result, error)) {
-    std::fprintf(stderr, "v2xloc-sim upgrade-trust: %s\n", error.c_str());
-    return 1;
-  }
-  std::printf("%s: trust list %s: %zu signers, %zu infrastructure surveyed, %zu with a background%s\n", dir.c_str(),
-              result.file.c_str(), result.signers, result.surveyed, result.backgrounds,
-              result.already_surveyed ? " (already)" : "; the manifest names it, the original is kept");
   return 0;
 }
 
@@ -173,19 +135,6 @@ int main(int argc, char** argv) {
       ->required();
   export_pcd->add_option("--encoding", encoding_name, "PCD DATA kind (binary_compressed: LZF, as PCL writes it)")
       ->check(CLI::IsMember({"binary_compressed", "binary", "ascii"}));
-  CLI::App* upgrade = app.add_subcommand(
-      "upgrade-can", "rewrite a recording's CAN log in the current CAN layout (the original is kept; readers "
-                     "convert old logs on the fly anyway)");
-  std::string upgrade_dir;
-  upgrade->add_option("RECORDING_DIR", upgrade_dir, "recording folder")->required();
-  CLI::App* upgrade_trust = app.add_subcommand(
-      "upgrade-trust", "add every infrastructure unit's surveyed pose and background to a recording's trust list (the "
-                       "original is kept; without surveys the firmware trusts the pose a unit declares, without a "
-                       "background the points it sends)");
-  std::string upgrade_trust_dir;
-  bool no_background = false;
-  upgrade_trust->add_option("RECORDING_DIR", upgrade_trust_dir, "recording folder")->required();
-  upgrade_trust->add_flag("--no-background", no_background, "add the surveyed poses only");
   try {
     app.parse(argc, argv);
     if (generate->parsed() && !all && (scenario < 0 || perm_name.empty()))
@@ -194,8 +143,6 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? 0 : 2;  // usage errors keep exit code 2
   }
   if (export_pcd->parsed()) return run_export(export_in, export_out, encoding_name);
-  if (upgrade->parsed()) return run_upgrade_can(upgrade_dir);
-  if (upgrade_trust->parsed()) return run_upgrade_trust(upgrade_trust_dir, !no_background);
   base.stereo = !no_stereo;
   return run_generate(base, all, scenario, perm_name, out);
 }

@@ -253,6 +253,7 @@ bool EventStream::next_frame(int i, std::vector<WireEvent>& out, std::string& er
     }
     stats_.points_dropped += ev.points_dropped;
     ++stats_.map_clouds;
+    if (config_.keep_source_clouds) ev.source = std::move(cloud);
     extra.insert(extra.begin(), std::move(ev));
     for (WireEvent& e : extra) {
       faults_.transport(e.datagrams, fst);
@@ -289,6 +290,7 @@ bool EventStream::next_frame(int i, std::vector<WireEvent>& out, std::string& er
                 reader_->ego_lidar_mount(), scan, config_.ego_point_times, ev, error)) {
     return false;
   }
+  if (config_.keep_source_clouds) ev.source = std::move(scan);
   stats_.points_dropped += ev.points_dropped;
   stats_.times_clamped += ev.times_clamped;
   stats_.datagrams += ev.datagrams.size();
@@ -298,58 +300,20 @@ bool EventStream::next_frame(int i, std::vector<WireEvent>& out, std::string& er
 }
 
 bool WireEventDecoder::feed(const WireEvent& event, DecodedFrame& frame) {
-  const std::int64_t disciplined_ns = decoder_.epoch_ns() + event.time_ns;
   if (event.kind == WireEvent::Kind::kCan) {
-    const firmware::DecodedCan decoded = decoder_.decode_can(event.can, disciplined_ns);
-    if (decoded.kind == firmware::CanInputKind::kVehicle) {
-      if (tap_ != nullptr) tap_->vehicle(decoded.vehicle);
-      localizer_.on_vehicle(decoded.vehicle);
-    }
-    if (decoded.kind == firmware::CanInputKind::kGnssFix) {
-      if (tap_ != nullptr) tap_->gnss(decoded.gnss);
-      localizer_.on_gnss(decoded.gnss);
-    }
+    driver_.on_can(event.can, decoder_.epoch_ns() + event.time_ns);
     return false;
   }
   bool produced = false;
   for (const auto& d : event.datagrams) {
     if (!decoder_.on_datagram(d, event.time_ns)) continue;
-    const firmware::DecodedCloud decoded = decoder_.decode_completed();
-    double trust_work = 0.0;
-    if (decoded.kind == firmware::CloudKind::kEgoScan || decoded.kind == firmware::CloudKind::kEgoRejected) {
-      // As the firmware: at the period boundary, the shares waiting for verification first.
-      const std::size_t shares = firmware::shares_this_period(localizer_.map_clouds_per_period());
-      for (std::size_t k = 0; k < shares; ++k) {
-        const firmware::DecodedCloud share = decoder_.next_verified_share(&wanted_);
-        if (share.kind == firmware::CloudKind::kNone) break;
-        if (share.kind != firmware::CloudKind::kMapCloud) continue;
-        if (tap_ != nullptr) tap_->map_cloud(share.map);
-        localizer_.on_map_cloud(share.map);
-      }
-      // As the firmware: the period's trust work goes into the localizer's budget (a refused scan
-      // ends the period without it).
-      trust_work = decoder_.take_trust_work();
-    }
-    if (decoded.kind == firmware::CloudKind::kEgoRejected) {  // as the firmware: the last pose again
-      frame.frame = static_cast<int>(decoded.frame_index);
-      frame.output = last_output_;
-      frame.pose = encoder_.encode(last_output_, decoded.frame_index, false);
-      frame.diagnostics = diagnostic_encoder_.encode(last_output_, decoded.frame_index);
-      produced = true;
-      continue;
-    }
-    if (decoded.kind != firmware::CloudKind::kEgoScan) continue;
-    if (tap_ != nullptr) {
-      tap_->period_work(trust_work);
-      tap_->ego_scan(decoded.ego);
-    }
-    localizer_.add_period_work(trust_work);
-    const LocalizerFrameOutput& out = localizer_.on_ego_scan(decoded.ego);
-    frame.frame = static_cast<int>(decoded.frame_index);
-    frame.output = out;
-    last_output_ = out;
-    frame.pose = encoder_.encode(out, decoded.frame_index, decoded.gnss_used);
-    frame.diagnostics = diagnostic_encoder_.encode(out, decoded.frame_index);
+    const firmware::DecodedCloud decoded = driver_.take_completed();
+    if (!firmware::PeriodDriver::closes_period(decoded)) continue;
+    const firmware::PeriodOutput& period = driver_.close_period(decoded);
+    frame.frame = static_cast<int>(period.frame_index);
+    frame.output = *period.output;
+    frame.pose = period.pose;
+    frame.diagnostics = period.diagnostics;
     produced = true;
   }
   return produced;
@@ -362,7 +326,8 @@ bool run_offline(const RecordingReader& reader, Localizer& localizer, firmware::
   if (!stream.open(reader, config, error)) return false;
   decoder.set_epoch_ns(stream.epoch_ns());
   decoder.provision_trust(stream.trust_list());
-  WireEventDecoder wire(decoder, localizer);
+  firmware::LocalizerAdapter<Localizer> port(localizer);
+  WireEventDecoder wire(decoder, port);
   wire.set_tap(tap);
   std::vector<WireEvent> events;
   for (int i = 0; i < stream.frame_count(); ++i) {

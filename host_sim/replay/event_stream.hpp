@@ -5,9 +5,8 @@
 //   emitted (log order); then every map cloud (infra / agent) with stamp <= t_i not yet emitted
 //   (stamp order); then ego scan i.
 // Events are wire bytes: CAN frames as hal::CanFrame, clouds as the UDP datagrams of the
-// point-cloud fragmenter (quantized exactly as sent). WireEventDecoder turns them into localizer
-// inputs through the firmware's own InputDecoder and applies them to the localizer itself, as the
-// firmware loop does, so the offline path sees the firmware's bits.
+// point-cloud fragmenter (quantized exactly as sent). WireEventDecoder hands them to the firmware's
+// own InputDecoder and period driver, so the offline path sees the firmware's bits.
 // Time: every event carries its recording time in ns (the emulated firmware's SimClock time);
 // disciplined (wire) time = epoch_ns + recording time, epoch_ns = Unix time of recording t = 0.
 #pragma once
@@ -20,9 +19,12 @@
 
 #include "firmware/wire/diagnostic_frames.hpp"
 #include "firmware/wire/input_decoder.hpp"
+#include "firmware/wire/localizer_port.hpp"
+#include "firmware/wire/period_driver.hpp"
 #include "firmware/wire/pose_frames.hpp"
 #include "firmware/wire/wire_conventions.hpp"
 #include "hal/can_frame.hpp"
+#include "host_sim/cloud_io/point_cloud.hpp"
 #include "host_sim/recording/recording_reader.hpp"
 #include "host_sim/recording/sim_trust.hpp"
 #include "host_sim/replay/fault_injection.hpp"
@@ -41,6 +43,7 @@ struct WireEvent {
   std::uint32_t points_dropped = 0;     // clouds: out of quantization range / not finite
   std::uint32_t times_clamped = 0;      // ego: point times beyond the u16 microsecond field
   int frame = -1;                       // kEgoScan: frame index
+  cloud_io::PointCloud source;          // clouds: as recorded, before quantization (keep_source_clouds)
 };
 
 struct EventStreamConfig {
@@ -49,6 +52,7 @@ struct EventStreamConfig {
   std::size_t max_datagram_bytes = protocol::pointcloud_wire::kMaxDatagramBytes;
   int max_frames = -1;                  // < 0: all frames of the recording
   bool sign_map_shares = true;          // signature datagram before each share (sim test keys)
+  bool keep_source_clouds = false;      // WireEvent::source set (the in-process evaluator's full precision)
   FaultSpec faults{};                   // fault injection (fault_injection.hpp); default none
 };
 
@@ -105,9 +109,9 @@ class EventStream {
   bool burst_done_ = false;
 };
 
-// Wire events -> localizer inputs through the firmware's InputDecoder (same decode, same order),
-// applied to the localizer here, and the ego frames' outputs encoded as the firmware's pose and
-// diagnostic CAN frames.
+// Wire events -> the firmware's period driver (firmware/wire/period_driver.hpp): the same decode,
+// order, share checks and localizer calls as the firmware, and the ego frames' outputs encoded as
+// its pose and diagnostic CAN frames. Transport only: an event's time is its receive time.
 struct DecodedFrame {
   int frame = -1;
   LocalizerFrameOutput output{};
@@ -131,38 +135,54 @@ class LocalizerInputTap {
 
 class WireEventDecoder {
  public:
-  // As the firmware, the decoder asks the localizer whether it wants a share before hashing it.
-  WireEventDecoder(firmware::InputDecoder& decoder, Localizer& localizer)
-      : decoder_(decoder), localizer_(localizer), wanted_(localizer) {
-    decoder_.set_share_filter(&wanted_);
-  }
+  // `localizer` is any LocalizerPort (firmware::LocalizerAdapter<Localizer> for the plain one).
+  WireEventDecoder(firmware::InputDecoder& decoder, firmware::LocalizerPort& localizer)
+      : decoder_(decoder), port_(localizer), driver_(decoder, port_) {}
   WireEventDecoder(const WireEventDecoder&) = delete;
   WireEventDecoder& operator=(const WireEventDecoder&) = delete;
-  // Returns true and fills `frame` when the event was an ego scan that produced an output.
+  // Returns true and fills `frame` when the event closed a period (an ego scan, used or refused).
   bool feed(const WireEvent& event, DecodedFrame& frame);
-  void set_tap(LocalizerInputTap* tap) { tap_ = tap; }
+  const firmware::PeriodDriver& driver() const { return driver_; }
+  void set_tap(LocalizerInputTap* tap) { port_.tap = tap; }
 
  private:
-  // The firmware asks its localizer before hashing or verifying a share
-  // (firmware/app/localizer_port.hpp, a layer host_sim does not include).
-  struct LocalizerWants final : firmware::MapShareWanted {
-    explicit LocalizerWants(const Localizer& l) : localizer(l) {}
-    bool wants(std::uint32_t source_id, double t) const override { return localizer.wants_map_cloud(source_id, t); }
+  // The caller's port, with the tap (when set) seeing each input just before it is applied.
+  struct TappedPort final : firmware::LocalizerPort {
+    explicit TappedPort(firmware::LocalizerPort& p) : inner(p) {}
+    bool wants(std::uint32_t source_id, double t) const override { return inner.wants(source_id, t); }
     bool fits_background(std::uint32_t source_id, const Mat4d& world_T_sensor,
                          std::span<const Vec3f> points) const override {
-      return localizer.map_cloud_fits_background(source_id, world_T_sensor, points);
+      return inner.fits_background(source_id, world_T_sensor, points);
     }
-    bool awaiting_first_map() const override { return !localizer.has_map(); }
-    const Localizer& localizer;
+    bool awaiting_first_map() const override { return inner.awaiting_first_map(); }
+    std::uint32_t map_clouds_per_period() const override { return inner.map_clouds_per_period(); }
+    void add_period_work(double instructions) override {
+      if (tap != nullptr) tap->period_work(instructions);
+      inner.add_period_work(instructions);
+    }
+    void on_vehicle(const VehicleInput& input) override {
+      if (tap != nullptr) tap->vehicle(input);
+      inner.on_vehicle(input);
+    }
+    void on_gnss(const GnssInput& input) override {
+      if (tap != nullptr) tap->gnss(input);
+      inner.on_gnss(input);
+    }
+    MapInsertResult on_map_cloud(const MapCloudInput& input) override {
+      if (tap != nullptr) tap->map_cloud(input);
+      return inner.on_map_cloud(input);
+    }
+    const LocalizerFrameOutput& on_ego_scan(const EgoScanInput& input) override {
+      if (tap != nullptr) tap->ego_scan(input);
+      return inner.on_ego_scan(input);
+    }
+    firmware::LocalizerPort& inner;
+    LocalizerInputTap* tap = nullptr;
   };
 
   firmware::InputDecoder& decoder_;
-  Localizer& localizer_;
-  LocalizerWants wanted_;
-  firmware::PoseFrameEncoder encoder_{};
-  firmware::DiagnosticFrameEncoder diagnostic_encoder_{};
-  LocalizerFrameOutput last_output_{};  // held for an ego scan refused for its time stamp
-  LocalizerInputTap* tap_ = nullptr;
+  TappedPort port_;
+  firmware::PeriodDriver driver_;
 };
 
 // The offline evaluator's loop: the whole event stream in-process. `decoder` is large (make it

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "firmware/protocol/can_messages.hpp"
+#include "tools/eval/gnss_track.hpp"
 #include "v2xloc/algo/core/geodesy.hpp"
 
 namespace v2xloc::eval {
@@ -34,51 +35,6 @@ LocalizationMode mode_from_code(protocol::LocalizerModeCode code) {
   }
   return LocalizationMode::kUninitialized;
 }
-
-// The GNSS fixes of the recording's CAN log, assembled as the in-process path does (a latitude and
-// longitude paired by the codec's GnssPositionPairer, status and time frames of one stamp; valid =
-// 2D/3D fix), in ENU minus the lever arm. The log is the recorded sender's: no counter checks here.
-class GnssTrack {
- public:
-  GnssTrack(const GeodeticOrigin& origin, const Eigen::Vector3d& lever) : origin_(origin), lever_(lever) {}
-
-  void push(const sim::CanLogFrame& f) {
-    hal::CanFrame frame;
-    frame.id = f.id;
-    frame.dlc = f.dlc;
-    for (int b = 0; b < 8; ++b) frame.data[b] = f.data[b];
-    if (f.id == protocol::kGnssPositionId) {
-      protocol::GnssPosition half;
-      if (protocol::unpack(frame, half) != protocol::DecodeStatus::kOk) return;
-      const bool paired = pairer_.push(half) == protocol::GnssPositionPairer::Result::kPaired;
-      position_t_ = paired ? f.t : -1.0;
-    } else if (f.id == protocol::kGnssStatusId) {
-      if (protocol::unpack(frame, status_) == protocol::DecodeStatus::kOk) status_t_ = f.t;
-    } else if (f.id == protocol::kGnssTimeId) {
-      protocol::GnssTime time;
-      if (protocol::unpack(frame, time) != protocol::DecodeStatus::kOk) return;
-      pairer_.end_fix();
-      if (std::abs(position_t_ - f.t) > 1e-4 || std::abs(status_t_ - f.t) > 1e-4) return;
-      const bool valid = status_.fix_type == protocol::GnssFixType::kFix3D ||
-                         status_.fix_type == protocol::GnssFixType::kFix2D;
-      if (!valid) return;
-      const Vec3d enu = geodetic_to_enu(origin_, GeodeticPoint{pairer_.lat_deg(), pairer_.lon_deg(), status_.alt_m});
-      body_ = enu - lever_;  // roll = pitch = 0: the lever is vertical
-      has_fix_ = true;
-    }
-  }
-  bool has_fix() const { return has_fix_; }
-  const Eigen::Vector3d& body() const { return body_; }
-
- private:
-  GeodeticOrigin origin_;
-  Eigen::Vector3d lever_;
-  protocol::GnssPositionPairer pairer_{};
-  protocol::GnssStatus status_{};
-  double position_t_ = -1.0, status_t_ = -2.0;
-  bool has_fix_ = false;
-  Eigen::Vector3d body_ = Eigen::Vector3d::Zero();
-};
 
 }  // namespace
 
@@ -120,26 +76,19 @@ LocalizerFrameOutput output_from_can(const sim::replay::ReplayedFrame& f, std::u
 bool records_from_outputs(const sim::RecordingReader& reader, const std::vector<LocalizerFrameOutput>& outputs,
                           const Eigen::Vector3d& gnss_antenna_in_body, std::vector<FrameRecord>& records,
                           std::string& error) {
-  std::vector<sim::CanLogFrame> can;
-  if (!reader.can_frames(can, error)) return false;
   if (outputs.size() > reader.ground_truth().size()) {
     error = "more frames than ground-truth poses";
     return false;
   }
-  GnssTrack gnss(make_geodetic_origin(reader.origin_lat_deg(), reader.origin_lon_deg(), reader.origin_alt_m()),
-                 gnss_antenna_in_body);
   records.assign(outputs.size(), FrameRecord{});
-  std::size_t next_can = 0;
   for (std::size_t i = 0; i < outputs.size(); ++i) {
     FrameRecord& rec = records[i];
     rec.t = reader.frame_time(static_cast<int>(i));
     rec.truth = reader.ground_truth()[i].pose;
-    for (; next_can < can.size() && can[next_can].t <= rec.t + 1e-9; ++next_can) gnss.push(can[next_can]);
-    rec.has_gnss = gnss.has_fix();
-    rec.gnss_body = gnss.body();
     rec.out = outputs[i];
     rec.lagged_pose = rec.out.fused_pose.matrix();
   }
+  if (!fill_gnss(reader, gnss_antenna_in_body, records, error)) return false;
   // Revisions are not on the wire, but everything they need is (fused pose, FilterInitialized,
   // odometry pose and OdometryOk): a receiver revises the start-up frames itself, with the
   // localizer's own algorithm, on the quantized values (1 mm, 1e-4 rad).

@@ -41,7 +41,7 @@ bool run_firmware(const sim::RecordingReader& reader, const FirmwareRunOptions& 
 // frame_index is the replayed frame's index (the 16-bit frame counters are unwrapped against it).
 LocalizerFrameOutput output_from_can(const sim::replay::ReplayedFrame& frame, std::uint32_t frame_index);
 
-// Records from per-frame outputs: truth and GNSS from the recording (as run_offline: latest valid
+// Records from per-frame outputs: truth and GNSS from the recording (fill_gnss, as run_offline: latest valid
 // fix with t <= frame time, lever arm removed), fixed-lag decisions applied to the frames they
 // decide. outputs[i] belongs to frame i. False + error when the CAN log cannot be read.
 bool records_from_outputs(const sim::RecordingReader& reader, const std::vector<LocalizerFrameOutput>& outputs,

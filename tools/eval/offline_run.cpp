@@ -1,32 +1,24 @@
 #include "tools/eval/offline_run.hpp"
 
 #include <algorithm>
-#include <charconv>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
 
-#if __has_include(<valgrind/callgrind.h>)
-#include <valgrind/callgrind.h>
-#define V2XLOC_HAVE_CALLGRIND 1
-#endif
-
-#include "firmware/wire/input_decoder.hpp"
-#include "firmware/wire/share_schedule.hpp"
-#include "firmware/wire/wire_conventions.hpp"
-#include "firmware/protocol/can_messages.hpp"
 #include "firmware/trust/background_file.hpp"
 #include "firmware/wire/background_store.hpp"
-#include "host_sim/cloud_io/point_cloud.hpp"
+#include "firmware/wire/input_decoder.hpp"
+#include "firmware/wire/period_driver.hpp"
 #include "host_sim/common/text_file.hpp"
 #include "host_sim/recording/sim_trust.hpp"
+#include "host_sim/replay/event_stream.hpp"
+#include "tools/eval/gnss_track.hpp"
+#include "tools/eval/in_process_port.hpp"
+#include "tools/eval/stage_clock.hpp"
 
 namespace v2xloc::eval {
 namespace {
-
-Mat4d to_mat(const Eigen::Isometry3d& iso) { return iso.matrix(); }
 
 // The recording's surveyed backgrounds (its trust list's `background` lines), read, checked and
 // kept as the firmware keeps them (firmware/wire/background_store.hpp: size cap, the list's
@@ -68,54 +60,6 @@ bool provision_backgrounds(const sim::RecordingReader& reader, Localizer& locali
   return true;
 }
 
-// Wall time of one localizer call [s].
-template <class F>
-double timed_seconds(F&& f) {
-  const auto t0 = std::chrono::steady_clock::now();
-  f();
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-// The localizer's stage probe on the host: wall time between marks per stage, and (under
-// callgrind, when asked) one stats dump per finished stage so instructions split the same way.
-class StageClock {
- public:
-  using Clock = std::chrono::steady_clock;
-  StageClock(bool timing, bool dumps) : timing_(timing), dumps_(dumps) {}
-  static void on_mark(void* self, LocalizerStage s) { static_cast<StageClock*>(self)->mark(s); }
-  StageProbe probe() { return StageProbe{&StageClock::on_mark, this}; }
-  bool active() const { return timing_ || dumps_; }
-  void mark(LocalizerStage s) {
-    if (!active()) return;
-    const auto now = Clock::now();
-    if (current_ != LocalizerStage::kIdle) {
-      ms_[static_cast<std::size_t>(current_)] += std::chrono::duration<double, std::milli>(now - last_).count();
-    }
-#ifdef V2XLOC_HAVE_CALLGRIND
-    if (dumps_ && RUNNING_ON_VALGRIND) {
-      char label[64];
-      std::snprintf(label, sizeof label, "frame %d %s", frame_, stage_name(current_));
-      CALLGRIND_DUMP_STATS_AT(label);
-    }
-#endif
-    current_ = s;
-    last_ = Clock::now();
-  }
-  void begin_period(int frame) {
-    mark(LocalizerStage::kIdle);
-    frame_ = frame;
-    ms_.fill(0.0);
-  }
-  const StageMs& period_ms() const { return ms_; }
-
- private:
-  bool timing_, dumps_;
-  int frame_ = -1;
-  LocalizerStage current_ = LocalizerStage::kIdle;
-  Clock::time_point last_ = Clock::now();
-  StageMs ms_{};
-};
-
 double percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
   std::sort(v.begin(), v.end());
@@ -123,23 +67,35 @@ double percentile(std::vector<double> v, double q) {
   return v[std::min(v.size() - 1, k > 0 ? k - 1 : 0)];
 }
 
-// "infra_3" -> 1 + 3, "agent_1..." -> 32 + 1: stable ids per sensor. The number comes from the
-// recording, so it is parsed without throwing and must keep infra and agent ids apart.
-bool source_id_of(const sim::MapCloudInfo& info, std::uint32_t& id, std::string& error) {
-  const auto digit = info.sensor.find_first_of("0123456789");
-  std::uint32_t k = 0;
-  if (digit != std::string::npos) {
-    const char* first = info.sensor.data() + digit;
-    const char* last = info.sensor.data() + info.sensor.size();
-    const auto r = std::from_chars(first, last, k);
-    if (r.ec != std::errc() || k >= firmware::kAgentSenderBase - firmware::kInfraSenderBase) {
-      error = "map cloud sensor '" + info.sensor + "': index must be 0.." +
-              std::to_string(firmware::kAgentSenderBase - firmware::kInfraSenderBase - 1);
-      return false;
-    }
-  }
-  id = info.kind == "agent" ? firmware::kAgentSenderBase + k : firmware::kInfraSenderBase + k;
+// A share older than this behind the newest one is refused by the verifier (too old, 1 s) before
+// it can reach the map: its recorded cloud is no longer kept.
+constexpr std::int64_t kShareKeepNs = 3'000'000'000;
+
+// Frame i's stereo disparity as the localizer reads it (none unless asked and recorded).
+bool stereo_of(const sim::RecordingReader& reader, const RunOptions& options, int i, sim::Image16& disparity,
+               StereoInput& out, std::string& error) {
+  out = StereoInput{};
+  if (!options.params.use_stereo || !reader.has_stereo()) return true;
+  if (!reader.disparity(i, disparity, error)) return false;
+  const sim::StereoCalibrationInfo& cal = reader.stereo_calibration();
+  out.disparity = std::span<const std::uint16_t>(disparity.pixels.data(), disparity.pixels.size());
+  out.width = static_cast<std::uint32_t>(disparity.width);
+  out.height = static_cast<std::uint32_t>(disparity.height);
+  out.calibration.fx = cal.fx;
+  out.calibration.fy = cal.fy;
+  out.calibration.cx = cal.cx;
+  out.calibration.cy = cal.cy;
+  out.calibration.baseline = cal.baseline;
+  out.calibration.vehicle_T_camera = cal.camera_to_body.matrix();
+  out.disparity_sigma = cal.disparity_sigma_px;
   return true;
+}
+
+void print_progress(const FrameRecord& rec, int i, int frames, double frame_seconds) {
+  const Eigen::Vector3d fused = rec.out.fused_pose.translation();
+  std::fprintf(stderr, "\r  frame %4d/%d  mode %d  fit %.3f rmse %.3f  err fused %.3f m  %.0f ms   ", i + 1, frames,
+               static_cast<int>(rec.out.mode), rec.out.fitness, rec.out.inlier_rmse,
+               (fused - rec.truth.translation()).norm(), frame_seconds * 1e3);
 }
 
 }  // namespace
@@ -153,9 +109,6 @@ void take_revisions(const TrajectoryBackfill& backfill, std::size_t newest, std:
 
 bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const RunOptions& options,
                  std::vector<FrameRecord>& records, RunStats& stats, std::string& error) {
-  std::vector<sim::CanLogFrame> can;
-  if (!reader.can_frames(can, error)) return false;
-  const auto& clouds = reader.map_clouds();
   const GeodeticOrigin origin =
       make_geodetic_origin(reader.origin_lat_deg(), reader.origin_lon_deg(), reader.origin_alt_m());
   LocalizerParams params = options.params;
@@ -164,152 +117,97 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
   stats = {};
   if (!provision_backgrounds(reader, localizer, stats.backgrounds_loaded, error)) return false;
 
-  const int frames = options.max_frames < 0 ? reader.frame_count()
-                                            : std::min(options.max_frames, reader.frame_count());
-  records.assign(static_cast<std::size_t>(frames), FrameRecord{});
-  std::size_t next_can = 0, next_cloud = 0;
-  // CAN goes through the firmware's decoder (same DBC decoding, same fix assembly, same checks).
-  auto decoder = std::make_unique<firmware::InputDecoder>(0);
-  bool has_gnss = false;
-  Eigen::Vector3d gnss_body = Eigen::Vector3d::Zero();
-  // Map clouds waiting for their period (the firmware's verification schedule), by schedule slot.
-  struct WaitingCloud {
-    const sim::MapCloudInfo* info = nullptr;
-    cloud_io::PointCloud cloud;
-  };
-  firmware::ShareSchedule schedule;
-  std::vector<WaitingCloud> waiting(firmware::ShareSchedule::kCapacity);
-  cloud_io::PointCloud scan;
-  std::vector<Vec3f> scan_points;
-  std::vector<float> scan_times;
-  sim::Image16 disparity;
-  using Clock = std::chrono::steady_clock;
+  // The recording as the firmware receives it (signed shares, the CAN log), decided on by the
+  // firmware's decoder and period driver; the port feeds the localizer the recorded clouds.
+  sim::replay::EventStreamConfig config;
+  config.max_frames = options.max_frames;
+  config.keep_source_clouds = true;
+  sim::replay::EventStream stream;
+  if (!stream.open(reader, config, error)) return false;
+  auto decoder = std::make_unique<firmware::InputDecoder>(stream.epoch_ns());
+  decoder->provision_trust(stream.trust_list());
   StageClock stages(options.timing, options.callgrind_dumps);
   localizer.set_stage_probe(stages.active() ? stages.probe() : StageProbe{});
+  InProcessPort port(localizer, stages);
+  sim::replay::WireEventDecoder wire(*decoder, port);
 
+  const int frames = stream.frame_count();
+  records.assign(static_cast<std::size_t>(frames), FrameRecord{});
+  std::vector<sim::replay::WireEvent> events;
+  sim::Image16 disparity;
   for (int i = 0; i < frames; ++i) {
-    const double t = reader.frame_time(i);
     FrameRecord& rec = records[static_cast<std::size_t>(i)];
-    rec.t = t;
+    rec.t = reader.frame_time(i);
     rec.truth = reader.ground_truth()[static_cast<std::size_t>(i)].pose;
-    double frame_seconds = 0.0;
+    events.clear();
+    if (!stream.next_frame(i, events, error)) return false;
     stages.begin_period(i);
-    stages.mark(LocalizerStage::kInputs);
-    // 1. CAN frames up to t.
-    for (; next_can < can.size() && can[next_can].t <= t + 1e-9; ++next_can) {
-      const sim::CanLogFrame& f = can[next_can];
-      hal::CanFrame frame;
-      frame.id = f.id;
-      frame.dlc = f.dlc;
-      for (int b = 0; b < 8; ++b) frame.data[b] = f.data[b];
-      const firmware::DecodedCan decoded = decoder->decode_can(frame, static_cast<std::int64_t>(std::llround(f.t * 1e9)));
-      if (decoded.kind == firmware::CanInputKind::kRejected) ++stats.can_decode_errors;
-      if (decoded.kind == firmware::CanInputKind::kVehicle) {
-        frame_seconds += timed_seconds([&] { localizer.on_vehicle(decoded.vehicle); });
+    bool closed = false;
+    for (sim::replay::WireEvent& ev : events) {
+      if (ev.kind == sim::replay::WireEvent::Kind::kMapCloud) {
+        port.keep_share(ev.sender_id, ev.time_ns, std::move(ev.source), ev.time_ns - kShareKeepNs);
+      } else if (ev.kind == sim::replay::WireEvent::Kind::kEgoScan) {
+        StereoInput stereo;
+        if (!stereo_of(reader, options, i, disparity, stereo, error)) return false;
+        port.set_scan(std::move(ev.source), stereo);
       }
-      if (decoded.kind == firmware::CanInputKind::kGnssFix) {
-        frame_seconds += timed_seconds([&] { localizer.on_gnss(decoded.gnss); });
-        if (decoded.gnss.valid) {
-          const GnssInput& fix = decoded.gnss;
-          const Vec3d enu = geodetic_to_enu(origin, GeodeticPoint{fix.lat_deg, fix.lon_deg, fix.alt_m});
-          gnss_body = enu - options.gnss_antenna_in_body;  // roll = pitch = 0: the lever is vertical
-          has_gnss = true;
+      sim::replay::DecodedFrame decoded;
+      if (wire.feed(ev, decoded)) {
+        if (decoded.frame != i) {
+          error = "in-process run: frame " + std::to_string(i) + " closed period " + std::to_string(decoded.frame);
+          return false;
         }
+        rec.out = decoded.output;
+        closed = true;
+      }
+      if (!port.error().empty()) {
+        error = port.error();
+        return false;
       }
     }
-    stages.mark(LocalizerStage::kIdle);
-    rec.has_gnss = has_gnss;
-    rec.gnss_body = gnss_body;
-    // 2. Map clouds up to t, on the firmware's share schedule (firmware/wire/share_schedule.hpp):
-    //    queued as they arrive, at most kMaxSignatureVerificationsPerPeriod reach the map per period.
-    for (; next_cloud < clouds.size() && clouds[next_cloud].stamp <= t + 1e-9; ++next_cloud) {
-      const firmware::ShareSchedule::Admission admission = schedule.admit();
-      if (admission.dropped_oldest) ++stats.map_clouds_dropped;
-      waiting[admission.slot].info = &clouds[next_cloud];
-      if (!reader.load_map_cloud(clouds[next_cloud], waiting[admission.slot].cloud, error)) return false;
+    if (!closed) {
+      error = "in-process run: the ego scan of frame " + std::to_string(i) + " did not close a period";
+      return false;
     }
-    schedule.begin_period();
-    std::size_t slot = 0;
-    // A share the map would not fuse (paced) costs the firmware no signature check: refunded.
-    const std::size_t shares = firmware::shares_this_period(localizer.map_clouds_per_period());
-    std::size_t shares_fused = 0;
-    for (std::size_t k = 0; k < firmware::kShareVerifyQueueCapacity && shares_fused < shares && schedule.release(slot); ++k) {
-      const sim::MapCloudInfo& info = *waiting[slot].info;
-      const cloud_io::PointCloud& cloud = waiting[slot].cloud;
-      MapCloudInput in;
-      if (!source_id_of(info, in.source_id, error)) return false;
-      if (!localizer.wants_map_cloud(in.source_id, info.stamp)) {
-        schedule.refund();
-        ++stats.map_clouds_paced;
-        continue;
-      }
-      in.is_agent = info.kind == "agent";
-      in.t = info.stamp;
-      in.world_T_sensor = to_mat(info.sensor_pose);
-      in.points = std::span<const Vec3f>(cloud.points.data(), cloud.points.size());
-      ++shares_fused;
-      stages.mark(LocalizerStage::kMapInsert);
-      const auto t0 = Clock::now();
-      const MapInsertResult r = localizer.on_map_cloud(in);
-      frame_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
-      stages.mark(LocalizerStage::kIdle);
-      ++stats.map_clouds;
-      if (r.status == MapInsertStatus::kRejectedInconsistent || r.status == MapInsertStatus::kBackgroundMismatch)
-        ++stats.map_clouds_rejected;
-    }
-    // 3. The ego scan.
-    if (!reader.ego_scan(i, scan, error)) return false;
-    EgoScanInput in;
-    in.t = t;
-    in.points = std::span<const Vec3f>(scan.points.data(), scan.points.size());
-    if (scan.time.size() == scan.points.size()) {
-      in.point_times = std::span<const float>(scan.time.data(), scan.time.size());
-    }
-    in.body_T_lidar = reader.ego_lidar_mount().matrix();
-    if (options.params.use_stereo && reader.has_stereo()) {
-      if (!reader.disparity(i, disparity, error)) return false;
-      const sim::StereoCalibrationInfo& cal = reader.stereo_calibration();
-      in.stereo.disparity = std::span<const std::uint16_t>(disparity.pixels.data(), disparity.pixels.size());
-      in.stereo.width = static_cast<std::uint32_t>(disparity.width);
-      in.stereo.height = static_cast<std::uint32_t>(disparity.height);
-      in.stereo.calibration.fx = cal.fx;
-      in.stereo.calibration.fy = cal.fy;
-      in.stereo.calibration.cx = cal.cx;
-      in.stereo.calibration.cy = cal.cy;
-      in.stereo.calibration.baseline = cal.baseline;
-      in.stereo.calibration.vehicle_T_camera = cal.camera_to_body.matrix();
-      in.stereo.disparity_sigma = cal.disparity_sigma_px;
-    }
-    const auto t0 = Clock::now();
-    rec.out = localizer.on_ego_scan(in);
     rec.lagged_pose = rec.out.fused_pose.matrix();
-    frame_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
+    const double frame_seconds = port.take_seconds();
     stats.seconds += frame_seconds;
     stats.max_frame_ms = std::max(stats.max_frame_ms, frame_seconds * 1e3);
-    stages.mark(LocalizerStage::kIdle);  // on_ego_scan ends idle; here for inputs-only periods
+    stages.mark(LocalizerStage::kIdle);
     if (options.timing) stats.period_stage_ms.push_back(stages.period_ms());
     take_revisions(localizer.backfill(), static_cast<std::size_t>(i), records);
     if (rec.out.gate_decided && rec.out.gate_decided_frame < records.size()) {
       records[rec.out.gate_decided_frame].gate_decided = true;
       records[rec.out.gate_decided_frame].gate_valid = rec.out.gate_decided_valid;
     }
-    if (!options.quiet) {
-      const Eigen::Vector3d fused = rec.out.fused_pose.translation();
-      std::fprintf(stderr,
-                   "\r  frame %4d/%d  mode %d  fit %.3f rmse %.3f  err fused %.3f m  %.0f ms   ",
-                   i + 1, frames, static_cast<int>(rec.out.mode), rec.out.fitness,
-                   rec.out.inlier_rmse, (fused - rec.truth.translation()).norm(),
-                   frame_seconds * 1e3);
-    }
+    if (!options.quiet) print_progress(rec, i, frames, frame_seconds);
   }
+  if (!fill_gnss(reader, options.gnss_antenna_in_body, records, error)) return false;
+  const firmware::DecoderCounters& d = decoder->counters();
+  const firmware::PeriodCounters& p = wire.driver().counters();
+  stats.can_decode_errors = d.can_rejected + d.can_repeated;
+  stats.map_clouds = p.map_handed;
+  stats.map_clouds_rejected = p.map_inconsistent + p.map_background_mismatch;
+  stats.map_clouds_paced = d.shares_paced + d.shares_paced_on_arrival;
+  stats.map_clouds_dropped = d.shares_queue_dropped;
+  stats.map_shares_untrusted = d.shares_untrusted + d.shares_off_background;
+  stats.trust = decoder->verifier().counters();
   localizer.set_stage_probe(StageProbe{});
   stats.counters = localizer.counters();
   stats.map_background_checked = localizer.map().counters().background_checked;
   stats.map_background_mismatch = localizer.map().counters().background_mismatch;
   if (!options.quiet) {
     const LocalizerCounters& c = stats.counters;
+    std::fprintf(stderr, "\n  shares: %zu to the map (%zu refused by it), %zu refused by the trust checks"
+                 " (pose_mismatch %llu, missing_signature %llu, bad_signature %llu, too_old %llu, replay %llu)\n",
+                 stats.map_clouds, stats.map_clouds_rejected, stats.map_shares_untrusted,
+                 static_cast<unsigned long long>(stats.trust.pose_mismatch),
+                 static_cast<unsigned long long>(stats.trust.missing_signature),
+                 static_cast<unsigned long long>(stats.trust.bad_signature),
+                 static_cast<unsigned long long>(stats.trust.too_old),
+                 static_cast<unsigned long long>(stats.trust.replay));
     std::fprintf(stderr,
-                 "\n  global searches %u (accepted %u), tracking %u, registrations ok %u, fused %u, "
+                 "  global searches %u (accepted %u), tracking %u, registrations ok %u, fused %u, "
                  "filter resets %u, confirmed %u, inconsistent %u, unconstrained %u, final ICP paused %u, track losses %u, audits %u, basin switches %u, ambiguities resolved %u, stereo %u (fused %u), map rebuilds %u, map normals %u (refused %u); EKF: registrations fused %llu rejected %llu, GNSS fused %llu "
                  "rejected %llu, too late %llu, invalid %llu, numeric %llu, history overflows %llu\n",
                  c.global_searches, c.global_accepted, c.tracking_registrations, c.registrations_ok,

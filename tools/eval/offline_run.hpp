@@ -1,8 +1,10 @@
-// Runs the localizer over a recording in process, in the canonical event order (per frame: CAN
-// frames up to the frame stamp, then map clouds up to it, then the ego scan), and keeps one
-// record per frame for the evaluation. Map clouds reach the localizer on the firmware's share
-// schedule (at most two per period, a queue of four), so both paths build the same map in the
-// same periods; they differ by the firmware's 4 mm quantization.
+// Runs the localizer over a recording in process and keeps one record per frame for the
+// evaluation. The recording is sent as the firmware receives it (host_sim/replay's event stream:
+// the CAN log, signed shares) through the firmware's decoder and period driver, which decide what
+// reaches the localizer and when (trust checks, surveyed pose and background, share schedule);
+// the localizer then gets the recorded clouds at full precision (tools/eval/in_process_port.hpp).
+// So the in-process and firmware paths fuse the same shares in the same periods and differ by the
+// wire's 4 mm quantization of the points.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -10,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "firmware/trust/map_share_verifier.hpp"
 #include "host_sim/recording/recording_reader.hpp"
 #include "v2xloc/algo/localization/localizer.hpp"
 #include "v2xloc/algo/localization/localizer_params.hpp"
@@ -52,13 +55,15 @@ struct RunStats {
   double max_frame_ms = 0.0;
   LocalizerCounters counters{};
   std::size_t can_decode_errors = 0;
-  std::size_t map_clouds = 0;
-  std::size_t map_clouds_rejected = 0;
+  std::size_t map_clouds = 0;           // verified shares handed to map fusion
+  std::size_t map_clouds_rejected = 0;  // of those: refused (inconsistent, off the surveyed background)
+  std::size_t map_shares_untrusted = 0;  // refused by the trust checks (trust: by reason) or off the background before ECDSA
   std::size_t map_clouds_paced = 0;     // not handed to the map: the source's stored cloud is recent (map_cloud_interval)
   std::size_t map_clouds_dropped = 0;    // waited beyond the share queue (the firmware's schedule)
   std::size_t backgrounds_loaded = 0;    // surveyed backgrounds the recording's trust list names
   std::uint64_t map_background_checked = 0;   // infrastructure clouds scored against them
   std::uint64_t map_background_mismatch = 0;  // of those: refused
+  trust::VerifierCounters trust{};       // the share verifier's counts (in process; zero through --firmware)
   std::vector<StageMs> period_stage_ms;  // one per frame when RunOptions::timing
 };
 

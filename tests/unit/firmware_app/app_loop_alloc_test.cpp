@@ -54,17 +54,20 @@ std::vector<std::vector<std::uint8_t>> cloud_datagrams(protocol::CloudMessageTyp
 
 TEST(FirmwareAppLoop, NoHeapAllocationAfterStartUpAndOnePosePerFrame) {
   hal::SimClock clock(0, kEpoch);
-  hal::UdpLink fw_can, fw_cloud, tx_can, tx_cloud;
+  hal::UdpLink fw_can, fw_cloud, fw_ego, tx_can, tx_cloud, tx_ego;
   hal::UdpOptions o;
   o.receive_buffer_bytes = 1 << 21;
   ASSERT_EQ(fw_can.open(o), hal::Status::kOk) << fw_can.last_error();
   ASSERT_EQ(fw_cloud.open(o), hal::Status::kOk) << fw_cloud.last_error();
+  ASSERT_EQ(fw_ego.open(o), hal::Status::kOk) << fw_ego.last_error();
   hal::UdpOptions t = o;
   t.has_peer = true;
   t.peer = fw_can.local_endpoint();
   ASSERT_EQ(tx_can.open(t), hal::Status::kOk);
   t.peer = fw_cloud.local_endpoint();
   ASSERT_EQ(tx_cloud.open(t), hal::Status::kOk);
+  t.peer = fw_ego.local_endpoint();
+  ASSERT_EQ(tx_ego.open(t), hal::Status::kOk);
   ASSERT_EQ(fw_can.set_peer(tx_can.local_endpoint()), hal::Status::kOk);
 
   hal::EmulatedCanBus fw_bus(fw_can, clock);
@@ -78,7 +81,7 @@ TEST(FirmwareAppLoop, NoHeapAllocationAfterStartUpAndOnePosePerFrame) {
 
   configure_localizer(g_localizer, make_geodetic_origin(48.1374, 11.5755, 520.0));
   static LocalizerAdapter<Localizer> port(g_localizer);
-  FirmwareApp app(FirmwareHal{fw_sim_bus, fw_cloud, clock, &pps, &led}, g_decoder, port);
+  FirmwareApp app(FirmwareHal{fw_sim_bus, fw_cloud, fw_ego, clock, &pps, &led}, g_decoder, port);
   ASSERT_EQ(app.start(), hal::Status::kOk);
 
   // Everything the test sends is prepared before the counted loop.
@@ -120,7 +123,7 @@ TEST(FirmwareAppLoop, NoHeapAllocationAfterStartUpAndOnePosePerFrame) {
     const std::int64_t t_ns = i * 100'000'000LL;
     ASSERT_EQ(tx_bus.send(make_sim_time_frame(t_ns + 1)), hal::Status::kOk);
     ASSERT_EQ(tx_bus.send(vehicle[static_cast<std::size_t>(i)]), hal::Status::kOk);
-    for (const auto& d : scans[static_cast<std::size_t>(i)]) ASSERT_EQ(tx_cloud.send(d), hal::Status::kOk);
+    for (const auto& d : scans[static_cast<std::size_t>(i)]) ASSERT_EQ(tx_ego.send(d), hal::Status::kOk);
     poll_until(static_cast<std::uint64_t>(i + 1));
     ASSERT_EQ(app.counters().frames_published, static_cast<std::uint64_t>(i + 1));
   }

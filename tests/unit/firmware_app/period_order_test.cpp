@@ -1,8 +1,8 @@
 // The firmware's input order does not depend on socket read timing: a map share received on the
 // V2X endpoint before an ego scan reaches map fusion before that scan even when the ego endpoint
 // happened to be read first, and its freshness is judged by the clock of the period boundary, not
-// by how far the emulated clock had moved when its datagrams were read. Also the share schedule
-// shared by the firmware and the in-process evaluator.
+// by how far the emulated clock had moved when its datagrams were read. Also the schedule of the
+// decoder's share verification queue.
 #include <gtest/gtest.h>
 
 #include <deque>
@@ -150,7 +150,7 @@ struct SignedPeriodBench {
   ScriptedLink v2x, ego;
   std::unique_ptr<InputDecoder> decoder = decoder_trusting_infra();
   RecordingPort port;
-  FirmwareApp app{FirmwareHal{sim_can, v2x, clock, nullptr, nullptr, &ego}, *decoder, port};
+  FirmwareApp app{FirmwareHal{sim_can, v2x, ego, clock, nullptr, nullptr}, *decoder, port};
 
   SignedPeriodBench() { queue_signed_period(v2x, ego, can, kT); }
   // Starts the firmware and polls until it publishes the period's frame (at most 10 polls).
@@ -220,7 +220,7 @@ TEST(FirmwareSecurityDiagnostics, HeartbeatIsFollowedByTheRefusalCounts) {
 
   auto decoder = std::make_unique<InputDecoder>(kEpoch);
   RecordingPort port;
-  FirmwareApp app(FirmwareHal{sim_can, v2x, clock, nullptr, nullptr, &ego}, *decoder, port);
+  FirmwareApp app(FirmwareHal{sim_can, v2x, ego, clock, nullptr, nullptr}, *decoder, port);
   ASSERT_EQ(app.start(), hal::Status::kOk);
   for (int k = 0; k < 10 && app.counters().frames_published == 0; ++k) app.poll_once();
   ASSERT_EQ(app.counters().frames_published, 1u);
@@ -260,7 +260,7 @@ TEST(FirmwareSecurityDiagnostics, SurveyedBackgroundRefusalIsReportedOn0x302) {
   ASSERT_EQ(b.start_and_run_period(), hal::Status::kOk);
   ASSERT_EQ(app.counters().frames_published, 1u);
   ASSERT_EQ(b.port.calls, "me");
-  EXPECT_EQ(app.counters().map_background_mismatch, 1u);
+  EXPECT_EQ(app.period_counters().map_background_mismatch, 1u);
   b.can.queue.push_back(make_sim_time_frame(1'100'000'000));
   app.poll_once();
   ASSERT_EQ(app.counters().heartbeats, 1u);

@@ -1,8 +1,9 @@
-// The firmware's view of the localizer: the four input calls and the per-frame output, behind a
-// small virtual interface so the application loop does not depend on which localizer type main()
-// links in. LocalizerAdapter binds
-// any type with the v2xloc::Localizer API (configure / on_vehicle / on_gnss / on_map_cloud /
-// on_ego_scan) without copying: the localizer object itself stays a static owned by main.
+// The period driver's view of the localizer (period_driver.hpp): the four input calls and the
+// per-frame output, behind a small virtual interface so the driver does not depend on which
+// localizer type its user links in. LocalizerAdapter binds any type with the v2xloc::Localizer API
+// (on_vehicle / on_gnss / on_map_cloud / on_ego_scan and the share questions) without copying: the
+// localizer object itself stays a static owned by main. The in-process evaluator has its own port
+// (tools/eval/in_process_port.hpp).
 #pragma once
 
 #include "firmware/wire/input_decoder.hpp"

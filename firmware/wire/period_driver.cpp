@@ -1,0 +1,72 @@
+#include "firmware/wire/period_driver.hpp"
+
+namespace v2xloc::firmware {
+
+PeriodDriver::PeriodDriver(InputDecoder& decoder, LocalizerPort& localizer) : decoder_(decoder), localizer_(localizer) {
+  decoder_.set_share_filter(&localizer_);
+}
+
+DecodedCan PeriodDriver::on_can(const hal::CanFrame& frame, std::int64_t time_ns) {
+  const DecodedCan decoded = decoder_.decode_can(frame, time_ns);
+  if (decoded.kind == CanInputKind::kVehicle) localizer_.on_vehicle(decoded.vehicle);
+  if (decoded.kind == CanInputKind::kGnssFix) localizer_.on_gnss(decoded.gnss);
+  return decoded;
+}
+
+DecodedCloud PeriodDriver::take_completed(std::int64_t local_time_ns) { return decoder_.decode_completed(local_time_ns); }
+
+DecodedCloud PeriodDriver::take_completed() { return decoder_.decode_completed(); }
+
+void PeriodDriver::count_insert(const MapInsertResult& result, bool is_agent) {
+  ++counters_.map_handed;
+  switch (result.status) {
+    case MapInsertStatus::kInserted:
+    case MapInsertStatus::kReplaced: ++counters_.map_fused; break;
+    case MapInsertStatus::kRejectedInconsistent:
+      ++counters_.map_inconsistent;
+      if (!is_agent) ++counters_.map_infra_inconsistent;
+      break;
+    case MapInsertStatus::kHeldBack: ++counters_.map_held_back; break;
+    case MapInsertStatus::kBackgroundMismatch: ++counters_.map_background_mismatch; break;
+    case MapInsertStatus::kNoSourceSlot: ++counters_.map_no_slot; break;
+    case MapInsertStatus::kStale: ++counters_.map_stale; break;
+    case MapInsertStatus::kPaced: ++counters_.map_paced; break;
+    case MapInsertStatus::kInvalidInput: break;
+  }
+}
+
+// The period's share budget: the schedule's cap or the localizer's (one while tracking). Shares
+// refused before their signature check do not use it (InputDecoder::next_verified_share).
+void PeriodDriver::release_shares() {
+  const std::size_t shares = shares_this_period(localizer_.map_clouds_per_period());
+  for (std::size_t k = 0; k < shares; ++k) {
+    const DecodedCloud share = decoder_.next_verified_share(&localizer_);
+    if (share.kind == CloudKind::kNone) break;
+    if (share.kind == CloudKind::kMapCloud) count_insert(localizer_.on_map_cloud(share.map), share.map.is_agent);
+  }
+}
+
+const PeriodOutput& PeriodDriver::close_period(const DecodedCloud& scan) {
+  ++counters_.periods;
+  release_shares();
+  // Trust work (hashing, ECDSA) counts against this period's budget; a refused scan ends the
+  // period without a localizer frame, so its work is dropped with it.
+  const double trust_work = decoder_.take_trust_work();
+  published_.frame_index = scan.frame_index;
+  published_.held = scan.kind != CloudKind::kEgoScan;
+  if (published_.held) {
+    ++counters_.ego_frames_held;  // a pose every frame: the last one again, or "no pose" before any
+    published_.gnss_used = false;
+  } else {
+    localizer_.add_period_work(trust_work);
+    latest_ = localizer_.on_ego_scan(scan.ego);
+    published_.gnss_used = scan.gnss_used;
+  }
+  has_output_ = true;
+  published_.output = &latest_;
+  published_.pose = pose_encoder_.encode(latest_, scan.frame_index, published_.gnss_used);
+  published_.diagnostics = diagnostic_encoder_.encode(latest_, scan.frame_index);
+  return published_;
+}
+
+}  // namespace v2xloc::firmware

@@ -1,0 +1,92 @@
+// One localizer period, for every caller: the firmware application, the replay's in-process wire
+// path and the in-process evaluator feed it the same decoded inputs and get the same decisions.
+// Callers own only their transport (where bytes come from, where the frames go).
+//
+// The period (the input order; firmware/wire/input_decoder.hpp):
+//   1. CAN frames as they arrive: decoded, a vehicle input or a closed GNSS fix to the localizer;
+//   2. clouds as they complete: a map share is admitted to the decoder's verification queue
+//      (signer, sender id, surveyed pose, replay) and nothing reaches the map yet;
+//   3. an ego scan (used or refused for its time stamp) closes the period: the waiting shares are
+//      released oldest first, up to shares_this_period(), each checked for freshness, need and
+//      surveyed background, then its signature, then handed to map fusion; the period's trust
+//      work goes into the localizer's budget; then the scan (or, refused, the last pose again);
+//      then the pose and diagnostic CAN frames.
+// Deterministic and allocation-free; the localizer is reached only through LocalizerPort.
+#pragma once
+
+#include <cstdint>
+
+#include "firmware/wire/diagnostic_frames.hpp"
+#include "firmware/wire/input_decoder.hpp"
+#include "firmware/wire/localizer_port.hpp"
+#include "firmware/wire/pose_frames.hpp"
+
+namespace v2xloc::firmware {
+
+// Map fusion's answers to the shares the driver handed it, and the periods without a scan.
+struct PeriodCounters {
+  std::uint64_t periods = 0;
+  std::uint64_t map_handed = 0;          // verified shares handed to map fusion
+  std::uint64_t map_fused = 0;           // of those: inserted or replaced a source's cloud
+  std::uint64_t map_inconsistent = 0;    // refused: disagree with the infrastructure
+  std::uint64_t map_infra_inconsistent = 0;  // of those, infrastructure shares (outvoted by the other units)
+  std::uint64_t map_held_back = 0;       // agent shares with too little overlap to be checked
+  std::uint64_t map_background_mismatch = 0;  // infrastructure shares off their unit's surveyed background
+  std::uint64_t map_no_slot = 0;         // per-role source cap reached
+  std::uint64_t map_stale = 0;           // not newer than the source's stored cloud
+  std::uint64_t map_paced = 0;           // not fused: the source's stored cloud is recent (map_cloud_interval)
+  std::uint64_t ego_frames_held = 0;     // ego scans refused for their time: last pose published again
+};
+
+// What one period publishes. `output` refers to the localizer's (or the driver's held) output and
+// stays valid until the next period.
+struct PeriodOutput {
+  const LocalizerFrameOutput* output = nullptr;
+  std::uint32_t frame_index = 0;
+  bool gnss_used = false;  // pose flag GnssUsed (false for a held pose)
+  bool held = false;       // the scan was refused for its time: the last pose again
+  PoseFrames pose{};
+  DiagnosticFrames diagnostics{};
+};
+
+class PeriodDriver {
+ public:
+  // Installs `localizer` as the decoder's share filter: shares the map would not fuse are not hashed.
+  PeriodDriver(InputDecoder& decoder, LocalizerPort& localizer);
+  PeriodDriver(const PeriodDriver&) = delete;
+  PeriodDriver& operator=(const PeriodDriver&) = delete;
+
+  // Step 1: one received CAN frame at disciplined time time_ns, decoded and applied.
+  DecodedCan on_can(const hal::CanFrame& frame, std::int64_t time_ns);
+  // Step 2: the cloud InputDecoder::on_datagram() just completed, after the caller applied every
+  // CAN frame received before it. local_time_ns: the disciplined clock read after those frames.
+  DecodedCloud take_completed(std::int64_t local_time_ns);
+  // The same with the decoder's own clock relation (emulation: epoch + receive time).
+  DecodedCloud take_completed();
+  // True for the clouds that close a period (an ego scan, used or refused).
+  static bool closes_period(const DecodedCloud& cloud) {
+    return cloud.kind == CloudKind::kEgoScan || cloud.kind == CloudKind::kEgoRejected;
+  }
+  // Step 3: `scan` (closes_period) closes the period. Its points must still be valid: the caller
+  // may read further V2X datagrams first (they do not touch the scan's buffer).
+  const PeriodOutput& close_period(const DecodedCloud& scan);
+
+  const PeriodCounters& counters() const { return counters_; }
+  // The latest published output (null before the first period).
+  const LocalizerFrameOutput* latest() const { return has_output_ ? &latest_ : nullptr; }
+
+ private:
+  void release_shares();
+  void count_insert(const MapInsertResult& result, bool is_agent);
+
+  InputDecoder& decoder_;
+  LocalizerPort& localizer_;
+  PoseFrameEncoder pose_encoder_{};
+  DiagnosticFrameEncoder diagnostic_encoder_{};
+  LocalizerFrameOutput latest_{};
+  bool has_output_ = false;
+  PeriodOutput published_{};
+  PeriodCounters counters_{};
+};
+
+}  // namespace v2xloc::firmware
