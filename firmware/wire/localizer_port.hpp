@@ -30,13 +30,13 @@ class LocalizerPort : public MapShareWanted {
   ~LocalizerPort() = default;  // never deleted through the interface (static objects)
 };
 
+// The share questions and the budget answered by a localizer with the v2xloc::Localizer API; the
+// four input calls are left to the port (the adapter below forwards them, the in-process
+// evaluator's swaps in the recorded clouds).
 template <class LocalizerT>
-class LocalizerAdapter final : public LocalizerPort {
+class LocalizerQuestions : public LocalizerPort {
  public:
-  explicit LocalizerAdapter(LocalizerT& localizer) : localizer_(localizer) {}
-  void on_vehicle(const VehicleInput& input) override { localizer_.on_vehicle(input); }
-  void on_gnss(const GnssInput& input) override { localizer_.on_gnss(input); }
-  MapInsertResult on_map_cloud(const MapCloudInput& input) override { return localizer_.on_map_cloud(input); }
+  explicit LocalizerQuestions(LocalizerT& localizer) : localizer_(localizer) {}
   bool wants(std::uint32_t source_id, double t) const override { return localizer_.wants_map_cloud(source_id, t); }
   bool fits_background(std::uint32_t source_id, const Mat4d& world_T_sensor,
                        std::span<const Vec3f> points) const override {
@@ -45,13 +45,23 @@ class LocalizerAdapter final : public LocalizerPort {
   bool awaiting_first_map() const override { return !localizer_.has_map(); }
   std::uint32_t map_clouds_per_period() const override { return localizer_.map_clouds_per_period(); }
   void add_period_work(double instructions) override { localizer_.add_period_work(instructions); }
-  const LocalizerFrameOutput& on_ego_scan(const EgoScanInput& input) override {
-    return localizer_.on_ego_scan(input);
-  }
   LocalizerT& localizer() { return localizer_; }
 
- private:
+ protected:
+  ~LocalizerQuestions() = default;
   LocalizerT& localizer_;
+};
+
+template <class LocalizerT>
+class LocalizerAdapter final : public LocalizerQuestions<LocalizerT> {
+ public:
+  explicit LocalizerAdapter(LocalizerT& localizer) : LocalizerQuestions<LocalizerT>(localizer) {}
+  void on_vehicle(const VehicleInput& input) override { this->localizer_.on_vehicle(input); }
+  void on_gnss(const GnssInput& input) override { this->localizer_.on_gnss(input); }
+  MapInsertResult on_map_cloud(const MapCloudInput& input) override { return this->localizer_.on_map_cloud(input); }
+  const LocalizerFrameOutput& on_ego_scan(const EgoScanInput& input) override {
+    return this->localizer_.on_ego_scan(input);
+  }
 };
 
 }  // namespace v2xloc::firmware

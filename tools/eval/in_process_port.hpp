@@ -19,9 +19,9 @@
 
 namespace v2xloc::eval {
 
-class InProcessPort final : public firmware::LocalizerPort {
+class InProcessPort final : public firmware::LocalizerQuestions<Localizer> {
  public:
-  InProcessPort(Localizer& localizer, StageClock& stages) : localizer_(localizer), stages_(stages) {}
+  InProcessPort(Localizer& localizer, StageClock& stages) : LocalizerQuestions(localizer), stages_(stages) {}
 
   // A map share's recorded cloud, before its wire event is fed; shares stamped before
   // `drop_before_ns` (recording time) are forgotten (the verifier refuses them as too old anyway).
@@ -39,14 +39,6 @@ class InProcessPort final : public firmware::LocalizerPort {
   // Empty unless the driver handed over a share or scan whose recorded cloud was not given.
   const std::string& error() const { return error_; }
 
-  bool wants(std::uint32_t source_id, double t) const override { return localizer_.wants_map_cloud(source_id, t); }
-  bool fits_background(std::uint32_t source_id, const Mat4d& world_T_sensor,
-                       std::span<const Vec3f> points) const override {
-    return localizer_.map_cloud_fits_background(source_id, world_T_sensor, points);
-  }
-  bool awaiting_first_map() const override { return !localizer_.has_map(); }
-  std::uint32_t map_clouds_per_period() const override { return localizer_.map_clouds_per_period(); }
-  void add_period_work(double instructions) override { localizer_.add_period_work(instructions); }
   void on_vehicle(const VehicleInput& input) override;
   void on_gnss(const GnssInput& input) override;
   MapInsertResult on_map_cloud(const MapCloudInput& input) override;
@@ -57,7 +49,6 @@ class InProcessPort final : public firmware::LocalizerPort {
   void begin(LocalizerStage stage);
   void end(LocalizerStage stage);
 
-  Localizer& localizer_;
   StageClock& stages_;
   std::map<std::pair<std::uint32_t, std::int64_t>, cloud_io::PointCloud> shares_;  // by (sender, stamp ns)
   cloud_io::PointCloud scan_;
