@@ -48,6 +48,9 @@ bool load_side(const std::string& root, const char* side, const std::vector<cons
     f.id = fs::path(cloud).stem().string();
     f.pointcloud_path = joined(dir, cloud);
     f.timestamp_us = timestamp_of(e);
+    if (e.contains("batch_id") && e["batch_id"].is_string()) f.batch_id = e["batch_id"].get<std::string>();
+    if (e.contains("intersection_loc") && e["intersection_loc"].is_string())
+      f.intersection = e["intersection_loc"].get<std::string>();
     for (const char* key : calib_keys) {
       if (!e.contains(key) || !e[key].is_string()) {
         error = where + ": needs a string " + key;

@@ -32,6 +32,7 @@ struct DairFrame {
   std::string pointcloud_path;     // joined with the side's folder
   std::int64_t timestamp_us = 0;   // pointcloud_timestamp [us] (0 when absent)
   std::vector<std::string> calib_paths;  // vehicle: novatel_to_world, lidar_to_novatel; roadside: virtuallidar_to_world
+  std::string batch_id, intersection;    // batch_id, intersection_loc ("" when absent)
 };
 
 class DairCalib {
@@ -39,6 +40,9 @@ class DairCalib {
   // False with a message when a side's data_info.json exists but cannot be used.
   bool load(const std::string& root, std::string& error);
 
+  // novatel_to_world and lidar_to_novatel of vehicle frame `vehicle_id`, as released.
+  bool vehicle_calibs(const std::string& vehicle_id, Mat4d& world_T_novatel, Mat4d& novatel_T_lidar,
+                      std::string& error) const;
   // novatel_to_world * lidar_to_novatel of vehicle frame `vehicle_id`.
   bool world_from_vehicle_lidar(const std::string& vehicle_id, Mat4d& world_T_lidar, std::string& error) const;
   // virtuallidar_to_world of roadside frame `roadside_id`, plus (offset.delta_x, offset.delta_y, 0)
@@ -54,8 +58,6 @@ class DairCalib {
   const std::map<std::string, DairFrame>& roadside_frames() const { return roadside_; }
 
  private:
-  bool vehicle_calibs(const std::string& vehicle_id, Mat4d& world_T_novatel, Mat4d& novatel_T_lidar,
-                      std::string& error) const;
   std::map<std::string, DairFrame> vehicle_, roadside_;
 };
 

@@ -1,7 +1,6 @@
 #include "tools/dataset/dair_recording.hpp"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -44,6 +43,7 @@ struct VehicleFrame {
   std::string id, pcd;
   std::int64_t stamp_us = 0;
   Iso world_T_lidar = Iso::Identity();
+  Iso novatel_T_lidar = Iso::Identity();  // the LiDAR in the NovAtel (GNSS antenna) frame
 };
 
 struct RoadsideFrame {
@@ -52,85 +52,55 @@ struct RoadsideFrame {
   Iso world_T_sensor = Iso::Identity();
 };
 
-// A string field of a data_info entry ("" when absent or not a string).
+// A string field of a cooperative/data_info.json entry ("" when absent or not a string).
 std::string text_of(const InJson& e, const char* key) {
   return e.is_object() && e.contains(key) && e[key].is_string() ? e[key].get<std::string>() : std::string();
 }
 
-// Microsecond stamps are strings in the release ("1626240238805763"); numbers are accepted too.
-bool stamp_of(const InJson& e, std::int64_t& us) {
-  if (!e.is_object() || !e.contains("pointcloud_timestamp")) return false;
-  const InJson& v = e["pointcloud_timestamp"];
-  if (v.is_number_integer()) {
-    us = v.get<std::int64_t>();
-    return us > 0;
-  }
-  if (!v.is_string()) return false;
-  const std::string s = v.get<std::string>();
-  const auto r = std::from_chars(s.data(), s.data() + s.size(), us);
-  return r.ec == std::errc() && r.ptr == s.data() + s.size() && us > 0;
-}
-
 // Released rotations are orthonormal to ~1e-7, not exactly: projected onto SO(3) so that every
 // pose written (and the unit quaternion a survey or a share declares) is one rotation.
-bool read_transform(const std::string& path, Iso& out, std::string& error) {
-  Mat4d m;
-  if (!read_dair_transform(path, m, error)) return false;
-  out = Iso::Identity();
+Iso projected(const Mat4d& m) {
+  Iso out = Iso::Identity();
   out.linear() = Eigen::Quaterniond(Eigen::Matrix3d(m.topLeftCorner<3, 3>())).normalized().toRotationMatrix();
   out.translation() = m.topRightCorner<3, 1>();
-  return true;
+  return out;
 }
 
-// A path from data_info, relative to its side's folder; refused when it leaves the folder.
-bool side_path(const std::string& side_dir, const std::string& relative, std::string& out, std::string& error) {
-  if (relative.empty() || relative.front() == '/' || relative.find("..") != std::string::npos) {
-    error = side_dir + ": data_info path '" + relative + "' must be relative and stay inside the folder";
-    return false;
-  }
-  out = side_dir + "/" + relative;
-  return true;
+bool stamp_known(const DairFrame& f, const char* side, std::string& error) {
+  if (f.timestamp_us > 0) return true;
+  error = std::string(side) + "/data_info.json frame " + f.id + ": pointcloud_timestamp missing or not microseconds";
+  return false;
 }
 
-bool read_vehicle_frames(const std::string& root, const std::string& batch, std::vector<VehicleFrame>& frames,
+// The scans of one vehicle-side sequence (batch_id) whose clouds are present, by time stamp.
+bool read_vehicle_frames(const DairCalib& calib, const std::string& batch, std::vector<VehicleFrame>& frames,
                          std::string& chosen_batch, std::string& error) {
-  const std::string dir = root + "/vehicle-side";
-  InJson info;
-  if (!read_dair_json(dir + "/data_info.json", info, error)) return false;
-  if (!info.is_array()) {
-    error = dir + "/data_info.json: expected an array of frames";
-    return false;
-  }
   std::map<std::string, int> batches;
-  for (const InJson& e : info) ++batches[text_of(e, "batch_id")];
+  for (const auto& [id, f] : calib.vehicle_frames()) ++batches[f.batch_id];
   chosen_batch = batch;
   if (chosen_batch.empty()) {
     if (batches.size() != 1) {
-      error = dir + "/data_info.json holds " + std::to_string(batches.size()) + " sequences (batch_id); pick one with --batch";
+      error = "vehicle-side/data_info.json holds " + std::to_string(batches.size()) +
+              " sequences (batch_id); pick one with --batch";
       return false;
     }
     chosen_batch = batches.begin()->first;
   } else if (!batches.count(chosen_batch)) {
-    error = dir + "/data_info.json has no batch_id '" + chosen_batch + "'";
+    error = "vehicle-side/data_info.json has no batch_id '" + chosen_batch + "'";
     return false;
   }
-  for (const InJson& e : info) {
-    if (text_of(e, "batch_id") != chosen_batch) continue;
+  for (const auto& [id, d] : calib.vehicle_frames()) {
+    if (d.batch_id != chosen_batch) continue;
+    if (!stamp_known(d, "vehicle-side", error)) return false;
+    if (!fs::is_regular_file(d.pointcloud_path)) continue;  // a folder may hold part of a sequence
+    Mat4d world_T_novatel, novatel_T_lidar;
+    if (!calib.vehicle_calibs(id, world_T_novatel, novatel_T_lidar, error)) return false;
     VehicleFrame f;
-    f.id = fs::path(text_of(e, "pointcloud_path")).stem().string();
-    std::string novatel, lidar;
-    if (!stamp_of(e, f.stamp_us)) {
-      error = dir + "/data_info.json frame " + f.id + ": pointcloud_timestamp missing or not microseconds";
-      return false;
-    }
-    if (!side_path(dir, text_of(e, "pointcloud_path"), f.pcd, error) ||
-        !side_path(dir, text_of(e, "calib_novatel_to_world_path"), novatel, error) ||
-        !side_path(dir, text_of(e, "calib_lidar_to_novatel_path"), lidar, error))
-      return false;
-    if (!fs::is_regular_file(f.pcd)) continue;  // a folder may hold part of a sequence
-    Iso world_T_novatel, novatel_T_lidar;
-    if (!read_transform(novatel, world_T_novatel, error) || !read_transform(lidar, novatel_T_lidar, error)) return false;
-    f.world_T_lidar = world_T_novatel * novatel_T_lidar;
+    f.id = id;
+    f.pcd = d.pointcloud_path;
+    f.stamp_us = d.timestamp_us;
+    f.novatel_T_lidar = projected(novatel_T_lidar);
+    f.world_T_lidar = projected(world_T_novatel) * f.novatel_T_lidar;
     frames.push_back(std::move(f));
   }
   std::sort(frames.begin(), frames.end(), [](const VehicleFrame& a, const VehicleFrame& b) { return a.stamp_us < b.stamp_us; });
@@ -141,7 +111,7 @@ bool read_vehicle_frames(const std::string& root, const std::string& batch, std:
     }
   }
   if (frames.size() < 2) {
-    error = dir + ": sequence '" + chosen_batch + "' has fewer than two scans present";
+    error = "vehicle-side: sequence '" + chosen_batch + "' has fewer than two scans present";
     return false;
   }
   return true;
@@ -155,26 +125,22 @@ struct RoadsideChoice {
   int pairs = 0;
 };
 
-bool choose_roadside(const std::string& root, const std::vector<VehicleFrame>& vehicle, RoadsideChoice& out,
-                     std::string& error) {
-  InJson pairs, infra;
-  if (!read_dair_json(root + "/cooperative/data_info.json", pairs, error) ||
-      !read_dair_json(root + "/infrastructure-side/data_info.json", infra, error))
-    return false;
-  if (!pairs.is_array() || !infra.is_array()) {
-    error = root + ": cooperative and infrastructure-side data_info.json must be arrays";
+bool choose_roadside(const std::string& root, const DairCalib& calib, const std::vector<VehicleFrame>& vehicle,
+                     RoadsideChoice& out, std::string& error) {
+  InJson pairs;
+  if (!read_dair_json(root + "/cooperative/data_info.json", pairs, error)) return false;
+  if (!pairs.is_array()) {
+    error = root + "/cooperative/data_info.json must be an array";
     return false;
   }
-  std::map<std::string, const InJson*> infra_by_id;
-  for (const InJson& e : infra) infra_by_id[fs::path(text_of(e, "pointcloud_path")).stem().string()] = &e;
   std::map<std::string, int> units;
   std::vector<double> dx, dy;
   for (const InJson& p : pairs) {
     const std::string vid = fs::path(text_of(p, "vehicle_pointcloud_path")).stem().string();
     if (std::none_of(vehicle.begin(), vehicle.end(), [&](const VehicleFrame& f) { return f.id == vid; })) continue;
-    const auto it = infra_by_id.find(fs::path(text_of(p, "infrastructure_pointcloud_path")).stem().string());
-    if (it == infra_by_id.end()) continue;
-    ++units[text_of(*it->second, "intersection_loc") + "\n" + text_of(*it->second, "batch_id")];
+    const auto it = calib.roadside_frames().find(fs::path(text_of(p, "infrastructure_pointcloud_path")).stem().string());
+    if (it == calib.roadside_frames().end()) continue;
+    ++units[it->second.intersection + "\n" + it->second.batch_id];
     if (p.contains("system_error_offset") && p["system_error_offset"].is_object()) {
       const InJson& o = p["system_error_offset"];
       if (o.contains("delta_x") && o["delta_x"].is_number() && o.contains("delta_y") && o["delta_y"].is_number()) {
@@ -206,31 +172,20 @@ bool choose_roadside(const std::string& root, const std::vector<VehicleFrame>& v
   return true;
 }
 
-bool read_roadside_frames(const std::string& root, const RoadsideChoice& unit, std::int64_t first_us,
+// The unit's scans stamped within [first_us, last_us] whose clouds are present, by time stamp.
+bool read_roadside_frames(const DairCalib& calib, const RoadsideChoice& unit, std::int64_t first_us,
                           std::int64_t last_us, std::vector<RoadsideFrame>& frames, std::string& error) {
-  const std::string dir = root + "/infrastructure-side";
-  InJson info;
-  if (!read_dair_json(dir + "/data_info.json", info, error)) return false;
-  for (const InJson& e : info) {
-    if (text_of(e, "intersection_loc") != unit.intersection || text_of(e, "batch_id") != unit.batch) continue;
-    RoadsideFrame f;
-    f.id = fs::path(text_of(e, "pointcloud_path")).stem().string();
-    std::string calib;
-    if (!stamp_of(e, f.stamp_us)) {
-      error = dir + "/data_info.json frame " + f.id + ": pointcloud_timestamp missing or not microseconds";
-      return false;
-    }
-    if (f.stamp_us < first_us || f.stamp_us > last_us) continue;
-    if (!side_path(dir, text_of(e, "pointcloud_path"), f.pcd, error) ||
-        !side_path(dir, text_of(e, "calib_virtuallidar_to_world_path"), calib, error))
-      return false;
-    if (!fs::is_regular_file(f.pcd)) continue;
-    if (!read_transform(calib, f.world_T_sensor, error)) return false;
-    frames.push_back(std::move(f));
+  for (const auto& [id, d] : calib.roadside_frames()) {
+    if (d.intersection != unit.intersection || d.batch_id != unit.batch) continue;
+    if (!stamp_known(d, "infrastructure-side", error)) return false;
+    if (d.timestamp_us < first_us || d.timestamp_us > last_us || !fs::is_regular_file(d.pointcloud_path)) continue;
+    Mat4d world_T_sensor;
+    if (!calib.world_from_roadside_lidar(id, world_T_sensor, error)) return false;
+    frames.push_back({id, d.pointcloud_path, d.timestamp_us, projected(world_T_sensor)});
   }
   std::sort(frames.begin(), frames.end(), [](const RoadsideFrame& a, const RoadsideFrame& b) { return a.stamp_us < b.stamp_us; });
   if (frames.empty()) {
-    error = dir + ": no roadside scan of " + unit.intersection + " during the drive";
+    error = "infrastructure-side: no roadside scan of " + unit.intersection + " during the drive";
     return false;
   }
   return true;
@@ -419,15 +374,17 @@ std::string DairRecordingSummary::one_line() const {
 
 bool write_dair_recording(const DairRecordingOptions& o, DairRecordingSummary& summary, std::string& error) {
   summary = DairRecordingSummary{};
+  DairCalib calib;
+  if (!calib.load(o.root, error)) return false;
   std::vector<VehicleFrame> vehicle;
   std::string batch;
-  if (!read_vehicle_frames(o.root, o.batch, vehicle, batch, error)) return false;
+  if (!read_vehicle_frames(calib, o.batch, vehicle, batch, error)) return false;
   RoadsideChoice unit;
-  if (!choose_roadside(o.root, vehicle, unit, error)) return false;
+  if (!choose_roadside(o.root, calib, vehicle, unit, error)) return false;
   const std::int64_t t0_us = vehicle.front().stamp_us;
   const std::int64_t end_us = vehicle.back().stamp_us + static_cast<std::int64_t>(kFramePeriodS * 1e6);
   std::vector<RoadsideFrame> roadside;
-  if (!read_roadside_frames(o.root, unit, t0_us, end_us, roadside, error)) return false;
+  if (!read_roadside_frames(calib, unit, t0_us, end_us, roadside, error)) return false;
   const auto seconds = [&](std::int64_t us) { return static_cast<double>(us - t0_us) * 1e-6; };
 
   const fs::path out(o.out_dir);
@@ -522,21 +479,8 @@ bool write_dair_recording(const DairRecordingOptions& o, DairRecordingSummary& s
 
   // GNSS through the simulated canyon, vehicle signals from the truth, both on the CAN log.
   const GeodeticOrigin origin = make_geodetic_origin(o.origin_lat_deg, o.origin_lon_deg, o.origin_alt_m);
-  Iso novatel_T_lidar_first = Iso::Identity();
-  {
-    // The antenna (NovAtel reference point) in the body frame, from the first scan's calibration.
-    const std::string dir = o.root + "/vehicle-side";
-    InJson info;
-    if (!read_dair_json(dir + "/data_info.json", info, error)) return false;
-    for (const InJson& e : info) {
-      if (fs::path(text_of(e, "pointcloud_path")).stem().string() != vehicle.front().id) continue;
-      std::string lidar;
-      if (!side_path(dir, text_of(e, "calib_lidar_to_novatel_path"), lidar, error) ||
-          !read_transform(lidar, novatel_T_lidar_first, error))
-        return false;
-    }
-  }
-  const Eigen::Vector3d antenna_in_body = mount * novatel_T_lidar_first.inverse().translation();
+  // The antenna (NovAtel reference point) in the body frame, from the first scan's calibration.
+  const Eigen::Vector3d antenna_in_body = mount * vehicle.front().novatel_T_lidar.inverse().translation();
   // The simulated street along the first heading, the drive starting in its inner lane
   // gnss_canyon_setback_m before the simulated intersection (as the simulator's Sim 0 ego).
   CanyonFrame canyon;
