@@ -7,7 +7,7 @@
 
 #include "host_sim/canlog/candump_log.hpp"
 #include "firmware/trust/cloud_digest.hpp"
-#include "host_sim/replay/host_sha256.hpp"
+#include "host_sim/replay/openssl_sha256.hpp"
 
 namespace v2xloc::sim::replay {
 namespace {
@@ -119,7 +119,7 @@ bool EventStream::map_share(std::uint32_t sender_id, std::uint32_t seq, std::int
   if (signer == nullptr || !sign_shares_) return true;
   // Sign what the receiver will hash: the payload bytes of our own fragments, per fragment.
   std::vector<trust::ShareDigestBuilder::Entry> scratch(ev.datagrams.size());
-  trust::ShareDigestBuilder builder(scratch, host_sha256);
+  trust::ShareDigestBuilder builder(scratch, openssl_sha256);
   for (const auto& d : ev.datagrams) {
     if (!builder.add(d)) {
       error = "map share fragment did not parse for signing";
