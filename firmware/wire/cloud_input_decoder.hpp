@@ -43,8 +43,8 @@ enum class DatagramChannel : std::uint8_t { kEgo, kV2x };
 inline constexpr std::int64_t kEgoScanMaxClockSkewNs = 500'000'000;  // [ns] 5 sweep periods
 
 // One completed cloud: `map` is set for kMapCloud (kMapShare: only its time and pose), `ego` for
-// kEgoScan. The point spans refer to the decoder's (or the queue's) buffers and stay valid until
-// the next datagram.
+// kEgoScan. The point spans refer to CloudInputDecoder's buffers (an ego scan's: valid until the
+// next ego scan is decoded) or to ShareVerificationQueue's (a map cloud's: see next_verified_share()).
 struct DecodedCloud {
   CloudKind kind = CloudKind::kNone;
   MapCloudInput map{};
