@@ -129,12 +129,12 @@ void print_counters(const FirmwareApp& app) {
               l.basin_audits, l.basin_switches, l.track_losses, l.filter_resets, l.tracking_registrations,
               l.registrations_ok, l.registrations_fused, l.registrations_gate_rejected, l.map_rebuilds, l.map_clouds_paced);
   std::printf("v2xloc-firmware: reassembly fragments %llu frames %llu duplicates %llu stale %llu timed_out %llu evicted %llu"
-              " bad_crc %llu truncated %llu malformed %llu over_capacity %llu\n",
+              " bad_crc %llu truncated %llu malformed %llu over_capacity %llu points_thinned %llu\n",
               (unsigned long long)r.fragments_accepted, (unsigned long long)r.frames_completed,
               (unsigned long long)r.duplicates, (unsigned long long)r.stale_fragments,
               (unsigned long long)r.frames_timed_out, (unsigned long long)r.frames_evicted,
               (unsigned long long)r.bad_crc, (unsigned long long)r.truncated, (unsigned long long)r.malformed,
-              (unsigned long long)r.over_capacity);
+              (unsigned long long)r.over_capacity, (unsigned long long)r.points_thinned);
 }
 
 // ---- Options: command line, or `key=value` lines in --config FILE (the command line wins). ----
