@@ -179,13 +179,8 @@ bool replay_recording(const RecordingReader& reader, const ReplayOptions& option
   }
   FirmwareProcess process;
   unsigned fw_can = options.firmware_can_port, fw_cloud = options.firmware_cloud_port, fw_ego = options.firmware_ego_port;
-  // The firmware is provisioned with the recording's trust list (older recordings: the derived
-  // one, written next to the temporary files).
-  std::string trust_path = reader.trust_list_path();
-  if (trust_path.empty()) {
-    trust_path = "/tmp/v2xloc-replay-trust-" + std::to_string(getpid()) + ".txt";
-    std::ofstream(trust_path) << trust_list_text(stream.trust_list());
-  }
+  // The firmware is provisioned with the recording's trust list.
+  const std::string trust_path = reader.trust_list_path();
   if (!options.firmware_path.empty()) {
     char origin[128];
     std::snprintf(origin, sizeof origin, "%.10f,%.10f,%.4f", reader.origin_lat_deg(), reader.origin_lon_deg(),

@@ -16,6 +16,7 @@
 #include "host_sim/gnss/gnss_simulator.hpp"
 #include "host_sim/recording/can_log_writer.hpp"
 #include "host_sim/recording/pose_io.hpp"
+#include "host_sim/recording/recording_reader.hpp"
 #include "host_sim/recording/sim_background.hpp"
 #include "host_sim/recording/sim_trust.hpp"
 #include "host_sim/vehicle/vehicle_signals.hpp"
@@ -526,7 +527,7 @@ bool write_dair_recording(const DairRecordingOptions& o, DairRecordingSummary& s
   // Manifest.
   Json m = Json::object();
   m["format"] = "v2xloc-recording";
-  m["format_version"] = 2;
+  m["format_version"] = sim::RecordingReader::kFormatVersion;
   m["scenario"] = Json{{"id", 100},
                        {"name", "dair_v2x_c"},
                        {"description", "DAIR-V2X-C cooperative sequence (real data), intersection " + unit.intersection}};

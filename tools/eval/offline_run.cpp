@@ -32,7 +32,6 @@ bool provision_backgrounds(const sim::RecordingReader& reader, Localizer& locali
   g_backgrounds = std::make_unique<firmware::BackgroundStore>();  // after configure(): the old one is no longer read
   loaded = 0;
   const std::string list_path = reader.trust_list_path();
-  if (list_path.empty()) return true;
   trust::TrustList list;
   if (!sim::load_trust_list(list_path, list, error)) return false;
   const std::filesystem::path dir = std::filesystem::path(list_path).parent_path();
