@@ -344,7 +344,7 @@ def main(argv):
     if not args.source_dir:
         parser.error("SOURCE_DIR is required")
     rows, errors = measure_tree(args.source_dir)
-    print("%d functions in %s; the %d longest:" % (len(rows), "/ ".join(PRODUCT_DIRS), args.top))
+    print("%d functions in %s; the %d longest:" % (len(rows), ", ".join(d + "/" for d in PRODUCT_DIRS), args.top))
     for lines, rel, line, name in rows[:args.top]:
         print("  %4d  %s:%d  %s" % (lines, rel, line, name))
     over = [r for r in rows if r[0] > args.max]
