@@ -102,18 +102,17 @@ def digit_separator(text, i):
     return j < i and text[j].isdigit()
 
 
-def top_level_close_paren(header):
-    """Index of the last ')' at bracket depth 0 in header, -1 if none."""
+def bracket_depths(header):
+    """(index, character, bracket depth after it) for every character of header."""
     depth = 0
-    last = -1
     for k, c in enumerate(header):
-        if c in "([":
-            depth += 1
-        elif c in ")]":
-            depth -= 1
-            if depth == 0 and c == ")":
-                last = k
-    return last
+        depth += 1 if c in "([" else -1 if c in ")]" else 0
+        yield k, c, depth
+
+
+def top_level_close_parens(header):
+    """Indices of the ')' that close a parenthesis at bracket depth 0, in order."""
+    return (k for k, c, depth in bracket_depths(header) if c == ")" and depth == 0)
 
 
 def matching_open(header, close):
@@ -130,31 +129,19 @@ def matching_open(header, close):
 
 def constructor_params_close(header):
     """Index of the ')' ending a constructor's parameters when an initializer list follows."""
-    depth = 0
-    for k, c in enumerate(header):
-        if c in "([":
-            depth += 1
-        elif c in ")]":
-            depth -= 1
-            if depth == 0 and c == ")":
-                rest = header[k + 1:].lstrip()
-                rest = re.sub(r"^(?:noexcept\b|const\b|\s)*", "", rest)
-                if rest.startswith(":") and not rest.startswith("::"):
-                    return k
+    for k in top_level_close_parens(header):
+        rest = re.sub(r"^(?:noexcept\b|const\b|\s)*", "", header[k + 1:])
+        if rest.startswith(":") and not rest.startswith("::"):
+            return k
     return -1
 
 
 def without_trailing_return(header):
     """header up to a trailing return type (auto f(T t) -> decltype(t + 1)), as written otherwise."""
-    depth = 0
     seen_params = False
-    for k, c in enumerate(header):
-        if c in "([":
-            depth += 1
-        elif c in ")]":
-            depth -= 1
-            seen_params = seen_params or (depth == 0 and c == ")")
-        elif depth == 0 and seen_params and header.startswith("->", k):
+    for k, c, depth in bracket_depths(header):
+        seen_params = seen_params or (c == ")" and depth == 0)
+        if seen_params and depth == 0 and header.startswith("->", k):
             return header[:k]
     return header
 
@@ -168,7 +155,7 @@ def function_name(header):
     header = without_trailing_return(header)
     close = constructor_params_close(header)
     if close < 0:
-        close = top_level_close_paren(header)
+        close = max(top_level_close_parens(header), default=-1)
         if close < 0 or not QUALIFIERS.match(header[close + 1:]):
             return None
     before = header[:matching_open(header, close)].rstrip()

@@ -152,38 +152,37 @@ class FrameCollector {
   }
 
   void take(const hal::CanFrame& f) {
+    std::size_t* pose_errors = &result_.pose_decode_errors;
+    std::size_t* diagnostic_errors = &result_.diagnostic_decode_errors;
     switch (f.id) {
       case protocol::kHeartbeatId: ++result_.heartbeats; break;
       case protocol::kPosePositionId:
-        frame_.pose.position = f;
-        have_position_ = protocol::unpack(f, frame_.position) == protocol::DecodeStatus::kOk;
-        if (!have_position_) ++result_.pose_decode_errors;
+        have_position_ = keep(frame_.pose.position, f, frame_.position, pose_errors);
         break;
       case protocol::kPoseAttitudeId:
-        frame_.pose.attitude = f;
-        have_attitude_ = protocol::unpack(f, frame_.attitude) == protocol::DecodeStatus::kOk &&
+        have_attitude_ = keep(frame_.pose.attitude, f, frame_.attitude, nullptr) &&
                          frame_.attitude.frame_counter == counter_;
         break;
-      case protocol::kPoseSigmaId:
-        frame_.pose.sigma = f;
-        have_sigma_ = protocol::unpack(f, frame_.sigma) == protocol::DecodeStatus::kOk;
-        if (!have_sigma_) ++result_.pose_decode_errors;
-        break;
+      case protocol::kPoseSigmaId: have_sigma_ = keep(frame_.pose.sigma, f, frame_.sigma, pose_errors); break;
       case protocol::kRegistrationPositionId:
-        have_reg_position_ = diagnostic(frame_.diagnostics.registration_position, f, frame_.registration_position);
+        have_reg_position_ =
+            keep(frame_.diagnostics.registration_position, f, frame_.registration_position, diagnostic_errors);
         break;
       case protocol::kRegistrationQualityId:
-        have_reg_quality_ = diagnostic(frame_.diagnostics.registration_quality, f, frame_.registration_quality) &&
-                            frame_.registration_quality.frame_counter == counter_;
+        have_reg_quality_ =
+            keep(frame_.diagnostics.registration_quality, f, frame_.registration_quality, diagnostic_errors) &&
+            frame_.registration_quality.frame_counter == counter_;
         break;
       case protocol::kGateDecisionId:
-        have_gate_ = diagnostic(frame_.diagnostics.gate, f, frame_.gate) && frame_.gate.frame_counter == counter_;
+        have_gate_ = keep(frame_.diagnostics.gate, f, frame_.gate, diagnostic_errors) &&
+                     frame_.gate.frame_counter == counter_;
         break;
       case protocol::kOdometryPositionId:
-        have_odom_position_ = diagnostic(frame_.diagnostics.odometry_position, f, frame_.odometry_position);
+        have_odom_position_ =
+            keep(frame_.diagnostics.odometry_position, f, frame_.odometry_position, diagnostic_errors);
         break;
       case protocol::kOdometryAttitudeId:
-        done_ = diagnostic(frame_.diagnostics.odometry_attitude, f, frame_.odometry_attitude) &&
+        done_ = keep(frame_.diagnostics.odometry_attitude, f, frame_.odometry_attitude, diagnostic_errors) &&
                 frame_.odometry_attitude.frame_counter == counter_ && have_position_ && have_attitude_ && have_sigma_ &&
                 have_reg_position_ && have_reg_quality_ && have_gate_ && have_odom_position_;
         break;
@@ -194,11 +193,12 @@ class FrameCollector {
   const ReplayedFrame& frame() const { return frame_; }
 
  private:
+  // The frame as received in `slot`, decoded; a decode failure counted in `errors` (when given).
   template <class Decoded>
-  bool diagnostic(hal::CanFrame& slot, const hal::CanFrame& f, Decoded& decoded) {
+  static bool keep(hal::CanFrame& slot, const hal::CanFrame& f, Decoded& decoded, std::size_t* errors) {
     slot = f;
     const bool ok = protocol::unpack(f, decoded) == protocol::DecodeStatus::kOk;
-    if (!ok) ++result_.diagnostic_decode_errors;
+    if (!ok && errors != nullptr) ++*errors;
     return ok;
   }
 
