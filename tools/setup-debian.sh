@@ -8,9 +8,9 @@ PKGS=(cmake ninja-build g++ pkg-config libeigen3-dev googletest libgtest-dev lib
       python3 python3-numpy python3-can python3-open3d python3-matplotlib
       g++-aarch64-linux-gnu qemu-user qemu-system-arm gcc-arm-none-eabi libstdc++-arm-none-eabi-newlib
       binutils-arm-none-eabi valgrind nodejs npm zlib1g-dev ca-certificates
-      libmbedtls-dev nlohmann-json3-dev liblzf-dev libcli11-dev libpng-dev libdeflate-dev
+      libmbedtls-dev libssl-dev nlohmann-json3-dev liblzf-dev libcli11-dev libpng-dev libdeflate-dev
       clang ccache libfuzzer-14-dev libclang-rt-14-dev llvm-14)
-ARM64_PKGS=(libgpiod-dev:arm64 libhidapi-dev:arm64 libsocketcan-dev:arm64 libmbedtls-dev:arm64 libpng-dev:arm64 liblzf-dev:arm64 zlib1g-dev:arm64)
+ARM64_PKGS=(libgpiod-dev:arm64 libhidapi-dev:arm64 libsocketcan-dev:arm64 libmbedtls-dev:arm64 libssl-dev:arm64 libpng-dev:arm64 liblzf-dev:arm64 zlib1g-dev:arm64)
 missing=()
 for p in "${PKGS[@]}" "${ARM64_PKGS[@]}"; do
   # NodeSource's nodejs bundles npm and conflicts with Debian's npm package: a working npm is enough.

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The whole test suite, as CI runs it: host build + tests, ASan/UBSan tests, aarch64 cross build + tests under qemu-aarch64, the bare-metal Cortex-R52 build with its
+# The whole test suite, as CI runs it: host build + tests, ASan/UBSan tests, the EMBEDDED profile's
+# tests, aarch64 cross build + tests under qemu-aarch64, the bare-metal Cortex-R52 build with its
 # link check and the whole localizer run as R52 code under QEMU (ctest label target), the installed
 # package's consumers and the fuzz targets.
 set -euo pipefail
@@ -20,9 +21,12 @@ cmake --preset host-asan >/dev/null
 cmake --build --preset host-asan -j "$JOBS"
 ctest --preset host-asan
 
-step "host-embedded: the EMBEDDED profile's host tools (fixtures and the target's reference)"
+step "host-embedded: the EMBEDDED profile (the target's capacities): build + tests"
 cmake --preset host-embedded >/dev/null
-cmake --build --preset host-embedded -j "$JOBS" --target v2xloc-sim v2xloc-fixture test_worst_case_localizer
+cmake --build --preset host-embedded -j "$JOBS"
+# The target runs' host tools (fixture writer, simulator), used in the cortex-r52 step.
+cmake --build --preset host-embedded -j "$JOBS" --target v2xloc-sim v2xloc-fixture
+ctest --preset host-embedded
 
 step "aarch64-linux: cross build + tests under qemu-aarch64"
 cmake --preset aarch64-linux >/dev/null

@@ -71,7 +71,7 @@ void FirmwareApp::discipline_clock(std::int64_t rx_monotonic_ns) {
   if (age < 0) return;  // the message predates the edge: wait for the next one
   pps_pending_ = false;
   if (age >= 1'000'000'000) return;  // no time message within the second: edge unusable
-  const protocol::GnssTime& t = decoder_.last_gnss_time();
+  const protocol::GnssTime& t = decoder_.can().last_gnss_time();
   const std::int64_t gnss_ns = gps_second_to_unix_ns(t.week, t.time_of_week_s);
   const std::int64_t step = gnss_ns - disciplined(pps_edge_ns_);
   if (counters_.clock_disciplined > 0 && (step > config_.max_clock_step_ns || step < -config_.max_clock_step_ns)) {
@@ -166,9 +166,11 @@ void FirmwareApp::publish(const PeriodOutput& period) {
 
 protocol::Heartbeat FirmwareApp::heartbeat_now() const {
   const std::int64_t now = hal_.clock.monotonic_ns();
-  const DecoderCounters& d = decoder_.counters();
+  const CanCounters& c = decoder_.can().counters();
+  const CloudCounters& d = decoder_.clouds().counters();
+  const ShareCounters& s = decoder_.shares().counters();
   const PeriodCounters& p = driver_.counters();
-  const protocol::ReassemblyCounters& r = decoder_.reassembly_counters();
+  const protocol::ReassemblyCounters& r = decoder_.clouds().reassembly_counters();
   protocol::Heartbeat hb;
   hb.state = localizer_state(driver_.latest());
   namespace err = protocol::heartbeat_error;
@@ -178,24 +180,24 @@ protocol::Heartbeat FirmwareApp::heartbeat_now() const {
       (now - last_gnss_ns_ > config_.gnss_timeout_ns ? err::kGnssTimeout : 0u) |
       (r.over_capacity + r.frames_evicted > 0 ? err::kCapacityOverflow : 0u));
   hb.uptime_s = static_cast<double>(now - start_ns_) * 1e-9;
-  hb.can_rx_errors = saturate_u8(d.can_rejected + counters_.can_error_frames);
+  hb.can_rx_errors = saturate_u8(c.can_rejected + counters_.can_error_frames);
   hb.udp_dropped = saturate_u8(d.datagrams_rejected + counters_.datagrams_oversize + r.frames_timed_out +
-                               r.frames_evicted + d.clouds_rejected + d.shares_untrusted + d.shares_queue_dropped + d.wrong_channel +
-                               d.ego_time_rejected + p.map_inconsistent + p.map_held_back +
-                               p.map_background_mismatch + p.map_no_slot);
+                               r.frames_evicted + d.clouds_rejected + s.shares_malformed + s.shares_untrusted +
+                               s.shares_queue_dropped + d.wrong_channel + d.ego_time_rejected + p.map_inconsistent +
+                               p.map_held_back + p.map_background_mismatch + p.map_no_slot);
   hb.counter = heartbeat_counter_;
   return hb;
 }
 
 protocol::TrustRejections FirmwareApp::trust_rejections_now() const {
-  const trust::VerifierCounters& v = decoder_.verifier().counters();
+  const trust::VerifierCounters& v = decoder_.shares().verifier().counters();
   protocol::TrustRejections t;
   t.unknown_signer = saturate_u8(v.unknown_signer);
   t.bad_signature = saturate_u8(v.bad_signature);
   t.too_old = saturate_u8(v.too_old);
   t.future = saturate_u8(v.future);
   t.replay = saturate_u8(v.replay);
-  t.queue_overflow = saturate_u8(decoder_.counters().shares_queue_dropped);
+  t.queue_overflow = saturate_u8(decoder_.shares().counters().shares_queue_dropped);
   t.pose_mismatch = static_cast<std::uint8_t>(v.pose_mismatch > 15 ? 15 : v.pose_mismatch);  // a 4-bit signal
   return t;
 }
@@ -204,13 +206,14 @@ protocol::InputGuards FirmwareApp::input_guards_now() const {
   const auto saturate = [](std::uint64_t v) {
     return static_cast<std::uint16_t>(v > protocol::kInputGuardsMax ? protocol::kInputGuardsMax : v);
   };
-  const DecoderCounters& d = decoder_.counters();
+  const CanCounters& c = decoder_.can().counters();
   protocol::InputGuards g;
-  g.can_crc_rejected = saturate(d.can_rejected);  // DLC / CRC / range; counter repeats separately
-  g.can_counter_rejected = saturate(d.can_repeated);
-  g.ego_time_rejected = saturate(d.ego_time_rejected);
-  g.missing_signature = saturate(decoder_.verifier().counters().missing_signature);
-  const std::uint64_t off_background = driver_.counters().map_background_mismatch + d.shares_off_background;
+  g.can_crc_rejected = saturate(c.can_rejected);  // DLC / CRC / range; counter repeats separately
+  g.can_counter_rejected = saturate(c.can_repeated);
+  g.ego_time_rejected = saturate(decoder_.clouds().counters().ego_time_rejected);
+  g.missing_signature = saturate(decoder_.shares().verifier().counters().missing_signature);
+  const std::uint64_t off_background =
+      driver_.counters().map_background_mismatch + decoder_.shares().counters().shares_off_background;
   g.background_mismatch = static_cast<std::uint8_t>(off_background > 15 ? 15 : off_background);  // a 4-bit signal
   return g;
 }

@@ -76,8 +76,10 @@ void force_receive_buffer(int fd, int bytes) {
 
 void print_counters(const FirmwareApp& app) {
   const FirmwareCounters& c = app.counters();
-  const DecoderCounters& d = app.decoder().counters();
-  const protocol::ReassemblyCounters& r = app.decoder().reassembly_counters();
+  const CanCounters& can = app.decoder().can().counters();
+  const CloudCounters& d = app.decoder().clouds().counters();
+  const ShareCounters& s = app.decoder().shares().counters();
+  const protocol::ReassemblyCounters& r = app.decoder().clouds().reassembly_counters();
   std::printf("v2xloc-firmware: polls %llu can_rx %llu can_err %llu can_tx %llu tx_fail %llu datagrams %llu oversize %llu"
               " frames %llu heartbeats %llu pps %llu disciplined %llu\n",
               (unsigned long long)c.polls, (unsigned long long)c.can_rx, (unsigned long long)c.can_error_frames,
@@ -86,12 +88,13 @@ void print_counters(const FirmwareApp& app) {
               (unsigned long long)c.heartbeats, (unsigned long long)c.pps_edges, (unsigned long long)c.clock_disciplined);
   std::printf("v2xloc-firmware: decoded vehicle %llu (invalid %llu) gnss %llu (incomplete %llu) can_rejected %llu unknown_id %llu"
               " ego_scans %llu map_clouds %llu clouds_rejected %llu datagrams_rejected %llu\n",
-              (unsigned long long)d.vehicle_inputs, (unsigned long long)d.vehicle_invalid,
-              (unsigned long long)d.gnss_inputs, (unsigned long long)d.gnss_incomplete,
-              (unsigned long long)d.can_rejected, (unsigned long long)d.can_unknown_id,
-              (unsigned long long)d.ego_scans, (unsigned long long)d.map_clouds, (unsigned long long)d.clouds_rejected,
+              (unsigned long long)can.vehicle_inputs, (unsigned long long)can.vehicle_invalid,
+              (unsigned long long)can.gnss_inputs, (unsigned long long)can.gnss_incomplete,
+              (unsigned long long)can.can_rejected, (unsigned long long)can.can_unknown_id,
+              (unsigned long long)d.ego_scans, (unsigned long long)s.map_clouds,
+              (unsigned long long)(d.clouds_rejected + s.shares_malformed),
               (unsigned long long)d.datagrams_rejected);
-  const trust::VerifierCounters& v = app.decoder().verifier().counters();
+  const trust::VerifierCounters& v = app.decoder().shares().verifier().counters();
   const PeriodCounters& p = app.period_counters();
   std::printf("v2xloc-firmware: trust shares accepted %llu rejected %llu (missing_signature %llu unknown_signer %llu"
               " sender_mismatch %llu too_old %llu future %llu stamp_skew %llu replay %llu pose_mismatch %llu bad_signature %llu"
@@ -102,20 +105,20 @@ void print_counters(const FirmwareApp& app) {
               (unsigned long long)v.unknown_signer, (unsigned long long)v.sender_mismatch, (unsigned long long)v.too_old,
               (unsigned long long)v.future, (unsigned long long)v.stamp_skew, (unsigned long long)v.replay,
               (unsigned long long)v.pose_mismatch, (unsigned long long)v.bad_signature, (unsigned long long)v.crypto_error, (unsigned long long)v.signatures_rx,
-              (unsigned long long)v.signatures_malformed, (unsigned long long)d.signature_verifications,
-              (unsigned long long)d.signatures_checked_on_arrival, (unsigned long long)d.wrong_channel,
+              (unsigned long long)v.signatures_malformed, (unsigned long long)s.signature_verifications,
+              (unsigned long long)s.signatures_checked_on_arrival, (unsigned long long)d.wrong_channel,
               (unsigned long long)d.ego_time_rejected, (unsigned long long)p.ego_frames_held);
   std::printf("v2xloc-firmware: can_repeated %llu can_counter_gaps %llu gnss_position_dropped %llu gnss_time_rejected %llu\n",
-              (unsigned long long)d.can_repeated, (unsigned long long)d.can_counter_gaps,
-              (unsigned long long)d.gnss_position_dropped, (unsigned long long)c.gnss_time_rejected);
+              (unsigned long long)can.can_repeated, (unsigned long long)can.can_counter_gaps,
+              (unsigned long long)can.gnss_position_dropped, (unsigned long long)c.gnss_time_rejected);
   std::printf("v2xloc-firmware: map fusion of trusted shares: inconsistent %llu (infrastructure %llu) background_mismatch %llu"
               " (off_background_before_signature %llu) held_back %llu no_slot %llu stale %llu; paced (not needed, source's last recent) %llu on arrival (not hashed),"
               " %llu before and %llu after the signature check\n",
               (unsigned long long)p.map_inconsistent, (unsigned long long)p.map_infra_inconsistent,
-              (unsigned long long)p.map_background_mismatch, (unsigned long long)d.shares_off_background,
+              (unsigned long long)p.map_background_mismatch, (unsigned long long)s.shares_off_background,
               (unsigned long long)p.map_held_back,
               (unsigned long long)p.map_no_slot, (unsigned long long)p.map_stale,
-              (unsigned long long)d.shares_paced_on_arrival, (unsigned long long)d.shares_paced,
+              (unsigned long long)s.shares_paced_on_arrival, (unsigned long long)s.shares_paced,
               (unsigned long long)p.map_paced);
   const LocalizerCounters& l = g_localizer.counters();
   std::printf("v2xloc-firmware: localizer searches %u (accepted %u confirmed %u inconsistent %u unconstrained %u dropped %u final_icp_paused %u) basin_audits %u"

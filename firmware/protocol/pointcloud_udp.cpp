@@ -436,25 +436,49 @@ void PointCloudReassembler::open_slot(std::size_t index, const CloudFragmentHead
 
 namespace {
 
-// One fragment's points, with the coordinate width a template parameter so the per-coordinate
-// loop has no branch on it (decoding was a tenth of the firmware's non-localizer time).
+// Where a cloud's points go in a slot: all of them in order, or, for a cloud of more points than
+// the slot holds, `kept` of them evenly spread over the cloud (point i when floor(i * kept / total)
+// steps up, stored at its rank floor((i + 1) * kept / total) - 1), so the whole sweep arrives at
+// a lower density instead of its first sectors only. Depends on the point's index alone: fragments
+// may arrive in any order.
+struct PointPlacement {
+  std::uint64_t total = 0, kept = 0;
+  bool thins() const { return kept < total; }
+  bool keeps(std::uint64_t i) const { return !thins() || (i + 1) * kept / total != i * kept / total; }
+  std::uint64_t rank(std::uint64_t i) const { return thins() ? (i + 1) * kept / total - 1 : i; }
+};
+
+PointPlacement placement_of(const CloudFragmentHeader& h, std::uint32_t max_points) {
+  return {h.total_points, h.total_points < max_points ? h.total_points : max_points};
+}
+
+// The points of one fragment (global indices first..first+count) into a slot's arrays. The
+// coordinate width is a template parameter so the per-coordinate loop has no branch on it
+// (decoding was a tenth of the firmware's non-localizer time).
 template <bool Wide>
-void decode_fragment(const std::uint8_t* r, std::size_t count, std::uint16_t flags, double scale, float* xyz,
-                     std::uint8_t* intensity, std::uint16_t* time_ticks) {
+void decode_fragment(const std::uint8_t* r, std::size_t count, std::uint16_t flags, double scale,
+                     const PointPlacement& place, std::uint64_t first, float* xyz, std::uint8_t* intensity,
+                     std::uint16_t* time_ticks) {
   const bool with_intensity = (flags & cloud_flags::kIntensity) != 0;
   const bool with_time = (flags & cloud_flags::kPointTime) != 0;
+  const std::size_t stride = cloud_point_stride(flags);
   const auto coordinate = [&r, scale] {
     const std::int32_t q = Wide ? static_cast<std::int32_t>(get_u32(r)) : static_cast<std::int16_t>(get_u16(r));
     r += Wide ? 4 : 2;
     return static_cast<float>(static_cast<double>(q) * scale);
   };
   for (std::size_t k = 0; k < count; ++k) {
-    xyz[3 * k] = coordinate();
-    xyz[3 * k + 1] = coordinate();
-    xyz[3 * k + 2] = coordinate();
-    if (with_intensity) intensity[k] = *r++;
+    if (!place.keeps(first + k)) {
+      r += stride;
+      continue;
+    }
+    const std::size_t d = static_cast<std::size_t>(place.rank(first + k));
+    xyz[3 * d] = coordinate();
+    xyz[3 * d + 1] = coordinate();
+    xyz[3 * d + 2] = coordinate();
+    if (with_intensity) intensity[d] = *r++;
     if (with_time) {
-      time_ticks[k] = get_u16(r);
+      time_ticks[d] = get_u16(r);
       r += 2;
     }
   }
@@ -465,16 +489,17 @@ void decode_fragment(const std::uint8_t* r, std::size_t count, std::uint16_t fla
 // Decodes straight into the slot; parse_cloud_fragment() guaranteed first + count <= total.
 void PointCloudReassembler::decode_points(std::size_t index, const CloudFragmentHeader& h,
                                           std::span<const std::uint8_t> payload) {
-  const std::size_t first = static_cast<std::size_t>(index) * storage_.max_points +
-                            static_cast<std::size_t>(h.fragment_index) * h.points_per_fragment;
+  const std::size_t base = static_cast<std::size_t>(index) * storage_.max_points;
+  const std::uint64_t first = static_cast<std::uint64_t>(h.fragment_index) * h.points_per_fragment;
+  const PointPlacement place = placement_of(h, storage_.max_points);
   const double scale = static_cast<double>(h.info.scale_m);
-  float* xyz = storage_.xyz.data() + 3 * first;
-  std::uint8_t* intensity = storage_.intensity.data() + first;
-  std::uint16_t* time_ticks = storage_.time_ticks.data() + first;
+  float* xyz = storage_.xyz.data() + 3 * base;
+  std::uint8_t* intensity = storage_.intensity.data() + base;
+  std::uint16_t* time_ticks = storage_.time_ticks.data() + base;
   if (h.flags & cloud_flags::kCoordsInt32) {
-    decode_fragment<true>(payload.data(), h.points_in_fragment, h.flags, scale, xyz, intensity, time_ticks);
+    decode_fragment<true>(payload.data(), h.points_in_fragment, h.flags, scale, place, first, xyz, intensity, time_ticks);
   } else {
-    decode_fragment<false>(payload.data(), h.points_in_fragment, h.flags, scale, xyz, intensity, time_ticks);
+    decode_fragment<false>(payload.data(), h.points_in_fragment, h.flags, scale, place, first, xyz, intensity, time_ticks);
   }
 }
 
@@ -485,14 +510,17 @@ void PointCloudReassembler::publish_completed(std::size_t index, std::int64_t no
   remember_finished(slot.meta);
   completed_slot_ = index;
   completed_.info = slot.meta.info;
-  completed_.point_count = slot.meta.total_points;
-  completed_.xyz = std::span<const float>(storage_.xyz).subspan(3 * base, 3 * std::size_t{slot.meta.total_points});
+  const std::size_t points = static_cast<std::size_t>(placement_of(slot.meta, storage_.max_points).kept);
+  completed_.point_count = static_cast<std::uint32_t>(points);
+  completed_.points_thinned = slot.meta.total_points - completed_.point_count;
+  completed_.xyz = std::span<const float>(storage_.xyz).subspan(3 * base, 3 * points);
   completed_.intensity = (slot.meta.flags & cloud_flags::kIntensity)
-                             ? std::span<const std::uint8_t>(storage_.intensity).subspan(base, slot.meta.total_points)
+                             ? std::span<const std::uint8_t>(storage_.intensity).subspan(base, points)
                              : std::span<const std::uint8_t>{};
   completed_.time_offset_ticks = (slot.meta.flags & cloud_flags::kPointTime)
-                                  ? std::span<const std::uint16_t>(storage_.time_ticks).subspan(base, slot.meta.total_points)
+                                  ? std::span<const std::uint16_t>(storage_.time_ticks).subspan(base, points)
                                   : std::span<const std::uint16_t>{};
+  counters_.points_thinned += completed_.points_thinned;
   completed_.first_fragment_rx_ns = slot.first_rx_ns;
   completed_.completed_rx_ns = now_ns;
   completed_.flags = slot.meta.flags;
@@ -511,7 +539,7 @@ CloudStatus PointCloudReassembler::push(std::span<const std::uint8_t> datagram, 
   std::span<const std::uint8_t> payload;
   const CloudStatus parsed = parse_cloud_fragment(datagram, h, payload);
   if (parsed != CloudStatus::kOk) return count(parsed);
-  if (storage_.slots.empty() || h.total_points > storage_.max_points || h.fragment_count > storage_.max_fragments) {
+  if (storage_.slots.empty() || h.fragment_count > storage_.max_fragments) {
     return count(CloudStatus::kCapacityExceeded);
   }
 

@@ -144,7 +144,8 @@ std::size_t cloud_point_stride(std::uint16_t flags);
 // A completed frame: points dequantized to float metres in the sensor frame.
 struct ReassembledCloud {
   CloudFrameInfo info;
-  std::uint32_t point_count = 0;
+  std::uint32_t point_count = 0;                 // <= the reassembler's max_points
+  std::uint32_t points_thinned = 0;              // sent points left out (evenly) to fit max_points
   std::span<const float> xyz;                    // 3 * point_count
   std::span<const std::uint8_t> intensity;       // empty when absent
   std::span<const std::uint16_t> time_offset_ticks; // empty when absent
@@ -186,6 +187,7 @@ struct ReassemblyCounters {
   std::uint64_t malformed = 0;
   std::uint64_t inconsistent = 0;
   std::uint64_t over_capacity = 0;
+  std::uint64_t points_thinned = 0;       // points of completed clouds over max_points, left out evenly
 };
 
 struct ReassemblyConfig {

@@ -41,7 +41,7 @@ void hash_frame_header(Sha256& h, const protocol::ReassembledCloud& cloud) {
   h.update_u32(bits(info.scale_m));
   h.update_u8(static_cast<std::uint8_t>(info.width));
   h.update_u16(cloud.flags);
-  h.update_u32(cloud.point_count);
+  h.update_u32(cloud.point_count + cloud.points_thinned);  // the total sent: a thinned cloud still verifies
   h.update_u16(cloud.fragment_count);
   h.update_u16(cloud.points_per_fragment);
 }

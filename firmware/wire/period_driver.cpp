@@ -36,7 +36,7 @@ void PeriodDriver::count_insert(const MapInsertResult& result, bool is_agent) {
 }
 
 // The period's share budget: the schedule's cap or the localizer's (one while tracking). Shares
-// refused before their signature check do not use it (InputDecoder::next_verified_share).
+// refused before their signature check do not use it (ShareVerificationQueue::next_verified_share).
 void PeriodDriver::release_shares() {
   const std::size_t shares = shares_this_period(localizer_.map_clouds_per_period());
   for (std::size_t k = 0; k < shares; ++k) {

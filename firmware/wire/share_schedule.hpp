@@ -1,7 +1,7 @@
 // When a map share reaches map fusion: the firmware checks at most
 // kMaxSignatureVerificationsPerPeriod signatures per 10 Hz period and keeps at most
 // kShareVerifyQueueCapacity shares waiting (full: the oldest gives way). This class is that
-// schedule and nothing else: a ring of slot indices; its user (InputDecoder) keeps the payload per
+// schedule and nothing else: a ring of slot indices; its user (ShareVerificationQueue) keeps the payload per
 // slot. Allocation-free, bounded.
 #pragma once
 

@@ -7,7 +7,7 @@
 
 #include "host_sim/canlog/candump_log.hpp"
 #include "firmware/trust/cloud_digest.hpp"
-#include "host_sim/replay/host_sha256.hpp"
+#include "host_sim/replay/openssl_sha256.hpp"
 
 namespace v2xloc::sim::replay {
 namespace {
@@ -110,17 +110,16 @@ bool EventStream::fragment(protocol::CloudMessageType type, std::uint32_t sender
   return true;
 }
 
-bool EventStream::map_share(const MapCloudInfo& info, std::uint32_t id, std::uint32_t seq, std::int64_t stamp_ns,
-                            const Eigen::Isometry3d& pose, const cloud_io::PointCloud& cloud, const SimSigner* signer,
-                            WireEvent& ev, std::string& error) {
-  (void)info;
+bool EventStream::map_share(std::uint32_t sender_id, std::uint32_t seq, std::int64_t stamp_ns, const Eigen::Isometry3d& pose,
+                            const cloud_io::PointCloud& cloud, const SimSigner* signer, WireEvent& ev,
+                            std::string& error) const {
   ev.kind = WireEvent::Kind::kMapCloud;
   ev.time_ns = stamp_ns;
-  if (!fragment(protocol::CloudMessageType::kMapShare, id, seq, stamp_ns, pose, cloud, false, ev, error)) return false;
+  if (!fragment(protocol::CloudMessageType::kMapShare, sender_id, seq, stamp_ns, pose, cloud, false, ev, error)) return false;
   if (signer == nullptr || !sign_shares_) return true;
   // Sign what the receiver will hash: the payload bytes of our own fragments, per fragment.
   std::vector<trust::ShareDigestBuilder::Entry> scratch(ev.datagrams.size());
-  trust::ShareDigestBuilder builder(scratch, host_sha256);
+  trust::ShareDigestBuilder builder(scratch, openssl_sha256);
   for (const auto& d : ev.datagrams) {
     if (!builder.add(d)) {
       error = "map share fragment did not parse for signing";
@@ -152,14 +151,17 @@ bool EventStream::next_frame(int i, std::vector<WireEvent>& out, std::string& er
   }
   ++next_frame_;
   const std::int64_t t_i = frame_time_ns(i);
+  append_can(t_i, out);
+  if (!send_map_clouds(t_i, error)) return false;
+  deliver_due_shares(t_i, out);
+  return append_ego_scan(i, t_i, out, error);
+}
 
-  const FaultSpec& fs = faults_.spec();
-  FaultStats& fst = stats_.faults;
-  const std::int64_t burst_ns = seconds_to_ns(fs.can_burst_at_s);
+void EventStream::append_can(std::int64_t t_i, std::vector<WireEvent>& out) {
   for (; next_can_ < can_.size() && can_[next_can_].time_ns <= t_i; ++next_can_) {
     const TimedCan& c = can_[next_can_];
     if (faults_.gnss_dropped(c.frame.id, static_cast<double>(c.time_ns) * 1e-9)) {
-      ++fst.gnss_frames_dropped;
+      ++stats_.faults.gnss_frames_dropped;
       continue;
     }
     WireEvent ev;
@@ -168,103 +170,144 @@ bool EventStream::next_frame(int i, std::vector<WireEvent>& out, std::string& er
     ev.can = c.frame;
     out.push_back(ev);
     ++stats_.can_frames;
-    if (fs.can_burst > 0 && !burst_done_ && c.time_ns >= burst_ns) {
-      // A burst of corrupt frames right after this one: bit flips (CRC), verbatim repeats
-      // (rolling counter), wrong DLC.
-      burst_done_ = true;
-      for (int k = 0; k < fs.can_burst; ++k) {
-        WireEvent bad = ev;
-        const int kind = faults_.rng().uniform_int(0, 2);
-        if (kind == 0) {
-          bad.can.data[faults_.rng().uniform_int(0, 7)] ^= static_cast<std::uint8_t>(1u << faults_.rng().uniform_int(0, 7));
-        } else if (kind == 2) {
-          bad.can.dlc = static_cast<std::uint8_t>(faults_.rng().uniform_int(0, 7));
-        }
-        out.push_back(bad);
-        ++fst.can_corrupt_sent;
-      }
-    }
+    append_can_burst(ev, out);
   }
+}
 
+// The CAN burst fault, once, right after the first frame at or after its time: corrupt copies of
+// that frame (bit flips: CRC; verbatim repeats: rolling counter; wrong DLC).
+void EventStream::append_can_burst(const WireEvent& after, std::vector<WireEvent>& out) {
+  const FaultSpec& fs = faults_.spec();
+  if (fs.can_burst <= 0 || burst_done_ || after.time_ns < seconds_to_ns(fs.can_burst_at_s)) return;
+  burst_done_ = true;
+  for (int k = 0; k < fs.can_burst; ++k) {
+    WireEvent bad = after;
+    const int kind = faults_.rng().uniform_int(0, 2);
+    if (kind == 0) {
+      bad.can.data[faults_.rng().uniform_int(0, 7)] ^= static_cast<std::uint8_t>(1u << faults_.rng().uniform_int(0, 7));
+    } else if (kind == 2) {
+      bad.can.dlc = static_cast<std::uint8_t>(faults_.rng().uniform_int(0, 7));
+    }
+    out.push_back(bad);
+    ++stats_.faults.can_corrupt_sent;
+  }
+}
+
+// Every map cloud stamped up to t_i becomes its shares (transport faults applied), held until
+// their (possibly delayed) arrival time.
+bool EventStream::send_map_clouds(std::int64_t t_i, std::string& error) {
   const auto& clouds = reader_->map_clouds();
   for (; next_cloud_ < clouds.size() && seconds_to_ns(clouds[next_cloud_].stamp) <= t_i; ++next_cloud_) {
     const MapCloudInfo& info = clouds[next_cloud_];
-    std::uint32_t id = 0;
-    sender_id_for(info, id);
     if (info.kind == "infra" && faults_.infra_dropped(info.stamp)) {
-      ++fst.infra_shares_dropped;
+      ++stats_.faults.infra_shares_dropped;
       continue;
     }
-    cloud_io::PointCloud cloud;
-    if (!reader_->load_map_cloud(info, cloud, error)) return false;
-    if (cloud_seq_.size() <= id) cloud_seq_.resize(id + 1, 0);
-    const SimSigner* signer = nullptr;
-    if (config_.sign_map_shares) {
-      for (const SimSigner& sg : signers_) {
-        if (sg.sensor == info.sensor) signer = &sg;
-      }
-    }
-    const bool rogue = (fs.rogue_shift_m != 0 || fs.rogue_future_s > 0) &&
-                       (fs.rogue_source == info.sensor || (fs.rogue_source == "all-infra" && info.kind == "infra"));
-    Eigen::Isometry3d shifted = Eigen::Translation3d(fs.rogue_shift_m, 0, 0) * info.sensor_pose;
-    cloud_io::PointCloud moved;  // rogue-points: the same world shift applied to the points instead
-    if (rogue && fs.rogue_points && fs.rogue_shift_m != 0) {
-      moved = cloud;
-      const Eigen::Vector3f in_sensor =
-          (info.sensor_pose.linear().transpose() * Eigen::Vector3d(fs.rogue_shift_m, 0, 0)).cast<float>();
-      for (Eigen::Vector3f& p : moved.points) p += in_sensor;
-      shifted = info.sensor_pose;
-    }
-    const cloud_io::PointCloud& rogue_cloud = moved.points.empty() ? cloud : moved;
-    const std::int64_t stamp_ns = seconds_to_ns(info.stamp);
-    const std::uint32_t seq = cloud_seq_[id]++;
-    WireEvent ev;
-    const bool insider = rogue && fs.rogue_signed && fs.rogue_shift_m != 0;
-    if (!map_share(info, id, seq, stamp_ns, insider ? shifted : info.sensor_pose, insider ? rogue_cloud : cloud, signer,
-                   ev, error)) {
-      return false;
-    }
-    if (insider) ++fst.rogue_shares;
-    std::vector<WireEvent> extra;
-    if (rogue && !fs.rogue_signed && fs.rogue_shift_m != 0) {  // outsider: unsigned shifted copy
-      WireEvent r;
-      if (!map_share(info, id, seq + 0x40000000u, stamp_ns, shifted, rogue_cloud, nullptr, r, error)) return false;
-      extra.push_back(std::move(r));
-      ++fst.rogue_shares;
-    }
-    if (rogue && fs.rogue_future_s > 0) {  // a copy dated in the future (signed: by the source's key)
-      WireEvent r;
-      if (!map_share(info, id, seq + 0x50000000u, stamp_ns + seconds_to_ns(fs.rogue_future_s), info.sensor_pose, cloud,
-                     fs.rogue_signed ? signer : nullptr, r, error)) {
-        return false;
-      }
-      r.time_ns = stamp_ns;  // sent now, dated ahead
-      extra.push_back(std::move(r));
-      ++fst.rogue_shares;
-    }
-    if (fs.rogue_ids > 0 && info.sensor == clouds.front().sensor) {  // once per share period
-      for (int k = 0; k < fs.rogue_ids; ++k) {
-        WireEvent r;
-        const std::uint32_t fake = 64u + static_cast<std::uint32_t>(k);
-        if (!map_share(info, fake, seq, stamp_ns, info.sensor_pose, cloud, nullptr, r, error)) return false;
-        extra.push_back(std::move(r));
-        ++fst.rogue_shares;
-      }
-    }
-    stats_.points_dropped += ev.points_dropped;
-    ++stats_.map_clouds;
-    if (config_.keep_source_clouds) ev.source = std::move(cloud);
-    extra.insert(extra.begin(), std::move(ev));
-    for (WireEvent& e : extra) {
-      faults_.transport(e.datagrams, fst);
-      if (fs.delay_s > 0) {
-        e.time_ns += seconds_to_ns(fs.delay_s);
-        ++fst.shares_delayed;
+    std::vector<WireEvent> shares;
+    if (!share_events(info, shares, error)) return false;
+    for (WireEvent& e : shares) {
+      faults_.transport(e.datagrams, stats_.faults);
+      if (faults_.spec().delay_s > 0) {
+        e.time_ns += seconds_to_ns(faults_.spec().delay_s);
+        ++stats_.faults.shares_delayed;
       }
       delayed_.push_back(std::move(e));
     }
   }
-  // Deliver every share whose (possibly delayed) arrival time has come, in arrival order.
+  return true;
+}
+
+// One recorded map cloud as the shares sent for it: its source's own (shifted, when the source is
+// a signed rogue), then the copies a rogue fault adds.
+bool EventStream::share_events(const MapCloudInfo& info, std::vector<WireEvent>& shares, std::string& error) {
+  ShareSource source;
+  source.info = &info;
+  sender_id_for(info, source.id);
+  if (!reader_->load_map_cloud(info, source.cloud, error)) return false;
+  if (cloud_seq_.size() <= source.id) cloud_seq_.resize(source.id + 1, 0);
+  source.signer = signer_for(info);
+  source.stamp_ns = seconds_to_ns(info.stamp);
+  source.seq = cloud_seq_[source.id]++;
+  const RogueShare rogue = rogue_share(info, source.cloud);
+  const cloud_io::PointCloud& rogue_cloud = rogue.moved.points.empty() ? source.cloud : rogue.moved;
+  const FaultSpec& fs = faults_.spec();
+  const bool insider = rogue.active && fs.rogue_signed && fs.rogue_shift_m != 0;
+  shares.emplace_back();
+  if (!map_share(source.id, source.seq, source.stamp_ns, insider ? rogue.pose : info.sensor_pose,
+                 insider ? rogue_cloud : source.cloud, source.signer, shares.back(), error)) {
+    return false;
+  }
+  if (insider) ++stats_.faults.rogue_shares;
+  if (!append_rogue_copies(source, rogue, rogue_cloud, shares, error)) return false;
+  stats_.points_dropped += shares.front().points_dropped;
+  ++stats_.map_clouds;
+  if (config_.keep_source_clouds) shares.front().source = std::move(source.cloud);
+  return true;
+}
+
+const SimSigner* EventStream::signer_for(const MapCloudInfo& info) const {
+  const SimSigner* signer = nullptr;
+  if (!config_.sign_map_shares) return signer;
+  for (const SimSigner& sg : signers_) {
+    if (sg.sensor == info.sensor) signer = &sg;
+  }
+  return signer;
+}
+
+// The rogue fault on one map cloud: active for the rogue source; its pose shifted by rogue_shift_m
+// in the world, or (rogue_points) the true pose with the points moved by the same world shift.
+EventStream::RogueShare EventStream::rogue_share(const MapCloudInfo& info, const cloud_io::PointCloud& cloud) const {
+  const FaultSpec& fs = faults_.spec();
+  RogueShare r;
+  r.active = (fs.rogue_shift_m != 0 || fs.rogue_future_s > 0) &&
+             (fs.rogue_source == info.sensor || (fs.rogue_source == "all-infra" && info.kind == "infra"));
+  r.pose = Eigen::Translation3d(fs.rogue_shift_m, 0, 0) * info.sensor_pose;
+  if (r.active && fs.rogue_points && fs.rogue_shift_m != 0) {
+    r.moved = cloud;
+    const Eigen::Vector3f in_sensor =
+        (info.sensor_pose.linear().transpose() * Eigen::Vector3d(fs.rogue_shift_m, 0, 0)).cast<float>();
+    for (Eigen::Vector3f& p : r.moved.points) p += in_sensor;
+    r.pose = info.sensor_pose;
+  }
+  return r;
+}
+
+// The extra shares a rogue fault sends besides the source's own: an unsigned shifted copy (an
+// outsider), a copy dated in the future, and shares under sender ids nobody provisioned.
+bool EventStream::append_rogue_copies(const ShareSource& source, const RogueShare& rogue,
+                                      const cloud_io::PointCloud& rogue_cloud, std::vector<WireEvent>& shares,
+                                      std::string& error) {
+  const FaultSpec& fs = faults_.spec();
+  const MapCloudInfo& info = *source.info;
+  const auto add = [&](std::uint32_t id, std::uint32_t seq, std::int64_t stamp_ns, const Eigen::Isometry3d& pose,
+                       const cloud_io::PointCloud& cloud, const SimSigner* signer) {
+    WireEvent r;
+    if (!map_share(id, seq, stamp_ns, pose, cloud, signer, r, error)) return false;
+    r.time_ns = source.stamp_ns;  // sent now, whatever it is dated
+    shares.push_back(std::move(r));
+    ++stats_.faults.rogue_shares;
+    return true;
+  };
+  if (rogue.active && !fs.rogue_signed && fs.rogue_shift_m != 0 &&
+      !add(source.id, source.seq + 0x40000000u, source.stamp_ns, rogue.pose, rogue_cloud, nullptr)) {
+    return false;
+  }
+  if (rogue.active && fs.rogue_future_s > 0 &&
+      !add(source.id, source.seq + 0x50000000u, source.stamp_ns + seconds_to_ns(fs.rogue_future_s), info.sensor_pose,
+           source.cloud, fs.rogue_signed ? source.signer : nullptr)) {
+    return false;
+  }
+  if (fs.rogue_ids > 0 && info.sensor == reader_->map_clouds().front().sensor) {  // once per share period
+    for (int k = 0; k < fs.rogue_ids; ++k) {
+      const std::uint32_t fake = 64u + static_cast<std::uint32_t>(k);
+      if (!add(fake, source.seq, source.stamp_ns, info.sensor_pose, source.cloud, nullptr)) return false;
+    }
+  }
+  return true;
+}
+
+// Every held share whose (possibly delayed) arrival time has come, in arrival order.
+void EventStream::deliver_due_shares(std::int64_t t_i, std::vector<WireEvent>& out) {
   std::stable_sort(delayed_.begin(), delayed_.end(),
                    [](const WireEvent& a, const WireEvent& b) { return a.time_ns < b.time_ns; });
   std::size_t n_due = 0;
@@ -274,7 +317,9 @@ bool EventStream::next_frame(int i, std::vector<WireEvent>& out, std::string& er
     out.push_back(std::move(delayed_[k]));
   }
   delayed_.erase(delayed_.begin(), delayed_.begin() + static_cast<std::ptrdiff_t>(n_due));
+}
 
+bool EventStream::append_ego_scan(int i, std::int64_t t_i, std::vector<WireEvent>& out, std::string& error) {
   cloud_io::PointCloud scan;
   if (!reader_->ego_scan(i, scan, error)) return false;
   WireEvent ev;
@@ -282,9 +327,9 @@ bool EventStream::next_frame(int i, std::vector<WireEvent>& out, std::string& er
   ev.time_ns = t_i;
   ev.frame = i;
   std::int64_t ego_stamp = t_i;
-  if (i == fs.ego_time_jump_frame) {  // one scan dated 1e18 ns (Unix), far in the future
+  if (i == faults_.spec().ego_time_jump_frame) {  // one scan dated 1e18 ns (Unix), far in the future
     ego_stamp = 1'000'000'000'000'000'000LL - epoch_ns_;
-    ++fst.ego_time_jumps;
+    ++stats_.faults.ego_time_jumps;
   }
   if (!fragment(protocol::CloudMessageType::kEgoScan, firmware::kEgoSenderId, static_cast<std::uint32_t>(i), ego_stamp,
                 reader_->ego_lidar_mount(), scan, config_.ego_point_times, ev, error)) {

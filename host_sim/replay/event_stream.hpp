@@ -81,9 +81,37 @@ class EventStream {
   static bool sender_id_for(const MapCloudInfo& info, std::uint32_t& sender_id);
 
  private:
-  bool map_share(const MapCloudInfo& info, std::uint32_t id, std::uint32_t seq, std::int64_t stamp_ns,
-                 const Eigen::Isometry3d& pose, const cloud_io::PointCloud& cloud, const SimSigner* signer,
-                 WireEvent& ev, std::string& error);
+  // One recorded map cloud about to be sent: sender id, sequence number, stamp [ns of recording
+  // time], signer (nullptr: unsigned) and the cloud as recorded.
+  struct ShareSource {
+    const MapCloudInfo* info = nullptr;
+    std::uint32_t id = 0;
+    std::uint32_t seq = 0;
+    std::int64_t stamp_ns = 0;
+    const SimSigner* signer = nullptr;
+    cloud_io::PointCloud cloud;
+  };
+  // The rogue-source fault on one map cloud (FaultSpec rogue_*).
+  struct RogueShare {
+    bool active = false;                         // this cloud's source is the rogue
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  // the pose the rogue declares
+    cloud_io::PointCloud moved;                  // rogue_points: the points moved instead (else empty)
+  };
+
+  // The steps of next_frame(), in order.
+  void append_can(std::int64_t t_i, std::vector<WireEvent>& out);
+  void append_can_burst(const WireEvent& after, std::vector<WireEvent>& out);
+  bool send_map_clouds(std::int64_t t_i, std::string& error);
+  bool share_events(const MapCloudInfo& info, std::vector<WireEvent>& shares, std::string& error);
+  const SimSigner* signer_for(const MapCloudInfo& info) const;
+  RogueShare rogue_share(const MapCloudInfo& info, const cloud_io::PointCloud& cloud) const;
+  bool append_rogue_copies(const ShareSource& source, const RogueShare& rogue, const cloud_io::PointCloud& rogue_cloud,
+                           std::vector<WireEvent>& shares, std::string& error);
+  void deliver_due_shares(std::int64_t t_i, std::vector<WireEvent>& out);
+  bool append_ego_scan(int i, std::int64_t t_i, std::vector<WireEvent>& out, std::string& error);
+
+  bool map_share(std::uint32_t sender_id, std::uint32_t seq, std::int64_t stamp_ns, const Eigen::Isometry3d& pose,
+                 const cloud_io::PointCloud& cloud, const SimSigner* signer, WireEvent& ev, std::string& error) const;
   bool fragment(protocol::CloudMessageType type, std::uint32_t sender_id, std::uint32_t seq,
                 std::int64_t stamp_ns, const Eigen::Isometry3d& pose, const cloud_io::PointCloud& cloud,
                 bool with_times, WireEvent& ev, std::string& error) const;

@@ -120,7 +120,7 @@ int main() {
     fused += close_period(*dec, fragment(protocol::CloudMessageType::kEgoScan, firmware::kEgoSenderId, 2000, p, now), now);
   }
   std::printf("sources %u points %zu fragments/share %zu queued %zu dropped %llu verified %llu fused %zu\n", kSources,
-              kPoints, shares[0].size(), queued, (unsigned long long)dec->counters().shares_queue_dropped,
-              (unsigned long long)dec->counters().signature_verifications, fused);
-  return fused == queued - dec->counters().shares_queue_dropped ? 0 : 1;
+              kPoints, shares[0].size(), queued, (unsigned long long)dec->shares().counters().shares_queue_dropped,
+              (unsigned long long)dec->shares().counters().signature_verifications, fused);
+  return fused == queued - dec->shares().counters().shares_queue_dropped ? 0 : 1;
 }

@@ -154,15 +154,16 @@ void close_frame(const Localizer& localizer, const RunOptions& options, InProces
 // The decoder's, period driver's, verifier's and localizer's counters of the run.
 void collect_counters(const firmware::InputDecoder& decoder, const sim::replay::WireEventDecoder& wire,
                       const Localizer& localizer, RunStats& stats) {
-  const firmware::DecoderCounters& d = decoder.counters();
+  const firmware::CanCounters& can = decoder.can().counters();
+  const firmware::ShareCounters& s = decoder.shares().counters();
   const firmware::PeriodCounters& p = wire.driver().counters();
-  stats.can_decode_errors = d.can_rejected + d.can_repeated;
+  stats.can_decode_errors = can.can_rejected + can.can_repeated;
   stats.map_clouds = p.map_handed;
   stats.map_clouds_rejected = p.map_inconsistent + p.map_background_mismatch;
-  stats.map_clouds_paced = d.shares_paced + d.shares_paced_on_arrival;
-  stats.map_clouds_dropped = d.shares_queue_dropped;
-  stats.map_shares_untrusted = d.shares_untrusted + d.shares_off_background;
-  stats.trust = decoder.verifier().counters();
+  stats.map_clouds_paced = s.shares_paced + s.shares_paced_on_arrival;
+  stats.map_clouds_dropped = s.shares_queue_dropped;
+  stats.map_shares_untrusted = s.shares_untrusted + s.shares_off_background;
+  stats.trust = decoder.shares().verifier().counters();
   stats.counters = localizer.counters();
   stats.map_background_checked = localizer.map().counters().background_checked;
   stats.map_background_mismatch = localizer.map().counters().background_mismatch;

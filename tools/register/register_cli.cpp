@@ -53,6 +53,8 @@ Json point_counts(const RegisterCloudsResult& result) {
   points["correspondences"] = s.correspondences;
   points["ransac_correspondence_inliers"] = s.ransac_correspondence_inliers;
   points["final_inliers"] = result.registration.inliers;
+  points["voxel_used_m"] = s.voxel_used;  // coarser than asked when a cloud overflowed the capacity
+  points["voxel_coarsenings"] = s.voxel_coarsenings;
   return points;
 }
 
@@ -60,8 +62,8 @@ Json dropped_counts(const RegisterCloudsResult& result) {
   const RegisterStageStats& s = result.stats;
   Json dropped;
   dropped["nonfinite"] = result.registration.nonfinite_dropped;
-  dropped["source_truncated"] = s.source_truncated;
-  dropped["target_truncated"] = s.target_truncated;
+  dropped["source_thinned"] = s.source_thinned;
+  dropped["target_thinned"] = s.target_thinned;
   dropped["downsample_overflow"] = s.downsample_overflow;
   dropped["correspondences_truncated"] = s.correspondences_truncated;
   dropped["search_cap_hits"] = s.search_cap_hits;

@@ -3,14 +3,20 @@
 //       runs the recording through the offline wire path (the firmware's decoder, share schedule
 //       and trust checks; host_sim/replay/event_stream.hpp) and writes every input it applies to
 //       the localizer as a fixture; --outputs: that run's period lines.
-//   play FIXTURE OUTPUT
+//   play FIXTURE OUTPUT [--callgrind]
 //       plays the fixture into this build's Localizer and writes its period lines: the host
-//       reference the target image's lines must equal, bit for bit.
+//       reference the target image's lines must equal, bit for bit. --callgrind: one callgrind
+//       dump per period (tools/timing/fixture_instructions.py).
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <memory>
 #include <string>
+
+#if __has_include(<valgrind/callgrind.h>)
+#include <valgrind/callgrind.h>
+#define V2XLOC_HAVE_CALLGRIND 1
+#endif
 
 #include "firmware/fixture/fixture_player.hpp"
 #include "host_sim/recording/recording_reader.hpp"
@@ -26,7 +32,7 @@ v2xloc::fixture::FixturePlayer g_player;
 int usage() {
   std::fprintf(stderr,
                "usage: v2xloc-fixture record RECORDING FIXTURE [--frames N] [--label NAME] [--outputs FILE]\n"
-               "       v2xloc-fixture play FIXTURE OUTPUT\n");
+               "       v2xloc-fixture play FIXTURE OUTPUT [--callgrind]\n");
   return 2;
 }
 
@@ -104,8 +110,36 @@ class FileSource final : public v2xloc::fixture::ByteSource {
   std::FILE* f_;
 };
 
+// Under callgrind (--callgrind, valgrind --collect-atstart=no): instructions are collected only
+// inside the localizer calls, as the target's PMU counts them, and dumped once per period.
+class CallgrindMeter : public v2xloc::fixture::CallMeter {
+ public:
+  explicit CallgrindMeter(bool on) : on_(on) {}
+  void begin() override { toggle(); }
+  void end() override { toggle(); }
+  void period_done(std::uint32_t period) {
+#ifdef V2XLOC_HAVE_CALLGRIND
+    if (!on_) return;
+    char label[32];
+    std::snprintf(label, sizeof label, "period %u", period);
+    CALLGRIND_DUMP_STATS_AT(label);
+#else
+    (void)period;
+#endif
+  }
+
+ private:
+  void toggle() {
+#ifdef V2XLOC_HAVE_CALLGRIND
+    if (on_) CALLGRIND_TOGGLE_COLLECT;
+#endif
+  }
+  bool on_;
+};
+
 int play(int argc, char** argv) {
-  if (argc != 4) return usage();
+  const bool callgrind = argc == 5 && std::strcmp(argv[4], "--callgrind") == 0;
+  if (argc != 4 && !callgrind) return usage();
   std::FILE* in = std::fopen(argv[2], "rb");
   std::FILE* out = std::fopen(argv[3], "w");
   if (in == nullptr || out == nullptr) {
@@ -117,10 +151,10 @@ int play(int argc, char** argv) {
     std::fprintf(stderr, "v2xloc-fixture: %s: %s\n", argv[2], g_player.error());
     return 1;
   }
-  struct : v2xloc::fixture::CallMeter {
-  } no_meter;
+  CallgrindMeter meter(callgrind);
   for (;;) {
-    const v2xloc::fixture::Step step = g_player.step(g_localizer, no_meter);
+    const v2xloc::fixture::Step step = g_player.step(g_localizer, meter);
+    if (step == v2xloc::fixture::Step::kPeriod) meter.period_done(g_player.period() - 1);
     if (step == v2xloc::fixture::Step::kEnd) break;
     if (step == v2xloc::fixture::Step::kError) {
       std::fprintf(stderr, "v2xloc-fixture: %s: %s\n", argv[2], g_player.error());

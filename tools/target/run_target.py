@@ -53,6 +53,7 @@ def main():
     ap.add_argument("--sim", help="v2xloc-sim: make the recording with it")
     ap.add_argument("--generate", nargs=argparse.REMAINDER, default=[],
                     help="v2xloc-sim generate arguments (last option)")
+    ap.add_argument("--recording", help="an existing recording folder instead of --sim/--generate")
     ap.add_argument("--worst-case", help="test_worst_case_localizer: its adversarial drive is the fixture")
     ap.add_argument("--budget", type=float, default=100e6, help="instructions per period outside 'setup'")
     ap.add_argument("--timeout", type=int, default=900, help="seconds for the QEMU run")
@@ -81,11 +82,13 @@ def main():
                                 stdout=f, stderr=subprocess.STDOUT, timeout=1200).returncode
         need(rc == 0, "the worst-case drive that writes the fixture", log)
     else:
-        need(a.sim and a.generate, "--sim and --generate, or --worst-case")
-        log = os.path.join(wd, "generate.log")
-        need(run([a.sim, "generate", *a.generate, "--out", "rec"], wd, 900, log) == 0, "v2xloc-sim generate", log)
+        rec = os.path.abspath(a.recording) if a.recording else "rec"
+        if not a.recording:
+            need(a.sim and a.generate, "--sim and --generate, --recording, or --worst-case")
+            log = os.path.join(wd, "generate.log")
+            need(run([a.sim, "generate", *a.generate, "--out", "rec"], wd, 900, log) == 0, "v2xloc-sim generate", log)
         log = os.path.join(wd, "record.log")
-        need(run([a.fixture_tool, "record", "rec", fixture, "--label", a.name, "--outputs", recorded], wd, 900, log) == 0,
+        need(run([a.fixture_tool, "record", rec, fixture, "--label", a.name, "--outputs", recorded], wd, 900, log) == 0,
              "v2xloc-fixture record", log)
         print(open(log).read().strip())
 
@@ -126,6 +129,7 @@ def main():
     cycles = [c[3] for c in inside]
     print(f"run_target: {a.name}: {len(periods)} periods bit-identical to the host EMBEDDED build; "
           f"{len(inside)} counted: instructions median {statistics.median(instr) / 1e6:.1f} M, "
+          f"p99 {sorted(instr)[min(len(instr) - 1, (99 * len(instr)) // 100)] / 1e6:.1f} M, "
           f"max {max(instr) / 1e6:.1f} M (period {max(inside, key=lambda c: c[2])[1]}), "
           f"cycles median {statistics.median(cycles) / 1e6:.1f} M max {max(cycles) / 1e6:.1f} M; "
           + "; ".join(s[2:] for s in summary))

@@ -67,29 +67,39 @@ bool params_valid(const RegisterCloudsParams& params, const Mat4d& initial) {
          params.icp_distance_voxels > 0.0 && params.icp_kernel_voxels > 0.0;
 }
 
-// Truncates what does not fit a scan buffer (counted, never silent).
-void truncate_inputs(std::span<const Vec3f>& source, std::span<const Vec3f>& target, RegisterStageStats& stats) {
-  if (source.size() > config::kMaxScanPoints) {
-    stats.source_truncated = static_cast<std::uint32_t>(source.size() - config::kMaxScanPoints);
-    source = source.first(config::kMaxScanPoints);
-  }
-  if (target.size() > config::kMaxScanPoints) {
-    stats.target_truncated = static_cast<std::uint32_t>(target.size() - config::kMaxScanPoints);
-    target = target.first(config::kMaxScanPoints);
-  }
+// 1. Downsampling (one hash table, reused: the stage leaves it empty). A cloud whose voxels do
+// not fit the downsampled capacity is downsampled again at a coarser voxel (every radius of the
+// later stages follows it) rather than cut: a cut keeps one part of the scene and drops the rest,
+// which a registration cannot tell from a smaller overlap. Bounded; what still overflows is counted.
+constexpr float kVoxelGrowth = 1.25f;      // ~0.64x the voxels of a surface per step
+constexpr int kMaxVoxelCoarsenings = 6;    // up to 3.8x the requested voxel
+
+// A cloud over the scan capacity (the profile's worst-case bound on the work) is used evenly
+// thinned to it, counted.
+bool fits(const VoxelDownsampleResult& r) { return r.output_overflow == 0; }
+
+void downsample_both(Pipeline& p, std::span<const Vec3f> source, std::span<const Vec3f> target) {
+  p.ds_source = p.ws.voxel.run(source, p.voxel, p.ws.source_down, config::kMaxScanPoints);
+  p.ds_target = p.ws.voxel.run(target, p.voxel, p.ws.target_down, config::kMaxScanPoints);
 }
 
-// 1. Downsampling (one hash table, reused: the stage leaves it empty).
 void downsample(Pipeline& p, std::span<const Vec3f> source, std::span<const Vec3f> target) {
   RegisterStageStats& stats = p.out.stats;
-  p.ds_source = p.ws.voxel.run(source, p.voxel, p.ws.source_down);
-  p.ds_target = p.ws.voxel.run(target, p.voxel, p.ws.target_down);
+  downsample_both(p, source, target);
+  while ((!fits(p.ds_source) || !fits(p.ds_target)) && stats.voxel_coarsenings < kMaxVoxelCoarsenings) {
+    p.voxel *= kVoxelGrowth;
+    ++stats.voxel_coarsenings;
+    downsample_both(p, source, target);
+  }
+  stats.voxel_used = p.voxel;
+  stats.source_thinned = p.ds_source.thinned;
+  stats.target_thinned = p.ds_target.thinned;
   p.timer.lap(RegisterStage::kDownsample);
   stats.source_downsampled = static_cast<std::uint32_t>(p.ws.source_down.size());
   stats.target_downsampled = static_cast<std::uint32_t>(p.ws.target_down.size());
   stats.downsample_overflow = overflow_of(p.ds_source) + overflow_of(p.ds_target);
   p.out.registration.nonfinite_dropped = p.ds_source.non_finite_dropped + p.ds_target.non_finite_dropped;
-  p.out.registration.overflow_dropped = stats.source_truncated + stats.target_truncated + stats.downsample_overflow;
+  p.out.registration.overflow_dropped = stats.source_thinned + stats.target_thinned + stats.downsample_overflow;
 }
 
 // The final status and the drop counts of every stage.
@@ -101,7 +111,7 @@ RegisterCloudsResult& finish(Pipeline& p, RegistrationStatus status) {
     out.coarse.status = status;
   }
   out.registration.nonfinite_dropped = p.ds_source.non_finite_dropped + p.ds_target.non_finite_dropped;
-  out.registration.overflow_dropped = stats.source_truncated + stats.target_truncated + stats.downsample_overflow +
+  out.registration.overflow_dropped = stats.source_thinned + stats.target_thinned + stats.downsample_overflow +
                                       stats.correspondences_truncated;
   return out;
 }
@@ -306,7 +316,6 @@ RegisterCloudsResult run(std::span<const Vec3f> source, std::span<const Vec3f> t
   }
   StageTimer timer(params.clock, out.stats);
   Pipeline p{params, ws, out, timer, params.voxel_size};
-  truncate_inputs(source, target, out.stats);
   downsample(p, source, target);
   if (ws.source_down.size() < 3 || ws.target_down.size() < 3) return finish(p, RegistrationStatus::kNotEnoughPoints);
   const std::span<const Vec3f> src = ws.source_down.span();

@@ -17,9 +17,26 @@ struct VoxelIndex {
   bool operator==(const VoxelIndex&) const = default;
 };
 
+// The points a call uses: all of them, or `take` of them evenly spread over the cloud (the i-th
+// when floor(i * take / n) steps up), so a cloud over the limit keeps its whole extent at a lower
+// density instead of losing its tail (for a scan, the sweep's last sectors).
+class EvenSelection {
+ public:
+  EvenSelection(std::size_t n, std::size_t take) : n_(n), take_(take < n ? take : n) {}
+  bool all() const { return take_ == n_; }
+  bool kept(std::size_t i) const { return all() || (i + 1) * take_ / n_ != i * take_ / n_; }
+  std::size_t skipped() const { return n_ - take_; }
+
+ private:
+  std::uint64_t n_, take_;
+};
+
 // Component-wise minimum of the finite points into lo; the others are counted.
-void finite_min_bound(std::span<const Vec3f> points, double lo[3], std::uint32_t& non_finite) {
-  for (const Vec3f& p : points) {
+void finite_min_bound(std::span<const Vec3f> points, const EvenSelection& selection, double lo[3],
+                      std::uint32_t& non_finite) {
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!selection.kept(i)) continue;
+    const Vec3f& p = points[i];
     if (!is_finite_point(p)) {
       ++non_finite;
       continue;
@@ -113,12 +130,13 @@ class VoxelTable {
 };
 
 // Every finite point into the accumulator of its voxel (range overflows counted in r).
-void accumulate_points(std::span<const Vec3f> points, const double origin[3], double voxel,
-                       VoxelTable& table, VoxelDownsampleResult& r) {
+void accumulate_points(std::span<const Vec3f> points, const EvenSelection& selection, const double origin[3],
+                       double voxel, VoxelTable& table, VoxelDownsampleResult& r) {
   VoxelAccumulator* last = nullptr;  // voxel of the previous accepted point
   VoxelIndex last_index;
-  for (const Vec3f& p : points) {
-    if (!is_finite_point(p)) continue;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Vec3f& p = points[i];
+    if (!selection.kept(i) || !is_finite_point(p)) continue;
     VoxelIndex index;
     if (!voxel_index_of(p, origin, voxel, index)) {
       ++r.range_overflow;
@@ -138,10 +156,12 @@ void accumulate_points(std::span<const Vec3f> points, const double origin[3], do
 VoxelDownsampleResult voxel_downsample(std::span<const Vec3f> points, float voxel_size,
                                        std::span<VoxelHashSlot> slots,
                                        std::span<VoxelAccumulator> accumulators,
-                                       BoundedVector<Vec3f>& out) {
+                                       BoundedVector<Vec3f>& out, std::size_t max_points) {
   VoxelDownsampleResult r;
   out.clear();
   r.input_points = static_cast<std::uint32_t>(points.size());
+  const EvenSelection selection(points.size(), max_points);
+  r.thinned = static_cast<std::uint32_t>(selection.skipped());
   if (!std::isfinite(voxel_size) || !(voxel_size > 0.0f)) {
     r.status = VoxelStatus::kInvalidVoxelSize;
     return r;
@@ -154,8 +174,8 @@ VoxelDownsampleResult voxel_downsample(std::span<const Vec3f> points, float voxe
 
   // Pass 1: bounds of the finite points.
   double lo[3] = {INFINITY, INFINITY, INFINITY};
-  finite_min_bound(points, lo, r.non_finite_dropped);
-  if (r.non_finite_dropped == r.input_points) {
+  finite_min_bound(points, selection, lo, r.non_finite_dropped);
+  if (r.non_finite_dropped == r.input_points - r.thinned) {
     r.status = VoxelStatus::kEmptyInput;
     return r;
   }
@@ -164,7 +184,7 @@ VoxelDownsampleResult voxel_downsample(std::span<const Vec3f> points, float voxe
 
   // Pass 2: accumulate per voxel; then centroids, leaving the hash table empty for the next call.
   VoxelTable table(slots, accumulators, std::min(out.capacity(), accumulators.size()));
-  accumulate_points(points, origin, voxel, table, r);
+  accumulate_points(points, selection, origin, voxel, table, r);
   table.write_centroids(out);
   r.output_points = static_cast<std::uint32_t>(out.size());
   const bool dropped = r.output_overflow + r.hash_overflow + r.range_overflow > 0;

@@ -90,7 +90,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       size -= len;
     }
   }
-  const auto& c = decoder->counters();
-  if (c.can_frames != frames || c.datagrams != datagrams) std::abort();
+  if (decoder->can().counters().can_frames != frames || decoder->clouds().counters().datagrams != datagrams) std::abort();
   return 0;
 }

@@ -144,7 +144,7 @@ TEST(CanLayout, FirmwareDecoderGetsBitIdenticalFixesFromAConvertedLog) {
     EXPECT_NE(d.kind, firmware::CanInputKind::kInvalid) << std::hex << r.frame.id;
     if (d.kind == firmware::CanInputKind::kGnssFix) {
       got.push_back(d.gnss);
-      times.push_back(decoder->last_gnss_time());
+      times.push_back(decoder->can().last_gnss_time());
     }
   }
   ASSERT_EQ(got.size(), fixes.size());
@@ -156,7 +156,7 @@ TEST(CanLayout, FirmwareDecoderGetsBitIdenticalFixesFromAConvertedLog) {
     EXPECT_EQ(times[k].time_of_week_s, legacy_value(fixes[k].tow_raw, 0.001)) << k;
     EXPECT_EQ(times[k].week, fixes[k].week) << k;
   }
-  const firmware::DecoderCounters& c = decoder->counters();
+  const firmware::CanCounters& c = decoder->can().counters();
   EXPECT_EQ(c.can_rejected + c.can_repeated + c.can_counter_gaps + c.gnss_position_dropped + c.gnss_incomplete, 0u);
 }
 

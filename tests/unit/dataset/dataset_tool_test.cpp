@@ -13,6 +13,7 @@
 #include <sys/wait.h>
 
 #include "tools/dataset/kitti_sequence.hpp"
+#include "v2xloc/algo/core/config.hpp"
 
 namespace v2xloc::testing {
 namespace {
@@ -93,6 +94,10 @@ TEST(DatasetTool, DairPairsRegisterFromNoPrior) {
   std::printf("%s\n", j["summary"].dump().c_str());
   ASSERT_EQ(j["pairs"].size(), 3u);
   EXPECT_EQ(j["summary"]["skipped_missing"], 1);
+  // A profile whose scan capacity is below the fixture's vehicle clouds (EMBEDDED: 16,384 of
+  // ~40,000 points) registers them evenly thinned at a coarser voxel: a looser, still metric bound.
+  const bool thinned = j["pairs"][0]["points"]["vehicle"].get<std::size_t>() > v2xloc::config::kMaxScanPoints;
+  const double max_t = thinned ? 0.5 : 0.05, max_r_deg = thinned ? 1.0 : 0.2;
   int registered = 0;
   for (std::size_t i = 0; i < 3; ++i) {
     const auto& p = j["pairs"][i];
@@ -104,9 +109,9 @@ TEST(DatasetTool, DairPairsRegisterFromNoPrior) {
     if (p["status"] != "ok") continue;
     ++registered;
     // The written calibration is the truth minus the offset: the corrected error is the real one.
-    EXPECT_LT(p["translation_error_offset_corrected_m"].get<double>(), 0.05);
-    EXPECT_LT(p["rotation_error_deg"].get<double>(), 0.2);
-    EXPECT_NEAR(p["translation_error_m"].get<double>(), info.offsets[i].norm(), 0.05);
+    EXPECT_LT(p["translation_error_offset_corrected_m"].get<double>(), max_t);
+    EXPECT_LT(p["rotation_error_deg"].get<double>(), max_r_deg);
+    EXPECT_NEAR(p["translation_error_m"].get<double>(), info.offsets[i].norm(), max_t);
   }
   EXPECT_GE(registered, 2);
   EXPECT_EQ(r.exit_code, registered == 3 ? 0 : 1);

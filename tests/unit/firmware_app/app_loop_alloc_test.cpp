@@ -128,10 +128,10 @@ TEST(FirmwareAppLoop, NoHeapAllocationAfterStartUpAndOnePosePerFrame) {
     ASSERT_EQ(app.counters().frames_published, static_cast<std::uint64_t>(i + 1));
   }
   EXPECT_EQ(allocations, 0u) << alloc_counter::bytes() << " bytes allocated inside poll_once()";
-  EXPECT_EQ(app.decoder().counters().map_clouds, 1u);
-  EXPECT_EQ(app.decoder().verifier().counters().accepted, 1u);
-  EXPECT_EQ(app.decoder().counters().ego_scans, static_cast<std::uint64_t>(kFrames));
-  EXPECT_EQ(app.decoder().counters().vehicle_inputs, static_cast<std::uint64_t>(kFrames));
+  EXPECT_EQ(app.decoder().shares().counters().map_clouds, 1u);
+  EXPECT_EQ(app.decoder().shares().verifier().counters().accepted, 1u);
+  EXPECT_EQ(app.decoder().clouds().counters().ego_scans, static_cast<std::uint64_t>(kFrames));
+  EXPECT_EQ(app.decoder().can().counters().vehicle_inputs, static_cast<std::uint64_t>(kFrames));
   EXPECT_GE(fw_sim_bus.time_frames(), static_cast<std::uint64_t>(kFrames));
   EXPECT_EQ(clock.monotonic_ns(), (kFrames - 1) * 100'000'000LL + 1);
 

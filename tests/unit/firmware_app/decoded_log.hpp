@@ -1,5 +1,5 @@
-// Records what the decoder returns, input by input (test helper for the decoder tests): the
-// decoder itself never calls a localizer, so the tests look at its typed results.
+// Records what the decoders return, input by input (test helper for the decoder tests): the
+// decoders never call a localizer, so the tests look at their typed results.
 #pragma once
 
 #include <vector>
@@ -10,20 +10,38 @@ namespace v2xloc::firmware::test {
 
 struct DecodedLog {
   // Decodes one CAN frame and keeps the vehicle / GNSS input it yields.
-  CanInputKind can(InputDecoder& decoder, const hal::CanFrame& frame, std::int64_t time_ns) {
-    const DecodedCan d = decoder.decode_can(frame, time_ns);
+  CanInputKind can(CanInputDecoder& decoder, const hal::CanFrame& frame, std::int64_t time_ns) {
+    const DecodedCan d = decoder.decode(frame, time_ns);
     if (d.kind == CanInputKind::kVehicle) vehicle.push_back(d.vehicle);
     if (d.kind == CanInputKind::kGnssFix) gnss.push_back(d.gnss);
     return d.kind;
   }
-  // Takes the completed cloud (if any) and copies its points out of the decoder's buffers.
+  // Takes the completed cloud (if any) from the whole decoder and copies its points out of the
+  // decoder's buffers. A queued share is verified at once (these tests look at decoding, not at
+  // the verification budget).
   CloudKind cloud(InputDecoder& decoder) {
     DecodedCloud d = decoder.decode_completed();
     if (d.kind == CloudKind::kMapQueued) {
-      // These tests look at decoding, not at the verification budget: verify the share now.
-      decoder.begin_verification_period();
+      decoder.shares().begin_period(decoder.clouds().completed_local_time_ns());
       d = decoder.next_verified_share();
     }
+    return record(d);
+  }
+  // The same from the cloud reassembly alone (a map share comes back as kMapShare).
+  CloudKind cloud(CloudInputDecoder& decoder) { return record(decoder.decode_completed()); }
+
+  std::vector<VehicleInput> vehicle;
+  std::vector<GnssInput> gnss;
+  std::vector<MapCloudInput> map;
+  std::vector<std::vector<Vec3f>> map_points;
+  std::vector<EgoScanInput> ego;
+  std::vector<std::vector<Vec3f>> ego_points;
+  std::vector<std::vector<float>> ego_times;
+  std::vector<std::uint32_t> ego_frame_index;
+  std::vector<bool> ego_gnss_used;
+
+ private:
+  CloudKind record(const DecodedCloud& d) {
     if (d.kind == CloudKind::kMapCloud) {
       map.push_back(d.map);
       map_points.emplace_back(d.map.points.begin(), d.map.points.end());
@@ -37,15 +55,6 @@ struct DecodedLog {
     }
     return d.kind;
   }
-  std::vector<VehicleInput> vehicle;
-  std::vector<GnssInput> gnss;
-  std::vector<MapCloudInput> map;
-  std::vector<std::vector<Vec3f>> map_points;
-  std::vector<EgoScanInput> ego;
-  std::vector<std::vector<Vec3f>> ego_points;
-  std::vector<std::vector<float>> ego_times;
-  std::vector<std::uint32_t> ego_frame_index;
-  std::vector<bool> ego_gnss_used;
 };
 
 }  // namespace v2xloc::firmware::test

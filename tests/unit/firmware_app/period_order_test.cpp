@@ -170,8 +170,8 @@ PeriodOutcome run_one_period(int share_after_ego_reads) {
   EXPECT_EQ(b.start_and_run_period(), hal::Status::kOk);
   PeriodOutcome out;
   out.calls = b.port.calls;
-  out.accepted = b.app.decoder().verifier().counters().accepted;
-  out.future = b.app.decoder().verifier().counters().future;
+  out.accepted = b.app.decoder().shares().verifier().counters().accepted;
+  out.future = b.app.decoder().shares().verifier().counters().future;
   out.published = b.app.counters().frames_published;
   out.clock_ns = b.clock.monotonic_ns();
   return out;

@@ -129,7 +129,7 @@ TEST(RegisterCli, JsonCarriesTransformBitsAndStages) {
                                       "target_downsampled", "correspondences",
                                       "ransac_correspondence_inliers", "final_inliers"}));
   EXPECT_EQ(keys(j["dropped"]),
-            (std::vector<std::string>{"nonfinite", "source_truncated", "target_truncated",
+            (std::vector<std::string>{"nonfinite", "source_thinned", "target_thinned",
                                       "downsample_overflow", "correspondences_truncated",
                                       "search_cap_hits", "feature_queries_cut"}));
   EXPECT_EQ(keys(j["ms"]), (std::vector<std::string>{"read_source", "read_target", "downsample", "normals",

@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cinttypes>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -57,6 +59,40 @@ TEST(RegisterClouds, GlobalThenIcpRecoversLargeTransform) {
   EXPECT_GT(r.stats.ransac_validations, 0u);
   EXPECT_EQ(r.registration.nonfinite_dropped, 0u);
   EXPECT_EQ(r.registration.overflow_dropped, 0u);
+  EXPECT_GE(r.stats.voxel_used, small_params().voxel_size);  // coarser only where the profile needs it
+}
+
+// A voxel too fine for the capacity: the stages run at a coarser voxel over the whole scene
+// instead of a cut cloud. The voxel is chosen from the profile's capacity so that it overflows
+// in every profile (~1.5x the capacity).
+TEST(RegisterClouds, CloudsOverTheDownsampledCapacityAreCoarsenedNotCut) {
+  const Mat4d truth = rotation_zyx(0.2, 0.0, 0.0, Vec3d(1.0, -0.5, 0.0));
+  // Dense enough for ~3x the capacity in points, in either profile.
+  testing::UrbanSceneOptions scene = small_scene();
+  const double base_points = static_cast<double>(testing::make_urban_pair(45, 46, truth, scene).source.size());
+  const double density = 3.0 * config::kMaxDownsampledPoints / base_points;
+  scene.ground_density *= density > 1.0 ? density : 1.0;
+  scene.structure_density *= density > 1.0 ? density : 1.0;
+  const testing::CloudPair pair = testing::make_urban_pair(45, 46, truth, scene);
+  ASSERT_LE(pair.source.size(), config::kMaxScanPoints);
+  RegisterCloudsParams params = small_params();
+  params.mode = RegistrationMode::kIcpOnly;
+  // Voxels at 1 m, scaled as a surface's (count ~ 1 / voxel^2) to ~1.5x the capacity.
+  RegistrationWorkspace& ws = workspace();
+  ws.voxel.run(pair.source, 1.0f, ws.source_down);
+  const double at_1m = static_cast<double>(ws.source_down.size());
+  ASSERT_LT(at_1m, 0.5 * config::kMaxDownsampledPoints);
+  params.voxel_size = static_cast<float>(std::sqrt(at_1m / (1.5 * config::kMaxDownsampledPoints)));
+  const Mat4d guess = rotation_zyx(0.22, 0.0, 0.0, Vec3d(1.2, -0.3, 0.05));
+  const RegisterCloudsResult r = register_clouds(pair.source, pair.target, params, guess, workspace());
+  ASSERT_EQ(r.registration.status, RegistrationStatus::kOk) << to_string(r.registration.status);
+  EXPECT_GT(r.stats.voxel_coarsenings, 0u);
+  EXPECT_GT(r.stats.voxel_used, params.voxel_size);
+  EXPECT_EQ(r.stats.downsample_overflow, 0u);
+  EXPECT_EQ(r.registration.overflow_dropped, 0u);
+  EXPECT_LE(r.stats.source_downsampled, config::kMaxDownsampledPoints);
+  EXPECT_GT(r.stats.source_downsampled, config::kMaxDownsampledPoints / 2);
+  EXPECT_LT(translation_error(r.registration.transform, truth), 0.05);
 }
 
 TEST(RegisterClouds, IcpOnlyModeRefinesInitialGuess) {
@@ -211,17 +247,29 @@ TEST(RegisterCloudsBadInput, DegenerateCloudsGiveClearStatuses) {
             RegistrationStatus::kInvalidInput);
 }
 
-TEST(RegisterCloudsBadInput, MoreThanCapacityIsTruncatedAndCounted) {
-  testing::CloudPair pair = testing::make_urban_pair(43, 44, Mat4d::Identity(), small_scene());
-  const std::size_t original = pair.source.size();
-  const std::size_t extra = config::kMaxScanPoints + 1000 - original;
-  // Pad with far-away points beyond the capacity: they are never seen.
-  for (std::size_t i = 0; i < extra; ++i) pair.source.emplace_back(1000.0f + float(i % 100), 0.0f, 0.0f);
-  ASSERT_GT(pair.source.size(), config::kMaxScanPoints);
+// A cloud over the scan capacity is used evenly thinned, not cut: the source, repeated until it
+// is 1000 points over, registers as the original does, and its last points are seen.
+TEST(RegisterCloudsBadInput, MoreThanCapacityIsThinnedEvenlyAndCounted) {
+  const Mat4d truth = rotation_zyx(0.4, 0.0, 0.0, Vec3d(2.0, 1.0, 0.0));
+  testing::CloudPair pair = testing::make_urban_pair(43, 44, truth, small_scene());
+  const std::vector<Vec3f> original = pair.source;
+  std::vector<Vec3f> repeated;
+  while (repeated.size() < config::kMaxScanPoints + 1000) {
+    for (const Vec3f& p : original) repeated.push_back(p);
+  }
+  repeated.resize(config::kMaxScanPoints + 1000);
+  // The last 200 points are moved 500 m away: a cut would never see them, an even thinning does.
+  for (std::size_t i = repeated.size() - 200; i < repeated.size(); ++i) repeated[i] += Vec3f(500.0f, 0.0f, 0.0f);
   const RegisterCloudsResult r =
-      register_clouds(pair.source, pair.target, small_params(), Mat4d::Identity(), workspace());
-  EXPECT_EQ(r.stats.source_truncated, 1000u);
+      register_clouds(repeated, pair.target, small_params(), Mat4d::Identity(), workspace());
+  EXPECT_EQ(r.stats.source_thinned, 1000u);
+  EXPECT_EQ(r.stats.target_thinned, 0u);
   EXPECT_GE(r.registration.overflow_dropped, 1000u);
+  float max_x = -1e9f;
+  for (const Vec3f& p : workspace().source_down.span()) max_x = std::max(max_x, p.x());
+  EXPECT_GT(max_x, 400.0f);  // the far copy is in the downsampled cloud
+  ASSERT_EQ(r.registration.status, RegistrationStatus::kOk) << to_string(r.registration.status);
+  EXPECT_LT(translation_error(r.registration.transform, truth), 0.05);
 }
 
 }  // namespace

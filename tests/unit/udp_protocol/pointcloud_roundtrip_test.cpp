@@ -210,11 +210,38 @@ TEST(PointCloudUdp, MaxSizeFrameFillsTheCapacityExactly) {
   EXPECT_EQ(feed(*r, d, &got), 1);
   EXPECT_EQ(got.size(), 6000u);
 
-  const auto over = make_cloud(2001, 30.0f, 5);
-  Datagrams d2;
-  ASSERT_EQ(fragment_all(make_info(2), over.view(), d2), CloudStatus::kOk);
-  EXPECT_EQ(r->push(d2[0], 0), CloudStatus::kCapacityExceeded);
-  EXPECT_EQ(r->counters().over_capacity, 1u);
+  EXPECT_EQ(r->counters().points_thinned, 0u);
+}
+
+// A cloud over the capacity arrives evenly thinned to it, whatever the fragment order: the
+// points kept are those a full-size reassembler receives at the selected indices (point i when
+// floor(i * kept / total) steps up), the sweep's whole extent, and the rest is counted.
+TEST(PointCloudUdp, CloudOverTheCapacityIsThinnedEvenlyNotCut) {
+  for (const std::size_t total : {2001u, 3500u}) {
+    const auto cloud = make_cloud(total, 30.0f, 5);
+    Datagrams d;
+    ASSERT_EQ(fragment_all(make_info(2), cloud.view(), d), CloudStatus::kOk);
+    std::vector<float> full;
+    auto big = std::make_unique<StaticPointCloudReassembler<1, 4000, 32>>();
+    ASSERT_EQ(feed(*big, d, &full), 1);
+    ASSERT_EQ(full.size(), 3 * total);
+
+    std::reverse(d.begin(), d.end());
+    auto small = std::make_unique<StaticPointCloudReassembler<1, 2000, 32>>();
+    std::vector<float> got;
+    ASSERT_EQ(feed(*small, d, &got), 1) << total;
+    ASSERT_EQ(got.size(), 6000u);
+    EXPECT_EQ(small->completed().points_thinned, total - 2000);
+    EXPECT_EQ(small->counters().points_thinned, total - 2000);
+    EXPECT_EQ(small->counters().over_capacity, 0u);
+    std::vector<float> expected;
+    for (std::uint64_t i = 0; i < total; ++i) {
+      if ((i + 1) * 2000 / total == i * 2000 / total) continue;
+      for (int a = 0; a < 3; ++a) expected.push_back(full[3 * i + a]);
+    }
+    EXPECT_EQ(got, expected) << total;
+    EXPECT_EQ(got[got.size() - 1], full[full.size() - 1]);  // the last point sent is kept
+  }
 }
 
 TEST(PointCloudUdp, SmallerDatagramLimitIsHonoured) {

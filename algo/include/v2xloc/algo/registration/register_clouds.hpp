@@ -87,9 +87,11 @@ struct RegisterStageStats {
   std::uint64_t ticks[static_cast<int>(RegisterStage::kCount)] = {};
   std::uint64_t total_ticks = 0;
   std::uint32_t source_input = 0, target_input = 0;          // points handed in
-  std::uint32_t source_truncated = 0, target_truncated = 0;  // beyond config::kMaxScanPoints
+  std::uint32_t source_thinned = 0, target_thinned = 0;  // left out, evenly, beyond config::kMaxScanPoints
   std::uint32_t source_downsampled = 0, target_downsampled = 0;
   std::uint32_t downsample_overflow = 0;   // voxel output/hash/range overflow (both clouds)
+  std::uint32_t voxel_coarsenings = 0;     // voxel grown x1.25 because a cloud overflowed the capacity
+  float voxel_used = 0.0f;                 // [m] the voxel the stages ran at
   std::uint32_t correspondences = 0;
   std::uint32_t correspondences_truncated = 0;
   std::uint32_t ransac_validations = 0;

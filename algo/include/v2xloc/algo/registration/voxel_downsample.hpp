@@ -49,14 +49,16 @@ struct VoxelDownsampleResult {
   std::uint32_t hash_overflow = 0;     // points whose voxel found no slot within kVoxelMaxProbes
   std::uint32_t range_overflow = 0;    // points whose voxel index does not fit int32
   std::uint32_t max_probe = 0;         // longest probe sequence seen
+  std::uint32_t thinned = 0;           // points left out to keep to max_points (evenly spread)
 };
 
 // out is cleared first; its capacity bounds the number of voxels. accumulators needs
-// out.capacity() entries (fewer -> that many voxels at most).
+// out.capacity() entries (fewer -> that many voxels at most). A cloud of more than max_points
+// points is downsampled from max_points of them evenly spread over it (the rest counted in thinned).
 VoxelDownsampleResult voxel_downsample(std::span<const Vec3f> points, float voxel_size,
                                        std::span<VoxelHashSlot> slots,
                                        std::span<VoxelAccumulator> accumulators,
-                                       BoundedVector<Vec3f>& out);
+                                       BoundedVector<Vec3f>& out, std::size_t max_points = SIZE_MAX);
 
 // Hash table and accumulators sized in the type. Large: declare it static.
 template <std::size_t Slots = config::kVoxelHashSlots,
@@ -67,9 +69,9 @@ struct VoxelDownsampleStorage {
   VoxelAccumulator accumulators[MaxVoxels];
 
   VoxelDownsampleResult run(std::span<const Vec3f> points, float voxel_size,
-                            BoundedVector<Vec3f>& out) {
+                            BoundedVector<Vec3f>& out, std::size_t max_points = SIZE_MAX) {
     return voxel_downsample(points, voxel_size, std::span<VoxelHashSlot>(slots, Slots),
-                            std::span<VoxelAccumulator>(accumulators, MaxVoxels), out);
+                            std::span<VoxelAccumulator>(accumulators, MaxVoxels), out, max_points);
   }
 };
 
