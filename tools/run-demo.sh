@@ -88,19 +88,12 @@ step "writing $OUT/index.md"
   echo "- Fused trajectories from the firmware's CAN frames (TUM): [estimates/](estimates/)"
   echo "- Recordings ($(du -sh "$REC" | cut -f1)): \`$REC\`"
   echo
-  echo "| recording | top view (eval) | error over time | timing | simulator top view |"
-  echo "|---|---|---|---|---|"
+  echo "| recording | top view | error over time | timing |"
+  echo "|---|---|---|---|"
   for dir in "${dirs[@]}"; do
     name=$(basename "$dir")
     cell() { [ -f "$OUT/plots/$1" ] && echo "[$1](plots/$1)" || echo "-"; }
-    sim_view="-"
-    if [ -f "$dir/topview.png" ]; then
-      case "$dir" in
-        "$OUT"/*) sim_view="[topview.png](${dir#"$OUT"/}/topview.png)" ;;  # a link inside out/
-        *) sim_view="\`$dir/topview.png\`" ;;
-      esac
-    fi
-    echo "| $name | $(cell "${name}_topview.png") | $(cell "${name}_error.png") | $(cell "${name}_timing.png") | $sim_view |"
+    echo "| $name | $(cell "${name}_topview.png") | $(cell "${name}_error.png") | $(cell "${name}_timing.png") |"
   done
   echo
   echo "Re-draw the plots without re-running: \`/usr/bin/python3 tools/plots/plot_run.py $OUT/plots\`"

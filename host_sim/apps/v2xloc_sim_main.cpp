@@ -4,7 +4,7 @@
 // --all writes DIR/sim<k>_<perm>/ for all 12 combinations (one after the other; tools/run-demo.sh
 // runs one process per recording instead, on every core).
 // v2xloc-sim export-pcd RECORDING_DIR --out DIR [--encoding binary_compressed|binary|ascii]
-// writes standard float32 PCD copies of a recording's clouds (format 2 stores them quantised).
+// writes standard float32 PCD copies of a recording's clouds (the recording stores them quantised).
 #include "host_sim/recording/pcd_export.hpp"
 #include "host_sim/recording/recorder.hpp"
 
@@ -130,7 +130,7 @@ int main(int argc, char** argv) {
   CLI::App* export_pcd = app.add_subcommand(
       "export-pcd", "standard PCD copies of a recording's clouds (float32 x y z intensity t) for PCL / Open3D");
   std::string export_in, export_out, encoding_name = "binary_compressed";
-  export_pcd->add_option("RECORDING_DIR", export_in, "recording folder (format 1 or 2)")->required();
+  export_pcd->add_option("RECORDING_DIR", export_in, "recording folder")->required();
   export_pcd->add_option("--out", export_out, "output folder: ego_lidar/, infra/, agents/ as in the recording")
       ->required();
   export_pcd->add_option("--encoding", encoding_name, "PCD DATA kind (binary_compressed: LZF, as PCL writes it)")

@@ -34,32 +34,8 @@ std::string_view trim(std::string_view s) {
   return s;
 }
 
-}  // namespace
-
-std::int64_t candump_timestamp_us(double seconds) {
-  return static_cast<std::int64_t>(std::floor(seconds * 1e6 + 0.5));
-}
-
-std::string format_candump_line(const CandumpRecord& r) {
-  char buf[96];
-  const bool extended = (r.frame.id & hal::CanFrame::kExtendedFlag) != 0u;
-  const std::int64_t ts = r.timestamp_us < 0 ? 0 : r.timestamp_us;
-  int n = std::snprintf(buf, sizeof buf, "(%lld.%06lld) %s ", static_cast<long long>(ts / 1000000),
-                        static_cast<long long>(ts % 1000000), r.interface.c_str());
-  std::string line(buf, static_cast<std::size_t>(n));
-  n = extended ? std::snprintf(buf, sizeof buf, "%08X#", r.frame.id & 0x1FFFFFFFu)
-               : std::snprintf(buf, sizeof buf, "%03X#", r.frame.id & 0x7FFu);
-  line.append(buf, static_cast<std::size_t>(n));
-  const std::uint8_t dlc = r.frame.dlc > 8 ? 8 : r.frame.dlc;
-  for (std::uint8_t i = 0; i < dlc; ++i) {
-    std::snprintf(buf, sizeof buf, "%02X", r.frame.data[i]);
-    line.append(buf, 2);
-  }
-  return line;
-}
-
-bool parse_candump_line(std::string_view line, CandumpRecord& out, std::string& error) {
-  std::string_view s = trim(line);
+// "(seconds.microseconds)" and the space after it, consumed from the front of s.
+bool parse_time_stamp(std::string_view& s, std::int64_t& timestamp_us, std::string& error) {
   if (s.empty() || s.front() != '(') {
     error = "expected '(' time stamp";
     return false;
@@ -87,13 +63,20 @@ bool parse_candump_line(std::string_view line, CandumpRecord& out, std::string& 
     error = "expected a space after the time stamp";
     return false;
   }
+  timestamp_us = sec * 1000000 + usec;
+  return true;
+}
+
+// The interface name (1-15 printable characters but '#', '(' and ')'), consumed with the blanks
+// around it.
+bool parse_interface(std::string_view& s, std::string_view& iface, std::string& error) {
   s = trim(s);
   const std::size_t space = s.find(' ');
   if (space == std::string_view::npos || space == 0 || space > 15) {
     error = "missing or bad interface name";
     return false;
   }
-  const std::string_view iface = s.substr(0, space);
+  iface = s.substr(0, space);
   for (char c : iface) {
     if (c <= ' ' || c == '#' || c == '(' || c == ')') {
       error = "bad interface name";
@@ -101,18 +84,16 @@ bool parse_candump_line(std::string_view line, CandumpRecord& out, std::string& 
     }
   }
   s = trim(s.substr(space + 1));
-  const std::size_t hash = s.find('#');
-  if (hash == std::string_view::npos) {
-    error = "missing '#' between id and data";
-    return false;
-  }
-  const std::string_view id_text = s.substr(0, hash);
-  std::string_view data_text = s.substr(hash + 1);
+  return true;
+}
+
+// 3 hex digits (standard, <= 0x7FF) or 8 (extended, no error/flag bits; kExtendedFlag set).
+bool parse_id(std::string_view id_text, std::uint32_t& id, std::string& error) {
   if (id_text.size() != 3 && id_text.size() != 8) {
     error = "id must have 3 (standard) or 8 (extended) hex digits";
     return false;
   }
-  std::uint32_t id = 0;
+  id = 0;
   for (char c : id_text) {
     const int v = hex_value(c);
     if (v < 0) {
@@ -132,6 +113,11 @@ bool parse_candump_line(std::string_view line, CandumpRecord& out, std::string& 
     }
     id |= hal::CanFrame::kExtendedFlag;
   }
+  return true;
+}
+
+// 0-8 data bytes as hex pairs; CAN FD ("##") and remote ("R") frames refused.
+bool parse_data(std::string_view data_text, hal::CanFrame& frame, std::string& error) {
   if (!data_text.empty() && data_text.front() == '#') {
     error = "CAN FD frames are not supported";
     return false;
@@ -148,8 +134,6 @@ bool parse_candump_line(std::string_view line, CandumpRecord& out, std::string& 
     error = "more than 8 data bytes";
     return false;
   }
-  hal::CanFrame frame;
-  frame.id = id;
   frame.dlc = static_cast<std::uint8_t>(data_text.size() / 2);
   for (std::size_t i = 0; i < frame.dlc; ++i) {
     const int hi = hex_value(data_text[2 * i]), lo = hex_value(data_text[2 * i + 1]);
@@ -159,7 +143,46 @@ bool parse_candump_line(std::string_view line, CandumpRecord& out, std::string& 
     }
     frame.data[i] = static_cast<std::uint8_t>(hi * 16 + lo);
   }
-  out.timestamp_us = sec * 1000000 + usec;
+  return true;
+}
+
+}  // namespace
+
+std::int64_t candump_timestamp_us(double seconds) {
+  return static_cast<std::int64_t>(std::floor(seconds * 1e6 + 0.5));
+}
+
+std::string format_candump_line(const CandumpRecord& r) {
+  char buf[96];
+  const bool extended = (r.frame.id & hal::CanFrame::kExtendedFlag) != 0u;
+  const std::int64_t ts = r.timestamp_us < 0 ? 0 : r.timestamp_us;
+  int n = std::snprintf(buf, sizeof buf, "(%lld.%06lld) %s ", static_cast<long long>(ts / 1000000),
+                        static_cast<long long>(ts % 1000000), r.interface.c_str());
+  std::string line(buf, static_cast<std::size_t>(n));
+  n = extended ? std::snprintf(buf, sizeof buf, "%08X#", r.frame.id & 0x1FFFFFFFu)
+               : std::snprintf(buf, sizeof buf, "%03X#", r.frame.id & 0x7FFu);
+  line.append(buf, static_cast<std::size_t>(n));
+  const std::uint8_t dlc = r.frame.dlc > 8 ? 8 : r.frame.dlc;
+  for (std::uint8_t i = 0; i < dlc; ++i) {
+    std::snprintf(buf, sizeof buf, "%02X", r.frame.data[i]);
+    line.append(buf, 2);
+  }
+  return line;
+}
+
+bool parse_candump_line(std::string_view line, CandumpRecord& out, std::string& error) {
+  std::string_view s = trim(line);
+  std::int64_t timestamp_us = 0;
+  std::string_view iface;
+  if (!parse_time_stamp(s, timestamp_us, error) || !parse_interface(s, iface, error)) return false;
+  const std::size_t hash = s.find('#');
+  if (hash == std::string_view::npos) {
+    error = "missing '#' between id and data";
+    return false;
+  }
+  hal::CanFrame frame;
+  if (!parse_id(s.substr(0, hash), frame.id, error) || !parse_data(s.substr(hash + 1), frame, error)) return false;
+  out.timestamp_us = timestamp_us;
   out.interface = std::string(iface);
   out.frame = frame;
   return true;

@@ -92,101 +92,118 @@ bool parse_list(const std::vector<std::string_view>& tokens, std::vector<T>& out
   return true;
 }
 
-bool parse_header(std::span<const std::uint8_t> bytes, Header& h, std::string& error) {
+// The per-field lists of a header (FIELDS, SIZE, TYPE, COUNT, SCALE), as read.
+struct FieldLists {
   std::vector<std::string> names;
   std::vector<std::size_t> sizes;
   std::vector<std::size_t> counts;
   std::vector<char> types;
   std::vector<double> scales;
-  bool has_data = false;
-  std::size_t pos = 0;
-  std::size_t line_no = 0;
-  std::string_view line;
-  std::vector<std::string_view> tokens;
-  while (!has_data && detail::next_line(bytes, pos, line)) {
-    ++line_no;
-    if (detail::split(line, tokens) == 0 || tokens[0].front() == '#') continue;
-    const std::string key = detail::to_lower(tokens[0]);
-    const std::string where = " (header line " + std::to_string(line_no) + ")";
-    if (key == "fields" || key == "columns") {
-      names.assign(tokens.begin() + 1, tokens.end());
-    } else if (key == "size") {
-      if (!parse_list(tokens, sizes)) { error = "bad SIZE" + where; return false; }
-    } else if (key == "count") {
-      if (!parse_list(tokens, counts)) { error = "bad COUNT" + where; return false; }
-    } else if (key == "type") {
-      types.clear();
-      for (std::size_t i = 1; i < tokens.size(); ++i) {
-        if (tokens[i].size() != 1) { error = "bad TYPE" + where; return false; }
-        types.push_back(tokens[i][0]);
-      }
-    } else if (key == "scale") {
-      if (!parse_list(tokens, scales) ||
-          !std::all_of(scales.begin(), scales.end(), [](double v) { return std::isfinite(v) && v > 0.0; })) {
-        error = "SCALE needs finite positive numbers" + where; return false;
-      }
-    } else if (key == "width") {
-      if (tokens.size() != 2 || !detail::parse_number(tokens[1], h.width)) {
-        error = "bad WIDTH" + where; return false;
-      }
-      h.has_width = true;
-    } else if (key == "height") {
-      if (tokens.size() != 2 || !detail::parse_number(tokens[1], h.height)) {
-        error = "bad HEIGHT" + where; return false;
-      }
-    } else if (key == "points") {
-      if (tokens.size() != 2 || !detail::parse_number(tokens[1], h.points)) {
-        error = "bad POINTS" + where; return false;
-      }
-      h.has_points = true;
-    } else if (key == "viewpoint") {
-      if (tokens.size() != 8) { error = "VIEWPOINT needs 7 values" + where; return false; }
-      for (std::size_t i = 0; i < 7; ++i) {
-        if (!detail::parse_number(tokens[i + 1], h.viewpoint[i])) {
-          error = "bad VIEWPOINT" + where; return false;
-        }
-      }
-      // The viewpoint becomes the sensor pose: inf/nan or a non-unit quaternion would silently
-      // become a wrong transform downstream. PCL prints unit quaternions to >= 6 digits.
-      const float* v = h.viewpoint;
-      const float norm = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
-      if (!std::all_of(v, v + 7, [](float x) { return std::isfinite(x); }) || !(std::abs(norm - 1.0f) <= 1e-3f)) {
-        error = "VIEWPOINT must be 7 finite numbers with a unit quaternion" + where; return false;
-      }
-      h.has_viewpoint = true;
-    } else if (key == "data") {
-      const std::string kind = tokens.size() == 2 ? detail::to_lower(tokens[1]) : std::string();
-      if (kind == "ascii") h.kind = DataKind::kAscii;
-      else if (kind == "binary") h.kind = DataKind::kBinary;
-      else if (kind == "binary_compressed") h.kind = DataKind::kBinaryCompressed;
-      else if (kind == "binary_shuffled_zlib") h.kind = DataKind::kShuffledZlib;
-      else { error = "unknown DATA type" + where; return false; }
-      has_data = true;
+};
+
+// VIEWPOINT: 7 finite numbers with a unit quaternion.
+bool parse_viewpoint(const std::vector<std::string_view>& tokens, const std::string& where, Header& h,
+                     std::string& error) {
+  if (tokens.size() != 8) { error = "VIEWPOINT needs 7 values" + where; return false; }
+  for (std::size_t i = 0; i < 7; ++i) {
+    if (!detail::parse_number(tokens[i + 1], h.viewpoint[i])) {
+      error = "bad VIEWPOINT" + where; return false;
     }
-    // VERSION and unknown keywords are ignored, as PCL does.
   }
-  if (!has_data) { error = "no DATA line: not a PCD file or truncated header"; return false; }
-  h.data_offset = pos;
+  // The viewpoint becomes the sensor pose: inf/nan or a non-unit quaternion would silently
+  // become a wrong transform downstream. PCL prints unit quaternions to >= 6 digits.
+  const float* v = h.viewpoint;
+  const float norm = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
+  if (!std::all_of(v, v + 7, [](float x) { return std::isfinite(x); }) || !(std::abs(norm - 1.0f) <= 1e-3f)) {
+    error = "VIEWPOINT must be 7 finite numbers with a unit quaternion" + where; return false;
+  }
+  h.has_viewpoint = true;
+  return true;
+}
+
+// A WIDTH, HEIGHT or POINTS line: one unsigned number.
+bool parse_count_line(const std::vector<std::string_view>& tokens, const char* name, const std::string& where,
+                      std::uint64_t& out, std::string& error) {
+  if (tokens.size() != 2 || !detail::parse_number(tokens[1], out)) {
+    error = std::string("bad ") + name + where; return false;
+  }
+  return true;
+}
+
+// DATA: the encoding of what follows the header.
+bool parse_data_line(const std::vector<std::string_view>& tokens, const std::string& where, Header& h,
+                     std::string& error) {
+  const std::string kind = tokens.size() == 2 ? detail::to_lower(tokens[1]) : std::string();
+  if (kind == "ascii") h.kind = DataKind::kAscii;
+  else if (kind == "binary") h.kind = DataKind::kBinary;
+  else if (kind == "binary_compressed") h.kind = DataKind::kBinaryCompressed;
+  else if (kind == "binary_shuffled_zlib") h.kind = DataKind::kShuffledZlib;
+  else { error = "unknown DATA type" + where; return false; }
+  return true;
+}
+
+// One header line (its first token lower-cased in `key`). VERSION and unknown keywords are
+// ignored, as PCL does.
+bool parse_header_line(const std::string& key, const std::vector<std::string_view>& tokens, const std::string& where,
+                       Header& h, FieldLists& lists, std::string& error) {
+  if (key == "fields" || key == "columns") {
+    lists.names.assign(tokens.begin() + 1, tokens.end());
+  } else if (key == "size") {
+    if (!parse_list(tokens, lists.sizes)) { error = "bad SIZE" + where; return false; }
+  } else if (key == "count") {
+    if (!parse_list(tokens, lists.counts)) { error = "bad COUNT" + where; return false; }
+  } else if (key == "type") {
+    lists.types.clear();
+    for (std::size_t i = 1; i < tokens.size(); ++i) {
+      if (tokens[i].size() != 1) { error = "bad TYPE" + where; return false; }
+      lists.types.push_back(tokens[i][0]);
+    }
+  } else if (key == "scale") {
+    if (!parse_list(tokens, lists.scales) ||
+        !std::all_of(lists.scales.begin(), lists.scales.end(), [](double v) { return std::isfinite(v) && v > 0.0; })) {
+      error = "SCALE needs finite positive numbers" + where; return false;
+    }
+  } else if (key == "width") {
+    if (!parse_count_line(tokens, "WIDTH", where, h.width, error)) return false;
+    h.has_width = true;
+  } else if (key == "height") {
+    if (!parse_count_line(tokens, "HEIGHT", where, h.height, error)) return false;
+  } else if (key == "points") {
+    if (!parse_count_line(tokens, "POINTS", where, h.points, error)) return false;
+    h.has_points = true;
+  } else if (key == "viewpoint") {
+    if (!parse_viewpoint(tokens, where, h, error)) return false;
+  } else if (key == "data") {
+    if (!parse_data_line(tokens, where, h, error)) return false;
+  }
+  return true;
+}
+
+// The lists agree in length; each field's scalar type, count and place in a point record; the
+// fields that carry x, y, z, intensity, time and normals.
+bool build_fields(FieldLists& lists, Header& h, std::string& error) {
+  const std::vector<std::string>& names = lists.names;
   if (names.empty()) { error = "missing FIELDS"; return false; }
-  if (sizes.size() != names.size() || types.size() != names.size()) {
+  if (lists.sizes.size() != names.size() || lists.types.size() != names.size()) {
     error = "FIELDS, SIZE and TYPE disagree in length"; return false;
   }
-  if (counts.empty()) counts.assign(names.size(), 1);
-  if (counts.size() != names.size()) { error = "FIELDS and COUNT disagree in length"; return false; }
+  if (lists.counts.empty()) lists.counts.assign(names.size(), 1);
+  if (lists.counts.size() != names.size()) { error = "FIELDS and COUNT disagree in length"; return false; }
   // PCL ignores unknown keywords: a SCALE in a standard file would be read unscaled elsewhere.
-  if (!scales.empty() && h.kind != DataKind::kShuffledZlib) {
+  if (!lists.scales.empty() && h.kind != DataKind::kShuffledZlib) {
     error = "SCALE is only defined for DATA binary_shuffled_zlib"; return false;
   }
-  if (!scales.empty() && scales.size() != names.size()) { error = "FIELDS and SCALE disagree in length"; return false; }
-
+  if (!lists.scales.empty() && lists.scales.size() != names.size()) {
+    error = "FIELDS and SCALE disagree in length"; return false;
+  }
   h.fields.resize(names.size());
   for (std::size_t i = 0; i < names.size(); ++i) {
     Field& f = h.fields[i];
     f.name = names[i];
-    f.size = sizes[i];
-    f.type = types[i];
-    f.count = counts[i];
-    if (!scales.empty()) f.scale = scales[i];
+    f.size = lists.sizes[i];
+    f.type = lists.types[i];
+    f.count = lists.counts[i];
+    if (!lists.scales.empty()) f.scale = lists.scales[i];
     if (!scalar_of(f.type, f.size, f.scalar)) {
       error = "unsupported TYPE/SIZE '" + std::string(1, f.type) + std::to_string(f.size) +
               "' for field '" + f.name + "'";
@@ -206,6 +223,11 @@ bool parse_header(std::span<const std::uint8_t> bytes, Header& h, std::string& e
   if (h.role_field[kX] < 0 || h.role_field[kY] < 0 || h.role_field[kZ] < 0) {
     error = "FIELDS lack x, y and z"; return false;
   }
+  return true;
+}
+
+// WIDTH and POINTS stand in for each other (POINTS = WIDTH x HEIGHT).
+bool resolve_point_count(Header& h, std::string& error) {
   if (!h.has_width && !h.has_points) { error = "missing WIDTH and POINTS"; return false; }
   if (!h.has_width) { h.width = h.points; h.height = 1; }
   if (!h.has_points) {
@@ -215,6 +237,25 @@ bool parse_header(std::span<const std::uint8_t> bytes, Header& h, std::string& e
     h.points = h.width * h.height;
   }
   return true;
+}
+
+bool parse_header(std::span<const std::uint8_t> bytes, Header& h, std::string& error) {
+  FieldLists lists;
+  std::size_t pos = 0;
+  std::size_t line_no = 0;
+  std::string_view line;
+  std::vector<std::string_view> tokens;
+  bool has_data = false;
+  while (!has_data && detail::next_line(bytes, pos, line)) {
+    ++line_no;
+    if (detail::split(line, tokens) == 0 || tokens[0].front() == '#') continue;
+    const std::string key = detail::to_lower(tokens[0]);
+    if (!parse_header_line(key, tokens, " (header line " + std::to_string(line_no) + ")", h, lists, error)) return false;
+    has_data = key == "data";
+  }
+  if (!has_data) { error = "no DATA line: not a PCD file or truncated header"; return false; }
+  h.data_offset = pos;
+  return build_fields(lists, h, error) && resolve_point_count(h, error);
 }
 
 // Fills `out` one field at a time: column(field_index, dst, stride) writes the field's n values

@@ -52,8 +52,8 @@ std::vector<png_bytep> row_pointers(const void* data, int height, std::size_t by
   return rows;
 }
 
-bool encode(int width, int height, int bit_depth, int colour_type, const std::vector<png_bytep>& rows,
-            std::vector<std::uint8_t>& out, std::string& error) {
+bool encode_gray16(int width, int height, const std::vector<png_bytep>& rows, std::vector<std::uint8_t>& out,
+                   std::string& error) {
   ErrorSink sink;
   out.clear();
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &sink, on_error, on_warning);
@@ -72,25 +72,25 @@ bool encode(int width, int height, int bit_depth, int colour_type, const std::ve
   // zlib level 1: a recording writes 200 disparity maps; on them level 6 was 4 % smaller but twice
   // the time (22 vs 11 ms per 621 x 187 map).
   png_set_compression_level(png, 1);
-  png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height), bit_depth, colour_type,
+  png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height), 16, PNG_COLOR_TYPE_GRAY,
                PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_write_info(png, info);
   // PNG stores 16-bit samples big-endian; our pixels are in host order.
-  if (bit_depth == 16 && std::endian::native == std::endian::little) png_set_swap(png);
+  if (std::endian::native == std::endian::little) png_set_swap(png);
   png_write_image(png, const_cast<png_bytepp>(rows.data()));
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
   return true;
 }
 
-bool check_size(int width, int height, std::size_t values, std::size_t per_pixel, std::string& error) {
+bool check_size(int width, int height, std::size_t values, std::string& error) {
   if (width <= 0 || height <= 0) {
     error = "cannot encode an empty image";
     return false;
   }
-  if (values != static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * per_pixel) {
+  if (values != static_cast<std::size_t>(width) * static_cast<std::size_t>(height)) {
     error = "image has " + std::to_string(values) + " values, expected " + std::to_string(width) + " x " +
-            std::to_string(height) + " x " + std::to_string(per_pixel);
+            std::to_string(height);
     return false;
   }
   return true;
@@ -180,27 +180,13 @@ bool write_file(const std::string& path, const std::vector<std::uint8_t>& bytes,
 }  // namespace
 
 bool encode_png(const Image16& image, std::vector<std::uint8_t>& out, std::string& error) {
-  if (!check_size(image.width, image.height, image.pixels.size(), 1, error)) return false;
-  return encode(image.width, image.height, 16, PNG_COLOR_TYPE_GRAY,
-                row_pointers(image.pixels.data(), image.height, static_cast<std::size_t>(image.width) * 2), out, error);
-}
-
-bool encode_png(const ImageRgb& image, std::vector<std::uint8_t>& out, std::string& error) {
-  if (!check_size(image.width, image.height, image.pixels.size(), 3, error)) return false;
-  return encode(image.width, image.height, 8, PNG_COLOR_TYPE_RGB,
-                row_pointers(image.pixels.data(), image.height, static_cast<std::size_t>(image.width) * 3), out, error);
+  if (!check_size(image.width, image.height, image.pixels.size(), error)) return false;
+  return encode_gray16(image.width, image.height,
+                       row_pointers(image.pixels.data(), image.height, static_cast<std::size_t>(image.width) * 2), out,
+                       error);
 }
 
 bool write_png(const std::string& path, const Image16& image, std::string& error) {
-  std::vector<std::uint8_t> bytes;
-  if (!encode_png(image, bytes, error)) {
-    error = path + ": " + error;
-    return false;
-  }
-  return write_file(path, bytes, error);
-}
-
-bool write_png(const std::string& path, const ImageRgb& image, std::string& error) {
   std::vector<std::uint8_t> bytes;
   if (!encode_png(image, bytes, error)) {
     error = path + ": " + error;

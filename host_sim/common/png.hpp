@@ -1,6 +1,7 @@
 // PNG files through libpng (the field's PNG library): 16-bit grayscale (KITTI-style disparity maps
-// in recordings) and 8-bit RGB (top views). Any PNG decoder reads what we write; the readers accept
-// any valid PNG of the right kind, whatever compression or filters the writer chose.
+// in recordings) written and read, and any PNG read as 8-bit RGB (checking pictures other tools
+// draw). Any PNG decoder reads what we write; the readers accept any valid PNG of the right kind,
+// whatever compression or filters the writer chose.
 #pragma once
 
 #include <cstdint>
@@ -22,12 +23,10 @@ struct ImageRgb {  // 8-bit RGB
   std::vector<std::uint8_t> pixels;  // row-major, 3 bytes per pixel
 };
 
-// Encoders return false with `error` set when the image is empty or inconsistent (pixel count
+// The encoder returns false with `error` set when the image is empty or inconsistent (pixel count
 // != width * height) or libpng fails.
 bool encode_png(const Image16& image, std::vector<std::uint8_t>& out, std::string& error);
-bool encode_png(const ImageRgb& image, std::vector<std::uint8_t>& out, std::string& error);
 bool write_png(const std::string& path, const Image16& image, std::string& error);
-bool write_png(const std::string& path, const ImageRgb& image, std::string& error);
 
 // A 16-bit grayscale PNG (anything else is an error: a disparity map must keep its 16 bits).
 bool decode_png16(std::span<const std::uint8_t> bytes, Image16& out, std::string& error);

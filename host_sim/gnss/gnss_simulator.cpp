@@ -130,34 +130,55 @@ void GnssSimulator::find_reflections(const Eigen::Vector3d& antenna_enu, const E
   }
 }
 
-GnssFix GnssSimulator::fix(double t, const Eigen::Vector3d& antenna_enu, const Eigen::Vector3d& antenna_velocity_enu) {
+// What one fix's observations share: the receiver's true position and motion, the atmosphere's true
+// and modelled zenith delays and the code-carrier smoothing gain for the time since the last fix.
+struct GnssSimulator::Epoch {
+  double t = 0.0;
+  Eigen::Vector3d antenna_enu, antenna_velocity_enu, rx_ecef;
+  double wavelength = 0.0, zenith_model = 0.0, zenith_true = 0.0, smoothing = 1.0;
+};
+
+struct GnssSimulator::Candidate {
+  std::size_t index;
+  Eigen::Vector3d sat_ecef, los_enu;
+  double elevation;
+};
+
+// The signal the receiver tracks from one satellite: its multipath delay, C/N0 and the direction
+// it arrives from (the line of sight, or the reflection's for NLOS).
+struct GnssSimulator::SignalPath {
+  double error_m = 0.0;
+  double cn0 = 0.0;
+  Eigen::Vector3d arrival;
+};
+
+GnssSimulator::Epoch GnssSimulator::begin_epoch(double t, const Eigen::Vector3d& antenna_enu,
+                                                const Eigen::Vector3d& antenna_velocity_enu) {
   const double dt = started_ ? t - last_t_ : 0.0;
   if (dt > 0.0) propagate_errors(dt);
   started_ = true;
   last_t_ = t;
-
-  GnssFix out;
-  out.t = t;
-  const Eigen::Vector3d rx_ecef = v2xloc::enu_to_ecef(origin_, antenna_enu);
+  Epoch e;
+  e.t = t;
+  e.antenna_enu = antenna_enu;
+  e.antenna_velocity_enu = antenna_velocity_enu;
+  e.rx_ecef = v2xloc::enu_to_ecef(origin_, antenna_enu);
   const double lat_rad = origin_.geodetic.lat_deg * kDegToRad;
-  const double wavelength = gnss::kSpeedOfLight / cfg_.carrier_hz;
-  const double zenith_model = gnss::saastamoinen_zenith_m(1013.25, 288.15, 0.5, lat_rad, origin_.geodetic.alt_m);
-  const double zenith_true = tropo_true_scale_ *
+  e.wavelength = gnss::kSpeedOfLight / cfg_.carrier_hz;
+  e.zenith_model = gnss::saastamoinen_zenith_m(1013.25, 288.15, 0.5, lat_rad, origin_.geodetic.alt_m);
+  e.zenith_true = tropo_true_scale_ *
       gnss::saastamoinen_zenith_m(cfg_.pressure_hpa, cfg_.temperature_k, cfg_.relative_humidity, lat_rad,
                                   origin_.geodetic.alt_m);
-  const double smoothing = dt > 0.0 ? 1.0 - std::exp(-dt / cfg_.multipath_smoothing_tau_s) : 1.0;
-  discover_facades(antenna_enu);
+  e.smoothing = dt > 0.0 ? 1.0 - std::exp(-dt / cfg_.multipath_smoothing_tau_s) : 1.0;
+  return e;
+}
 
-  // Satellites above the mask, highest first, limited by the receiver's channels.
-  struct Candidate {
-    std::size_t index;
-    Eigen::Vector3d sat_ecef, los_enu;
-    double elevation;
-  };
-  std::vector<Candidate> visible;
+// Satellites above the mask, highest first, limited by the receiver's channels.
+void GnssSimulator::visible_satellites(const Epoch& e, std::vector<Candidate>& visible) {
+  visible.clear();
   for (std::size_t i = 0; i < sats_.size(); ++i) {
-    const Eigen::Vector3d sat = satellite_ecef(sats_[i], t);
-    const Eigen::Vector3d los = v2xloc::ecef_delta_to_enu(origin_, sat - rx_ecef).normalized();
+    const Eigen::Vector3d sat = satellite_ecef(sats_[i], e.t);
+    const Eigen::Vector3d los = v2xloc::ecef_delta_to_enu(origin_, sat - e.rx_ecef).normalized();
     const double el = det::asin(std::clamp(los.z(), -1.0, 1.0));
     if (el >= cfg_.elevation_mask_deg * kDegToRad) visible.push_back({i, sat, los, el});
     else sats_[i].tracked_before = false;
@@ -166,90 +187,98 @@ GnssFix GnssSimulator::fix(double t, const Eigen::Vector3d& antenna_enu, const E
     return a.elevation > b.elevation || (a.elevation == b.elevation && a.index < b.index);
   });
   if (static_cast<int>(visible.size()) > cfg_.max_tracked_satellites) visible.resize(static_cast<std::size_t>(cfg_.max_tracked_satellites));
-  out.num_visible = static_cast<int>(visible.size());
+}
 
-  std::vector<gnss::PseudorangeObservation> obs;
-  std::vector<gnss::ReflectedPath> paths;
-  std::vector<gnss::RangeRateObservation> rates;
-  for (const Candidate& c : visible) {
-    Satellite& sat = sats_[c.index];
-    const double sin_el = det::sin(c.elevation);
-    const Eigen::Vector3d start = antenna_enu + Eigen::Vector3d(0, 0, kRayStartLift);
-    RayHit block;
-    const bool los_clear = !world_.cast(start, c.los_enu, kSkyRayRange, block);
-    find_reflections(antenna_enu, c.los_enu, reflections_);
-    double cn0 = cfg_.cn0_zenith_dbhz - kCn0ElevationSpanDb * (1.0 - sin_el);
-    paths.clear();
-    double path_error = 0.0;
-    Eigen::Vector3d arrival = c.los_enu;  // direction the tracked signal comes from
-    if (los_clear) {
-      // Multipath on a line-of-sight signal, paper eq. 1. a_k: the facade's reflection coefficient
-      // scaled by the correlator's in-phase share (1 + cos theta_k) / 2, theta_k the carrier phase
-      // of the reflected path; phi_k: the reflection's half-cycle phase shift as range (lambda / 2).
-      for (const Reflection& r : reflections_) {
-        const double excess = r.excess_m;
-        const double theta = 2.0 * det::kPi * excess / wavelength + det::kPi;
-        const double a = std::clamp(cfg_.reflection_amplitude * 0.5 * (1.0 + det::cos(theta)), 1e-3, 1.0);
-        paths.push_back({a, excess, 0.5 * wavelength});
-      }
-      path_error = gnss::multipath_delay_m(paths.data(), paths.size());
-    } else if (!reflections_.empty()) {
-      // NLOS: the receiver tracks the shortest reflection alone (a = 1 in eq. 1), weaker signal.
-      const Reflection& shortest = *std::min_element(
-          reflections_.begin(), reflections_.end(),
-          [](const Reflection& a, const Reflection& b) { return a.excess_m < b.excess_m; });
-      arrival = shortest.arrival_dir;
-      paths.push_back({1.0, shortest.excess_m, 0.5 * wavelength});
-      path_error = gnss::multipath_delay_m(paths.data(), paths.size());
-      cn0 -= cfg_.reflection_loss_db - 20.0 * std::log10(std::max(cfg_.reflection_amplitude, 1e-3));
-      ++out.num_nlos;
-    } else {
-      ++out.num_blocked;
-      sat.tracked_before = false;
-      continue;
+// Line of sight or facade reflections; false (and the satellite lost) when the direct path is
+// blocked and no reflection reaches the antenna.
+bool GnssSimulator::signal_path(const Epoch& e, const Candidate& c, std::vector<gnss::ReflectedPath>& paths,
+                                SignalPath& out, GnssFix& fix) {
+  const double sin_el = det::sin(c.elevation);
+  const Eigen::Vector3d start = e.antenna_enu + Eigen::Vector3d(0, 0, kRayStartLift);
+  RayHit block;
+  const bool los_clear = !world_.cast(start, c.los_enu, kSkyRayRange, block);
+  find_reflections(e.antenna_enu, c.los_enu, reflections_);
+  out.cn0 = cfg_.cn0_zenith_dbhz - kCn0ElevationSpanDb * (1.0 - sin_el);
+  paths.clear();
+  out.error_m = 0.0;
+  out.arrival = c.los_enu;
+  if (los_clear) {
+    // Multipath on a line-of-sight signal, paper eq. 1. a_k: the facade's reflection coefficient
+    // scaled by the correlator's in-phase share (1 + cos theta_k) / 2, theta_k the carrier phase
+    // of the reflected path; phi_k: the reflection's half-cycle phase shift as range (lambda / 2).
+    for (const Reflection& r : reflections_) {
+      const double excess = r.excess_m;
+      const double theta = 2.0 * det::kPi * excess / e.wavelength + det::kPi;
+      const double a = std::clamp(cfg_.reflection_amplitude * 0.5 * (1.0 + det::cos(theta)), 1e-3, 1.0);
+      paths.push_back({a, excess, 0.5 * e.wavelength});
     }
-    const double noise_sigma = cfg_.code_noise_m_at_45dbhz * std::pow(10.0, (45.0 - cn0) / 20.0);
-    const double raw_error = path_error + noise_sigma * rng_.gaussian();
-    // Code-carrier smoothing: the receiver low-passes code noise and multipath (time correlation).
-    sat.multipath_smoothed_m = sat.tracked_before
-                                   ? sat.multipath_smoothed_m + smoothing * (raw_error - sat.multipath_smoothed_m)
-                                   : raw_error;
-    sat.tracked_before = true;
-
-    const double iono_true = gnss::iono_delay_m(cfg_.vtec_tecu * gnss::kTecUnit * (1.0 + sat.iono_rel), cfg_.carrier_hz) *
-                             gnss::iono_slant_factor(c.elevation, cfg_.iono_shell_height_m);
-    const double iono_model = gnss::iono_delay_m(cfg_.vtec_model_fraction * cfg_.vtec_tecu * gnss::kTecUnit, cfg_.carrier_hz) *
-                              gnss::iono_slant_factor(c.elevation, cfg_.iono_shell_height_m);
-    const double mapping = gnss::tropo_mapping(c.elevation);
-    const double geometric = (c.sat_ecef - rx_ecef).norm();
-    const double pseudorange = geometric + clock_bias_m_ + sat.sisre_m + iono_true + zenith_true * mapping +
-                               sat.multipath_smoothed_m;
-    // The receiver applies its own atmosphere models; the residuals stay in the measurement.
-    gnss::PseudorangeObservation o;
-    o.sat_ecef = c.sat_ecef;
-    o.pseudorange_m = pseudorange - iono_model - zenith_model * mapping;
-    o.sigma_m = apriori_sigma(cfg_.sigma_uere_m, sin_el, cfg_.cn0_weighting ? cn0 : 45.0);
-    obs.push_back(o);
-
-    // Range rate: the satellite's motion along the true line of sight, the antenna's along the
-    // arrival direction (mirrored for NLOS), the clock drift, and tracking-loop noise.
-    const Eigen::Vector3d u_ecef = (c.sat_ecef - rx_ecef).normalized();
-    const Eigen::Vector3d sat_vel = satellite_velocity_ecef(sats_[c.index], t);
-    const double rate_noise = cfg_.doppler_noise_mps_at_45dbhz * std::pow(10.0, (45.0 - cn0) / 20.0);
-    gnss::RangeRateObservation rr;
-    rr.sat_vel_ecef = sat_vel;
-    rr.range_rate_mps = u_ecef.dot(sat_vel) - arrival.dot(antenna_velocity_enu) + clock_drift_mps_ +
-                        rate_noise * doppler_rng_.gaussian();
-    rr.sigma_mps = apriori_sigma(cfg_.sigma_doppler_uere_mps, sin_el, cfg_.cn0_weighting ? cn0 : 45.0);
-    rates.push_back(rr);
+    out.error_m = gnss::multipath_delay_m(paths.data(), paths.size());
+    return true;
   }
+  if (reflections_.empty()) {
+    ++fix.num_blocked;
+    sats_[c.index].tracked_before = false;
+    return false;
+  }
+  // NLOS: the receiver tracks the shortest reflection alone (a = 1 in eq. 1), weaker signal.
+  const Reflection& shortest = *std::min_element(
+      reflections_.begin(), reflections_.end(),
+      [](const Reflection& a, const Reflection& b) { return a.excess_m < b.excess_m; });
+  out.arrival = shortest.arrival_dir;
+  paths.push_back({1.0, shortest.excess_m, 0.5 * e.wavelength});
+  out.error_m = gnss::multipath_delay_m(paths.data(), paths.size());
+  out.cn0 -= cfg_.reflection_loss_db - 20.0 * std::log10(std::max(cfg_.reflection_amplitude, 1e-3));
+  ++fix.num_nlos;
+  return true;
+}
 
+// The tracked signal's pseudorange (smoothed multipath and code noise, satellite, atmosphere and
+// clock errors; corrected by the receiver's own atmosphere models) and range rate (the satellite's
+// motion along the true line of sight, the antenna's along the arrival direction, the clock drift,
+// tracking-loop noise).
+void GnssSimulator::observe(const Epoch& e, const Candidate& c, const SignalPath& path,
+                            gnss::PseudorangeObservation& pr, gnss::RangeRateObservation& rr) {
+  Satellite& sat = sats_[c.index];
+  const double sin_el = det::sin(c.elevation);
+  const double noise_sigma = cfg_.code_noise_m_at_45dbhz * std::pow(10.0, (45.0 - path.cn0) / 20.0);
+  const double raw_error = path.error_m + noise_sigma * rng_.gaussian();
+  // Code-carrier smoothing: the receiver low-passes code noise and multipath (time correlation).
+  sat.multipath_smoothed_m = sat.tracked_before
+                                 ? sat.multipath_smoothed_m + e.smoothing * (raw_error - sat.multipath_smoothed_m)
+                                 : raw_error;
+  sat.tracked_before = true;
+
+  const double iono_true = gnss::iono_delay_m(cfg_.vtec_tecu * gnss::kTecUnit * (1.0 + sat.iono_rel), cfg_.carrier_hz) *
+                           gnss::iono_slant_factor(c.elevation, cfg_.iono_shell_height_m);
+  const double iono_model = gnss::iono_delay_m(cfg_.vtec_model_fraction * cfg_.vtec_tecu * gnss::kTecUnit, cfg_.carrier_hz) *
+                            gnss::iono_slant_factor(c.elevation, cfg_.iono_shell_height_m);
+  const double mapping = gnss::tropo_mapping(c.elevation);
+  const double geometric = (c.sat_ecef - e.rx_ecef).norm();
+  const double pseudorange = geometric + clock_bias_m_ + sat.sisre_m + iono_true + e.zenith_true * mapping +
+                             sat.multipath_smoothed_m;
+  pr.sat_ecef = c.sat_ecef;
+  pr.pseudorange_m = pseudorange - iono_model - e.zenith_model * mapping;
+  pr.sigma_m = apriori_sigma(cfg_.sigma_uere_m, sin_el, cfg_.cn0_weighting ? path.cn0 : 45.0);
+
+  const Eigen::Vector3d u_ecef = (c.sat_ecef - e.rx_ecef).normalized();
+  const Eigen::Vector3d sat_vel = satellite_velocity_ecef(sat, e.t);
+  const double rate_noise = cfg_.doppler_noise_mps_at_45dbhz * std::pow(10.0, (45.0 - path.cn0) / 20.0);
+  rr.sat_vel_ecef = sat_vel;
+  rr.range_rate_mps = u_ecef.dot(sat_vel) - path.arrival.dot(e.antenna_velocity_enu) + clock_drift_mps_ +
+                      rate_noise * doppler_rng_.gaussian();
+  rr.sigma_mps = apriori_sigma(cfg_.sigma_doppler_uere_mps, sin_el, cfg_.cn0_weighting ? path.cn0 : 45.0);
+}
+
+// The receiver's position fix (weighted least squares from its last solution) and, on it, the
+// velocity fix with residual-based exclusion.
+void GnssSimulator::solve(const std::vector<gnss::PseudorangeObservation>& obs,
+                          std::vector<gnss::RangeRateObservation>& rates, GnssFix& out) {
   out.num_sats = static_cast<int>(obs.size());
-  if (obs.size() < 4) return out;
+  if (obs.size() < 4) return;
   Eigen::Vector4d initial = last_solution_;
   if (!have_solution_) initial(3) = 0.0;
   const gnss::WlsSolution sol = gnss::solve_position_wls(obs, initial, cfg_.max_lsq_iterations, origin_);
-  if (!sol.converged) return out;
+  if (!sol.converged) return;
   last_solution_ = sol.state;
   have_solution_ = true;
   const auto geo = v2xloc::ecef_to_geodetic(sol.state.head<3>());
@@ -278,6 +307,26 @@ GnssFix GnssSimulator::fix(double t, const Eigen::Vector3d& antenna_enu, const E
     out.speed_acc_mps = cfg_.sigma_doppler_uere_mps * vel.hdop * std::max(1.0, vel.unit_weight_sigma);
     out.velocity_valid = true;
   }
+}
+
+GnssFix GnssSimulator::fix(double t, const Eigen::Vector3d& antenna_enu, const Eigen::Vector3d& antenna_velocity_enu) {
+  const Epoch e = begin_epoch(t, antenna_enu, antenna_velocity_enu);
+  GnssFix out;
+  out.t = t;
+  discover_facades(antenna_enu);
+  std::vector<Candidate> visible;
+  visible_satellites(e, visible);
+  out.num_visible = static_cast<int>(visible.size());
+
+  std::vector<gnss::PseudorangeObservation> obs;
+  std::vector<gnss::ReflectedPath> paths;
+  std::vector<gnss::RangeRateObservation> rates;
+  for (const Candidate& c : visible) {
+    SignalPath path;
+    if (!signal_path(e, c, paths, path, out)) continue;
+    observe(e, c, path, obs.emplace_back(), rates.emplace_back());
+  }
+  solve(obs, rates, out);
   return out;
 }
 

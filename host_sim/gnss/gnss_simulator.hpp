@@ -25,6 +25,12 @@
 
 namespace v2xloc::sim {
 
+namespace gnss {
+struct PseudorangeObservation;
+struct RangeRateObservation;
+struct ReflectedPath;
+}  // namespace gnss
+
 struct GnssConfig {
   // Constellation (circular Walker-like orbits, propagated in time; Earth rotation included).
   int gps_planes = 6, gps_per_plane = 5;          // 30 GPS, r = 26560 km, i = 55 deg
@@ -128,6 +134,18 @@ class GnssSimulator {
   // Specular facade reflections that reach the antenna from direction los.
   void find_reflections(const Eigen::Vector3d& antenna_enu, const Eigen::Vector3d& los,
                         std::vector<Reflection>& out) const;
+  // The steps of fix(), in order (gnss_simulator.cpp).
+  struct Epoch;
+  struct Candidate;
+  struct SignalPath;
+  Epoch begin_epoch(double t, const Eigen::Vector3d& antenna_enu, const Eigen::Vector3d& antenna_velocity_enu);
+  void visible_satellites(const Epoch& e, std::vector<Candidate>& visible);
+  bool signal_path(const Epoch& e, const Candidate& c, std::vector<gnss::ReflectedPath>& paths, SignalPath& out,
+                   GnssFix& fix);
+  void observe(const Epoch& e, const Candidate& c, const SignalPath& path, gnss::PseudorangeObservation& pr,
+               gnss::RangeRateObservation& rr);
+  void solve(const std::vector<gnss::PseudorangeObservation>& obs, std::vector<gnss::RangeRateObservation>& rates,
+             GnssFix& out);
 
   GnssConfig cfg_;
   const RayCaster& world_;

@@ -4,25 +4,19 @@
 #include "host_sim/common/png.hpp"
 #include "host_sim/common/rng.hpp"
 #include "host_sim/recording/pose_io.hpp"
+#include "host_sim/recording/recording_reader.hpp"
 #include "host_sim/recording/sim_background.hpp"
 #include "v2xloc/algo/core/config.hpp"
 #include "host_sim/recording/sim_trust.hpp"
-#include "host_sim/recording/topview.hpp"
 #include "host_sim/scenario/simulation.hpp"
 #include "host_sim/sensors/lidar.hpp"
 #include "host_sim/sensors/stereo.hpp"
 #include "host_sim/cloud_io/pcd.hpp"
 
-#if V2XLOC_SIM_HAVE_GNSS
 #include "host_sim/gnss/gnss_simulator.hpp"
 #include "host_sim/recording/gnss_drive.hpp"
-#endif
-#if V2XLOC_SIM_HAVE_VEHICLE
 #include "host_sim/vehicle/vehicle_signals.hpp"
-#endif
-#if V2XLOC_SIM_HAVE_CANLOG
 #include "host_sim/recording/can_log_writer.hpp"
-#endif
 
 #include <algorithm>
 #include <chrono>
@@ -300,10 +294,8 @@ void write_ground_truth(Session& s, const std::vector<TimedPose>& gt) {
 
 const Eigen::Vector3d kAntennaInBody(0.0, 0.0, 1.75);
 
-#if V2XLOC_SIM_HAVE_GNSS
-// GNSS fixes (host_sim/gnss): gnss_fixes.txt, the summary's statistics, the manifest entry and the
-// valid fixes for the top view.
-std::vector<GnssFix> record_gnss(Session& s, RecordingSummary& summary, TopViewData& top, Json& gnss_json) {
+// GNSS fixes (host_sim/gnss): gnss_fixes.txt, the summary's statistics and the manifest entry.
+std::vector<GnssFix> record_gnss(Session& s, RecordingSummary& summary, Json& gnss_json) {
   const RecorderConfig& cfg = s.cfg;
   std::vector<GnssFix> fixes;
   const v2xloc::GeodeticOrigin origin = v2xloc::make_geodetic_origin(cfg.origin_lat_deg, cfg.origin_lon_deg, cfg.origin_alt_m);
@@ -322,11 +314,9 @@ std::vector<GnssFix> record_gnss(Session& s, RecordingSummary& summary, TopViewD
                   f.speed_acc_mps, f.velocity_valid ? 1 : 0, vel.x(), vel.y());
     csv += line;
     fixes.push_back(f);
-    if (f.valid) top.gnss_fixes.push_back(f.enu_estimate.head<2>());
   }
   const int valid = drive.valid;
   if (!write_text_file((s.root / "gnss_fixes.txt").string(), csv, s.err)) s.errors.push_back(s.err);
-  summary.has_gnss = true;
   summary.gnss_fixes = valid;
   summary.gnss_mean_h_error = drive.mean_h_error;
   summary.gnss_max_h_error = drive.max_h_error;
@@ -347,12 +337,10 @@ std::vector<GnssFix> record_gnss(Session& s, RecordingSummary& summary, TopViewD
   gnss_json["max_velocity_error_mps"] = drive.max_velocity_error;
   return fixes;
 }
-#endif
 
-#if V2XLOC_SIM_HAVE_GNSS && V2XLOC_SIM_HAVE_CANLOG && V2XLOC_SIM_HAVE_VEHICLE
 // CAN log: vehicle motion (wheel speed, yaw rate from host_sim/vehicle's model) at the vehicle rate
 // and the GNSS fixes (host_sim/recording/can_log_writer.hpp).
-void write_can_log(Session& s, const std::vector<GnssFix>& fixes, RecordingSummary& summary, Json& can_json) {
+void write_can_log(Session& s, const std::vector<GnssFix>& fixes, Json& can_json) {
   const RecorderConfig& cfg = s.cfg;
   const Scenario& sc = s.scenario();
   VehicleSignalSimulator veh(VehicleSignalConfig{}, derive_seed(cfg.seed, {kVehicle}));
@@ -367,9 +355,7 @@ void write_can_log(Session& s, const std::vector<GnssFix>& fixes, RecordingSumma
                                   vehicle, fixes, can_json, s.err)) {
     s.errors.push_back(s.err);
   }
-  summary.has_can_log = true;
 }
-#endif
 
 void summarize_scans(const std::vector<double>& pts_per_scan, RecordingSummary& summary) {
   if (pts_per_scan.empty()) return;
@@ -380,7 +366,7 @@ void summarize_scans(const std::vector<double>& pts_per_scan, RecordingSummary& 
   summary.points_per_scan_max = *std::max_element(pts_per_scan.begin(), pts_per_scan.end());
 }
 
-Json manifest_files(const Session& s, const RecordingSummary& summary) {
+Json manifest_files(const Session& s) {
   Json files = Json::object();
   files["ego_scan_pattern"] = "ego_lidar/%06d.pcdz";
   files["ego_scan_fields"] = std::string(kCloudFields) + "; sensor frame at each point's firing time; t = seconds since the frame stamp";
@@ -391,8 +377,7 @@ Json manifest_files(const Session& s, const RecordingSummary& summary) {
   Json agt = Json::array();
   for (std::size_t a = 0; a < s.scenario().agents.size(); ++a) agt.push_back(Json("agent_" + std::to_string(a) + "_ground_truth.tum"));
   files["agent_ground_truth"] = agt;
-  files["top_view"] = "topview.png";
-  if (summary.has_can_log) files["can_log"] = "gnss_vehicle.log";
+  files["can_log"] = "gnss_vehicle.log";
   files["trust_list"] = kTrustListFile;
   return files;
 }
@@ -506,8 +491,7 @@ Json build_manifest(const Session& s, const FrameProducts& products, const Recor
   const Scenario& sc = s.scenario();
   Json m = Json::object();
   m["format"] = "v2xloc-recording";
-  // 2: clouds quantised (.pcdz, units.cloud_quantisation); 1: float32 PCD binary_compressed.
-  m["format_version"] = 2;
+  m["format_version"] = RecordingReader::kFormatVersion;
   Json scj = Json::object();
   scj["id"] = sc.id;
   scj["name"] = sc.name;
@@ -539,7 +523,7 @@ Json build_manifest(const Session& s, const FrameProducts& products, const Recor
   quantisation["note"] = "stored integer x step; each .pcdz file's SCALE line carries the same steps";
   units["cloud_quantisation"] = quantisation;
   m["units"] = units;
-  m["files"] = manifest_files(s, summary);
+  m["files"] = manifest_files(s);
   m["sensors"] = manifest_sensors(s);
   Json mc = Json::object();
   mc["fields"] = std::string(kCloudFields) + ", sensor frame at stamp_s";
@@ -556,25 +540,6 @@ Json build_manifest(const Session& s, const FrameProducts& products, const Recor
   return m;
 }
 
-// topview.png: the paths sampled at the frame stamps (and the end), the sites and the GNSS fixes.
-bool write_top_view_picture(const Session& s, TopViewData& top, const std::string& title, std::string& error) {
-  const Scenario& sc = s.scenario();
-  top.title = title;
-  top.agent_paths.resize(sc.agents.size());
-  for (int k = 0; k <= s.frames; ++k) {
-    const double tt = std::min(k * s.dt_frame, sc.duration);
-    const PlanarPose e = sc.ego.pose(tt);
-    top.ego_path.emplace_back(e.x, e.y);
-    for (std::size_t a = 0; a < sc.agents.size(); ++a) {
-      const PlanarPose p = sc.agents[a].pose(tt);
-      top.agent_paths[a].emplace_back(p.x, p.y);
-    }
-  }
-  for (const auto& site : s.sites) top.infra.push_back(site.sensor_to_enu.translation().head<2>());
-  top.agents_have_lidar = s.agents;
-  return write_top_view((s.root / "topview.png").string(), s.sim.iw, top, error);
-}
-
 }  // namespace
 
 std::string recording_name(int scenario, Permutation p) {
@@ -583,17 +548,11 @@ std::string recording_name(int scenario, Permutation p) {
 
 std::string RecordingSummary::one_line() const {
   char buf[512];
-  int n = std::snprintf(buf, sizeof buf, "%-22s frames %4d  pts/scan %6.0f (%.0f-%.0f)  map clouds %4d", name.c_str(),
-                        frames, points_per_scan_mean, points_per_scan_min, points_per_scan_max, map_clouds);
-  if (has_gnss) {
-    n += std::snprintf(buf + n, sizeof buf - static_cast<std::size_t>(n),
-                       "  GNSS h-err mean %5.2f m max %5.2f m  HDOP %.1f-%.1f", gnss_mean_h_error, gnss_max_h_error,
-                       hdop_min, hdop_max);
-  } else {
-    n += std::snprintf(buf + n, sizeof buf - static_cast<std::size_t>(n), "  GNSS n/a");
-  }
-  std::snprintf(buf + n, sizeof buf - static_cast<std::size_t>(n), "  %.1f MB  %.1f s", static_cast<double>(bytes) / 1e6,
-                seconds);
+  std::snprintf(buf, sizeof buf,
+                "%-22s frames %4d  pts/scan %6.0f (%.0f-%.0f)  map clouds %4d  GNSS h-err mean %5.2f m max %5.2f m"
+                "  HDOP %.1f-%.1f  %.1f MB  %.1f s",
+                name.c_str(), frames, points_per_scan_mean, points_per_scan_min, points_per_scan_max, map_clouds,
+                gnss_mean_h_error, gnss_max_h_error, hdop_min, hdop_max, static_cast<double>(bytes) / 1e6, seconds);
   return buf;
 }
 
@@ -610,15 +569,10 @@ bool generate_recording(const RecorderConfig& cfg, RecordingSummary& summary, st
   write_ground_truth(s, products.ground_truth);
 
   summary = RecordingSummary{};
-  TopViewData top;
   Json gnss_json;
   Json can_json;
-#if V2XLOC_SIM_HAVE_GNSS
-  const std::vector<GnssFix> fixes = record_gnss(s, summary, top, gnss_json);
-#if V2XLOC_SIM_HAVE_CANLOG && V2XLOC_SIM_HAVE_VEHICLE
-  write_can_log(s, fixes, summary, can_json);
-#endif
-#endif
+  const std::vector<GnssFix> fixes = record_gnss(s, summary, gnss_json);
+  write_can_log(s, fixes, can_json);
   if (s.failed(error)) return false;
 
   summary.name = recording_name(cfg.scenario, cfg.permutation);
@@ -628,7 +582,6 @@ bool generate_recording(const RecorderConfig& cfg, RecordingSummary& summary, st
   if (!write_trust_list(s, error)) return false;
   const Json manifest = build_manifest(s, products, summary, gnss_json, can_json);
   if (!write_text_file((s.root / "manifest.json").string(), manifest.dump(2) + "\n", error)) return false;
-  if (cfg.top_view && !write_top_view_picture(s, top, summary.name, error)) return false;
 
   summary.bytes = folder_bytes(s.root);
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();

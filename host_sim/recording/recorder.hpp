@@ -20,7 +20,6 @@ struct RecorderConfig {
   bool stereo = true;
   double gnss_rate_hz = 5.0;
   double vehicle_rate_hz = 100.0;
-  bool top_view = true;        // write topview.png
   // Geodetic origin of the local ENU frame (the intersection centre).
   double origin_lat_deg = 48.1374, origin_lon_deg = 11.5755, origin_alt_m = 520.0;
   double time_origin_unix_s = 1700000000.0;  // CAN log timestamps = this + recording time
@@ -35,10 +34,8 @@ struct RecordingSummary {
   int frames = 0;
   double points_per_scan_mean = 0, points_per_scan_min = 0, points_per_scan_max = 0;
   int map_clouds = 0;
-  bool has_gnss = false;
   int gnss_fixes = 0;
   double gnss_mean_h_error = 0, gnss_max_h_error = 0, hdop_min = 0, hdop_max = 0;
-  bool has_can_log = false;
   std::uint64_t bytes = 0;
   double seconds = 0;          // wall time
   std::string one_line() const;

@@ -76,15 +76,31 @@ class Fields {
   std::string& error_;
 };
 
-// can_log.layout_version: absent (recordings made before CAN layout 2) means layout 1; a newer
-// layout than this build decodes is refused.
-bool read_can_layout_version(const Fields& top, std::string& error, int& out) {
-  out = kCanLayoutLegacy;
+// What a recording in a format this build does not read is told to do.
+constexpr const char* kRegenerate =
+    "this build reads only what it writes: make the recording again (v2xloc-sim generate --scenario N --perm P"
+    " --out DIR, or --all; v2xloc-dataset dair-v2x-c ROOT --recording DIR for the DAIR-V2X-C drive)";
+
+// format_version: exactly kFormatVersion. Older recordings (1: float32 PCD clouds, no version
+// field) and newer ones are refused by name, with the command that makes them again.
+bool check_format_version(const Fields& top) {
+  const Json* v = top.find("format_version");
+  if (v == nullptr) return top.fail("format_version", "missing (a format-1 recording); " + std::string(kRegenerate));
+  if (!v->is_number_integer() || v->get<std::int64_t>() != RecordingReader::kFormatVersion)
+    return top.fail("format_version", v->dump() + ", not " + std::to_string(RecordingReader::kFormatVersion) + "; " +
+                                          kRegenerate);
+  return true;
+}
+
+// can_log.layout_version (with a CAN log): exactly the layout the firmware decodes.
+bool check_can_layout_version(const Fields& top) {
   const Json* can = top.find("can_log");
-  if (can == nullptr || !can->is_object() || !can->contains("layout_version")) return true;
-  std::int64_t version = kCanLayoutLegacy;
-  if (!Fields(*can, "can_log.", error).integer("layout_version", kCanLayoutLegacy, kCanLayoutVersion, version)) return false;
-  out = static_cast<int>(version);
+  const Json* v = can != nullptr && can->is_object() && can->contains("layout_version") ? &(*can)["layout_version"] : nullptr;
+  if (v == nullptr)
+    return top.fail("can_log.layout_version", "missing (a CAN layout 1 log); " + std::string(kRegenerate));
+  if (!v->is_number_integer() || v->get<std::int64_t>() != kCanLayoutVersion)
+    return top.fail("can_log.layout_version",
+                    v->dump() + ", not " + std::to_string(kCanLayoutVersion) + "; " + kRegenerate);
   return true;
 }
 
@@ -246,12 +262,15 @@ bool RecordingReader::parse_manifest(const std::string& text, std::string& error
   std::string format;
   if (!top.string("format", format)) return false;
   if (format != "v2xloc-recording") return top.fail("format", "not a v2xloc recording");
-  // 1: float32 PCD clouds; 2: quantised .pcdz clouds. Each cloud file names its own encoding, so
-  // both read through read_pcd; a newer version may change more than that and is refused.
-  std::int64_t version = 1;
-  if (top.find("format_version") && !top.integer("format_version", 1, 2, version)) return false;
-  format_version_ = static_cast<int>(version);
-  const Json *scenario = nullptr, *geo = nullptr, *files = nullptr;
+  return check_format_version(top) && read_timing_and_origin(m, error) && read_files(m, error) &&
+         read_sensors(m, error) && read_map_clouds(m, error);
+}
+
+// Scenario id, permutation, frames and their stamps, time and geodetic origin, the simulator's
+// seed and set-up, the GNSS lever arm.
+bool RecordingReader::read_timing_and_origin(const Json& m, std::string& error) {
+  const Fields top(m, "", error);
+  const Json *scenario = nullptr, *geo = nullptr;
   std::int64_t count = 0, id = 0;
   if (!top.object("scenario", scenario) || !Fields(*scenario, "scenario.", error).integer("id", 0, 1'000'000, id) ||
       !top.string("permutation", permutation_) || !top.integer("frame_count", 1, kMaxFrames, count) ||
@@ -273,47 +292,47 @@ bool RecordingReader::parse_manifest(const std::string& text, std::string& error
     quick_ = quick->get<bool>();
   }
   const Fields g(*geo, "geodetic_origin.", error);
-  if (!g.number("lat_deg", -90, 90, origin_lat_deg_) || !g.number("lon_deg", -180, 180, origin_lon_deg_) ||
-      !g.number("alt_m", -1e4, 1e5, origin_alt_m_))
-    return false;
+  return g.number("lat_deg", -90, 90, origin_lat_deg_) && g.number("lon_deg", -180, 180, origin_lon_deg_) &&
+         g.number("alt_m", -1e4, 1e5, origin_alt_m_);
+}
 
+// files: the per-frame patterns, ground truth, CAN log (in the current layout) and trust list.
+bool RecordingReader::read_files(const Json& m, std::string& error) {
+  const Fields top(m, "", error);
+  const Json* files = nullptr;
   if (!top.object("files", files)) return false;
   const Fields f(*files, "files.", error);
   std::string scan, disparity;
   if (!f.string("ego_scan_pattern", scan) || !f.string("disparity_pattern", disparity, false) ||
       !f.path("ground_truth", gt_file_) || !f.path("ground_truth_100hz", gt100_file_) ||
-      !f.path("can_log", can_log_file_, false) || !f.path("trust_list", trust_list_file_, false))
+      !f.path("can_log", can_log_file_, false) || !f.path("trust_list", trust_list_file_))
     return false;
-  if (!read_can_layout_version(top, error, can_layout_version_)) return false;
+  if (!can_log_file_.empty() && !check_can_layout_version(top)) return false;
   std::string why;
   if (!parse_index_pattern(scan, scan_pattern_, why)) return f.fail("ego_scan_pattern", why);
   if (f.find("disparity_pattern") && !parse_index_pattern(disparity, disparity_pattern_, why))
     return f.fail("disparity_pattern", why);
+  return true;
+}
 
+// sensors: the ego LiDAR's mount (required), the stereo calibration when the recording has
+// disparity maps, every infrastructure unit's surveyed pose.
+bool RecordingReader::read_sensors(const Json& m, std::string& error) {
+  const Fields top(m, "", error);
   const Json* sensors = top.find("sensors");
   if (!sensors || !sensors->is_array()) return top.fail("sensors", "missing or not an array");
   bool have_ego_lidar = false;
   for (std::size_t k = 0; k < sensors->size(); ++k) {
-    const Fields s((*sensors)[k], "sensors[" + std::to_string(k) + "].", error);
+    const std::string where = "sensors[" + std::to_string(k) + "].";
+    const Fields s((*sensors)[k], where, error);
     std::string name, carrier;
     if (!s.string("name", name) || !s.string("carrier", carrier, false)) return false;
     if (name == "ego_lidar") {
       if (!s.pose("mount_in_body", ego_lidar_mount_)) return false;
       have_ego_lidar = true;
     }
-    if (name == "ego_stereo" && disparity_pattern_.width > 0) {
-      std::int64_t w = 0, h = 0;
-      if (!s.integer("width", 1, 65535, w) || !s.integer("height", 1, 65535, h) ||
-          !s.number("fx", 1e-3, 1e7, stereo_.fx) || !s.number("fy", 1e-3, 1e7, stereo_.fy) ||
-          !s.number("cx", -1e7, 1e7, stereo_.cx) || !s.number("cy", -1e7, 1e7, stereo_.cy) ||
-          !s.number("baseline_m", 1e-4, 100, stereo_.baseline) ||
-          !s.number("disparity_sigma_px", 0, 1e3, stereo_.disparity_sigma_px) ||
-          !s.pose("camera_to_body", stereo_.camera_to_body))
-        return false;
-      stereo_.width = static_cast<int>(w);
-      stereo_.height = static_cast<int>(h);
-      has_stereo_ = true;
-    }
+    if (name == "ego_stereo" && disparity_pattern_.width > 0 && !read_stereo_calibration((*sensors)[k], where, error))
+      return false;
     if (carrier == "infrastructure") {
       Eigen::Isometry3d p;
       if (!s.pose("surveyed_pose_enu", p)) return false;
@@ -321,8 +340,27 @@ bool RecordingReader::parse_manifest(const std::string& text, std::string& error
       infra_names_.push_back(name);
     }
   }
-  if (!have_ego_lidar) return top.fail("sensors", "no ego_lidar entry");
+  return have_ego_lidar ? true : top.fail("sensors", "no ego_lidar entry");
+}
 
+bool RecordingReader::read_stereo_calibration(const Json& entry, const std::string& where, std::string& error) {
+  const Fields s(entry, where, error);
+  std::int64_t w = 0, h = 0;
+  if (!s.integer("width", 1, 65535, w) || !s.integer("height", 1, 65535, h) || !s.number("fx", 1e-3, 1e7, stereo_.fx) ||
+      !s.number("fy", 1e-3, 1e7, stereo_.fy) || !s.number("cx", -1e7, 1e7, stereo_.cx) ||
+      !s.number("cy", -1e7, 1e7, stereo_.cy) || !s.number("baseline_m", 1e-4, 100, stereo_.baseline) ||
+      !s.number("disparity_sigma_px", 0, 1e3, stereo_.disparity_sigma_px) ||
+      !s.pose("camera_to_body", stereo_.camera_to_body))
+    return false;
+  stereo_.width = static_cast<int>(w);
+  stereo_.height = static_cast<int>(h);
+  has_stereo_ = true;
+  return true;
+}
+
+// map_clouds.clouds: every published cloud with its reported and true pose, sorted by stamp.
+bool RecordingReader::read_map_clouds(const Json& m, std::string& error) {
+  const Fields top(m, "", error);
   const Json* map = top.find("map_clouds");
   const Json* clouds = map && map->is_object() && map->contains("clouds") ? &(*map)["clouds"] : nullptr;
   if (!clouds || !clouds->is_array()) return top.fail("map_clouds.clouds", "missing or not an array");
@@ -404,16 +442,13 @@ bool RecordingReader::load_map_cloud(const MapCloudInfo& info, cloud_io::PointCl
   return resolve(info.file, path, error) && cloud_io::read_pcd(path, out, error);
 }
 
-std::string RecordingReader::trust_list_path() const {
-  return trust_list_file_.empty() ? std::string() : dir_ + "/" + trust_list_file_;
-}
+std::string RecordingReader::trust_list_path() const { return dir_ + "/" + trust_list_file_; }
 
 std::string RecordingReader::can_log_path() const {
   return can_log_file_.empty() ? std::string() : dir_ + "/" + can_log_file_;
 }
 
-bool RecordingReader::can_records(std::vector<CandumpRecord>& out, std::string& error,
-                                  CanLayoutConversion* conversion) const {
+bool RecordingReader::can_records(std::vector<CandumpRecord>& out, std::string& error) const {
   out.clear();
   std::string path;
   if (can_log_file_.empty()) {
@@ -438,10 +473,6 @@ bool RecordingReader::can_records(std::vector<CandumpRecord>& out, std::string& 
       return false;
     }
     out.push_back(std::move(r));
-  }
-  if (can_layout_version_ == kCanLayoutLegacy) {
-    const CanLayoutConversion done = convert_can_layout_1_to_2(out);
-    if (conversion != nullptr) *conversion = done;
   }
   return true;
 }

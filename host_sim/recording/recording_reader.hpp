@@ -4,9 +4,10 @@
 // A recording is untrusted input: open() checks every manifest field it uses (type, range,
 // finiteness), file names are data (one `%0Nd` frame-index token, paths that stay inside the
 // folder), the ground truth must cover every frame; any violation is an error naming the field.
+// Only the current format is read (format_version 2, CAN layout 2): an older recording is refused
+// with the command that makes it again.
 #pragma once
 
-#include "host_sim/canlog/can_layout.hpp"
 #include "host_sim/canlog/candump_log.hpp"
 #include "host_sim/common/png.hpp"
 #include "host_sim/recording/pose_io.hpp"
@@ -44,23 +45,21 @@ struct CanLogFrame {
   std::uint8_t data[8] = {};
 };
 
-// Largest manifest the reader (and the tools rewriting one) accept; ours are ~100 kB even with
-// 1000s of map clouds.
+// Largest manifest the reader accepts; ours are ~100 kB even with 1000s of map clouds.
 inline constexpr std::size_t kMaxManifestBytes = 64u << 20;
 
 class RecordingReader {
  public:
+  // The manifest format_version written and read: quantised .pcdz clouds, a trust list, CAN
+  // layout 2 (host_sim/canlog/can_layout.hpp).
+  static constexpr int kFormatVersion = 2;
+
   bool open(const std::string& dir, std::string& error);
 
   // Upper bound on frame_count: 24 h at 10 Hz, far beyond any recording, bounds the allocations.
   static constexpr int kMaxFrames = 864'000;
 
   const std::string& dir() const { return dir_; }
-  // Manifest format_version (1 when absent): 1 float32 PCD clouds, 2 quantised .pcdz clouds.
-  int format_version() const { return format_version_; }
-  // CAN layout of the log as recorded: manifest can_log.layout_version, 1 when absent
-  // (host_sim/canlog/can_layout.hpp). The readers below always return the current layout.
-  int can_layout_version() const { return can_layout_version_; }
   int scenario() const { return scenario_; }
   const std::string& permutation() const { return permutation_; }
   int frame_count() const { return frame_count_; }
@@ -113,13 +112,11 @@ class RecordingReader {
   // CAN log (candump -L format: "(unix.usec) iface ID#DATA", host_sim/canlog). False if the
   // recording has none or any line is malformed.
   std::string can_log_path() const;
-  // trust_list.txt of the recording (manifest files.trust_list); empty for recordings made before it.
+  // trust_list.txt of the recording (manifest files.trust_list).
   std::string trust_list_path() const;
   bool can_frames(std::vector<CanLogFrame>& out, std::string& error) const;
-  // The same log as candump records (unix time stamps), in the current CAN layout: a layout-1 log
-  // is converted as it is read, so every replay path sees what a layout-2 recording holds.
-  // `conversion` (optional) reports what a layout-1 log's conversion did.
-  bool can_records(std::vector<CandumpRecord>& out, std::string& error, CanLayoutConversion* conversion = nullptr) const;
+  // The same log as candump records (unix time stamps).
+  bool can_records(std::vector<CandumpRecord>& out, std::string& error) const;
 
   // A per-frame file name: literal text around one `%0Nd` token (N = 1..9), e.g. "ego_lidar/%06d.pcd".
   struct IndexPattern {
@@ -136,10 +133,14 @@ class RecordingReader {
  private:
   // dir_/rel, provided rel is a plain relative path whose real location is inside the recording.
   bool resolve(const std::string& rel, std::string& path, std::string& error) const;
+  // The steps of parse_manifest, each over the parsed manifest; false + error naming the field.
+  bool read_timing_and_origin(const Json& m, std::string& error);
+  bool read_files(const Json& m, std::string& error);
+  bool read_sensors(const Json& m, std::string& error);
+  bool read_stereo_calibration(const Json& entry, const std::string& where, std::string& error);
+  bool read_map_clouds(const Json& m, std::string& error);
 
   std::string dir_, real_dir_;
-  int format_version_ = 1;
-  int can_layout_version_ = 1;
   int scenario_ = 0;
   std::string permutation_;
   int frame_count_ = 0;

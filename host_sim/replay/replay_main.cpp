@@ -7,7 +7,6 @@
 
 #include <climits>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <string>
 
@@ -33,12 +32,18 @@ void print_ape(const char* label, const ErrorStats& s) {
               s.rmse, s.median, s.max);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  // Everything after "--" goes to the firmware untouched, so it is split off before CLI11 sees it.
-  int own_argc = argc;
+// The command line: everything after "--" goes to the firmware untouched (split off before CLI11
+// sees it); --connect HOST:CANPORT,CLOUDPORT names a running firmware instead of starting one.
+struct Command {
   ReplayOptions options;
+  std::string dir, out_dir;
+  bool connect = false;
+};
+
+// Parses argv into `cmd`; returns -1 to go on, otherwise the exit code (help: 0, usage errors: 2).
+int parse_command_line(int argc, char** argv, Command& cmd) {
+  int own_argc = argc;
+  ReplayOptions& options = cmd.options;
   for (int i = 1; i < argc; ++i) {
     if (std::string(argv[i]) == "--") {
       own_argc = i;
@@ -50,25 +55,23 @@ int main(int argc, char** argv) {
                "with --connect), writes OUT/fused.tum and prints the APE against the ground truth. Exit 0 only\n"
                "on a complete replay. Arguments after -- go to the firmware.",
                "v2xloc-replay"};
-  std::string dir, out_dir, connect_spec;
-  app.add_option("RECORDING_DIR", dir, "recording folder (v2xloc-sim generate)")->required();
+  std::string connect_spec, faults_spec;
+  app.add_option("RECORDING_DIR", cmd.dir, "recording folder (v2xloc-sim generate)")->required();
   auto* firmware_opt = app.add_option("--firmware", options.firmware_path,
                                       "v2xloc-firmware to start (default: next to this executable)");
   auto* connect_opt = app.add_option("--connect", connect_spec, "HOST:CANPORT,CLOUDPORT of a running firmware")
                           ->excludes(firmware_opt);
   app.add_option("--local-can-port", options.local_can_port, "our CAN UDP port with --connect");
-  app.add_option("--out", out_dir, "folder for fused.tum");
+  app.add_option("--out", cmd.out_dir, "folder for fused.tum");
   app.add_option("--frames", options.stream.max_frames, "replay only the first N frames");
   app.add_option("--timeout", options.frame_timeout_s, "seconds to wait for each frame's output");
   app.add_flag("--verbose", options.verbose, "print every exchange");
-  std::string faults_spec;
   app.add_option("--faults", faults_spec,
                  "fault injection, comma-separated key=value (e.g. loss=0.3,delay=0.5,rogue-shift=3; keys in "
                  "host_sim/replay/fault_injection.hpp)");
-  const bool connect = [&] {
-    try {
-      app.parse(own_argc, argv);
-      if (connect_opt->count() == 0) return false;
+  try {
+    app.parse(own_argc, argv);
+    if (connect_opt->count() > 0) {
       unsigned can = 0, cloud = 0;
       char host[64] = {};
       if (std::sscanf(connect_spec.c_str(), "%63[^:]:%u,%u", host, &can, &cloud) != 3 || can > 65535 || cloud > 65535)
@@ -76,31 +79,22 @@ int main(int argc, char** argv) {
       options.host = host;
       options.firmware_can_port = static_cast<std::uint16_t>(can);
       options.firmware_cloud_port = static_cast<std::uint16_t>(cloud);
-      return true;
-    } catch (const CLI::ParseError& e) {
-      std::exit(app.exit(e) == 0 ? 0 : 2);  // usage errors keep exit code 2
+      cmd.connect = true;
     }
-  }();
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;  // usage errors keep exit code 2
+  }
   if (std::string ferr; !faults_spec.empty() && !parse_fault_spec(faults_spec, options.stream.faults, ferr)) {
     std::fprintf(stderr, "v2xloc-replay: --faults: %s\n", ferr.c_str());
     return 2;
   }
-  if (!connect && options.firmware_path.empty()) options.firmware_path = default_firmware_path();
+  if (!cmd.connect && options.firmware_path.empty()) options.firmware_path = default_firmware_path();
+  return -1;
+}
 
-  RecordingReader reader;
-  std::string error;
-  if (!reader.open(dir, error)) {
-    std::fprintf(stderr, "v2xloc-replay: %s\n", error.c_str());
-    return 1;
-  }
-  std::printf("v2xloc-replay: %s (scenario %d, %s, %d frames)%s\n", dir.c_str(), reader.scenario(),
-              reader.permutation().c_str(), reader.frame_count(),
-              connect ? " -> connected firmware" : (" -> " + options.firmware_path).c_str());
-  ReplayResult result;
-  const bool ok = replay_recording(reader, options, result, error);
-  if (!result.firmware_output.empty()) {
-    std::printf("---- firmware output ----\n%s-------------------------\n", result.firmware_output.c_str());
-  }
+// What was sent and received: the event stream's and the fault injection's counters, the CAN
+// receive side's.
+void print_counters(const ReplayOptions& options, const ReplayResult& result) {
   const EventStreamStats& s = result.stream_stats;
   std::printf("v2xloc-replay: %zu frames replayed in %.2f s (%.1f frames/s); sent %zu CAN frames, %zu datagrams "
               "(%zu map clouds, %zu ego scans, %llu points dropped by quantization range, %llu point times clamped)\n",
@@ -122,16 +116,19 @@ int main(int argc, char** argv) {
               "send retries %zu\n",
               result.heartbeats, result.pose_decode_errors, result.diagnostic_decode_errors, result.timeouts,
               result.send_retries);
+}
 
+// OUT/fused.tum (when asked) and the APE of the fused pose against the ground truth.
+bool report_trajectory(const RecordingReader& reader, const Command& cmd, const ReplayResult& result) {
   const StampedTrajectory estimate = pose_frames_to_trajectory(result.frames);
-  if (!out_dir.empty()) {
-    std::filesystem::create_directories(out_dir);
+  if (!cmd.out_dir.empty()) {
+    std::filesystem::create_directories(cmd.out_dir);
     std::string werr;
-    if (!write_tum(out_dir + "/fused.tum", estimate, werr)) {
+    if (!write_tum(cmd.out_dir + "/fused.tum", estimate, werr)) {
       std::fprintf(stderr, "v2xloc-replay: %s\n", werr.c_str());
-      return 1;
+      return false;
     }
-    std::printf("v2xloc-replay: wrote %s/fused.tum\n", out_dir.c_str());
+    std::printf("v2xloc-replay: wrote %s/fused.tum\n", cmd.out_dir.c_str());
   }
   if (estimate.size() >= 3) {
     const StampedTrajectory truth = ground_truth_trajectory(reader);
@@ -142,6 +139,30 @@ int main(int argc, char** argv) {
     print_ape("unaligned", absolute_position_error(estimate, truth, false));
     print_ape("aligned (SE(3))", absolute_position_error(estimate, truth, true));
   }
+  return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Command cmd;
+  if (const int rc = parse_command_line(argc, argv, cmd); rc >= 0) return rc;
+  RecordingReader reader;
+  std::string error;
+  if (!reader.open(cmd.dir, error)) {
+    std::fprintf(stderr, "v2xloc-replay: %s\n", error.c_str());
+    return 1;
+  }
+  std::printf("v2xloc-replay: %s (scenario %d, %s, %d frames)%s\n", cmd.dir.c_str(), reader.scenario(),
+              reader.permutation().c_str(), reader.frame_count(),
+              cmd.connect ? " -> connected firmware" : (" -> " + cmd.options.firmware_path).c_str());
+  ReplayResult result;
+  const bool ok = replay_recording(reader, cmd.options, result, error);
+  if (!result.firmware_output.empty()) {
+    std::printf("---- firmware output ----\n%s-------------------------\n", result.firmware_output.c_str());
+  }
+  print_counters(cmd.options, result);
+  if (!report_trajectory(reader, cmd, result)) return 1;
   if (!ok) {
     std::fprintf(stderr, "v2xloc-replay: FAILED: %s\n", error.c_str());
     return 1;

@@ -1,7 +1,5 @@
 #include "host_sim/replay/replay_session.hpp"
 
-#include <fstream>
-
 #include <poll.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -143,110 +141,170 @@ bool send_with_retry(SendFn&& send, std::size_t& retries) {
   return false;
 }
 
-}  // namespace
-
-bool replay_recording(const RecordingReader& reader, const ReplayOptions& options, ReplayResult& result,
-                      std::string& error) {
-  result = ReplayResult{};
-  const auto t0 = Clock::now();
-  EventStream stream;
-  if (!stream.open(reader, options.stream, error)) return false;
-
-  std::uint32_t host = 0;
-  if (!hal::parse_ipv4(options.host.c_str(), host)) {
-    error = "bad host address " + options.host;
-    return false;
-  }
-  hal::UdpLink can_link, cloud_link;
-  hal::UdpOptions can_options;
-  can_options.bind = hal::Ipv4Endpoint{0x7F000001u, options.local_can_port};
-  can_options.receive_buffer_bytes = 1 << 20;
-  if (can_link.open(can_options) != hal::Status::kOk) {
-    error = std::string("CAN UDP socket: ") + can_link.last_error();
-    return false;
-  }
-  hal::UdpOptions cloud_options;
-  cloud_options.bind = hal::Ipv4Endpoint{0x7F000001u, 0};
-  if (cloud_link.open(cloud_options) != hal::Status::kOk) {
-    error = std::string("cloud UDP socket: ") + cloud_link.last_error();
-    return false;
+// The pose and diagnostic frames of replayed frame i as they arrive: complete once the odometry
+// attitude (sent last) names frame i and the pose (position, attitude with frame counter i, sigma)
+// and the other diagnostics (those with a frame counter naming i) decoded before it.
+class FrameCollector {
+ public:
+  FrameCollector(int i, double t, ReplayResult& result) : result_(result), counter_(static_cast<std::uint16_t>(i & 0xFFFF)) {
+    frame_.frame = i;
+    frame_.t = t;
   }
 
-  hal::UdpLink ego_link;
-  if (ego_link.open(cloud_options) != hal::Status::kOk) {
-    error = std::string("ego UDP socket: ") + ego_link.last_error();
-    return false;
+  void take(const hal::CanFrame& f) {
+    std::size_t* pose_errors = &result_.pose_decode_errors;
+    std::size_t* diagnostic_errors = &result_.diagnostic_decode_errors;
+    switch (f.id) {
+      case protocol::kHeartbeatId: ++result_.heartbeats; break;
+      case protocol::kPosePositionId:
+        have_position_ = keep(frame_.pose.position, f, frame_.position, pose_errors);
+        break;
+      case protocol::kPoseAttitudeId:
+        have_attitude_ = keep(frame_.pose.attitude, f, frame_.attitude, nullptr) &&
+                         frame_.attitude.frame_counter == counter_;
+        break;
+      case protocol::kPoseSigmaId: have_sigma_ = keep(frame_.pose.sigma, f, frame_.sigma, pose_errors); break;
+      case protocol::kRegistrationPositionId:
+        have_reg_position_ =
+            keep(frame_.diagnostics.registration_position, f, frame_.registration_position, diagnostic_errors);
+        break;
+      case protocol::kRegistrationQualityId:
+        have_reg_quality_ =
+            keep(frame_.diagnostics.registration_quality, f, frame_.registration_quality, diagnostic_errors) &&
+            frame_.registration_quality.frame_counter == counter_;
+        break;
+      case protocol::kGateDecisionId:
+        have_gate_ = keep(frame_.diagnostics.gate, f, frame_.gate, diagnostic_errors) &&
+                     frame_.gate.frame_counter == counter_;
+        break;
+      case protocol::kOdometryPositionId:
+        have_odom_position_ =
+            keep(frame_.diagnostics.odometry_position, f, frame_.odometry_position, diagnostic_errors);
+        break;
+      case protocol::kOdometryAttitudeId:
+        done_ = keep(frame_.diagnostics.odometry_attitude, f, frame_.odometry_attitude, diagnostic_errors) &&
+                frame_.odometry_attitude.frame_counter == counter_ && have_position_ && have_attitude_ && have_sigma_ &&
+                have_reg_position_ && have_reg_quality_ && have_gate_ && have_odom_position_;
+        break;
+      default: break;
+    }
   }
-  FirmwareProcess process;
-  unsigned fw_can = options.firmware_can_port, fw_cloud = options.firmware_cloud_port, fw_ego = options.firmware_ego_port;
-  // The firmware is provisioned with the recording's trust list (older recordings: the derived
-  // one, written next to the temporary files).
-  std::string trust_path = reader.trust_list_path();
-  if (trust_path.empty()) {
-    trust_path = "/tmp/v2xloc-replay-trust-" + std::to_string(getpid()) + ".txt";
-    std::ofstream(trust_path) << trust_list_text(stream.trust_list());
+  bool done() const { return done_; }
+  const ReplayedFrame& frame() const { return frame_; }
+
+ private:
+  // The frame as received in `slot`, decoded; a decode failure counted in `errors` (when given).
+  template <class Decoded>
+  static bool keep(hal::CanFrame& slot, const hal::CanFrame& f, Decoded& decoded, std::size_t* errors) {
+    slot = f;
+    const bool ok = protocol::unpack(f, decoded) == protocol::DecodeStatus::kOk;
+    if (!ok && errors != nullptr) ++*errors;
+    return ok;
   }
-  if (!options.firmware_path.empty()) {
+
+  ReplayResult& result_;
+  const std::uint16_t counter_;
+  ReplayedFrame frame_;
+  bool have_position_ = false, have_attitude_ = false, have_sigma_ = false, done_ = false;
+  bool have_reg_position_ = false, have_reg_quality_ = false, have_gate_ = false, have_odom_position_ = false;
+};
+
+// One replay: the sockets, the started firmware (or the ports of a running one), the event
+// stream; frame by frame, send the events and wait for the frame's pose and diagnostics.
+class Lockstep {
+ public:
+  Lockstep(const RecordingReader& reader, const ReplayOptions& options, ReplayResult& result)
+      : reader_(reader), options_(options), result_(result), can_(can_link_, stamp_clock_) {}
+
+  bool run(std::string& error) {
+    if (!stream_.open(reader_, options_.stream, error) || !open_sockets(error) || !connect_firmware(error)) return false;
+    std::vector<WireEvent> events;
+    for (int i = 0; i < stream_.frame_count(); ++i) {
+      events.clear();
+      if (!stream_.next_frame(i, events, error) || !send_events(i, events, error) || !await_frame(i, error))
+        return finish(false, error);
+    }
+    return finish(true, error);
+  }
+
+ private:
+  bool open_sockets(std::string& error) {
+    if (!hal::parse_ipv4(options_.host.c_str(), host_)) {
+      error = "bad host address " + options_.host;
+      return false;
+    }
+    hal::UdpOptions can_options;
+    can_options.bind = hal::Ipv4Endpoint{0x7F000001u, options_.local_can_port};
+    can_options.receive_buffer_bytes = 1 << 20;
+    if (can_link_.open(can_options) != hal::Status::kOk) {
+      error = std::string("CAN UDP socket: ") + can_link_.last_error();
+      return false;
+    }
+    hal::UdpOptions cloud_options;
+    cloud_options.bind = hal::Ipv4Endpoint{0x7F000001u, 0};
+    if (cloud_link_.open(cloud_options) != hal::Status::kOk) {
+      error = std::string("cloud UDP socket: ") + cloud_link_.last_error();
+      return false;
+    }
+    if (ego_link_.open(cloud_options) != hal::Status::kOk) {
+      error = std::string("ego UDP socket: ") + ego_link_.last_error();
+      return false;
+    }
+    return true;
+  }
+
+  // fork/exec the firmware on ephemeral ports, provisioned with the recording's trust list and
+  // origin, and read its ports from its "ready" line.
+  bool start_firmware(unsigned& can_port, unsigned& cloud_port, unsigned& ego_port, std::string& error) {
     char origin[128];
-    std::snprintf(origin, sizeof origin, "%.10f,%.10f,%.4f", reader.origin_lat_deg(), reader.origin_lon_deg(),
-                  reader.origin_alt_m());
+    std::snprintf(origin, sizeof origin, "%.10f,%.10f,%.4f", reader_.origin_lat_deg(), reader_.origin_lon_deg(),
+                  reader_.origin_alt_m());
     std::vector<std::string> args{"--emulated",
                                   "--can-port", "0",
                                   "--cloud-port", "0",
                                   "--ego-port", "0",
-                                  "--trust-list", trust_path,
-                                  "--can-peer-port", std::to_string(can_link.local_endpoint().port),
-                                  "--epoch-ns", std::to_string(stream.epoch_ns()),
+                                  "--trust-list", reader_.trust_list_path(),
+                                  "--can-peer-port", std::to_string(can_link_.local_endpoint().port),
+                                  "--epoch-ns", std::to_string(stream_.epoch_ns()),
                                   "--origin", origin};
-    args.insert(args.end(), options.firmware_args.begin(), options.firmware_args.end());
-    if (!process.start(options.firmware_path, args, error)) return false;
-    if (!process.wait_ready(options.startup_timeout_s, fw_can, fw_cloud, fw_ego, error)) {
-      result.firmware_exit_code = process.stop();
+    args.insert(args.end(), options_.firmware_args.begin(), options_.firmware_args.end());
+    if (!process_.start(options_.firmware_path, args, error)) return false;
+    if (!process_.wait_ready(options_.startup_timeout_s, can_port, cloud_port, ego_port, error)) {
+      result_.firmware_exit_code = process_.stop();
       return false;
     }
-  }
-  if (fw_can == 0 || fw_cloud == 0) {
-    error = "no firmware ports (start one with --firmware or give --connect HOST:CAN,CLOUD)";
-    return false;
-  }
-  can_link.set_peer(hal::Ipv4Endpoint{host, static_cast<std::uint16_t>(fw_can)});
-  cloud_link.set_peer(hal::Ipv4Endpoint{host, static_cast<std::uint16_t>(fw_cloud)});
-  // Ego scans on the firmware's ego endpoint (a firmware without one: the cloud port).
-  ego_link.set_peer(hal::Ipv4Endpoint{host, static_cast<std::uint16_t>(fw_ego != 0 ? fw_ego : fw_cloud)});
-  hal::SimClock stamp_clock;  // our receive stamps are irrelevant; only the frames matter
-  hal::EmulatedCanBus can(can_link, stamp_clock);
-  can.accept_all();
-
-  auto finish = [&](bool ok) {
-    result.stream_stats = stream.stats();
-    if (!options.firmware_path.empty()) {
-      result.firmware_exit_code = process.stop();
-      result.firmware_output = process.output();
-      if (ok && result.firmware_exit_code != 0) {
-        error = "firmware exited with code " + std::to_string(result.firmware_exit_code);
-        ok = false;
-      }
-    }
-    result.wall_seconds = seconds_since(t0);
-    return ok;
-  };
-
-  std::int64_t last_time_sent = -1;
-  auto send_can = [&](const hal::CanFrame& f) {
-    if (!send_with_retry([&] { return can.send(f); }, result.send_retries)) return false;
-    ++result.can_frames_sent;
     return true;
-  };
-  auto send_time = [&](std::int64_t t) {
-    if (t <= last_time_sent) return true;  // the clock never goes back; equal times need no frame
-    last_time_sent = t;
-    return send_can(firmware::make_sim_time_frame(t));
-  };
+  }
 
-  std::vector<WireEvent> events;
-  for (int i = 0; i < stream.frame_count(); ++i) {
-    events.clear();
-    if (!stream.next_frame(i, events, error)) return finish(false);
+  bool connect_firmware(std::string& error) {
+    unsigned fw_can = options_.firmware_can_port, fw_cloud = options_.firmware_cloud_port,
+             fw_ego = options_.firmware_ego_port;
+    if (!options_.firmware_path.empty() && !start_firmware(fw_can, fw_cloud, fw_ego, error)) return false;
+    if (fw_can == 0 || fw_cloud == 0) {
+      error = "no firmware ports (start one with --firmware or give --connect HOST:CAN,CLOUD)";
+      return false;
+    }
+    can_link_.set_peer(hal::Ipv4Endpoint{host_, static_cast<std::uint16_t>(fw_can)});
+    cloud_link_.set_peer(hal::Ipv4Endpoint{host_, static_cast<std::uint16_t>(fw_cloud)});
+    // Ego scans on the firmware's ego endpoint (a firmware without one: the cloud port).
+    ego_link_.set_peer(hal::Ipv4Endpoint{host_, static_cast<std::uint16_t>(fw_ego != 0 ? fw_ego : fw_cloud)});
+    can_.accept_all();
+    return true;
+  }
+
+  bool send_can(const hal::CanFrame& f) {
+    if (!send_with_retry([&] { return can_.send(f); }, result_.send_retries)) return false;
+    ++result_.can_frames_sent;
+    return true;
+  }
+  bool send_time(std::int64_t t) {
+    if (t <= last_time_sent_) return true;  // the clock never goes back; equal times need no frame
+    last_time_sent_ = t;
+    return send_can(firmware::make_sim_time_frame(t));
+  }
+
+  // Frame i's events in stream order, each preceded by the sim-time frame of its stamp.
+  bool send_events(int i, const std::vector<WireEvent>& events, std::string& error) {
     for (const WireEvent& ev : events) {
       bool ok = true;
       if (ev.kind == WireEvent::Kind::kCan) {
@@ -255,100 +313,95 @@ bool replay_recording(const RecordingReader& reader, const ReplayOptions& option
         if (ev.kind == WireEvent::Kind::kEgoScan) ok = send_time(ev.time_ns);
         for (const auto& d : ev.datagrams) {
           if (!ok) break;
-          hal::UdpLink& link = ev.kind == WireEvent::Kind::kEgoScan ? ego_link : cloud_link;
-          ok = send_with_retry([&] { return link.send(d); }, result.send_retries);
-          ++result.datagrams_sent;
+          hal::UdpLink& link = ev.kind == WireEvent::Kind::kEgoScan ? ego_link_ : cloud_link_;
+          ok = send_with_retry([&] { return link.send(d); }, result_.send_retries);
+          ++result_.datagrams_sent;
         }
       }
       if (!ok) {
         error = "send failed at frame " + std::to_string(i);
-        return finish(false);
+        return false;
       }
     }
+    return true;
+  }
 
-    // Lockstep: wait for this frame's pose (position, attitude with frame counter i, sigma) and
-    // diagnostics (the frames with a frame counter must name i; odometry attitude comes last).
-    ReplayedFrame frame;
-    frame.frame = i;
-    frame.t = reader.frame_time(i);
-    const auto counter_i = static_cast<std::uint16_t>(i & 0xFFFF);
-    bool have_position = false, have_attitude = false, have_sigma = false, done = false;
-    bool have_reg_position = false, have_reg_quality = false, have_gate = false, have_odom_position = false;
-    auto diagnostic = [&](hal::CanFrame& slot, const hal::CanFrame& f, auto& decoded) {
-      slot = f;
-      const bool ok = protocol::unpack(f, decoded) == protocol::DecodeStatus::kOk;
-      if (!ok) ++result.diagnostic_decode_errors;
-      return ok;
-    };
+  // Lockstep: the CAN frames until frame i's pose and diagnostics are complete, the frame timeout
+  // passes or the started firmware exits.
+  bool await_frame(int i, std::string& error) {
+    FrameCollector collector(i, reader_.frame_time(i), result_);
     const auto wait0 = Clock::now();
-    while (!done) {
+    while (!collector.done()) {
       hal::CanRxFrame rx;
-      const hal::Status s = can.receive(rx);
+      const hal::Status s = can_.receive(rx);
       if (s == hal::Status::kWouldBlock) {
-        if (seconds_since(wait0) > options.frame_timeout_s) break;
-        if (!options.firmware_path.empty() && !process.alive()) {
+        if (seconds_since(wait0) > options_.frame_timeout_s) break;
+        if (!options_.firmware_path.empty() && !process_.alive()) {
           error = "firmware exited while replaying frame " + std::to_string(i);
-          return finish(false);
+          return false;
         }
-        pollfd p{can_link.fd(), POLLIN, 0};
+        pollfd p{can_link_.fd(), POLLIN, 0};
         poll(&p, 1, 50);
         continue;
       }
-      if (s != hal::Status::kOk || rx.error) continue;
-      switch (rx.frame.id) {
-        case protocol::kHeartbeatId: ++result.heartbeats; break;
-        case protocol::kPosePositionId:
-          frame.pose.position = rx.frame;
-          have_position = protocol::unpack(rx.frame, frame.position) == protocol::DecodeStatus::kOk;
-          if (!have_position) ++result.pose_decode_errors;
-          break;
-        case protocol::kPoseAttitudeId:
-          frame.pose.attitude = rx.frame;
-          have_attitude = protocol::unpack(rx.frame, frame.attitude) == protocol::DecodeStatus::kOk &&
-                          frame.attitude.frame_counter == static_cast<std::uint16_t>(i & 0xFFFF);
-          break;
-        case protocol::kPoseSigmaId:
-          frame.pose.sigma = rx.frame;
-          have_sigma = protocol::unpack(rx.frame, frame.sigma) == protocol::DecodeStatus::kOk;
-          if (!have_sigma) ++result.pose_decode_errors;
-          break;
-        case protocol::kRegistrationPositionId:
-          have_reg_position = diagnostic(frame.diagnostics.registration_position, rx.frame, frame.registration_position);
-          break;
-        case protocol::kRegistrationQualityId:
-          have_reg_quality = diagnostic(frame.diagnostics.registration_quality, rx.frame, frame.registration_quality) &&
-                             frame.registration_quality.frame_counter == counter_i;
-          break;
-        case protocol::kGateDecisionId:
-          have_gate = diagnostic(frame.diagnostics.gate, rx.frame, frame.gate) && frame.gate.frame_counter == counter_i;
-          break;
-        case protocol::kOdometryPositionId:
-          have_odom_position = diagnostic(frame.diagnostics.odometry_position, rx.frame, frame.odometry_position);
-          break;
-        case protocol::kOdometryAttitudeId:
-          done = diagnostic(frame.diagnostics.odometry_attitude, rx.frame, frame.odometry_attitude) &&
-                 frame.odometry_attitude.frame_counter == counter_i && have_position && have_attitude && have_sigma &&
-                 have_reg_position && have_reg_quality && have_gate && have_odom_position;
-          break;
-        default: break;
-      }
+      if (s == hal::Status::kOk && !rx.error) collector.take(rx.frame);
     }
-    if (!done) {
-      ++result.timeouts;
+    if (!collector.done()) {
+      ++result_.timeouts;
       error = "timeout waiting for the pose and diagnostic frames of frame " + std::to_string(i) + " (" +
-              std::to_string(options.frame_timeout_s) + " s)";
-      return finish(false);
+              std::to_string(options_.frame_timeout_s) + " s)";
+      return false;
     }
-    result.frames.push_back(frame);
-    if (options.on_frame) options.on_frame(frame);
-    if (options.verbose) {
-      std::fprintf(stderr, "frame %4d  x %9.3f y %9.3f yaw %7.4f  sigma %.3f  flags %d%d%d%d\n", i, frame.position.x_m,
-                   frame.position.y_m, frame.attitude.yaw_rad, frame.sigma.sigma_x_m, frame.position.flags.pose_valid,
-                   frame.position.flags.registration_valid, frame.position.flags.gnss_used,
-                   frame.position.flags.degraded);
+    report(collector.frame());
+    return true;
+  }
+
+  void report(const ReplayedFrame& frame) {
+    result_.frames.push_back(frame);
+    if (options_.on_frame) options_.on_frame(frame);
+    if (options_.verbose) {
+      std::fprintf(stderr, "frame %4d  x %9.3f y %9.3f yaw %7.4f  sigma %.3f  flags %d%d%d%d\n", frame.frame,
+                   frame.position.x_m, frame.position.y_m, frame.attitude.yaw_rad, frame.sigma.sigma_x_m,
+                   frame.position.flags.pose_valid, frame.position.flags.registration_valid,
+                   frame.position.flags.gnss_used, frame.position.flags.degraded);
     }
   }
-  return finish(true);
+
+  // The stream's counters, the started firmware stopped (its output and exit code kept), the wall
+  // time; a firmware exiting with a non-zero code fails a replay that succeeded.
+  bool finish(bool ok, std::string& error) {
+    result_.stream_stats = stream_.stats();
+    if (!options_.firmware_path.empty()) {
+      result_.firmware_exit_code = process_.stop();
+      result_.firmware_output = process_.output();
+      if (ok && result_.firmware_exit_code != 0) {
+        error = "firmware exited with code " + std::to_string(result_.firmware_exit_code);
+        ok = false;
+      }
+    }
+    result_.wall_seconds = seconds_since(t0_);
+    return ok;
+  }
+
+  const RecordingReader& reader_;
+  const ReplayOptions& options_;
+  ReplayResult& result_;
+  const Clock::time_point t0_ = Clock::now();
+  EventStream stream_;
+  std::uint32_t host_ = 0;
+  hal::UdpLink can_link_, cloud_link_, ego_link_;
+  hal::SimClock stamp_clock_;  // our receive stamps are irrelevant; only the frames matter
+  hal::EmulatedCanBus can_;
+  FirmwareProcess process_;
+  std::int64_t last_time_sent_ = -1;
+};
+
+}  // namespace
+
+bool replay_recording(const RecordingReader& reader, const ReplayOptions& options, ReplayResult& result,
+                      std::string& error) {
+  result = ReplayResult{};
+  return Lockstep(reader, options, result).run(error);
 }
 
 StampedTrajectory pose_frames_to_trajectory(const std::vector<ReplayedFrame>& frames) {

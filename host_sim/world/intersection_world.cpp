@@ -143,7 +143,6 @@ void add_lamp(IntersectionWorld& iw, double x, double y, double arm_dx, double a
   w.add(Primitive::cylinder(x, y, 0.0, 8.0, 0.12, kMatPole, id));
   const Vector3d a(x, y, 7.85), b(x + arm_dx, y + arm_dy, 8.0);
   w.add(Primitive::box(a.cwiseMin(b) - Vector3d(0.06, 0.06, 0), a.cwiseMax(b) + Vector3d(0.06, 0.06, 0), kMatPole, id));
-  iw.poles.emplace_back(x, y);
 }
 
 void add_traffic_light(IntersectionWorld& iw, double x, double y, double arm_dx, double arm_dy) {
@@ -158,7 +157,6 @@ void add_traffic_light(IntersectionWorld& iw, double x, double y, double arm_dx,
     w.add(Primitive::box(c - Vector3d(0.2, 0.2, 0.55), c + Vector3d(0.2, 0.2, 0.55), kMatTrafficLight, id));
   }
   w.add(Primitive::box(Vector3d(x - 0.2, y - 0.2, 2.2), Vector3d(x + 0.2, y + 0.2, 3.2), kMatTrafficLight, id));
-  iw.poles.emplace_back(x, y);
 }
 
 void add_tree(IntersectionWorld& iw, Rng& rng, double x, double y) {
@@ -168,7 +166,6 @@ void add_tree(IntersectionWorld& iw, Rng& rng, double x, double y) {
   w.add(Primitive::cylinder(x, y, 0.0, trunk_h + 0.5, rng.uniform(0.15, 0.25), kMatTrunk, id));
   const Vector3d c(x, y, trunk_h + crown_r * 0.8);
   w.add(Primitive::sphere(c, crown_r, kMatFoliage, id));
-  iw.trees.push_back(c);
 }
 
 void add_parked_car(IntersectionWorld& iw, double x, double y, double yaw) {
@@ -177,7 +174,6 @@ void add_parked_car(IntersectionWorld& iw, double x, double y, double yaw) {
   const double c = std::cos(yaw), s = std::sin(yaw);
   w.add(Primitive::yaw_box(Vector3d(x, y, 0.75), Vector3d(2.25, 0.9, 0.45), yaw, kMatParkedCar, id));
   w.add(Primitive::yaw_box(Vector3d(x - 0.2 * c, y - 0.2 * s, 1.43), Vector3d(1.2, 0.82, 0.23), yaw, kMatParkedCar, id));
-  iw.parked_cars.emplace_back(x, y);
 }
 
 }  // namespace
@@ -195,7 +191,6 @@ void build_intersection_world(const WorldConfig& cfg, IntersectionWorld& iw) {
     for (double sy : {-1.0, 1.0}) {
       const double c = L::kRoadHalfWidth + 2.5;
       iw.world.add(Primitive::cylinder(sx * c, sy * c, 0.0, 4.7, 0.12, kMatPole, iw.world.new_object_id()));
-      iw.poles.emplace_back(sx * c, sy * c);
     }
   if (cfg.street_furniture) {
     const double curb = L::kRoadHalfWidth + 0.6;

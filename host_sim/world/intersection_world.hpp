@@ -31,7 +31,7 @@ struct WorldConfig {
   bool parked_cars = true;
 };
 
-struct BuildingInfo {  // for top-view plots and GNSS diagnostics
+struct BuildingInfo {  // the layout's blocks, for checks of the canyon
   Eigen::Vector2d lo, hi;  // footprint (axis aligned)
   double height = 0.0;
 };
@@ -39,9 +39,6 @@ struct BuildingInfo {  // for top-view plots and GNSS diagnostics
 struct IntersectionWorld {
   World world;
   std::vector<BuildingInfo> buildings;
-  std::vector<Eigen::Vector3d> trees;         // crown centres
-  std::vector<Eigen::Vector2d> poles;         // lamps + traffic lights
-  std::vector<Eigen::Vector2d> parked_cars;   // centres
 };
 
 // Builds the static world (vehicles are added by the scenario as dynamic bodies).

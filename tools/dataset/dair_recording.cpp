@@ -16,6 +16,7 @@
 #include "host_sim/gnss/gnss_simulator.hpp"
 #include "host_sim/recording/can_log_writer.hpp"
 #include "host_sim/recording/pose_io.hpp"
+#include "host_sim/recording/recording_reader.hpp"
 #include "host_sim/recording/sim_background.hpp"
 #include "host_sim/recording/sim_trust.hpp"
 #include "host_sim/vehicle/vehicle_signals.hpp"
@@ -360,6 +361,277 @@ void normalise_intensity(cloud_io::PointCloud& c) {
   for (float& v : c.intensity) v = std::isfinite(v) ? std::clamp(v / 255.0f, 0.0f, 1.0f) : 0.0f;
 }
 
+// ---- The steps of write_dair_recording, in order ----
+
+// What the steps share: the options, the dataset's frames, the recording folder and what each
+// step produces for the later ones.
+struct Conversion {
+  Conversion(const DairRecordingOptions& options, DairRecordingSummary& s) : o(options), summary(s), out(options.out_dir) {}
+  const DairRecordingOptions& o;
+  DairRecordingSummary& summary;
+  const fs::path out;
+  // The dataset: the vehicle sequence, the roadside unit paired with it and its scans.
+  DairCalib calib;
+  std::vector<VehicleFrame> vehicle;
+  std::string batch;
+  RoadsideChoice unit;
+  std::vector<RoadsideFrame> roadside;
+  std::int64_t t0_us = 0;  // the first vehicle scan's stamp: recording time 0
+  // The recording frame and the roadside unit's pose in it.
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+  Iso roadside_pose = Iso::Identity();
+  // Ego scans: the LiDAR mount, the ground truth at the scan stamps and at 100 Hz.
+  Iso mount = Iso::Identity();
+  std::vector<sim::TimedPose> gt, gt100;
+  std::vector<double> stamps;
+  // Roadside shares: their manifest entries and the sweeps (for the background).
+  Json clouds = Json::array();
+  std::vector<cloud_io::PointCloud> sweeps;
+  // GNSS and the CAN log.
+  Eigen::Vector3d antenna_in_body = Eigen::Vector3d::Zero();
+  CanyonFrame canyon;
+  GnssResult gnss;
+  Json can_json;
+
+  double seconds(std::int64_t us) const { return static_cast<double>(us - t0_us) * 1e-6; }
+  Iso shifted(Iso T) const {
+    T.translation() -= offset;
+    return T;
+  }
+};
+
+bool read_dataset(Conversion& c, std::string& error) {
+  if (!c.calib.load(c.o.root, error) || !read_vehicle_frames(c.calib, c.o.batch, c.vehicle, c.batch, error) ||
+      !choose_roadside(c.o.root, c.calib, c.vehicle, c.unit, error))
+    return false;
+  c.t0_us = c.vehicle.front().stamp_us;
+  const std::int64_t end_us = c.vehicle.back().stamp_us + static_cast<std::int64_t>(kFramePeriodS * 1e6);
+  return read_roadside_frames(c.calib, c.unit, c.t0_us, end_us, c.roadside, error);
+}
+
+bool create_folders(const Conversion& c, std::string& error) {
+  std::error_code ec;
+  fs::create_directories(c.out / "ego_lidar", ec);
+  fs::create_directories(c.out / "infra" / kRoadsideSensor, ec);
+  if (ec) {
+    error = "cannot create " + c.o.out_dir + ": " + ec.message();
+    return false;
+  }
+  return true;
+}
+
+// The roadside pose as DAIR-V2X's calib_i2v composes it (offset on the world translation); the
+// recording frame's offset from it (whole metres) and the first scan's height.
+void place_recording_frame(Conversion& c) {
+  Iso roadside_world = c.roadside.front().world_T_sensor;
+  if (c.o.system_error_offset) roadside_world.translation() += Eigen::Vector3d(c.unit.delta_x, c.unit.delta_y, 0.0);
+  c.offset = roadside_world.translation().array().round();
+  c.offset.z() = std::round(c.vehicle.front().world_T_lidar.translation().z());
+  c.roadside_pose = c.shifted(roadside_world);
+}
+
+// The mount height from the first scan's road returns.
+bool measure_mount(Conversion& c, const cloud_io::PointCloud& first_scan, const std::string& path, std::string& error) {
+  c.summary.lidar_height_m = lidar_height(first_scan);
+  if (!(c.summary.lidar_height_m > 0.5 && c.summary.lidar_height_m < 5.0)) {
+    error = path + ": no road found below the LiDAR (height " + std::to_string(c.summary.lidar_height_m) + " m)";
+    return false;
+  }
+  c.mount.translation() = Eigen::Vector3d(0.0, 0.0, c.summary.lidar_height_m);
+  return true;
+}
+
+// Ego scans as recorded (point times clamped to the frame period), their stamps and the truth.
+bool write_ego_scans(Conversion& c, std::string& error) {
+  cloud_io::PointCloud scan;
+  cloud_io::ReadOptions read;
+  for (std::size_t i = 0; i < c.vehicle.size(); ++i) {
+    read.time_offset_s = static_cast<double>(c.vehicle[i].stamp_us) * 1e-6;
+    if (!cloud_io::read_pcd(c.vehicle[i].pcd, scan, error, read)) return false;
+    if (scan.time.size() != scan.points.size()) {
+      error = c.vehicle[i].pcd + ": no per-point timestamp field";
+      return false;
+    }
+    if (i == 0 && !measure_mount(c, scan, c.vehicle[i].pcd, error)) return false;
+    for (float& t : scan.time) {
+      const float clamped = std::clamp(std::isfinite(t) ? t : 0.0f, 0.0f, static_cast<float>(kFramePeriodS) - 1e-6f);
+      c.summary.times_clamped += clamped != t ? 1 : 0;
+      t = clamped;
+    }
+    normalise_intensity(scan);
+    scan.normals.clear();
+    if (!cloud_io::write_quantised_pcd(frame_file((c.out / "ego_lidar").string(), i), scan, cloud_io::Quantisation{},
+                                       error))
+      return false;
+    const double t = c.seconds(c.vehicle[i].stamp_us);
+    c.stamps.push_back(t);
+    c.gt.push_back({t, c.shifted(c.vehicle[i].world_T_lidar) * c.mount.inverse()});
+  }
+  c.summary.frames = static_cast<int>(c.vehicle.size());
+  c.summary.duration_s = c.stamps.back() + kFramePeriodS;
+  return true;
+}
+
+// Roadside clouds (the shares) with their manifest entries; the sweeps kept for the background.
+bool write_roadside_clouds(Conversion& c, std::string& error) {
+  for (std::size_t k = 0; k < c.roadside.size(); ++k) {
+    cloud_io::PointCloud cloud;
+    if (!cloud_io::read_pcd(c.roadside[k].pcd, cloud, error)) return false;
+    normalise_intensity(cloud);
+    cloud.time.clear();
+    cloud.normals.clear();
+    const std::string rel = frame_file(std::string("infra/") + kRoadsideSensor, k);
+    if (!cloud_io::write_quantised_pcd((c.out / rel).string(), cloud, cloud_io::Quantisation{}, error)) return false;
+    Json e = Json::object();
+    e["sensor"] = kRoadsideSensor;
+    e["kind"] = "infra";
+    e["stamp_s"] = c.seconds(c.roadside[k].stamp_us);
+    e["file"] = rel;
+    e["points"] = cloud.points.size();
+    e["sensor_pose_enu"] = sim::pose_to_json(c.roadside_pose);
+    e["true_sensor_pose_enu"] = sim::pose_to_json(c.roadside_pose);
+    e["dair_frame"] = c.roadside[k].id;
+    c.clouds.push_back(std::move(e));
+    c.sweeps.push_back(std::move(cloud));
+  }
+  c.summary.roadside_clouds = static_cast<int>(c.roadside.size());
+  c.summary.first_roadside_s = c.seconds(c.roadside.front().stamp_us);
+  return true;
+}
+
+// Ground truth at the scan stamps and at 100 Hz.
+bool write_ground_truth(Conversion& c, std::string& error) {
+  for (int k = 0; k * 0.01 <= c.stamps.back() + 1e-9; ++k) c.gt100.push_back({k * 0.01, interpolate(c.gt, k * 0.01)});
+  return sim::write_tum((c.out / "ground_truth.tum").string(), c.gt, error) &&
+         sim::write_tum((c.out / "ground_truth_100hz.tum").string(), c.gt100, error);
+}
+
+// GNSS through the simulated canyon, vehicle signals from the truth, both on the CAN log.
+bool write_can_log(Conversion& c, std::string& error) {
+  const DairRecordingOptions& o = c.o;
+  const GeodeticOrigin origin = make_geodetic_origin(o.origin_lat_deg, o.origin_lon_deg, o.origin_alt_m);
+  // The antenna (NovAtel reference point) in the body frame, from the first scan's calibration.
+  c.antenna_in_body = c.mount * c.vehicle.front().novatel_T_lidar.inverse().translation();
+  // The simulated street along the first heading, the drive starting in its inner lane
+  // gnss_canyon_setback_m before the simulated intersection (as the simulator's Sim 0 ego).
+  c.canyon.rotation = yaw_of(c.gt.front().pose);
+  const Eigen::Vector2d forward(std::cos(c.canyon.rotation), std::sin(c.canyon.rotation)), left(-forward.y(), forward.x());
+  c.canyon.centre = c.gt.front().pose.translation().head<2>() + o.gnss_canyon_setback_m * forward + kInnerLaneM * left;
+  c.gnss = simulate_gnss(o, c.gt100, c.antenna_in_body, c.canyon, origin, c.stamps.back());
+  c.summary.gnss_valid_fixes = c.gnss.valid;
+  c.summary.gnss_mean_h_error_m = c.gnss.mean_h_error;
+  c.summary.gnss_max_h_error_m = c.gnss.max_h_error;
+
+  const std::vector<Motion> motion = motion_of(c.gt);
+  sim::VehicleSignalSimulator signals(sim::VehicleSignalConfig{}, sim::derive_seed(o.seed, {kVehicleStream}));
+  std::vector<sim::VehicleSignals> vehicle_signals;
+  const int nv = static_cast<int>(std::floor(c.stamps.back() * o.vehicle_rate_hz + 1e-9)) + 1;
+  for (int k = 0; k < nv; ++k) {
+    const double t = k / o.vehicle_rate_hz;
+    const Motion m = motion_at(c.gt, motion, t);
+    vehicle_signals.push_back(signals.sample(t, m.speed, m.yaw_rate));
+  }
+  return sim::write_gnss_vehicle_can_log((c.out / "gnss_vehicle.log").string(), "gnss_vehicle.log",
+                                         static_cast<double>(c.t0_us) * 1e-6, vehicle_signals, c.gnss.fixes, c.can_json,
+                                         error);
+}
+
+// Trust list: the roadside unit's test key, survey and background.
+bool write_trust_list(Conversion& c, std::string& error) {
+  sim::SimSigner signer;
+  if (!sim::sim_signer("infra", kRoadsideSensor, signer)) {
+    error = "no test key for the roadside unit";
+    return false;
+  }
+  signer.surveyed = true;
+  signer.survey = sim::surveyed_pose(c.roadside_pose);
+  trust::TrustList list = sim::trust_list_of({signer});
+  sim::SimBackground background;
+  if (!sim::background_from_points(static_points(c.sweeps, c.o.background_min_share), config::kBackgroundFileCells,
+                                   background, error) ||
+      !sim::write_background(c.o.out_dir, kRoadsideSensor, background, list.signers[0], error) ||
+      !sim::write_text_file((c.out / sim::kTrustListFile).string(), sim::trust_list_text(list), error))
+    return false;
+  c.summary.background_cells = background.cells.size();
+  return true;
+}
+
+// Where the recording comes from, its frames and units.
+void describe_source(const Conversion& c, Json& m) {
+  const DairRecordingOptions& o = c.o;
+  m["source"] = Json{{"dataset", "DAIR-V2X-C"},
+                     {"root", o.root},
+                     {"vehicle_batch", c.batch},
+                     {"roadside", c.unit.intersection + " batch " + c.unit.batch},
+                     {"pairs_in_sequence", c.unit.pairs},
+                     {"world_offset", std::vector<double>{c.offset.x(), c.offset.y(), c.offset.z()}},
+                     {"world_offset_note", "recording frame = DAIR world frame - world_offset"},
+                     {"system_error_offset_applied", o.system_error_offset},
+                     {"system_error_offset", Json{{"delta_x", c.unit.delta_x}, {"delta_y", c.unit.delta_y}}},
+                     {"ground_truth", "novatel_to_world * lidar_to_novatel * inverse(mount_in_body)"}};
+  m["units"] = Json{{"frame", "DAIR world frame (local, x east, y north, z up) shifted by source.world_offset"},
+                    {"body_frame", "vehicle LiDAR axes (x forward, y left, z up), origin on the road below it"},
+                    {"time", "seconds since the first vehicle scan; unix time = time_origin_unix_s + t"},
+                    {"pose", "[x, y, z, qx, qy, qz, qw], child frame in parent frame"},
+                    {"intensity", "[0, 1]: the sensors' 0-255 / 255"}};
+  m["files"] = Json{{"ego_scan_pattern", "ego_lidar/%06d.pcdz"},
+                    {"ego_scan_fields", "x y z intensity t; sensor frame at each point's firing time; t = seconds since the frame stamp"},
+                    {"frame_stamp", "frame_stamps_s"},
+                    {"ground_truth", "ground_truth.tum"},
+                    {"ground_truth_100hz", "ground_truth_100hz.tum"},
+                    {"can_log", "gnss_vehicle.log"},
+                    {"trust_list", sim::kTrustListFile}};
+}
+
+// The sensors, the map clouds, the GNSS model and the CAN log.
+void describe_sensors(const Conversion& c, Json& m) {
+  const DairRecordingOptions& o = c.o;
+  Json ego = Json{{"name", "ego_lidar"}, {"carrier", "ego"}, {"type", "lidar"}, {"model", "Hesai Pandar40 (40 beams)"},
+                  {"rate_hz", 1.0 / kFramePeriodS}, {"mount_in_body", sim::pose_to_json(c.mount)}};
+  Json infra = Json{{"name", kRoadsideSensor}, {"carrier", "infrastructure"}, {"type", "lidar"},
+                    {"rate_hz_published", 1.0 / kFramePeriodS}, {"surveyed_pose_enu", sim::pose_to_json(c.roadside_pose)},
+                    {"background_note", "cells its own sweeps of the drive hit in at least half of them"}};
+  m["sensors"] = Json::array({ego, infra});
+  m["map_clouds"] = Json{{"fields", "x y z intensity (quantised), sensor frame (DAIR virtual LiDAR)"},
+                         {"clouds", c.clouds}};
+  const Eigen::Vector3d& a = c.antenna_in_body;
+  m["gnss"] = Json{{"model", "host_sim/gnss urban-canyon receiver along the true antenna path, the simulated "
+                             "intersection's buildings laid on this intersection"},
+                   {"rate_hz", o.gnss_rate_hz},
+                   {"epoch_offset_s", 3600.0 * o.gnss_epoch_hour},
+                   {"antenna_in_body", std::vector<double>{a.x(), a.y(), a.z()}},
+                   {"canyon_centre", std::vector<double>{c.canyon.centre.x(), c.canyon.centre.y()}},
+                   {"canyon_setback_m", o.gnss_canyon_setback_m},
+                   {"canyon_rotation_deg", c.canyon.rotation * 180.0 / M_PI},
+                   {"valid_fixes", c.gnss.valid},
+                   {"mean_horizontal_error_m", c.gnss.mean_h_error},
+                   {"max_horizontal_error_m", c.gnss.max_h_error}};
+  m["can_log"] = c.can_json;
+}
+
+bool write_manifest(const Conversion& c, std::string& error) {
+  const DairRecordingOptions& o = c.o;
+  Json m = Json::object();
+  m["format"] = "v2xloc-recording";
+  m["format_version"] = sim::RecordingReader::kFormatVersion;
+  m["scenario"] = Json{{"id", 100},
+                       {"name", "dair_v2x_c"},
+                       {"description", "DAIR-V2X-C cooperative sequence (real data), intersection " + c.unit.intersection}};
+  m["permutation"] = "real_1_infra";
+  m["seed"] = static_cast<double>(o.seed);
+  m["quick"] = false;
+  m["duration_s"] = c.summary.duration_s;
+  m["frame_rate_hz"] = 1.0 / kFramePeriodS;
+  m["frame_count"] = c.summary.frames;
+  m["frame_stamps_s"] = c.stamps;
+  m["time_origin_unix_s"] = static_cast<double>(c.t0_us) * 1e-6;
+  m["geodetic_origin"] = Json{{"lat_deg", o.origin_lat_deg}, {"lon_deg", o.origin_lon_deg}, {"alt_m", o.origin_alt_m},
+                              {"note", "nominal: the release does not georeference its world frame"}};
+  describe_source(c, m);
+  describe_sensors(c, m);
+  return sim::write_text_file((c.out / "manifest.json").string(), m.dump(2) + "\n", error);
+}
+
 }  // namespace
 
 std::string DairRecordingSummary::one_line() const {
@@ -374,215 +646,11 @@ std::string DairRecordingSummary::one_line() const {
 
 bool write_dair_recording(const DairRecordingOptions& o, DairRecordingSummary& summary, std::string& error) {
   summary = DairRecordingSummary{};
-  DairCalib calib;
-  if (!calib.load(o.root, error)) return false;
-  std::vector<VehicleFrame> vehicle;
-  std::string batch;
-  if (!read_vehicle_frames(calib, o.batch, vehicle, batch, error)) return false;
-  RoadsideChoice unit;
-  if (!choose_roadside(o.root, calib, vehicle, unit, error)) return false;
-  const std::int64_t t0_us = vehicle.front().stamp_us;
-  const std::int64_t end_us = vehicle.back().stamp_us + static_cast<std::int64_t>(kFramePeriodS * 1e6);
-  std::vector<RoadsideFrame> roadside;
-  if (!read_roadside_frames(calib, unit, t0_us, end_us, roadside, error)) return false;
-  const auto seconds = [&](std::int64_t us) { return static_cast<double>(us - t0_us) * 1e-6; };
-
-  const fs::path out(o.out_dir);
-  std::error_code ec;
-  fs::create_directories(out / "ego_lidar", ec);
-  fs::create_directories(out / "infra" / kRoadsideSensor, ec);
-  if (ec) {
-    error = "cannot create " + o.out_dir + ": " + ec.message();
-    return false;
-  }
-
-  // The roadside pose as DAIR-V2X's calib_i2v composes it (offset on the world translation).
-  Iso roadside_world = roadside.front().world_T_sensor;
-  if (o.system_error_offset) roadside_world.translation() += Eigen::Vector3d(unit.delta_x, unit.delta_y, 0.0);
-  Eigen::Vector3d offset = roadside_world.translation().array().round();
-  offset.z() = std::round(vehicle.front().world_T_lidar.translation().z());
-  const auto shifted = [&](Iso T) {
-    T.translation() -= offset;
-    return T;
-  };
-  const Iso roadside_pose = shifted(roadside_world);
-
-  // Ego scans; the mount height from the first.
-  cloud_io::PointCloud scan;
-  cloud_io::ReadOptions read;
-  Iso mount = Iso::Identity();
-  std::vector<sim::TimedPose> gt;
-  std::vector<double> stamps;
-  const cloud_io::Quantisation quantisation{};
-  for (std::size_t i = 0; i < vehicle.size(); ++i) {
-    read.time_offset_s = static_cast<double>(vehicle[i].stamp_us) * 1e-6;
-    if (!cloud_io::read_pcd(vehicle[i].pcd, scan, error, read)) return false;
-    if (scan.time.size() != scan.points.size()) {
-      error = vehicle[i].pcd + ": no per-point timestamp field";
-      return false;
-    }
-    if (i == 0) {
-      summary.lidar_height_m = lidar_height(scan);
-      if (!(summary.lidar_height_m > 0.5 && summary.lidar_height_m < 5.0)) {
-        error = vehicle[i].pcd + ": no road found below the LiDAR (height " + std::to_string(summary.lidar_height_m) + " m)";
-        return false;
-      }
-      mount.translation() = Eigen::Vector3d(0.0, 0.0, summary.lidar_height_m);
-    }
-    for (float& t : scan.time) {
-      const float clamped = std::clamp(std::isfinite(t) ? t : 0.0f, 0.0f, static_cast<float>(kFramePeriodS) - 1e-6f);
-      summary.times_clamped += clamped != t ? 1 : 0;
-      t = clamped;
-    }
-    normalise_intensity(scan);
-    scan.normals.clear();
-    if (!cloud_io::write_quantised_pcd(frame_file((out / "ego_lidar").string(), i), scan, quantisation, error)) return false;
-    const double t = seconds(vehicle[i].stamp_us);
-    stamps.push_back(t);
-    gt.push_back({t, shifted(vehicle[i].world_T_lidar) * mount.inverse()});
-  }
-  summary.frames = static_cast<int>(vehicle.size());
-  summary.duration_s = stamps.back() + kFramePeriodS;
-
-  // Roadside clouds (shares) and the background of their static cells.
-  Json clouds = Json::array();
-  std::vector<cloud_io::PointCloud> sweeps;
-  for (std::size_t k = 0; k < roadside.size(); ++k) {
-    cloud_io::PointCloud cloud;
-    if (!cloud_io::read_pcd(roadside[k].pcd, cloud, error)) return false;
-    normalise_intensity(cloud);
-    cloud.time.clear();
-    cloud.normals.clear();
-    const std::string rel = frame_file(std::string("infra/") + kRoadsideSensor, k);
-    if (!cloud_io::write_quantised_pcd((out / rel).string(), cloud, quantisation, error)) return false;
-    Json e = Json::object();
-    e["sensor"] = kRoadsideSensor;
-    e["kind"] = "infra";
-    e["stamp_s"] = seconds(roadside[k].stamp_us);
-    e["file"] = rel;
-    e["points"] = cloud.points.size();
-    e["sensor_pose_enu"] = sim::pose_to_json(roadside_pose);
-    e["true_sensor_pose_enu"] = sim::pose_to_json(roadside_pose);
-    e["dair_frame"] = roadside[k].id;
-    clouds.push_back(std::move(e));
-    sweeps.push_back(std::move(cloud));
-  }
-  summary.roadside_clouds = static_cast<int>(roadside.size());
-  summary.first_roadside_s = seconds(roadside.front().stamp_us);
-
-  // Ground truth at the scan stamps and at 100 Hz.
-  std::vector<sim::TimedPose> gt100;
-  for (int k = 0; k * 0.01 <= stamps.back() + 1e-9; ++k) gt100.push_back({k * 0.01, interpolate(gt, k * 0.01)});
-  if (!sim::write_tum((out / "ground_truth.tum").string(), gt, error) ||
-      !sim::write_tum((out / "ground_truth_100hz.tum").string(), gt100, error))
-    return false;
-
-  // GNSS through the simulated canyon, vehicle signals from the truth, both on the CAN log.
-  const GeodeticOrigin origin = make_geodetic_origin(o.origin_lat_deg, o.origin_lon_deg, o.origin_alt_m);
-  // The antenna (NovAtel reference point) in the body frame, from the first scan's calibration.
-  const Eigen::Vector3d antenna_in_body = mount * vehicle.front().novatel_T_lidar.inverse().translation();
-  // The simulated street along the first heading, the drive starting in its inner lane
-  // gnss_canyon_setback_m before the simulated intersection (as the simulator's Sim 0 ego).
-  CanyonFrame canyon;
-  canyon.rotation = yaw_of(gt.front().pose);
-  const Eigen::Vector2d forward(std::cos(canyon.rotation), std::sin(canyon.rotation)), left(-forward.y(), forward.x());
-  canyon.centre = gt.front().pose.translation().head<2>() + o.gnss_canyon_setback_m * forward + kInnerLaneM * left;
-  const GnssResult gnss = simulate_gnss(o, gt100, antenna_in_body, canyon, origin, stamps.back());
-  summary.gnss_valid_fixes = gnss.valid;
-  summary.gnss_mean_h_error_m = gnss.mean_h_error;
-  summary.gnss_max_h_error_m = gnss.max_h_error;
-
-  const std::vector<Motion> motion = motion_of(gt);
-  sim::VehicleSignalSimulator signals(sim::VehicleSignalConfig{}, sim::derive_seed(o.seed, {kVehicleStream}));
-  std::vector<sim::VehicleSignals> vehicle_signals;
-  const int nv = static_cast<int>(std::floor(stamps.back() * o.vehicle_rate_hz + 1e-9)) + 1;
-  for (int k = 0; k < nv; ++k) {
-    const double t = k / o.vehicle_rate_hz;
-    const Motion m = motion_at(gt, motion, t);
-    vehicle_signals.push_back(signals.sample(t, m.speed, m.yaw_rate));
-  }
-  const double t0_unix = static_cast<double>(t0_us) * 1e-6;
-  Json can_json;
-  if (!sim::write_gnss_vehicle_can_log((out / "gnss_vehicle.log").string(), "gnss_vehicle.log", t0_unix, vehicle_signals,
-                                       gnss.fixes, can_json, error))
-    return false;
-
-  // Trust list: the roadside unit's test key, survey and background.
-  sim::SimSigner signer;
-  if (!sim::sim_signer("infra", kRoadsideSensor, signer)) {
-    error = "no test key for the roadside unit";
-    return false;
-  }
-  signer.surveyed = true;
-  signer.survey = sim::surveyed_pose(roadside_pose);
-  trust::TrustList list = sim::trust_list_of({signer});
-  sim::SimBackground background;
-  if (!sim::background_from_points(static_points(sweeps, o.background_min_share), config::kBackgroundFileCells, background, error) ||
-      !sim::write_background(o.out_dir, kRoadsideSensor, background, list.signers[0], error) ||
-      !sim::write_text_file((out / sim::kTrustListFile).string(), sim::trust_list_text(list), error))
-    return false;
-  summary.background_cells = background.cells.size();
-
-  // Manifest.
-  Json m = Json::object();
-  m["format"] = "v2xloc-recording";
-  m["format_version"] = 2;
-  m["scenario"] = Json{{"id", 100},
-                       {"name", "dair_v2x_c"},
-                       {"description", "DAIR-V2X-C cooperative sequence (real data), intersection " + unit.intersection}};
-  m["permutation"] = "real_1_infra";
-  m["seed"] = static_cast<double>(o.seed);
-  m["quick"] = false;
-  m["duration_s"] = summary.duration_s;
-  m["frame_rate_hz"] = 1.0 / kFramePeriodS;
-  m["frame_count"] = summary.frames;
-  m["frame_stamps_s"] = stamps;
-  m["time_origin_unix_s"] = t0_unix;
-  m["geodetic_origin"] = Json{{"lat_deg", o.origin_lat_deg}, {"lon_deg", o.origin_lon_deg}, {"alt_m", o.origin_alt_m},
-                              {"note", "nominal: the release does not georeference its world frame"}};
-  m["source"] = Json{{"dataset", "DAIR-V2X-C"},
-                     {"root", o.root},
-                     {"vehicle_batch", batch},
-                     {"roadside", unit.intersection + " batch " + unit.batch},
-                     {"pairs_in_sequence", unit.pairs},
-                     {"world_offset", std::vector<double>{offset.x(), offset.y(), offset.z()}},
-                     {"world_offset_note", "recording frame = DAIR world frame - world_offset"},
-                     {"system_error_offset_applied", o.system_error_offset},
-                     {"system_error_offset", Json{{"delta_x", unit.delta_x}, {"delta_y", unit.delta_y}}},
-                     {"ground_truth", "novatel_to_world * lidar_to_novatel * inverse(mount_in_body)"}};
-  m["units"] = Json{{"frame", "DAIR world frame (local, x east, y north, z up) shifted by source.world_offset"},
-                    {"body_frame", "vehicle LiDAR axes (x forward, y left, z up), origin on the road below it"},
-                    {"time", "seconds since the first vehicle scan; unix time = time_origin_unix_s + t"},
-                    {"pose", "[x, y, z, qx, qy, qz, qw], child frame in parent frame"},
-                    {"intensity", "[0, 1]: the sensors' 0-255 / 255"}};
-  m["files"] = Json{{"ego_scan_pattern", "ego_lidar/%06d.pcdz"},
-                    {"ego_scan_fields", "x y z intensity t; sensor frame at each point's firing time; t = seconds since the frame stamp"},
-                    {"frame_stamp", "frame_stamps_s"},
-                    {"ground_truth", "ground_truth.tum"},
-                    {"ground_truth_100hz", "ground_truth_100hz.tum"},
-                    {"can_log", "gnss_vehicle.log"},
-                    {"trust_list", sim::kTrustListFile}};
-  Json ego = Json{{"name", "ego_lidar"}, {"carrier", "ego"}, {"type", "lidar"}, {"model", "Hesai Pandar40 (40 beams)"},
-                  {"rate_hz", 1.0 / kFramePeriodS}, {"mount_in_body", sim::pose_to_json(mount)}};
-  Json infra = Json{{"name", kRoadsideSensor}, {"carrier", "infrastructure"}, {"type", "lidar"},
-                    {"rate_hz_published", 1.0 / kFramePeriodS}, {"surveyed_pose_enu", sim::pose_to_json(roadside_pose)},
-                    {"background_note", "cells its own sweeps of the drive hit in at least half of them"}};
-  m["sensors"] = Json::array({ego, infra});
-  m["map_clouds"] = Json{{"fields", "x y z intensity (quantised), sensor frame (DAIR virtual LiDAR)"},
-                         {"clouds", clouds}};
-  m["gnss"] = Json{{"model", "host_sim/gnss urban-canyon receiver along the true antenna path, the simulated "
-                             "intersection's buildings laid on this intersection"},
-                   {"rate_hz", o.gnss_rate_hz},
-                   {"epoch_offset_s", 3600.0 * o.gnss_epoch_hour},
-                   {"antenna_in_body", std::vector<double>{antenna_in_body.x(), antenna_in_body.y(), antenna_in_body.z()}},
-                   {"canyon_centre", std::vector<double>{canyon.centre.x(), canyon.centre.y()}},
-                   {"canyon_setback_m", o.gnss_canyon_setback_m},
-                   {"canyon_rotation_deg", canyon.rotation * 180.0 / M_PI},
-                   {"valid_fixes", gnss.valid},
-                   {"mean_horizontal_error_m", gnss.mean_h_error},
-                   {"max_horizontal_error_m", gnss.max_h_error}};
-  m["can_log"] = can_json;
-  return sim::write_text_file((out / "manifest.json").string(), m.dump(2) + "\n", error);
+  Conversion c(o, summary);
+  if (!read_dataset(c, error) || !create_folders(c, error)) return false;
+  place_recording_frame(c);
+  return write_ego_scans(c, error) && write_roadside_clouds(c, error) && write_ground_truth(c, error) &&
+         write_can_log(c, error) && write_trust_list(c, error) && write_manifest(c, error);
 }
 
 }  // namespace v2xloc::dataset

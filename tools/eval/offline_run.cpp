@@ -32,7 +32,6 @@ bool provision_backgrounds(const sim::RecordingReader& reader, Localizer& locali
   g_backgrounds = std::make_unique<firmware::BackgroundStore>();  // after configure(): the old one is no longer read
   loaded = 0;
   const std::string list_path = reader.trust_list_path();
-  if (list_path.empty()) return true;
   trust::TrustList list;
   if (!sim::load_trust_list(list_path, list, error)) return false;
   const std::filesystem::path dir = std::filesystem::path(list_path).parent_path();
@@ -98,6 +97,108 @@ void print_progress(const FrameRecord& rec, int i, int frames, double frame_seco
                (fused - rec.truth.translation()).norm(), frame_seconds * 1e3);
 }
 
+// Frame i's wire events through the firmware's decoder and period driver, the port holding the
+// recorded clouds (shares kept, the scan with its stereo); the ego scan must close period i.
+bool feed_frame(const sim::RecordingReader& reader, const RunOptions& options, int i,
+                std::vector<sim::replay::WireEvent>& events, InProcessPort& port, sim::replay::WireEventDecoder& wire,
+                sim::Image16& disparity, FrameRecord& rec, std::string& error) {
+  bool closed = false;
+  for (sim::replay::WireEvent& ev : events) {
+    if (ev.kind == sim::replay::WireEvent::Kind::kMapCloud) {
+      port.keep_share(ev.sender_id, ev.time_ns, std::move(ev.source), ev.time_ns - kShareKeepNs);
+    } else if (ev.kind == sim::replay::WireEvent::Kind::kEgoScan) {
+      StereoInput stereo;
+      if (!stereo_of(reader, options, i, disparity, stereo, error)) return false;
+      port.set_scan(std::move(ev.source), stereo);
+    }
+    sim::replay::DecodedFrame decoded;
+    if (wire.feed(ev, decoded)) {
+      if (decoded.frame != i) {
+        error = "in-process run: frame " + std::to_string(i) + " closed period " + std::to_string(decoded.frame);
+        return false;
+      }
+      rec.out = decoded.output;
+      closed = true;
+    }
+    if (!port.error().empty()) {
+      error = port.error();
+      return false;
+    }
+  }
+  if (!closed) {
+    error = "in-process run: the ego scan of frame " + std::to_string(i) + " did not close a period";
+    return false;
+  }
+  return true;
+}
+
+// After period i: its time, the backfill's revisions of earlier frames, the gate's decision on
+// the frame it names.
+void close_frame(const Localizer& localizer, const RunOptions& options, InProcessPort& port, StageClock& stages, int i,
+                 int frames, std::vector<FrameRecord>& records, RunStats& stats) {
+  FrameRecord& rec = records[static_cast<std::size_t>(i)];
+  rec.lagged_pose = rec.out.fused_pose.matrix();
+  const double frame_seconds = port.take_seconds();
+  stats.seconds += frame_seconds;
+  stats.max_frame_ms = std::max(stats.max_frame_ms, frame_seconds * 1e3);
+  stages.mark(LocalizerStage::kIdle);
+  if (options.timing) stats.period_stage_ms.push_back(stages.period_ms());
+  take_revisions(localizer.backfill(), static_cast<std::size_t>(i), records);
+  if (rec.out.gate_decided && rec.out.gate_decided_frame < records.size()) {
+    records[rec.out.gate_decided_frame].gate_decided = true;
+    records[rec.out.gate_decided_frame].gate_valid = rec.out.gate_decided_valid;
+  }
+  if (!options.quiet) print_progress(rec, i, frames, frame_seconds);
+}
+
+// The decoder's, period driver's, verifier's and localizer's counters of the run.
+void collect_counters(const firmware::InputDecoder& decoder, const sim::replay::WireEventDecoder& wire,
+                      const Localizer& localizer, RunStats& stats) {
+  const firmware::CanCounters& can = decoder.can().counters();
+  const firmware::ShareCounters& s = decoder.shares().counters();
+  const firmware::PeriodCounters& p = wire.driver().counters();
+  stats.can_decode_errors = can.can_rejected + can.can_repeated;
+  stats.map_clouds = p.map_handed;
+  stats.map_clouds_rejected = p.map_inconsistent + p.map_background_mismatch;
+  stats.map_clouds_paced = s.shares_paced + s.shares_paced_on_arrival;
+  stats.map_clouds_dropped = s.shares_queue_dropped;
+  stats.map_shares_untrusted = s.shares_untrusted + s.shares_off_background;
+  stats.trust = decoder.shares().verifier().counters();
+  stats.counters = localizer.counters();
+  stats.map_background_checked = localizer.map().counters().background_checked;
+  stats.map_background_mismatch = localizer.map().counters().background_mismatch;
+}
+
+void print_counters(const RunStats& stats, const Localizer& localizer) {
+  const LocalizerCounters& c = stats.counters;
+  std::fprintf(stderr, "\n  shares: %zu to the map (%zu refused by it), %zu refused by the trust checks"
+               " (pose_mismatch %llu, missing_signature %llu, bad_signature %llu, too_old %llu, replay %llu)\n",
+               stats.map_clouds, stats.map_clouds_rejected, stats.map_shares_untrusted,
+               static_cast<unsigned long long>(stats.trust.pose_mismatch),
+               static_cast<unsigned long long>(stats.trust.missing_signature),
+               static_cast<unsigned long long>(stats.trust.bad_signature),
+               static_cast<unsigned long long>(stats.trust.too_old),
+               static_cast<unsigned long long>(stats.trust.replay));
+  std::fprintf(stderr,
+               "  global searches %u (accepted %u), tracking %u, registrations ok %u, fused %u, "
+               "filter resets %u, confirmed %u, inconsistent %u, unconstrained %u, final ICP paused %u, track losses %u, audits %u, basin switches %u, ambiguities resolved %u, stereo %u (fused %u), map rebuilds %u, map normals %u (refused %u); EKF: registrations fused %llu rejected %llu, GNSS fused %llu "
+               "rejected %llu, too late %llu, invalid %llu, numeric %llu, history overflows %llu\n",
+               c.global_searches, c.global_accepted, c.tracking_registrations, c.registrations_ok,
+               c.registrations_fused, c.filter_resets, c.global_confirmed, c.global_inconsistent, c.global_unconstrained,
+               c.global_final_icp_paused,
+               c.track_losses,
+               c.basin_audits, c.basin_switches, c.ambiguities_resolved, c.stereo_registrations, c.stereo_fused,
+               c.map_rebuilds, c.map_normals_computed, c.map_normals_refused,
+               static_cast<unsigned long long>(localizer.ekf().counters().registration_fused),
+               static_cast<unsigned long long>(localizer.ekf().counters().registration_rejected),
+               static_cast<unsigned long long>(localizer.ekf().counters().gnss_fused),
+               static_cast<unsigned long long>(localizer.ekf().counters().gnss_rejected),
+               static_cast<unsigned long long>(localizer.ekf().counters().too_late),
+               static_cast<unsigned long long>(localizer.ekf().counters().invalid_inputs),
+               static_cast<unsigned long long>(localizer.ekf().counters().numeric_failures),
+               static_cast<unsigned long long>(localizer.ekf().counters().history_overflows));
+}
+
 }  // namespace
 
 void take_revisions(const TrajectoryBackfill& backfill, std::size_t newest, std::vector<FrameRecord>& records) {
@@ -142,90 +243,13 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
     events.clear();
     if (!stream.next_frame(i, events, error)) return false;
     stages.begin_period(i);
-    bool closed = false;
-    for (sim::replay::WireEvent& ev : events) {
-      if (ev.kind == sim::replay::WireEvent::Kind::kMapCloud) {
-        port.keep_share(ev.sender_id, ev.time_ns, std::move(ev.source), ev.time_ns - kShareKeepNs);
-      } else if (ev.kind == sim::replay::WireEvent::Kind::kEgoScan) {
-        StereoInput stereo;
-        if (!stereo_of(reader, options, i, disparity, stereo, error)) return false;
-        port.set_scan(std::move(ev.source), stereo);
-      }
-      sim::replay::DecodedFrame decoded;
-      if (wire.feed(ev, decoded)) {
-        if (decoded.frame != i) {
-          error = "in-process run: frame " + std::to_string(i) + " closed period " + std::to_string(decoded.frame);
-          return false;
-        }
-        rec.out = decoded.output;
-        closed = true;
-      }
-      if (!port.error().empty()) {
-        error = port.error();
-        return false;
-      }
-    }
-    if (!closed) {
-      error = "in-process run: the ego scan of frame " + std::to_string(i) + " did not close a period";
-      return false;
-    }
-    rec.lagged_pose = rec.out.fused_pose.matrix();
-    const double frame_seconds = port.take_seconds();
-    stats.seconds += frame_seconds;
-    stats.max_frame_ms = std::max(stats.max_frame_ms, frame_seconds * 1e3);
-    stages.mark(LocalizerStage::kIdle);
-    if (options.timing) stats.period_stage_ms.push_back(stages.period_ms());
-    take_revisions(localizer.backfill(), static_cast<std::size_t>(i), records);
-    if (rec.out.gate_decided && rec.out.gate_decided_frame < records.size()) {
-      records[rec.out.gate_decided_frame].gate_decided = true;
-      records[rec.out.gate_decided_frame].gate_valid = rec.out.gate_decided_valid;
-    }
-    if (!options.quiet) print_progress(rec, i, frames, frame_seconds);
+    if (!feed_frame(reader, options, i, events, port, wire, disparity, rec, error)) return false;
+    close_frame(localizer, options, port, stages, i, frames, records, stats);
   }
   if (!fill_gnss(reader, options.gnss_antenna_in_body, records, error)) return false;
-  const firmware::CanCounters& can = decoder->can().counters();
-  const firmware::ShareCounters& s = decoder->shares().counters();
-  const firmware::PeriodCounters& p = wire.driver().counters();
-  stats.can_decode_errors = can.can_rejected + can.can_repeated;
-  stats.map_clouds = p.map_handed;
-  stats.map_clouds_rejected = p.map_inconsistent + p.map_background_mismatch;
-  stats.map_clouds_paced = s.shares_paced + s.shares_paced_on_arrival;
-  stats.map_clouds_dropped = s.shares_queue_dropped;
-  stats.map_shares_untrusted = s.shares_untrusted + s.shares_off_background;
-  stats.trust = decoder->shares().verifier().counters();
   localizer.set_stage_probe(StageProbe{});
-  stats.counters = localizer.counters();
-  stats.map_background_checked = localizer.map().counters().background_checked;
-  stats.map_background_mismatch = localizer.map().counters().background_mismatch;
-  if (!options.quiet) {
-    const LocalizerCounters& c = stats.counters;
-    std::fprintf(stderr, "\n  shares: %zu to the map (%zu refused by it), %zu refused by the trust checks"
-                 " (pose_mismatch %llu, missing_signature %llu, bad_signature %llu, too_old %llu, replay %llu)\n",
-                 stats.map_clouds, stats.map_clouds_rejected, stats.map_shares_untrusted,
-                 static_cast<unsigned long long>(stats.trust.pose_mismatch),
-                 static_cast<unsigned long long>(stats.trust.missing_signature),
-                 static_cast<unsigned long long>(stats.trust.bad_signature),
-                 static_cast<unsigned long long>(stats.trust.too_old),
-                 static_cast<unsigned long long>(stats.trust.replay));
-    std::fprintf(stderr,
-                 "  global searches %u (accepted %u), tracking %u, registrations ok %u, fused %u, "
-                 "filter resets %u, confirmed %u, inconsistent %u, unconstrained %u, final ICP paused %u, track losses %u, audits %u, basin switches %u, ambiguities resolved %u, stereo %u (fused %u), map rebuilds %u, map normals %u (refused %u); EKF: registrations fused %llu rejected %llu, GNSS fused %llu "
-                 "rejected %llu, too late %llu, invalid %llu, numeric %llu, history overflows %llu\n",
-                 c.global_searches, c.global_accepted, c.tracking_registrations, c.registrations_ok,
-                 c.registrations_fused, c.filter_resets, c.global_confirmed, c.global_inconsistent, c.global_unconstrained,
-                 c.global_final_icp_paused,
-                 c.track_losses,
-                 c.basin_audits, c.basin_switches, c.ambiguities_resolved, c.stereo_registrations, c.stereo_fused,
-                 c.map_rebuilds, c.map_normals_computed, c.map_normals_refused,
-                 static_cast<unsigned long long>(localizer.ekf().counters().registration_fused),
-                 static_cast<unsigned long long>(localizer.ekf().counters().registration_rejected),
-                 static_cast<unsigned long long>(localizer.ekf().counters().gnss_fused),
-                 static_cast<unsigned long long>(localizer.ekf().counters().gnss_rejected),
-                 static_cast<unsigned long long>(localizer.ekf().counters().too_late),
-                 static_cast<unsigned long long>(localizer.ekf().counters().invalid_inputs),
-                 static_cast<unsigned long long>(localizer.ekf().counters().numeric_failures),
-                 static_cast<unsigned long long>(localizer.ekf().counters().history_overflows));
-  }
+  collect_counters(*decoder, wire, localizer, stats);
+  if (!options.quiet) print_counters(stats, localizer);
   return true;
 }
 

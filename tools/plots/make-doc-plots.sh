@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Regenerates the example plots in docs/plots/ from a short recording (Sim 0, 4_infra_2_agent,
-# 6 s, seed 1): the evaluator's top view and error over time, and the simulator's own top view.
+# 6 s, seed 1): the evaluator's top view and error over time.
 # Needs the host build (v2xloc-sim, v2xloc-eval) and python3-matplotlib.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -13,5 +13,4 @@ build/host/bin/v2xloc-eval "$WORK/rec" --plots "$WORK/plots" --trace "$WORK/trac
 mkdir -p docs/plots
 cp "$WORK/plots/sim0_4_infra_2_agent_topview.png" docs/plots/example_eval_topview.png
 cp "$WORK/plots/sim0_4_infra_2_agent_error.png" docs/plots/example_error_over_time.png
-cp "$WORK/rec/topview.png" docs/plots/example_sim_topview.png
-echo "docs/plots/: example_eval_topview.png example_error_over_time.png example_sim_topview.png"
+echo "docs/plots/: example_eval_topview.png example_error_over_time.png"

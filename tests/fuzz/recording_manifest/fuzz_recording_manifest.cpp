@@ -20,8 +20,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       return 0;
     }
     if (reader.frame_count() < 1 || reader.frame_count() > RecordingReader::kMaxFrames ||
-        !(reader.frame_rate() > 0) || !std::isfinite(reader.time_origin_unix()) ||
-        reader.can_layout_version() < kCanLayoutLegacy || reader.can_layout_version() > kCanLayoutVersion)
+        !(reader.frame_rate() > 0) || !std::isfinite(reader.time_origin_unix()) || reader.trust_list_path().empty())
       std::abort();
     (void)reader.latest_map_clouds(1e9);
     return 0;

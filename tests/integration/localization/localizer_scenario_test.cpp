@@ -35,7 +35,6 @@ TEST(LocalizerScenario, ShortDriveFusesToCentimetres) {
   cfg.permutation = sim::Permutation::k2Infra;
   cfg.duration = 5.0;
   cfg.stereo = false;
-  cfg.top_view = false;
   cfg.out_dir = dir.string();
   sim::RecordingSummary summary;
   std::string error;

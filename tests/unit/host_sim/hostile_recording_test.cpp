@@ -1,6 +1,7 @@
 // Recordings are untrusted: every defect measured against the old reader (printf-format scan
 // patterns, unchecked counts and rates, short ground truth, silently ignored CAN stamps) is a test
 // here expecting a clear error naming the field, on a small hand-built recording.
+#include "host_sim/canlog/can_layout.hpp"
 #include "host_sim/cloud_io/pcd.hpp"
 #include "host_sim/common/text_file.hpp"
 #include "host_sim/recording/recording_reader.hpp"
@@ -40,6 +41,7 @@ class HostileRecording : public test::RecordingDirTest {
     write("ground_truth_100hz.tum", "0 0 0 0 0 0 0 1\n0.01 0.1 0 0 0 0 0 1\n0.02 0.2 0 0 0 0 0 1\n");
     write("can.log", "(1700000000.050000) can0 120#0000000000000000\n(1700000000.100000) can0 18FF0001#01\n");
     m_["files"]["can_log"] = "can.log";
+    m_["can_log"] = {{"layout_version", kCanLayoutVersion}};
     m_["sensors"] = Json::array({{{"name", "ego_lidar"}, {"carrier", "ego"}, {"mount_in_body", pose(1.9)}},
                                  {{"name", "infra_0"}, {"carrier", "infrastructure"}, {"surveyed_pose_enu", pose(5)}}});
     m_["map_clouds"]["clouds"] = Json::array({{{"sensor", "infra_0"},
@@ -127,17 +129,34 @@ TEST_F(HostileRecording, SymlinkOutOfTheRecordingIsRefused) {
   fs::remove_all(outside);
 }
 
-// Format 1 (float32 .pcd, as in this fixture; also when format_version is absent) and format 2
-// (quantised .pcdz) both read; a version this reader does not know is refused by name.
-TEST_F(HostileRecording, FormatVersionOneAndTwoReadOthersAreRefused) {
+// Only the current format is read: an older recording (format 1 has no format_version; a CAN
+// layout 1 log no can_log.layout_version) or a newer one is refused by name, with the command
+// that makes it again.
+TEST_F(HostileRecording, OnlyTheCurrentFormatIsReadOthersAreToldHowToRegenerate) {
   ASSERT_EQ(open_error(), "");
-  EXPECT_EQ(reader_.format_version(), 1);
-  m_["format_version"] = 1;
-  ASSERT_EQ(open_error(), "");
-  for (const Json& v : {Json(0), Json(3), Json("2"), Json(2.5), Json(nullptr)}) {
+  m_.erase("format_version");
+  expect_refused("format_version: missing (a format-1 recording); this build reads only what it writes");
+  expect_refused("v2xloc-sim generate");
+  for (const Json& v : {Json(1), Json(0), Json(3), Json("2"), Json(2.5), Json(nullptr)}) {
     m_["format_version"] = v;
-    expect_refused("format_version");
+    expect_refused("format_version: " + v.dump() + ", not 2; this build reads only what it writes");
   }
+  m_["format_version"] = 2;
+  m_["can_log"].erase("layout_version");
+  expect_refused("can_log.layout_version: missing (a CAN layout 1 log)");
+  for (const Json& v : {Json(1), Json(3), Json("2")}) {
+    m_["can_log"]["layout_version"] = v;
+    expect_refused("can_log.layout_version: " + v.dump() + ", not 2; this build reads only what it writes");
+  }
+  m_["can_log"]["layout_version"] = 2;
+  m_["files"].erase("trust_list");
+  expect_refused("files.trust_list: missing");
+  m_["files"]["trust_list"] = "trust_list.txt";
+  ASSERT_EQ(open_error(), "");
+}
+
+// Quantised .pcdz clouds read through the same reader as float32 PCD; a damaged one is refused.
+TEST_F(HostileRecording, QuantisedCloudsReadADamagedOneIsRefused) {
   cloud_io::PointCloud cloud;
   cloud.points = {{1.0f, 2.0f, 3.0f}, {-4.0f, 5.5f, 6.25f}};
   cloud.intensity = {0.5f, 1.0f};
@@ -145,11 +164,9 @@ TEST_F(HostileRecording, FormatVersionOneAndTwoReadOthersAreRefused) {
   std::string err;
   for (const char* f : {"ego_lidar/000000.pcdz", "ego_lidar/000001.pcdz", "infra/000000.pcdz"})
     ASSERT_TRUE(cloud_io::write_quantised_pcd((dir_ / f).string(), cloud, cloud_io::Quantisation{}, err)) << err;
-  m_["format_version"] = 2;
   m_["files"]["ego_scan_pattern"] = "ego_lidar/%06d.pcdz";
   m_["map_clouds"]["clouds"][0]["file"] = "infra/000000.pcdz";
   ASSERT_EQ(open_error(), "");
-  EXPECT_EQ(reader_.format_version(), 2);
   cloud_io::PointCloud c;
   ASSERT_TRUE(reader_.ego_scan(1, c, err)) << err;
   ASSERT_EQ(c.size(), 2u);

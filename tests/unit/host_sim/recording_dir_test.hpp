@@ -29,6 +29,7 @@ class RecordingDirTest : public ::testing::Test {
     write("ground_truth.tum", "0 0 0 0 0 0 0 1\n");
     write("ground_truth_100hz.tum", "0 0 0 0 0 0 0 1\n0.01 0.1 0 0 0 0 0 1\n");
     m_ = {{"format", "v2xloc-recording"},
+          {"format_version", 2},
           {"scenario", {{"id", 0}}},
           {"permutation", "2_infra"},
           {"frame_rate_hz", 10.0},
@@ -38,7 +39,8 @@ class RecordingDirTest : public ::testing::Test {
           {"files",
            {{"ego_scan_pattern", "ego_lidar/%06d.pcd"},
             {"ground_truth", "ground_truth.tum"},
-            {"ground_truth_100hz", "ground_truth_100hz.tum"}}},
+            {"ground_truth_100hz", "ground_truth_100hz.tum"},
+            {"trust_list", "trust_list.txt"}}},
           {"sensors", Json::array({{{"name", "ego_lidar"}, {"mount_in_body", Json::array({0, 0, 1.9, 0, 0, 0, 1})}}})},
           {"map_clouds", {{"clouds", Json::array()}}}};
   }

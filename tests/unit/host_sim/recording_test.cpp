@@ -9,7 +9,6 @@
 
 #include <gtest/gtest.h>
 
-#include <array>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -76,40 +75,6 @@ TEST_F(HostSimRecording, SameSeedGivesByteIdenticalRecording) {
   EXPECT_GT(files, 20u);
 }
 
-// The simulator's top view explains itself: a white title strip, a framed legend box in the
-// top-left corner and a scale bar in the bottom-left, drawn over the scene.
-TEST_F(HostSimRecording, TopViewHasTitleLegendAndScaleBar) {
-  ASSERT_TRUE(ok_) << error_;
-  ImageRgb img;
-  std::string err;
-  ASSERT_TRUE(read_png_rgb((fs::path(dir_a_) / "topview.png").string(), img, err)) << err;
-  EXPECT_EQ(img.width, 960);
-  EXPECT_EQ(img.height, 960);
-  auto px = [&](int x, int y) {
-    const std::size_t i = (static_cast<std::size_t>(y) * static_cast<std::size_t>(img.width) + static_cast<std::size_t>(x)) * 3;
-    return std::array<int, 3>{img.pixels[i], img.pixels[i + 1], img.pixels[i + 2]};
-  };
-  const std::array<int, 3> white{255, 255, 255}, ink{20, 20, 20};
-  int title_ink = 0, legend_ink = 0, scale_ink = 0;
-  for (int x = 0; x < img.width; ++x)
-    for (int y = 0; y < 34; ++y) title_ink += px(x, y) == ink ? 1 : 0;
-  for (int x = 12; x < 300; ++x)
-    for (int y = 46; y < 200; ++y) legend_ink += px(x, y) == ink ? 1 : 0;
-  for (int x = 15; x < 110; ++x)
-    for (int y = img.height - 50; y < img.height - 10; ++y) scale_ink += px(x, y) == ink ? 1 : 0;
-  EXPECT_EQ(px(2, 2), white);    // title strip background
-  EXPECT_EQ(px(10, 44), ink);    // legend frame corner
-  EXPECT_EQ(px(12, 47), white);  // legend background
-  EXPECT_GT(title_ink, 300);     // text, not an empty strip
-  EXPECT_GT(legend_ink, 1000);
-  EXPECT_GT(scale_ink, 300);     // bar, ticks and "20 m"
-  // The scene itself: the red ego path is there.
-  int red = 0;
-  for (int i = 0; i < img.width * img.height; ++i)
-    red += img.pixels[static_cast<std::size_t>(i) * 3] == 220 && img.pixels[static_cast<std::size_t>(i) * 3 + 1] == 30 ? 1 : 0;
-  EXPECT_GT(red, 200);
-}
-
 TEST_F(HostSimRecording, DifferentSeedGivesDifferentNoise) {
   ASSERT_TRUE(ok_) << error_;
   EXPECT_NE(slurp(fs::path(dir_a_) / "ego_lidar/000000.pcdz"), slurp(fs::path(dir_c_) / "ego_lidar/000000.pcdz"));
@@ -124,7 +89,6 @@ TEST_F(HostSimRecording, ReaderIteratesFramesCloudsAndTruth) {
   EXPECT_EQ(r.frame_count(), 10);
   EXPECT_EQ(r.scenario(), 3);
   EXPECT_EQ(r.permutation(), "4_infra_2_agent");
-  EXPECT_EQ(r.format_version(), 2);  // quantised .pcdz clouds
   ASSERT_EQ(r.ground_truth().size(), 10u);
   EXPECT_EQ(r.ground_truth_100hz().size(), 100u);
   for (int i = 0; i < r.frame_count(); ++i) {
@@ -218,10 +182,9 @@ TEST_F(HostSimRecording, CanLogHoldsVehicleAndGnssFramesInTimeOrder) {
   RecordingReader r;
   std::string err;
   ASSERT_TRUE(r.open(dir_a_, err)) << err;
-  if (r.can_log_path().empty()) GTEST_SKIP() << "built without the CAN codec / candump writer";
+  ASSERT_FALSE(r.can_log_path().empty());
   std::vector<CanLogFrame> frames;
   ASSERT_TRUE(r.can_frames(frames, err)) << err;
-  EXPECT_EQ(r.can_layout_version(), kCanLayoutVersion);
   std::size_t motion = 0, gnss = 0;
   double last = -1;
   for (const auto& f : frames) {
