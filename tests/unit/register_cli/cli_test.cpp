@@ -127,7 +127,8 @@ TEST(RegisterCli, JsonCarriesTransformBitsAndStages) {
   EXPECT_EQ(keys(j["points"]),
             (std::vector<std::string>{"source_input", "target_input", "source_downsampled",
                                       "target_downsampled", "correspondences",
-                                      "ransac_correspondence_inliers", "final_inliers"}));
+                                      "ransac_correspondence_inliers", "final_inliers", "voxel_used_m",
+                                      "voxel_coarsenings"}));
   EXPECT_EQ(keys(j["dropped"]),
             (std::vector<std::string>{"nonfinite", "source_thinned", "target_thinned",
                                       "downsample_overflow", "correspondences_truncated",
