@@ -26,7 +26,7 @@ void BasinAudit::configure(const LocalizerParams& params) {
   first_of_track_ = true;
 }
 
-AuditOutcome BasinAudit::step(const AuditFrame& f, LocalizerCounters& counters) {
+AuditOutcome BasinAudit::step(const AuditFrame& f, PoseSearchScratch& scratch, LocalizerCounters& counters) {
   // A search that outlived its track (frames without tracking in between) is dropped.
   if (running_ && f.frame - started_frame_ > params_.audit_max_frames) running_ = false;
   // Periods that fused map clouds have spent part of their spare work: the audit is insurance, it
@@ -52,7 +52,7 @@ AuditOutcome BasinAudit::step(const AuditFrame& f, LocalizerCounters& counters) 
   const std::uint64_t budget = quota > 0 ? quota : ~std::uint64_t{0};
   AuditOutcome out;
   const std::uint64_t before = job_.work();
-  const bool done = job_.step(f.map, budget);
+  const bool done = job_.step(f.map, scratch, budget);
   counters.audit_work += job_.work() - before;
   if (done) {
     running_ = false;

@@ -188,7 +188,7 @@ RegistrationResult Localizer::track(double t, const Mat4d& body_T_lidar) {
                             frame_,               odom_T_body_,
                             map_.busy(),          params_.work.enabled ? &work_ : nullptr};
   const double before = work_.spent();
-  const TrackingOutcome o = tracking_.step(frame, counters_);
+  const TrackingOutcome o = tracking_.step(frame, search_scratch_, counters_);
   tracking_forecast_ = work_.spent() - before;  // the next period's rebuild decision expects as much
   output_.basin_audited = o.audit.audited;
   if (o.audit.switch_basin) {
@@ -224,7 +224,7 @@ StartupOutcome Localizer::search(double t, const Mat4d& body_T_lidar) {
   frame.icp_hints = icp_hints();
   frame.probe = probe_;
   if (params_.work.enabled) frame.work = &work_;
-  const StartupOutcome s = startup_.step(frame, counters_);
+  const StartupOutcome s = startup_.step(frame, search_scratch_, counters_);
   if (s.status == StartupStatus::kStartFilter) filter_.start(t, Pose3d(s.registration.transform), vehicle_);
   const StartupSearchReport& r = s.report;
   if (r.searched) {

@@ -82,7 +82,7 @@ bool StartupSearch::candidate_pose(std::uint32_t frame, const Pose3d& odom_T_bod
 // One period of the search job (started when due), then, in the period it finishes: the
 // ambiguity check, the final ICP and the acceptance checks the symmetric
 // intersection needs (inside the GNSS uncertainty region, enough of the scan explained).
-StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& counters) {
+StartupOutcome StartupSearch::step(const StartupFrame& f, PoseSearchScratch& scratch, LocalizerCounters& counters) {
   StartupOutcome out;
   if (job_kind_ != JobKind::kNone &&
       (job_track_broken_ || f.frame - job_frame_ >= params_.startup_max_frames)) {
@@ -112,7 +112,7 @@ StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& cou
   // This period's work, including the set-up start_job() did (a new job's work starts at 0).
   if (!final_running_) {
     const std::uint64_t before = started ? 0 : job_.work();
-    const bool finished = job_.step(f.map, slice_budget(f), first_scores_whole(f.frame));
+    const bool finished = job_.step(f.map, scratch, slice_budget(f), first_scores_whole(f.frame));
     const std::uint64_t spent = job_.work() - before;
     if (f.work != nullptr) f.work->add(static_cast<double>(spent) * f.work->params().search_unit);
     counters.global_search_work += spent;

@@ -9,7 +9,7 @@ void TrackingRegistration::configure(const LocalizerParams& params) {
   audit_.configure(params);
 }
 
-TrackingOutcome TrackingRegistration::step(const TrackingFrame& f, LocalizerCounters& counters) {
+TrackingOutcome TrackingRegistration::step(const TrackingFrame& f, PoseSearchScratch& scratch, LocalizerCounters& counters) {
   TrackingOutcome out;
   ++counters.tracking_registrations;
   RegistrationResult& result = out.registration;
@@ -34,7 +34,7 @@ TrackingOutcome TrackingRegistration::step(const TrackingFrame& f, LocalizerCoun
                      f.probe, f.frame, f.odom_T_body, f.map_busy};
     audit.work_cap = audit_cap;
     audit.room_to_start = room_to_start;
-    out.audit = audit_.step(audit, counters);
+    out.audit = audit_.step(audit, scratch, counters);
     if (out.audit.switch_basin) result.status = RegistrationStatus::kDidNotConverge;
   }
   if (result.ok() && f.stereo_cloud.size() >= params_.stereo_min_points) {

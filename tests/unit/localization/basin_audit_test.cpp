@@ -23,6 +23,7 @@ struct AuditScene {
   std::vector<Vec3f> scan;
   std::vector<std::uint32_t> hints;
   AuditMarks marks;
+  std::unique_ptr<PoseSearchScratch> scratch = std::make_unique<PoseSearchScratch>();
 
   AuditScene() {
     scan.assign(map.points.begin(), map.points.begin() + 600);
@@ -58,7 +59,7 @@ TEST(BasinAudit, WaitsOutPeriodsThatFusedMapClouds) {
   const auto first_audit_of_track = [&](std::uint32_t frame) {
     f.map_busy = true;
     f.frame = frame;
-    EXPECT_TRUE(audit->step(f, counters).audited) << "the first audit of a track";
+    EXPECT_TRUE(audit->step(f, *scene.scratch, counters).audited) << "the first audit of a track";
     marks.audit = 0;
   };
   first_audit_of_track(0);
@@ -66,20 +67,20 @@ TEST(BasinAudit, WaitsOutPeriodsThatFusedMapClouds) {
   f.map_busy = true;
   for (std::uint32_t k = 0; k < 3; ++k) {
     f.frame = k;
-    EXPECT_FALSE(audit->step(f, counters).audited);
+    EXPECT_FALSE(audit->step(f, *scene.scratch, counters).audited);
   }
   EXPECT_EQ(marks.audit, 0) << "due, but no audit starts in a busy period";
   f.map_busy = false;
   f.frame = 3;
-  audit->step(f, counters);
+  audit->step(f, *scene.scratch, counters);
   EXPECT_EQ(marks.audit, 1) << "started in the first quiet period";
   f.map_busy = true;
   f.frame = 4;
-  EXPECT_FALSE(audit->step(f, counters).audited);
+  EXPECT_FALSE(audit->step(f, *scene.scratch, counters).audited);
   EXPECT_EQ(marks.audit, 1) << "paused";
   f.map_busy = false;
   f.frame = 5;
-  audit->step(f, counters);
+  audit->step(f, *scene.scratch, counters);
   EXPECT_EQ(marks.audit, 2) << "resumed";
 
   params.audit_work_per_busy_period = 500;  // busy periods advance it, by less
@@ -87,7 +88,7 @@ TEST(BasinAudit, WaitsOutPeriodsThatFusedMapClouds) {
   first_audit_of_track(6);
   f.map_busy = true;
   f.frame = 7;
-  EXPECT_FALSE(audit->step(f, counters).audited);
+  EXPECT_FALSE(audit->step(f, *scene.scratch, counters).audited);
   EXPECT_EQ(marks.audit, 1) << "a busy quota: started in a busy period";
 }
 
@@ -109,7 +110,7 @@ TEST(BasinAudit, NewTrackIsAuditedEarly) {
   std::vector<std::uint32_t> audited;
   for (std::uint32_t k = 0; k < 70; ++k) {
     f.frame = k;
-    if (audit->step(f, counters).audited) audited.push_back(k);
+    if (audit->step(f, *scene.scratch, counters).audited) audited.push_back(k);
   }
   ASSERT_GE(audited.size(), 2u);
   EXPECT_EQ(audited[0], 4u) << "the fifth tracked frame";
@@ -117,14 +118,14 @@ TEST(BasinAudit, NewTrackIsAuditedEarly) {
   audit->cancel();  // track lost: the next track is new
   f.frame = 100;
   for (std::uint32_t k = 0; k < 5; ++k, ++f.frame) {
-    EXPECT_EQ(audit->step(f, counters).audited, k == 4) << "tracked frame " << k << " of the new track";
+    EXPECT_EQ(audit->step(f, *scene.scratch, counters).audited, k == 4) << "tracked frame " << k << " of the new track";
   }
   params.audit_first_frames = 30;  // no early audit: the first after a whole period
   audit->configure(params);
   std::uint32_t first = 0;
   for (std::uint32_t k = 0; k < 40 && first == 0; ++k) {
     f.frame = 200 + k;
-    if (audit->step(f, counters).audited) first = k + 1;
+    if (audit->step(f, *scene.scratch, counters).audited) first = k + 1;
   }
   EXPECT_EQ(first, 30u);
 }

@@ -16,6 +16,7 @@ struct CornerScene {
   testing::CornerMap map;
   std::vector<Vec3f> scan;
   std::vector<std::uint32_t> hints;
+  std::unique_ptr<PoseSearchScratch> scratch = std::make_unique<PoseSearchScratch>();
 
   CornerScene() {
     scan.assign(map.points.begin(), map.points.begin() + 900);
@@ -50,7 +51,7 @@ TEST(StartupSearch, RegionWidensAfterASearchFindsNothing) {
   std::vector<double> regions;
   for (std::uint32_t frame = 0; frame < 40 && regions.size() < 3; ++frame) {
     search->on_frame(true, Pose3d::Identity(), GnssFix{});
-    const StartupOutcome out = search->step(scene.frame(frame, fix), counters);
+    const StartupOutcome out = search->step(scene.frame(frame, fix), *scene.scratch, counters);
     if (!out.report.searched) continue;
     EXPECT_EQ(out.status, StartupStatus::kRejected);
     regions.push_back(out.report.region);
@@ -64,7 +65,7 @@ TEST(StartupSearch, RegionWidensAfterASearchFindsNothing) {
   search->on_track_lost();  // a new track: back to the floor
   for (std::uint32_t frame = 40; frame < 80; ++frame) {
     search->on_frame(true, Pose3d::Identity(), GnssFix{});
-    const StartupOutcome out = search->step(scene.frame(frame, fix), counters);
+    const StartupOutcome out = search->step(scene.frame(frame, fix), *scene.scratch, counters);
     if (!out.report.searched) continue;
     EXPECT_DOUBLE_EQ(out.report.region, params.global_min_region);
     break;
@@ -85,7 +86,7 @@ TEST(StartupSearch, FirstAcquisitionWindowOpensWithTheFirstSearch) {
   constexpr std::uint32_t kFirstMapFrame = 22;  // e.g. the roadside unit comes into V2X range
   search->on_frame(true, Pose3d::Identity(), GnssFix{});
   StartupFrame f = scene.frame(kFirstMapFrame, Vec3d(7.0, 3.0, 0.0));
-  search->step(f, counters);
+  search->step(f, *scene.scratch, counters);
   ASSERT_EQ(counters.global_searches, 1u);
   EXPECT_TRUE(search->first_acquisition_pending(kFirstMapFrame + params.startup_first_frames - 1));
   EXPECT_FALSE(search->first_acquisition_pending(kFirstMapFrame + params.startup_first_frames));
@@ -94,7 +95,7 @@ TEST(StartupSearch, FirstAcquisitionWindowOpensWithTheFirstSearch) {
   search->configure(params);
   search->on_frame(true, Pose3d::Identity(), GnssFix{});
   LocalizerCounters again;
-  search->step(scene.frame(0, Vec3d(7.0, 3.0, 0.0)), again);
+  search->step(scene.frame(0, Vec3d(7.0, 3.0, 0.0)), *scene.scratch, again);
   ASSERT_EQ(again.global_searches, 1u);
   EXPECT_FALSE(search->first_acquisition_pending(0));
 }
@@ -127,7 +128,7 @@ TEST(StartupSearch, FinalIcpRunsInSlicesWithTheSameResult) {
       work.add(params.work.budget - params.work.search_start - 1e5);  // room to start a search, little more
       StartupFrame f = scene.frame(frame, fix);
       if (budget) f.work = &work;
-      const StartupOutcome out = search->step(f, r.counters);
+      const StartupOutcome out = search->step(f, *scene.scratch, r.counters);
       if (out.report.searched && !searched) {
         searched = true;
         r.searched_frame = frame;

@@ -45,7 +45,8 @@ struct AuditOutcome {
 class BasinAudit {
  public:
   void configure(const LocalizerParams& params);
-  AuditOutcome step(const AuditFrame& frame, LocalizerCounters& counters);
+  // scratch: the pose search's (pose_search.hpp), shared with the caller's other searches.
+  AuditOutcome step(const AuditFrame& frame, PoseSearchScratch& scratch, LocalizerCounters& counters);
   // Tracking was lost: a running search no longer describes the track, and the next track is
   // audited early (see first_audit_due()).
   void cancel() {

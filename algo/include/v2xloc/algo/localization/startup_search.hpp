@@ -75,7 +75,8 @@ class StartupSearch {
   // Every valid frame, before step(): the track sample (odometry and GNSS position) and the
   // retry spacing. A failed odometry breaks the track.
   void on_frame(bool odometry_ok, const Pose3d& odom_T_body, const GnssFix& gnss);
-  StartupOutcome step(const StartupFrame& frame, LocalizerCounters& counters);
+  // scratch: the pose search's (pose_search.hpp), shared with the caller's other searches.
+  StartupOutcome step(const StartupFrame& frame, PoseSearchScratch& scratch, LocalizerCounters& counters);
 
   // Tracking was lost: drop the candidate, search at the next frame.
   void on_track_lost();

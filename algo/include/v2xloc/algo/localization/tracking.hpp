@@ -13,6 +13,7 @@
 #include "v2xloc/algo/localization/localizer_types.hpp"
 #include "v2xloc/algo/localization/stage_probe.hpp"
 #include "v2xloc/algo/registration/icp.hpp"
+#include "v2xloc/algo/registration/pose_search.hpp"
 
 namespace v2xloc {
 
@@ -42,7 +43,8 @@ struct TrackingOutcome {
 class TrackingRegistration {
  public:
   void configure(const LocalizerParams& params);
-  TrackingOutcome step(const TrackingFrame& frame, LocalizerCounters& counters);
+  // scratch: the basin audit's pose search scratch (pose_search.hpp).
+  TrackingOutcome step(const TrackingFrame& frame, PoseSearchScratch& scratch, LocalizerCounters& counters);
   void on_track_lost() { audit_.cancel(); }
 
  private:
