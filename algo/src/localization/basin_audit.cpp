@@ -20,7 +20,7 @@ bool distinct_basin(const Mat4d& a, const Mat4d& b, const PoseSearchParams& sp) 
 
 void BasinAudit::configure(const LocalizerParams& params) {
   params_ = params;
-  job_.set_proximity_grid(params.search_on_proximity_grid ? &grid_ : nullptr);
+  job_.set_proximity_grid(&grid_);
   running_ = false;
   frames_since_audit_ = first_audit_due();
   first_of_track_ = true;

@@ -55,7 +55,7 @@ GnssFusion PoseFilter::on_gnss(double t, const Vec3d& enu, double h_acc, double 
       return GnssFusion::kDiverged;
     }
   }
-  if (!params_.use_gnss || !ekf_.initialized()) return GnssFusion::kIgnored;
+  if (!ekf_.initialized()) return GnssFusion::kIgnored;
   ekf_.on_gnss(t, enu, h_acc, v_acc);
   if (params_.shadow_ungated_filter) shadow_.on_gnss(t, enu, h_acc, v_acc);
   return GnssFusion::kFused;

@@ -45,8 +45,7 @@ std::uint32_t ScanPreparation::prepare(const EgoScanInput& in, const VehicleMoti
   ip.max_range = params_.max_range;
   ip.voxel = params_.registration_voxel;
   ip.frame_period = params_.frame_period;
-  const bool deskew_now = params_.deskew && have_vehicle_delta_;
-  const ScanIngestResult r = ingest_.run(in.points, in.point_times, deskew_now ? &delta : nullptr, ip);
+  const ScanIngestResult r = ingest_.run(in.points, in.point_times, have_vehicle_delta_ ? &delta : nullptr, ip);
   dropped += r.non_finite_dropped + r.range_dropped + r.capacity_dropped;
   coarsened += r.coarsened > 0 ? 1u : 0u;
   return 1u + r.coarsened;

@@ -28,7 +28,7 @@ void StartupSearch::configure(const LocalizerParams& params) {
   first_search_started_ = false;
   first_search_frame_ = 0;
   region_scale_ = 1.0;
-  job_.set_proximity_grid(params.search_on_proximity_grid ? &grid_ : nullptr);
+  job_.set_proximity_grid(&grid_);
 }
 
 void StartupSearch::on_frame(bool odometry_ok, const Pose3d& odom_T_body, const GnssFix& gnss) {
@@ -172,8 +172,7 @@ void StartupSearch::begin_final_icp(const StartupFrame& f, LocalizerCounters& co
   final_run_ = IcpRun{};
   final_run_.result = final_.best;  // not ok: nothing to refine (finished)
   if (!final_.best.ok()) return;
-  const bool subsample = params_.startup_icp_on_tracking_scan && !f.tracking_scan.empty();
-  const std::span<const Vec3f> scan = subsample ? f.tracking_scan : f.scan;
+  const std::span<const Vec3f> scan = f.tracking_scan.empty() ? f.scan : f.tracking_scan;
   if (scan.size() > final_scan_.capacity()) {
     final_run_.result = icp(scan, f.map, final_.best.transform, params_.icp, f.icp_hints);
     const std::uint64_t work = final_run_.result.node_visits + (final_run_.result.iterations + 1) * scan.size();
@@ -276,13 +275,13 @@ void StartupSearch::start_job(const StartupFrame& f, LocalizerCounters& counters
     sp.yaw_prior_tolerance = params_.heading_search_tolerance;
     ++counters.heading_searches;
   }
-  sp.provisional = params_.startup_output_provisional && params_.startup_work_per_period > 0;
+  sp.provisional = params_.startup_work_per_period > 0;  // a search over several periods outputs its best pose so far
   sp.provisional_scored = sp.provisional && first_scores_whole(f.frame);
   job_frame_ = f.frame;
   job_odom_ = f.odom_T_body.matrix();
   job_track_broken_ = false;
   provisional_valid_ = false;
-  const bool confirm_finalists = params_.global_confirm_finalists && finalist_count_ > 0 && candidate_.valid &&
+  const bool confirm_finalists = finalist_count_ > 0 && candidate_.valid &&
                                  f.frame - candidate_.frame <= params_.global_confirm_window;
   // The GNSS region a result must lie in: around this fix, or for a confirming search around the
   // fix its candidate's search started from (both checked where they were taken).
@@ -365,7 +364,7 @@ StartupStatus StartupSearch::accept(const StartupFrame& f, const Search& s, Regi
   if (!result.ok()) return StartupStatus::kRejected;
   const Mat4d& odom = f.odom_T_body.matrix();
   double track_distance = 0.0;
-  const bool track_known = params_.use_gnss && track_gnss_distance(result.transform, odom, track_distance);
+  const bool track_known = track_gnss_distance(result.transform, odom, track_distance);
   const bool heading_agrees =
       f.course_known &&
       std::abs(det::wrap_pi(yaw_of(result.transform.topLeftCorner<3, 3>()) - f.course)) <= params_.heading_search_tolerance;
@@ -374,9 +373,8 @@ StartupStatus StartupSearch::accept(const StartupFrame& f, const Search& s, Regi
     result.status = RegistrationStatus::kDegenerate;
     return StartupStatus::kRejected;
   }
-  if (result.fitness < params_.global_min_fitness || result.inlier_rmse > params_.max_inlier_rmse ||
-      (f.course_known && !heading_agrees) ||
-      (params_.use_gnss && distance_from_region_fix(result.transform, odom) > s.region) ||
+  if (result.fitness < params_.global_min_fitness || (f.course_known && !heading_agrees) ||
+      distance_from_region_fix(result.transform, odom) > s.region ||
       (track_known && track_distance > params_.track_max_distance)) {
     result.status = RegistrationStatus::kDidNotConverge;
     return StartupStatus::kRejected;

@@ -15,9 +15,6 @@ TrackingOutcome TrackingRegistration::step(const TrackingFrame& f, PoseSearchScr
   RegistrationResult& result = out.registration;
   result = icp(f.tracking_scan, f.map, f.predicted.matrix(), params_.icp, f.icp_hints);
   if (result.status == RegistrationStatus::kDidNotConverge) ++counters.tracking_work_capped;  // icp.max_work
-  if (result.ok() && result.inlier_rmse > params_.max_inlier_rmse) {
-    result.status = RegistrationStatus::kDidNotConverge;  // counted as a failed frame
-  }
   const std::uint64_t queries = (static_cast<std::uint64_t>(result.iterations) + 1) * f.tracking_scan.size();
   counters.tracking_queries += queries;
   std::uint64_t audit_cap = ~std::uint64_t{0};

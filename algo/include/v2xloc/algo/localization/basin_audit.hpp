@@ -72,8 +72,8 @@ class BasinAudit {
   std::uint32_t frames_since_audit_ = 0;
   bool first_of_track_ = true;  // the next audit is the track's first (it takes the period's room)
   PoseSearch job_{};
-  // The audit's own hypothesis scoring bitmap (search_on_proximity_grid), as the start-up
-  // search's: scoring on the map's k-d tree was ~40 % of an audit's instructions.
+  // The audit's own hypothesis scoring bitmap, as the start-up search's (TUNING.md, "Candidates
+  // and grid").
   ProximityGrid grid_{};
   PoseSearchParams search_params_{};
   bool running_ = false;

@@ -70,13 +70,11 @@ struct LocalizerParams {
   double global_min_region = 30.0;    // [m] start-up region radius floor (canyon NLOS; TUNING.md)
   double global_max_region = 45.0;    // [m] start-up region radius ceiling after searches that matched nothing
   double global_region_growth = 1.5;  // [ratio] region growth per such search; back to the floor on a match
-  double global_max_vertical = 3.0;   // [m] RANSAC prior: hypothesis height off the road surface
   double global_min_fitness = 0.3;    // [0-1] start-up solution needs at least this ICP fitness
   // [0-0.5] start-up solution's final-ICP horizontal constraint at least this (0: off; off on EMBEDDED)
   double global_min_horizontal_constraint = config::kEmbeddedProfile ? 0.0 : 0.04;
   std::uint32_t road_height_min_points = 50;  // [points] in the 0.2 m bin to output the road height
   double global_max_ambiguity = 0.85; // [0-1] runner-up / winner tight fitness above: ambiguous
-  double max_inlier_rmse = 1e9;       // [m] registration above this RMSE fails (1e9: off; TUNING.md)
   double tracking_max_sigma_xy = 0.5; // [m] EKF position sigma above which we search globally
   std::uint32_t max_failed_frames = 10;   // [frames] consecutive unfused registrations -> global search
   std::uint32_t global_retry_frames = 2;  // [frames] between two global searches (bounded cost)
@@ -85,16 +83,7 @@ struct LocalizerParams {
   std::uint32_t startup_first_frames = 10;  // [frames] since the first search: the first acquisition at most
   // [work units/period] first-acquisition slice floor, budget or not (0: within the budget; TUNING.md)
   std::uint32_t startup_first_work_per_period = 0;
-  // [switch] the first acquisition's first slice scores and climbs every hypothesis, budget or not
-  bool startup_first_score_whole = true;
   std::uint32_t startup_max_frames = 20;  // [frames] a search job not finished within this is dropped
-  // [switch] output a running search's best pose so far (not localized, not fused)
-  bool startup_output_provisional = true;
-  // [switch] the confirming search re-decides the first search's finalists instead of the whole region
-  bool global_confirm_finalists = true;
-  bool startup_icp_on_tracking_scan = true;  // [switch] an accepted pose's final ICP on the tracking subsample
-  // [switch] score hypotheses on a proximity bitmap of the region (search.grid_cell), not the k-d tree
-  bool search_on_proximity_grid = true;
   std::uint32_t global_confirm_window = 10;  // [frames] a second search within this confirms (0: off)
   double global_confirm_distance = 0.5;   // [m] confirmation: horizontal disagreement allowed
   double global_confirm_yaw = 0.035;      // [rad] confirmation: heading disagreement allowed (2 deg)
@@ -145,10 +134,8 @@ struct LocalizerParams {
   double restart_sigmas[kEkfStateSize] = {0.1, 0.1, 0.1, 0.01, 0.5, 0.05, 0.005, 0.02};
 
   // ---- Switches (ablations) ----
-  bool use_gnss = true;               // fuse GNSS fixes (and use them for track checks)
   bool use_vehicle_signals = true;    // fuse wheel speed / yaw rate; deskew and predict with them
   bool use_odometry = true;           // fuse the LiDAR odometry's relative motion
-  bool deskew = true;                 // deskew scans with per-point times
   // [switch] evaluation only: an ungated second filter for the paper's "Fused" column (ECU: off)
   bool shadow_ungated_filter = false;
 

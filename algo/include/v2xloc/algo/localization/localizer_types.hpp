@@ -60,7 +60,7 @@ struct EgoScanInput {
 
 enum class LocalizationMode : std::uint8_t {
   kUninitialized,  // no GNSS / no map yet
-  kGlobalSearch,   // FPFH + RANSAC within the GNSS uncertainty region
+  kGlobalSearch,   // start-up pose search within the GNSS uncertainty region
   kTracking,       // ICP from the EKF prediction
 };
 

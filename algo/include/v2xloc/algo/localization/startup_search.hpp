@@ -3,10 +3,9 @@
 // and checked against the GNSS region, the course over ground and the GNSS track the odometry
 // implies. An accepted solution starts the filter only when a second search within
 // global_confirm_window frames agrees with it through the odometry (the candidate); that search
-// may re-decide only the first one's finalists (global_confirm_finalists). The search is a job:
-// startup_work_per_period bounds its work per frame, its result is carried to the frame it
-// finishes in by the odometry; its final ICP then takes what the periods have left, its result
-// carried the same way. Owns all its state: the job, the candidate, the track of recent odometry
+// re-decides only the first one's finalists. The search is a job: startup_work_per_period bounds
+// its work per frame, its result is carried to the frame it finishes in by the odometry; its
+// final ICP then takes what the periods have left, its result carried the same way. Owns all its state: the job, the candidate, the track of recent odometry
 // / GNSS positions and the retry spacing. One entry point per frame (step), everything it reads
 // in a StartupFrame.
 #pragma once
@@ -121,10 +120,8 @@ class StartupSearch {
   bool first_exempt(std::uint32_t frame) const {
     return first_acquisition_pending(frame) && params_.startup_first_work_per_period > 0;
   }
-  // Power-up: a search's first slice scores every hypothesis (startup_first_score_whole).
-  bool first_scores_whole(std::uint32_t frame) const {
-    return params_.startup_first_score_whole && first_acquisition_pending(frame);
-  }
+  // Power-up: a search's first slice scores and climbs every hypothesis, whatever the budget.
+  bool first_scores_whole(std::uint32_t frame) const { return first_acquisition_pending(frame); }
   std::uint64_t room_slice(const StartupFrame& f, std::uint64_t floor, std::uint64_t cap) const;
   // The region around the fix before widening, and the same widened by region_scale_.
   double floor_region(const StartupFrame& f) const;
@@ -154,7 +151,7 @@ class StartupSearch {
   // The running search job and what its result needs: the frame it started at and that frame's
   // odometry pose (to carry the result), its region and parameters.
   PoseSearch job_;
-  ProximityGrid grid_;               // the job's hypothesis scoring (search_on_proximity_grid)
+  ProximityGrid grid_;               // the job's hypothesis scoring
   JobKind job_kind_ = JobKind::kNone;
   bool acquired_ = false;            // the filter was started once (the first acquisition is over)
   bool first_search_started_ = false;
