@@ -21,11 +21,9 @@ void StartupSearch::configure(const LocalizerParams& params) {
   candidate_ = {};
   track_count_ = 0;
   frames_since_search_ = params.global_retry_frames;  // allow a search at the first frame
-  job_kind_ = JobKind::kNone;
-  final_running_ = false;
+  transition(Event::kStop);
   finalist_count_ = 0;
-  acquired_ = false;
-  first_search_started_ = false;
+  acquisition_ = Acquisition::kNoSearchYet;
   first_search_frame_ = 0;
   region_scale_ = 1.0;
   job_.set_proximity_grid(&grid_);
@@ -50,9 +48,7 @@ void StartupSearch::on_frame(bool odometry_ok, const Pose3d& odom_T_body, const 
 void StartupSearch::on_track_lost() {
   candidate_.valid = false;
   finalist_count_ = 0;
-  job_kind_ = JobKind::kNone;
-  final_running_ = false;
-  provisional_valid_ = false;
+  transition(Event::kStop);
   frames_since_search_ = params_.global_retry_frames;
   region_scale_ = 1.0;
 }
@@ -68,7 +64,7 @@ void StartupSearch::nominate(std::uint32_t frame, const Pose3d& pose, const Pose
 
 bool StartupSearch::candidate_pose(std::uint32_t frame, const Pose3d& odom_T_body, Pose3d& pose) const {
   if (!candidate_.valid || !candidate_.output || frame - candidate_.frame > params_.global_confirm_window) {
-    if (job_kind_ != JobKind::kExhaustive || !provisional_valid_) return false;
+    if (!(state_ == State::kSearch || state_ == State::kSearchFinalIcp) || !provisional_valid_) return false;
     // The running search's best pose so far, carried from the frame it started at; from a widened
     // search only inside the normal region (beyond it nothing but the scan match vouches for it).
     if (horizontal_distance(provisional_, job_fix_) > job_floor_region_) return false;
@@ -79,67 +75,91 @@ bool StartupSearch::candidate_pose(std::uint32_t frame, const Pose3d& odom_T_bod
   return true;
 }
 
-// One period of the search job (started when due), then, in the period it finishes: the
-// ambiguity check, the final ICP and the acceptance checks the symmetric
-// intersection needs (inside the GNSS uncertainty region, enough of the scan explained).
+StartupSearch::State StartupSearch::next(State state, Event event) {
+  switch (event) {
+    case Event::kStartSearch: return state == State::kIdle ? State::kSearch : state;
+    case Event::kStartConfirm: return state == State::kIdle ? State::kConfirm : state;
+    case Event::kJobDone:
+      return state == State::kSearch ? State::kSearchFinalIcp : state == State::kConfirm ? State::kConfirmFinalIcp : state;
+    case Event::kFinalIcpDone:
+      return state == State::kSearchFinalIcp || state == State::kConfirmFinalIcp ? State::kIdle : state;
+    case Event::kStop: return State::kIdle;
+  }
+  return state;
+}
+
+void StartupSearch::transition(Event event) {
+  state_ = next(state_, event);
+  if (state_ == State::kIdle) provisional_valid_ = false;  // the best pose so far belongs to a job
+}
+
+// One period of the search: the job (started when due), then, in the period it finishes, the
+// ambiguity check, the final ICP and the acceptance checks the symmetric intersection needs
+// (inside the GNSS uncertainty region, enough of the scan explained). Each state's work runs
+// in its own method; a state finished hands over to the next within the period.
 StartupOutcome StartupSearch::step(const StartupFrame& f, PoseSearchScratch& scratch, LocalizerCounters& counters) {
   StartupOutcome out;
-  if (job_kind_ != JobKind::kNone &&
-      (job_track_broken_ || f.frame - job_frame_ >= params_.startup_max_frames)) {
-    job_kind_ = JobKind::kNone;  // its result could not be carried here, or it took too long
-    final_running_ = false;
-    provisional_valid_ = false;
+  if (state_ != State::kIdle && (job_track_broken_ || f.frame - job_frame_ >= params_.startup_max_frames)) {
+    transition(Event::kStop);  // its result could not be carried here, or it took too long
     ++counters.global_searches_dropped;
   }
-  bool started = false;
-  if (job_kind_ == JobKind::kNone) {
-    if (!f.gnss.valid || frames_since_search_ < params_.global_retry_frames) return out;
-    // Its set-up (road height over the whole map, the proximity grid) is one piece: a search
-    // starts in a period with room for it (the first acquisition does not wait).
-    if (!first_acquisition_pending(f.frame) && f.work != nullptr && f.work->left() < f.work->params().search_start) return out;
-    frames_since_search_ = 0;
-    if (!first_search_started_) {
-      first_search_started_ = true;
-      first_search_frame_ = f.frame;
-    }
-    f.probe(LocalizerStage::kGlobalSearch);
-    ++counters.global_searches;
-    start_job(f, counters);
-    started = true;
-  } else {
-    f.probe(LocalizerStage::kGlobalSearch);
-  }
-  // This period's work, including the set-up start_job() did (a new job's work starts at 0).
-  if (!final_running_) {
-    const std::uint64_t before = started ? 0 : job_.work();
-    const bool finished = job_.step(f.map, scratch, slice_budget(f), first_scores_whole(f.frame));
-    const std::uint64_t spent = job_.work() - before;
-    if (f.work != nullptr) f.work->add(static_cast<double>(spent) * f.work->params().search_unit);
-    counters.global_search_work += spent;
-    if (!finished) {
-      if (job_kind_ == JobKind::kExhaustive) provisional_valid_ = job_.provisional(provisional_);
-      out.status = StartupStatus::kSearching;
-      f.probe(LocalizerStage::kFusion);
-      return out;
-    }
-    finish_job(f, out.report, counters);
-  }
-  if (!continue_final_icp(f, counters)) {  // out of room: it goes on in the next period
-    ++counters.global_final_icp_paused;
-    out.status = StartupStatus::kSearching;
-    f.probe(LocalizerStage::kFusion);
-    return out;
-  }
-  const JobKind kind = job_kind_;
-  job_kind_ = JobKind::kNone;
-  final_running_ = false;
-  provisional_valid_ = false;
-  out.status = accept(f, final_, out.registration, counters);
-  if (out.status == StartupStatus::kStartFilter) acquired_ = true;
-  if (kind == JobKind::kExhaustive) widen_region(out.status, f.frame, final_.searched.best);
-  if (out.status == StartupStatus::kRejected && candidate_.valid && candidate_.frame == f.frame) keep_finalists(f);
+  const bool started = state_ == State::kIdle && start_when_due(f, counters);
+  if (state_ == State::kIdle) return out;
+  if (!started) f.probe(LocalizerStage::kGlobalSearch);
+  if (state_ == State::kSearch || state_ == State::kConfirm) run_job(f, scratch, started, out.report, counters);
+  if (state_ == State::kSearchFinalIcp || state_ == State::kConfirmFinalIcp) run_final_icp(f, out, counters);
+  if (state_ != State::kIdle) out.status = StartupStatus::kSearching;
   f.probe(LocalizerStage::kFusion);
   return out;
+}
+
+// kIdle: a job starts with a GNSS fix, global_retry_frames after the last one, in a period with
+// room for its set-up (road height over the whole map, the proximity grid: one piece; the first
+// acquisition does not wait). True when one started.
+bool StartupSearch::start_when_due(const StartupFrame& f, LocalizerCounters& counters) {
+  if (!f.gnss.valid || frames_since_search_ < params_.global_retry_frames) return false;
+  if (!first_acquisition_pending(f.frame) && f.work != nullptr && f.work->left() < f.work->params().search_start) return false;
+  frames_since_search_ = 0;
+  if (acquisition_ == Acquisition::kNoSearchYet) {
+    acquisition_ = Acquisition::kFirst;
+    first_search_frame_ = f.frame;
+  }
+  f.probe(LocalizerStage::kGlobalSearch);
+  ++counters.global_searches;
+  start_job(f, counters);
+  return true;
+}
+
+// kSearch / kConfirm: this period's slice of the job, counting the set-up start_job() did (a new
+// job's work starts at 0). Done, its result is taken and the final ICP begins.
+void StartupSearch::run_job(const StartupFrame& f, PoseSearchScratch& scratch, bool started, StartupSearchReport& report,
+                            LocalizerCounters& counters) {
+  const std::uint64_t before = started ? 0 : job_.work();
+  const bool finished = job_.step(f.map, scratch, slice_budget(f), first_scores_whole(f.frame));
+  const std::uint64_t spent = job_.work() - before;
+  if (f.work != nullptr) f.work->add(static_cast<double>(spent) * f.work->params().search_unit);
+  counters.global_search_work += spent;
+  if (!finished) {
+    if (state_ == State::kSearch) provisional_valid_ = job_.provisional(provisional_);
+    return;
+  }
+  finish_job(f, report, counters);
+  transition(Event::kJobDone);
+}
+
+// kSearchFinalIcp / kConfirmFinalIcp: this period's slice of the final ICP (out of room: it goes
+// on in the next period). Done, the acceptance checks decide the outcome and the search is idle.
+void StartupSearch::run_final_icp(const StartupFrame& f, StartupOutcome& out, LocalizerCounters& counters) {
+  if (!continue_final_icp(f, counters)) {
+    ++counters.global_final_icp_paused;
+    return;
+  }
+  const bool exhaustive = state_ == State::kSearchFinalIcp;
+  transition(Event::kFinalIcpDone);
+  out.status = accept(f, final_, out.registration, counters);
+  if (out.status == StartupStatus::kStartFilter) acquisition_ = Acquisition::kAcquired;
+  if (exhaustive) widen_region(out.status, f.frame, final_.searched.best);
+  if (out.status == StartupStatus::kRejected && candidate_.valid && candidate_.frame == f.frame) keep_finalists(f);
 }
 
 // The period the job finishes in: its result carried here, the ambiguity check, the report,
@@ -165,7 +185,6 @@ void StartupSearch::finish_job(const StartupFrame& f, StartupSearchReport& r, Lo
 // without one). Up to icp.max_work (~44 M instructions from a poor start): run in slices on a copy
 // of the scan; a scan larger than the copy is refined at once, as a tracking ICP would be.
 void StartupSearch::begin_final_icp(const StartupFrame& f, LocalizerCounters& counters) {
-  final_running_ = true;
   final_frame_ = f.frame;
   final_odom_ = f.odom_T_body.matrix();
   final_scan_.clear();
@@ -288,14 +307,14 @@ void StartupSearch::start_job(const StartupFrame& f, LocalizerCounters& counters
   region_fix_ = confirm_finalists ? candidate_.region_fix : f.gnss.enu;
   region_odom_ = confirm_finalists ? candidate_.region_odom : job_odom_;
   if (!confirm_finalists) {
-    job_kind_ = JobKind::kExhaustive;
+    transition(Event::kStartSearch);
     job_.start(f.search_scan, f.map, f.gnss.enu, sp);
     return;
   }
   Mat4d carried[kPoseSearchRefine];
   const Mat4d to_now = se3_inverse(candidate_.odom) * job_odom_;
   for (std::uint32_t i = 0; i < finalist_count_; ++i) carried[i] = finalists_[i] * to_now;
-  job_kind_ = JobKind::kFinalists;
+  transition(Event::kStartConfirm);
   job_.start_from_poses(f.search_scan, f.map, std::span<const Mat4d>(carried, finalist_count_), finalists_ground_z_,
                         sp);
 }

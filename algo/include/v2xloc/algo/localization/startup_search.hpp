@@ -89,7 +89,8 @@ class StartupSearch {
   // Counted from the first search, not from configure(): the ECU may run for seconds before a
   // map exists (no roadside unit in V2X range yet).
   bool first_acquisition_pending(std::uint32_t frame) const {
-    return !acquired_ && (!first_search_started_ || frame - first_search_frame_ < params_.startup_first_frames);
+    return acquisition_ == Acquisition::kNoSearchYet ||
+           (acquisition_ == Acquisition::kFirst && frame - first_search_frame_ < params_.startup_first_frames);
   }
 
  private:
@@ -113,7 +114,23 @@ class StartupSearch {
     PoseSearchResult searched{};     // carried to the frame the job finished in
     RegistrationResult best{};       // the basin picked so far
   };
-  enum class JobKind : std::uint8_t { kNone, kExhaustive, kFinalists };
+  // The job's life, one state at a time. kIdle -(start)-> kSearch (exhaustive, over the GNSS
+  // region), or kConfirm (re-deciding the candidate's finalists); -(job done)-> the final ICP of
+  // its pick, kSearchFinalIcp / kConfirmFinalIcp; -(final ICP done)-> kIdle. Dropped (odometry
+  // broken, startup_max_frames) or a lost track: kIdle from any state.
+  enum class State : std::uint8_t { kIdle, kSearch, kConfirm, kSearchFinalIcp, kConfirmFinalIcp };
+  enum class Event : std::uint8_t { kStartSearch, kStartConfirm, kJobDone, kFinalIcpDone, kStop };
+  // The power-up window (first_acquisition_pending): no search yet, the first one under way, or a
+  // filter started once.
+  enum class Acquisition : std::uint8_t { kNoSearchYet, kFirst, kAcquired };
+
+  // The transition function; an event a state does not expect leaves it where it is.
+  static State next(State state, Event event);
+  void transition(Event event);  // entering kIdle forgets the running job's best pose so far
+  bool start_when_due(const StartupFrame& f, LocalizerCounters& counters);  // kIdle
+  void run_job(const StartupFrame& f, PoseSearchScratch& scratch, bool started, StartupSearchReport& report,
+               LocalizerCounters& counters);  // kSearch, kConfirm
+  void run_final_icp(const StartupFrame& f, StartupOutcome& out, LocalizerCounters& counters);  // the final ICP states
 
   std::uint64_t slice_budget(const StartupFrame& f) const;
   // Power-up exception (startup_first_work_per_period > 0): the slices ignore the budget.
@@ -144,6 +161,9 @@ class StartupSearch {
   bool track_gnss_distance(const Mat4d& pose, const Mat4d& odom_T_body, double& mean_distance) const;
 
   LocalizerParams params_{};
+  State state_ = State::kIdle;
+  Acquisition acquisition_ = Acquisition::kNoSearchYet;
+  std::uint32_t first_search_frame_ = 0;  // the frame the first search started in (kFirst)
   Candidate candidate_{};
   TrackSample track_[kTrackFrames];
   std::uint32_t track_count_ = 0;    // consecutive samples pushed (reset by odometry failures)
@@ -152,11 +172,8 @@ class StartupSearch {
   // odometry pose (to carry the result), its region and parameters.
   PoseSearch job_;
   ProximityGrid grid_;               // the job's hypothesis scoring
-  JobKind job_kind_ = JobKind::kNone;
-  bool acquired_ = false;            // the filter was started once (the first acquisition is over)
-  bool first_search_started_ = false;
-  std::uint32_t first_search_frame_ = 0;  // the frame the first search started in
-  bool job_track_broken_ = false;    // the odometry failed since the job started
+  // The odometry failed since the job started: its result cannot be carried, the next step drops it.
+  bool job_track_broken_ = false;
   std::uint32_t job_frame_ = 0;
   Mat4d job_odom_ = Mat4d::Identity();
   double job_region_ = 0.0;
@@ -177,7 +194,6 @@ class StartupSearch {
   // The finished job's pick (final_) refined by the tracking ICP in slices like the job's (a whole
   // one costs up to icp.max_work): on a copy of the tracking subsample of the frame the job
   // finished in (final_frame_, final_odom_), its result carried from there by the odometry.
-  bool final_running_ = false;
   Search final_{};
   IcpRun final_run_{};
   std::uint32_t final_frame_ = 0;
