@@ -20,19 +20,19 @@ void Localizer::configure(const LocalizerParams& params, const GeodeticOrigin& o
   have_frame_ = false;
   vehicle_ = {};
   gnss_ = {};
-  course_.configure(params);
+  course_.configure(params.course);
   odom_T_body_ = Pose3d::Identity();
-  scan_.configure(params);
+  scan_.configure(params.scan, params.use_vehicle_signals);
   odometry_.configure(params.odometry);
   odometry_.reset();
-  map_.configure(params);
+  map_.configure(params.map, params.tracking.icp.max_correspondence_distance);
   work_.configure(params.work);
   tracking_forecast_ = 0.0;
   rebuild_deferred_ = 0;
-  filter_.configure(params);
-  startup_.configure(params);
-  tracking_.configure(params);
-  frame_output_.configure(params);
+  filter_.configure(params.filter, params.use_vehicle_signals);
+  startup_.configure(params.startup, params.tracking.icp, params.filter.ekf.gates.gnss_sigma_inflation);
+  tracking_.configure(params.tracking, params.audit, params.startup.search);
+  frame_output_.configure(params.output);
 }
 
 void Localizer::on_vehicle(const VehicleInput& in) {

@@ -16,11 +16,14 @@ double horizontal_distance(const Mat4d& pose, const Vec3d& enu) {
 
 }  // namespace
 
-void StartupSearch::configure(const LocalizerParams& params) {
+void StartupSearch::configure(const StartupSearchParams& params, const IcpParams& final_icp,
+                              double gnss_sigma_inflation) {
   params_ = params;
+  final_icp_ = final_icp;
+  gnss_sigma_inflation_ = gnss_sigma_inflation;
   candidate_ = {};
   track_count_ = 0;
-  frames_since_search_ = params.global_retry_frames;  // allow a search at the first frame
+  frames_since_search_ = params.retry_frames;  // allow a search at the first frame
   transition(Event::kStop);
   finalist_count_ = 0;
   acquisition_ = Acquisition::kNoSearchYet;
@@ -49,7 +52,7 @@ void StartupSearch::on_track_lost() {
   candidate_.valid = false;
   finalist_count_ = 0;
   transition(Event::kStop);
-  frames_since_search_ = params_.global_retry_frames;
+  frames_since_search_ = params_.retry_frames;
   region_scale_ = 1.0;
 }
 
@@ -63,7 +66,7 @@ void StartupSearch::nominate(std::uint32_t frame, const Pose3d& pose, const Pose
 }
 
 bool StartupSearch::candidate_pose(std::uint32_t frame, const Pose3d& odom_T_body, Pose3d& pose) const {
-  if (!candidate_.valid || !candidate_.output || frame - candidate_.frame > params_.global_confirm_window) {
+  if (!candidate_.valid || !candidate_.output || frame - candidate_.frame > params_.confirm_window) {
     if (!(state_ == State::kSearch || state_ == State::kSearchFinalIcp) || !provisional_valid_) return false;
     // The running search's best pose so far, carried from the frame it started at; from a widened
     // search only inside the normal region (beyond it nothing but the scan match vouches for it).
@@ -99,7 +102,7 @@ void StartupSearch::transition(Event event) {
 // in its own method; a state finished hands over to the next within the period.
 StartupOutcome StartupSearch::step(const StartupFrame& f, PoseSearchScratch& scratch, LocalizerCounters& counters) {
   StartupOutcome out;
-  if (state_ != State::kIdle && (job_track_broken_ || f.frame - job_frame_ >= params_.startup_max_frames)) {
+  if (state_ != State::kIdle && (job_track_broken_ || f.frame - job_frame_ >= params_.max_frames)) {
     transition(Event::kStop);  // its result could not be carried here, or it took too long
     ++counters.global_searches_dropped;
   }
@@ -113,11 +116,11 @@ StartupOutcome StartupSearch::step(const StartupFrame& f, PoseSearchScratch& scr
   return out;
 }
 
-// kIdle: a job starts with a GNSS fix, global_retry_frames after the last one, in a period with
+// kIdle: a job starts with a GNSS fix, retry_frames after the last one, in a period with
 // room for its set-up (road height over the whole map, the proximity grid: one piece; the first
 // acquisition does not wait). True when one started.
 bool StartupSearch::start_when_due(const StartupFrame& f, LocalizerCounters& counters) {
-  if (!f.gnss.valid || frames_since_search_ < params_.global_retry_frames) return false;
+  if (!f.gnss.valid || frames_since_search_ < params_.retry_frames) return false;
   if (!first_acquisition_pending(f.frame) && f.work != nullptr && f.work->left() < f.work->params().search_start) return false;
   frames_since_search_ = 0;
   if (acquisition_ == Acquisition::kNoSearchYet) {
@@ -182,8 +185,8 @@ void StartupSearch::finish_job(const StartupFrame& f, StartupSearchReport& r, Lo
 }
 
 // (2) The tracking ICP from the pick, on this frame's tracking subsample (the registration scan
-// without one). Up to icp.max_work (~44 M instructions from a poor start): run in slices on a copy
-// of the scan; a scan larger than the copy is refined at once, as a tracking ICP would be.
+// without one). Up to final_icp_.max_work (~44 M instructions from a poor start): run in slices
+// on a copy of the scan; a scan larger than the copy is refined at once, as a tracking ICP would be.
 void StartupSearch::begin_final_icp(const StartupFrame& f, LocalizerCounters& counters) {
   final_frame_ = f.frame;
   final_odom_ = f.odom_T_body.matrix();
@@ -193,30 +196,30 @@ void StartupSearch::begin_final_icp(const StartupFrame& f, LocalizerCounters& co
   if (!final_.best.ok()) return;
   const std::span<const Vec3f> scan = f.tracking_scan.empty() ? f.scan : f.tracking_scan;
   if (scan.size() > final_scan_.capacity()) {
-    final_run_.result = icp(scan, f.map, final_.best.transform, params_.icp, f.icp_hints);
+    final_run_.result = icp(scan, f.map, final_.best.transform, final_icp_, f.icp_hints);
     const std::uint64_t work = final_run_.result.node_visits + (final_run_.result.iterations + 1) * scan.size();
     counters.global_search_work += work;
     if (f.work != nullptr) f.work->add(static_cast<double>(work) * f.work->params().search_unit);
     return;
   }
   for (const Vec3f& p : scan) final_scan_.push_back(p);
-  icp_begin(final_run_, final_scan_.span(), f.map, final_.best.transform, params_.icp,
+  icp_begin(final_run_, final_scan_.span(), f.map, final_.best.transform, final_icp_,
             std::span<std::uint32_t>(final_hints_, final_scan_.size()));
 }
 
 // One period's slice of the final ICP, counted as search work: all the period has left, at least
 // the job's floor (a short piece: the job's quota keeps the search's steady share); whole without
-// a period budget and under the power-up exception (first_exempt). True once finished; out of icp.max_work in all
-// it ends kDidNotConverge, as icp() does.
+// a period budget and under the power-up exception (first_exempt). True once finished; out of
+// final_icp_.max_work in all it ends kDidNotConverge, as icp() does.
 bool StartupSearch::continue_final_icp(const StartupFrame& f, LocalizerCounters& counters) {
   if (final_run_.finished) return true;
-  const std::uint64_t cap = params_.icp.max_work > 0 ? params_.icp.max_work : ~std::uint64_t{0};
+  const std::uint64_t cap = final_icp_.max_work > 0 ? final_icp_.max_work : ~std::uint64_t{0};
   const std::uint64_t left = cap > final_run_.work ? cap - final_run_.work : 0;
   const std::uint64_t slice = first_exempt(f.frame)
                                   ? ~std::uint64_t{0}
-                                  : room_slice(f, params_.startup_min_work_per_period, ~std::uint64_t{0});
+                                  : room_slice(f, params_.min_work_per_period, ~std::uint64_t{0});
   const std::uint64_t before = final_run_.work;
-  bool finished = icp_continue(final_run_, final_scan_.span(), f.map, params_.icp, ~std::uint32_t{0},
+  bool finished = icp_continue(final_run_, final_scan_.span(), f.map, final_icp_, ~std::uint32_t{0},
                                std::span<std::uint32_t>(final_hints_, final_scan_.size()), slice < left ? slice : left);
   const std::uint64_t spent = final_run_.work - before;
   if (f.work != nullptr) f.work->add(static_cast<double>(spent) * f.work->params().search_unit);
@@ -230,13 +233,13 @@ bool StartupSearch::continue_final_icp(const StartupFrame& f, LocalizerCounters&
 
 // This period's slice: what the period has left (period_work.hpp), between the floor that keeps
 // the search moving in crowded periods and the fixed quota (all of it without a period budget).
-// Under the power-up exception, at least startup_first_work_per_period.
+// Under the power-up exception, at least first_work_per_period.
 std::uint64_t StartupSearch::slice_budget(const StartupFrame& f) const {
-  const std::uint64_t quota = params_.startup_work_per_period;
+  const std::uint64_t quota = params_.work_per_period;
   if (quota == 0) return ~std::uint64_t{0};
-  const std::uint64_t floor = params_.startup_min_work_per_period < quota ? params_.startup_min_work_per_period : quota;
+  const std::uint64_t floor = params_.min_work_per_period < quota ? params_.min_work_per_period : quota;
   std::uint64_t slice = room_slice(f, floor, quota);
-  if (first_exempt(f.frame) && params_.startup_first_work_per_period > slice) slice = params_.startup_first_work_per_period;
+  if (first_exempt(f.frame) && params_.first_work_per_period > slice) slice = params_.first_work_per_period;
   return slice;
 }
 
@@ -250,28 +253,28 @@ std::uint64_t StartupSearch::room_slice(const StartupFrame& f, std::uint64_t flo
 }
 
 double StartupSearch::floor_region(const StartupFrame& f) const {
-  const double region = params_.global_gnss_gate_sigmas * (f.gnss.sigma * params_.ekf.gates.gnss_sigma_inflation + 1.0);
-  return region < params_.global_min_region ? params_.global_min_region : region;
+  const double region = params_.gnss_gate_sigmas * (f.gnss.sigma * gnss_sigma_inflation_ + 1.0);
+  return region < params_.min_region ? params_.min_region : region;
 }
 
 double StartupSearch::widened(double floor) const {
   if (!(region_scale_ > 1.0)) return floor;
   const double wide = floor * region_scale_;
-  const double cap = params_.global_max_region > floor ? params_.global_max_region : floor;
+  const double cap = params_.max_region > floor ? params_.max_region : floor;
   return wide < cap ? wide : cap;
 }
 
 // An exhaustive search whose best pose matched nothing well (no candidate set, no filter started,
-// its best below global_min_fitness): the true pose may lie outside the region (a canyon fix
+// its best below min_fitness): the true pose may lie outside the region (a canyon fix
 // further off than the floor), so the next search looks wider. A search that matched, even one
 // refused as ambiguous, returns to the normal region. The work stays bounded: hypotheses grow
 // with the area (45 m: 2.25x), spread over periods like any search.
 void StartupSearch::widen_region(StartupStatus status, std::uint32_t frame, const RegistrationResult& best) {
-  const bool matched = best.ok() && best.fitness >= params_.global_min_fitness;
+  const bool matched = best.ok() && best.fitness >= params_.min_fitness;
   const bool found = matched || status == StartupStatus::kStartFilter || status == StartupStatus::kAccepted ||
                      (candidate_.valid && candidate_.frame == frame);
-  region_scale_ = found ? 1.0 : region_scale_ * params_.global_region_growth;
-  if (!(region_scale_ < 1e3)) region_scale_ = 1e3;  // capped by global_max_region anyway
+  region_scale_ = found ? 1.0 : region_scale_ * params_.region_growth;
+  if (!(region_scale_ < 1e3)) region_scale_ = 1e3;  // capped by max_region anyway
 }
 
 // (1) Exhaustive, GNSS-seeded search over position and heading; or, to confirm a candidate, the
@@ -282,8 +285,8 @@ void StartupSearch::start_job(const StartupFrame& f, LocalizerCounters& counters
   job_fix_ = f.gnss.enu;
   PoseSearchParams& sp = job_params_;
   sp = params_.search;
-  // A widened region (widen_region) may exceed the search's own radius, up to global_max_region.
-  const double radius_cap = region_scale_ > 1.0 && params_.global_max_region > sp.radius ? params_.global_max_region
+  // A widened region (widen_region) may exceed the search's own radius, up to max_region.
+  const double radius_cap = region_scale_ > 1.0 && params_.max_region > sp.radius ? params_.max_region
                                                                                        : sp.radius;
   sp.radius = job_region_ < radius_cap ? job_region_ : radius_cap;
   sp.sensor_in_body = f.sensor_in_body;
@@ -291,17 +294,17 @@ void StartupSearch::start_job(const StartupFrame& f, LocalizerCounters& counters
   if (f.course_known) {
     sp.use_yaw_prior = true;
     sp.yaw_prior = f.course;
-    sp.yaw_prior_tolerance = params_.heading_search_tolerance;
+    sp.yaw_prior_tolerance = params_.heading_tolerance;
     ++counters.heading_searches;
   }
-  sp.provisional = params_.startup_work_per_period > 0;  // a search over several periods outputs its best pose so far
+  sp.provisional = params_.work_per_period > 0;  // a search over several periods outputs its best pose so far
   sp.provisional_scored = sp.provisional && first_scores_whole(f.frame);
   job_frame_ = f.frame;
   job_odom_ = f.odom_T_body.matrix();
   job_track_broken_ = false;
   provisional_valid_ = false;
   const bool confirm_finalists = finalist_count_ > 0 && candidate_.valid &&
-                                 f.frame - candidate_.frame <= params_.global_confirm_window;
+                                 f.frame - candidate_.frame <= params_.confirm_window;
   // The GNSS region a result must lie in: around this fix, or for a confirming search around the
   // fix its candidate's search started from (both checked where they were taken).
   region_fix_ = confirm_finalists ? candidate_.region_fix : f.gnss.enu;
@@ -336,7 +339,7 @@ void StartupSearch::take_result(const StartupFrame& f, Search& s) const {
 void StartupSearch::resolve_ambiguity(const StartupFrame& f, Search& s, LocalizerCounters& counters) const {
   const PoseSearchResult& searched = s.searched;
   const bool distinct = searched.best_tight_fitness > 0.0 &&
-                        searched.runner_up_tight_fitness < params_.global_max_ambiguity * searched.best_tight_fitness;
+                        searched.runner_up_tight_fitness < params_.max_ambiguity * searched.best_tight_fitness;
   if (distinct) return;
   s.best.status = RegistrationStatus::kDidNotConverge;
   const Mat4d& odom = f.odom_T_body.matrix();
@@ -386,13 +389,13 @@ StartupStatus StartupSearch::accept(const StartupFrame& f, const Search& s, Regi
   const bool track_known = track_gnss_distance(result.transform, odom, track_distance);
   const bool heading_agrees =
       f.course_known &&
-      std::abs(det::wrap_pi(yaw_of(result.transform.topLeftCorner<3, 3>()) - f.course)) <= params_.heading_search_tolerance;
-  if (result.horizontal_constraint < params_.global_min_horizontal_constraint) {
+      std::abs(det::wrap_pi(yaw_of(result.transform.topLeftCorner<3, 3>()) - f.course)) <= params_.heading_tolerance;
+  if (result.horizontal_constraint < params_.min_horizontal_constraint) {
     ++counters.global_unconstrained;  // an along-street alias fits as well (see the parameter)
     result.status = RegistrationStatus::kDegenerate;
     return StartupStatus::kRejected;
   }
-  if (result.fitness < params_.global_min_fitness || (f.course_known && !heading_agrees) ||
+  if (result.fitness < params_.min_fitness || (f.course_known && !heading_agrees) ||
       distance_from_region_fix(result.transform, odom) > s.region ||
       (track_known && track_distance > params_.track_max_distance)) {
     result.status = RegistrationStatus::kDidNotConverge;
@@ -414,12 +417,12 @@ StartupStatus StartupSearch::accept(const StartupFrame& f, const Search& s, Regi
 
 bool StartupSearch::confirm(std::uint32_t frame, const Mat4d& pose, const Mat4d& odom_T_body, bool output,
                             LocalizerCounters& counters) {
-  if (params_.global_confirm_window == 0) return true;
-  if (candidate_.valid && frame - candidate_.frame <= params_.global_confirm_window) {
+  if (params_.confirm_window == 0) return true;
+  if (candidate_.valid && frame - candidate_.frame <= params_.confirm_window) {
     const Mat4d predicted = candidate_.pose * se3_inverse(candidate_.odom) * odom_T_body;
     const double dyaw = det::wrap_pi(yaw_of(pose.topLeftCorner<3, 3>()) - yaw_of(predicted.topLeftCorner<3, 3>()));
-    if (horizontal_distance(pose, predicted.topRightCorner<3, 1>()) <= params_.global_confirm_distance &&
-        std::abs(dyaw) <= params_.global_confirm_yaw) {
+    if (horizontal_distance(pose, predicted.topRightCorner<3, 1>()) <= params_.confirm_distance &&
+        std::abs(dyaw) <= params_.confirm_yaw) {
       candidate_.valid = false;
       ++counters.global_confirmed;
       return true;

@@ -4,9 +4,10 @@
 
 namespace v2xloc {
 
-void TrackingRegistration::configure(const LocalizerParams& params) {
+void TrackingRegistration::configure(const TrackingParams& params, const BasinAuditParams& audit,
+                                     const PoseSearchParams& search) {
   params_ = params;
-  audit_.configure(params);
+  audit_.configure(audit, search, params.icp);
 }
 
 TrackingOutcome TrackingRegistration::step(const TrackingFrame& f, PoseSearchScratch& scratch, LocalizerCounters& counters) {
@@ -14,7 +15,7 @@ TrackingOutcome TrackingRegistration::step(const TrackingFrame& f, PoseSearchScr
   ++counters.tracking_registrations;
   RegistrationResult& result = out.registration;
   result = icp(f.tracking_scan, f.map, f.predicted.matrix(), params_.icp, f.icp_hints);
-  if (result.status == RegistrationStatus::kDidNotConverge) ++counters.tracking_work_capped;  // icp.max_work
+  if (result.status == RegistrationStatus::kDidNotConverge) ++counters.tracking_work_capped;  // params_.icp.max_work
   const std::uint64_t queries = (static_cast<std::uint64_t>(result.iterations) + 1) * f.tracking_scan.size();
   counters.tracking_queries += queries;
   std::uint64_t audit_cap = ~std::uint64_t{0};

@@ -6,9 +6,15 @@
 #include <vector>
 
 #include "corner_map.hpp"
+#include "v2xloc/algo/localization/localizer_params.hpp"
 
 namespace v2xloc {
 namespace {
+
+// Configured as the Localizer configures it.
+void configure(BasinAudit& audit, const LocalizerParams& params) {
+  audit.configure(params.audit, params.startup.search, params.tracking.icp);
+}
 
 struct AuditMarks {
   int audit = 0;
@@ -47,11 +53,11 @@ TEST(BasinAudit, WaitsOutPeriodsThatFusedMapClouds) {
   ASSERT_TRUE(scene.map.normals_ok);
   AuditMarks& marks = scene.marks;
   LocalizerParams params;
-  params.audit_period_frames = 1;
-  params.audit_work_per_period = 1000;  // a job over many periods
-  params.audit_work_per_busy_period = 0;
+  params.audit.period_frames = 1;
+  params.audit.work_per_period = 1000;  // a job over many periods
+  params.audit.work_per_busy_period = 0;
   auto audit = std::make_unique<BasinAudit>();
-  audit->configure(params);
+  configure(*audit, params);
   LocalizerCounters counters;
   AuditFrame f = scene.frame();
   // A new track's first audit takes the period's whole room (here unbounded: it ends at once),
@@ -83,8 +89,8 @@ TEST(BasinAudit, WaitsOutPeriodsThatFusedMapClouds) {
   audit->step(f, *scene.scratch, counters);
   EXPECT_EQ(marks.audit, 2) << "resumed";
 
-  params.audit_work_per_busy_period = 500;  // busy periods advance it, by less
-  audit->configure(params);
+  params.audit.work_per_busy_period = 500;  // busy periods advance it, by less
+  configure(*audit, params);
   first_audit_of_track(6);
   f.map_busy = true;
   f.frame = 7;
@@ -93,18 +99,18 @@ TEST(BasinAudit, WaitsOutPeriodsThatFusedMapClouds) {
 }
 
 
-// A new track (power-up, or after a lost one) is audited after audit_first_frames tracked frames
+// A new track (power-up, or after a lost one) is audited after audit.first_frames tracked frames
 // (a start-up search on a map missing a unit's shares can accept an alias); later audits come
-// every audit_period_frames.
+// every audit.period_frames.
 TEST(BasinAudit, NewTrackIsAuditedEarly) {
   AuditScene scene;
   ASSERT_TRUE(scene.map.normals_ok);
   LocalizerParams params;
-  params.audit_period_frames = 30;
-  params.audit_first_frames = 5;
-  params.audit_work_per_period = 0;  // each audit in one period
+  params.audit.period_frames = 30;
+  params.audit.first_frames = 5;
+  params.audit.work_per_period = 0;  // each audit in one period
   auto audit = std::make_unique<BasinAudit>();
-  audit->configure(params);
+  configure(*audit, params);
   LocalizerCounters counters;
   AuditFrame f = scene.frame();
   std::vector<std::uint32_t> audited;
@@ -120,8 +126,8 @@ TEST(BasinAudit, NewTrackIsAuditedEarly) {
   for (std::uint32_t k = 0; k < 5; ++k, ++f.frame) {
     EXPECT_EQ(audit->step(f, *scene.scratch, counters).audited, k == 4) << "tracked frame " << k << " of the new track";
   }
-  params.audit_first_frames = 30;  // no early audit: the first after a whole period
-  audit->configure(params);
+  params.audit.first_frames = 30;  // no early audit: the first after a whole period
+  configure(*audit, params);
   std::uint32_t first = 0;
   for (std::uint32_t k = 0; k < 40 && first == 0; ++k) {
     f.frame = 200 + k;

@@ -2,12 +2,13 @@
 // to go by. A GNSS-seeded exhaustive pose search (pose_search.hpp), refined by the tracking ICP
 // and checked against the GNSS region, the course over ground and the GNSS track the odometry
 // implies. An accepted solution starts the filter only when a second search within
-// global_confirm_window frames agrees with it through the odometry (the candidate); that search
-// re-decides only the first one's finalists. The search is a job: startup_work_per_period bounds
-// its work per frame, its result is carried to the frame it finishes in by the odometry; its
-// final ICP then takes what the periods have left, its result carried the same way. Owns all its state: the job, the candidate, the track of recent odometry
-// / GNSS positions and the retry spacing. One entry point per frame (step), everything it reads
-// in a StartupFrame.
+// confirm_window frames agrees with it through the odometry (the candidate); that search
+// re-decides only the first one's finalists. The search is a job: work_per_period bounds its
+// work per frame, its result is carried to the frame it finishes in by the odometry; its final
+// ICP then takes what the periods have left, its result carried the same way. Owns all its
+// state: the job, the candidate, the track of recent odometry / GNSS positions and the retry
+// spacing. One entry point per frame (step), everything it reads in a StartupFrame; its
+// settings are StartupSearchParams (localizer_params.hpp).
 #pragma once
 
 #include <cstdint>
@@ -54,7 +55,7 @@ struct StartupSearchReport {
 };
 
 enum class StartupStatus : std::uint8_t {
-  kNotDue,       // no GNSS yet, or within global_retry_frames of the last search
+  kNotDue,       // no GNSS yet, or within retry_frames of the last search
   kSearching,    // a search job is running (its work spread over the frames)
   kRejected,     // searched; no solution, or one not (yet) trusted (reported, not fused)
   kAccepted,     // a solution for the running filter (gated and fused like a tracking one)
@@ -69,7 +70,9 @@ struct StartupOutcome {
 
 class StartupSearch {
  public:
-  void configure(const LocalizerParams& params);
+  // final_icp: the tracking ICP, which refines a finished search's pick; gnss_sigma_inflation: the
+  // EKF's (EkfGates), applied to the fix's reported sigma for the region's radius.
+  void configure(const StartupSearchParams& params, const IcpParams& final_icp, double gnss_sigma_inflation);
 
   // Every valid frame, before step(): the track sample (odometry and GNSS position) and the
   // retry spacing. A failed odometry breaks the track.
@@ -84,13 +87,13 @@ class StartupSearch {
   // The unconfirmed candidate carried to this frame by the odometry, when it is a better
   // estimate than the GNSS fix.
   bool candidate_pose(std::uint32_t frame, const Pose3d& odom_T_body, Pose3d& pose) const;
-  // Power-up: no filter started yet, within startup_first_frames of the first search (the
+  // Power-up: no filter started yet, within first_frames of the first search (the
   // localizer takes no map clouds meanwhile; the searches' first slices score every hypothesis).
   // Counted from the first search, not from configure(): the ECU may run for seconds before a
   // map exists (no roadside unit in V2X range yet).
   bool first_acquisition_pending(std::uint32_t frame) const {
     return acquisition_ == Acquisition::kNoSearchYet ||
-           (acquisition_ == Acquisition::kFirst && frame - first_search_frame_ < params_.startup_first_frames);
+           (acquisition_ == Acquisition::kFirst && frame - first_search_frame_ < params_.first_frames);
   }
 
  private:
@@ -117,7 +120,7 @@ class StartupSearch {
   // The job's life, one state at a time. kIdle -(start)-> kSearch (exhaustive, over the GNSS
   // region), or kConfirm (re-deciding the candidate's finalists); -(job done)-> the final ICP of
   // its pick, kSearchFinalIcp / kConfirmFinalIcp; -(final ICP done)-> kIdle. Dropped (odometry
-  // broken, startup_max_frames) or a lost track: kIdle from any state.
+  // broken, max_frames) or a lost track: kIdle from any state.
   enum class State : std::uint8_t { kIdle, kSearch, kConfirm, kSearchFinalIcp, kConfirmFinalIcp };
   enum class Event : std::uint8_t { kStartSearch, kStartConfirm, kJobDone, kFinalIcpDone, kStop };
   // The power-up window (first_acquisition_pending): no search yet, the first one under way, or a
@@ -133,9 +136,9 @@ class StartupSearch {
   void run_final_icp(const StartupFrame& f, StartupOutcome& out, LocalizerCounters& counters);  // the final ICP states
 
   std::uint64_t slice_budget(const StartupFrame& f) const;
-  // Power-up exception (startup_first_work_per_period > 0): the slices ignore the budget.
+  // Power-up exception (first_work_per_period > 0): the slices ignore the budget.
   bool first_exempt(std::uint32_t frame) const {
-    return first_acquisition_pending(frame) && params_.startup_first_work_per_period > 0;
+    return first_acquisition_pending(frame) && params_.first_work_per_period > 0;
   }
   // Power-up: a search's first slice scores and climbs every hypothesis, whatever the budget.
   bool first_scores_whole(std::uint32_t frame) const { return first_acquisition_pending(frame); }
@@ -160,7 +163,9 @@ class StartupSearch {
   // hypothesis of this frame implies through the odometry; false when too few fixes.
   bool track_gnss_distance(const Mat4d& pose, const Mat4d& odom_T_body, double& mean_distance) const;
 
-  LocalizerParams params_{};
+  StartupSearchParams params_{};
+  IcpParams final_icp_{};
+  double gnss_sigma_inflation_ = 1.0;
   State state_ = State::kIdle;
   Acquisition acquisition_ = Acquisition::kNoSearchYet;
   std::uint32_t first_search_frame_ = 0;  // the frame the first search started in (kFirst)
@@ -192,7 +197,7 @@ class StartupSearch {
   std::uint32_t finalist_count_ = 0;
   double finalists_ground_z_ = 0.0;
   // The finished job's pick (final_) refined by the tracking ICP in slices like the job's (a whole
-  // one costs up to icp.max_work): on a copy of the tracking subsample of the frame the job
+  // one costs up to final_icp_.max_work): on a copy of the tracking subsample of the frame the job
   // finished in (final_frame_, final_odom_), its result carried from there by the odometry.
   Search final_{};
   IcpRun final_run_{};

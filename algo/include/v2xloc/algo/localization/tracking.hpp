@@ -42,13 +42,14 @@ struct TrackingOutcome {
 
 class TrackingRegistration {
  public:
-  void configure(const LocalizerParams& params);
+  // audit, search: the basin audit's own and the start-up search's pose search (basin_audit.hpp).
+  void configure(const TrackingParams& params, const BasinAuditParams& audit, const PoseSearchParams& search);
   // scratch: the basin audit's pose search scratch (pose_search.hpp).
   TrackingOutcome step(const TrackingFrame& frame, PoseSearchScratch& scratch, LocalizerCounters& counters);
   void on_track_lost() { audit_.cancel(); }
 
  private:
-  LocalizerParams params_{};
+  TrackingParams params_{};
   BasinAudit audit_{};
 };
 
