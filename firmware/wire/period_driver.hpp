@@ -34,7 +34,7 @@ struct PeriodCounters {
   std::uint64_t map_background_mismatch = 0;  // infrastructure shares off their unit's surveyed background
   std::uint64_t map_no_slot = 0;         // per-role source cap reached
   std::uint64_t map_stale = 0;           // not newer than the source's stored cloud
-  std::uint64_t map_paced = 0;           // not fused: the source's stored cloud is recent (map_cloud_interval)
+  std::uint64_t map_paced = 0;           // not fused: the source's stored cloud is recent (map.cloud_interval)
   std::uint64_t ego_frames_held = 0;     // ego scans refused for their time: last pose published again
 };
 

@@ -117,12 +117,12 @@ int parse_args(int argc, char** argv, EvalArgs& a) {
   app.add_option("--gate", gate, "validity gate: fixed-lag (default), causal or off")
       ->type_name("MODE")
       ->check(CLI::IsMember({"fixed-lag", "causal", "off"}));
-  app.add_flag("--no-gnss-gate", [&params](std::int64_t) { params.ekf.gates.gnss_gate_enabled = false; },
+  app.add_flag("--no-gnss-gate", [&params](std::int64_t) { params.filter.ekf.gates.gnss_gate_enabled = false; },
                "ablation: fuse every GNSS fix (no chi-square gate)");
-  app.add_flag("--no-odometry", [&params](std::int64_t) { params.use_odometry = false; }, "ablation: no LiDAR odometry");
+  app.add_flag("--no-odometry", [&params](std::int64_t) { params.filter.use_odometry = false; }, "ablation: no LiDAR odometry");
   app.add_flag("--no-vehicle", [&params](std::int64_t) { params.use_vehicle_signals = false; },
                "ablation: no wheel speed / yaw rate");
-  app.add_flag("--no-gnss-heading", [&params](std::int64_t) { params.use_gnss_heading = false; },
+  app.add_flag("--no-gnss-heading", [&params](std::int64_t) { params.course.enabled = false; },
                "ablation: no course over ground from the GNSS Doppler velocity");
   app.add_flag("--stereo", params.use_stereo, "also register the stereo clouds (recordings with disparity maps)");
   app.add_flag("--quiet", a.options.quiet, "no per-frame progress on stderr");
@@ -146,9 +146,9 @@ int parse_args(int argc, char** argv, EvalArgs& a) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
-  if (gate == "fixed-lag") params.gate_mode = v2xloc::GateMode::kFixedLag;
-  if (gate == "causal") params.gate_mode = v2xloc::GateMode::kCausal;
-  if (gate == "off") params.gate_mode = v2xloc::GateMode::kOff;
+  if (gate == "fixed-lag") params.filter.gate_mode = v2xloc::GateMode::kFixedLag;
+  if (gate == "causal") params.filter.gate_mode = v2xloc::GateMode::kCausal;
+  if (gate == "off") params.filter.gate_mode = v2xloc::GateMode::kOff;
   if (a.json) a.options.quiet = true;
   return -1;
 }

@@ -213,7 +213,7 @@ bool run_offline(const sim::RecordingReader& reader, Localizer& localizer, const
   const GeodeticOrigin origin =
       make_geodetic_origin(reader.origin_lat_deg(), reader.origin_lon_deg(), reader.origin_alt_m());
   LocalizerParams params = options.params;
-  params.shadow_ungated_filter = true;  // the evaluator reports the ungated "Fused" column
+  params.filter.shadow_ungated_filter = true;  // the evaluator reports the ungated "Fused" column
   localizer.configure(params, origin);
   stats = {};
   if (!provision_backgrounds(reader, localizer, stats.backgrounds_loaded, error)) return false;

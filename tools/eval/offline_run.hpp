@@ -58,7 +58,7 @@ struct RunStats {
   std::size_t map_clouds = 0;           // verified shares handed to map fusion
   std::size_t map_clouds_rejected = 0;  // of those: refused (inconsistent, off the surveyed background)
   std::size_t map_shares_untrusted = 0;  // refused by the trust checks (trust: by reason) or off the background before ECDSA
-  std::size_t map_clouds_paced = 0;     // not handed to the map: the source's stored cloud is recent (map_cloud_interval)
+  std::size_t map_clouds_paced = 0;     // not handed to the map: the source's stored cloud is recent (map.cloud_interval)
   std::size_t map_clouds_dropped = 0;    // waited beyond the share queue (the firmware's schedule)
   std::size_t backgrounds_loaded = 0;    // surveyed backgrounds the recording's trust list names
   std::uint64_t map_background_checked = 0;   // infrastructure clouds scored against them

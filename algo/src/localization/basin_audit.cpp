@@ -18,26 +18,28 @@ bool distinct_basin(const Mat4d& a, const Mat4d& b, const PoseSearchParams& sp) 
 
 }  // namespace
 
-void BasinAudit::configure(const LocalizerParams& params) {
+void BasinAudit::configure(const BasinAuditParams& params, const PoseSearchParams& search, const IcpParams& icp) {
   params_ = params;
-  job_.set_proximity_grid(params.search_on_proximity_grid ? &grid_ : nullptr);
+  search_ = search;
+  icp_ = icp;
+  job_.set_proximity_grid(&grid_);
   running_ = false;
   frames_since_audit_ = first_audit_due();
   first_of_track_ = true;
 }
 
-AuditOutcome BasinAudit::step(const AuditFrame& f, LocalizerCounters& counters) {
+AuditOutcome BasinAudit::step(const AuditFrame& f, PoseSearchScratch& scratch, LocalizerCounters& counters) {
   // A search that outlived its track (frames without tracking in between) is dropped.
-  if (running_ && f.frame - started_frame_ > params_.audit_max_frames) running_ = false;
+  if (running_ && f.frame - started_frame_ > params_.max_frames) running_ = false;
   // Periods that fused map clouds have spent part of their spare work: the audit is insurance, it
-  // takes a smaller quota there or waits (the frames it pauses count towards audit_max_frames).
+  // takes a smaller quota there or waits (the frames it pauses count towards max_frames).
   // A new track's first audit takes all the room the period has left: until it ends, an alias
   // accepted on an incomplete map is the output (~25 frames on the fixed quotas).
-  const std::uint32_t fixed = f.map_busy ? params_.audit_work_per_busy_period : params_.audit_work_per_period;
+  const std::uint32_t fixed = f.map_busy ? params_.work_per_busy_period : params_.work_per_period;
   const std::uint64_t quota = first_of_track_ ? f.work_cap : (fixed < f.work_cap ? fixed : f.work_cap);
   const bool paused = (!first_of_track_ && f.map_busy && fixed == 0) || f.work_cap == 0;
   if (!running_) {
-    if (params_.audit_period_frames == 0 || ++frames_since_audit_ < params_.audit_period_frames) return {};
+    if (params_.period_frames == 0 || ++frames_since_audit_ < params_.period_frames) return {};
     if (paused || !f.room_to_start) return {};  // due: starts in the next period with room
     frames_since_audit_ = 0;
     f.probe(LocalizerStage::kAudit);
@@ -52,7 +54,7 @@ AuditOutcome BasinAudit::step(const AuditFrame& f, LocalizerCounters& counters) 
   const std::uint64_t budget = quota > 0 ? quota : ~std::uint64_t{0};
   AuditOutcome out;
   const std::uint64_t before = job_.work();
-  const bool done = job_.step(f.map, budget);
+  const bool done = job_.step(f.map, scratch, budget);
   counters.audit_work += job_.work() - before;
   if (done) {
     running_ = false;
@@ -64,10 +66,10 @@ AuditOutcome BasinAudit::step(const AuditFrame& f, LocalizerCounters& counters) 
 }
 
 void BasinAudit::start(const AuditFrame& f) {
-  search_params_ = params_.search;
-  search_params_.radius = params_.audit_radius;
+  search_params_ = search_;
+  search_params_.radius = params_.radius;
   search_params_.sensor_in_body = f.sensor_in_body;
-  search_params_.refine_candidates = params_.audit_refine_candidates;
+  search_params_.refine_candidates = params_.refine_candidates;
   tracked_at_start_ = f.tracked.matrix();
   odom_at_start_ = f.odom_T_body.matrix();
   started_frame_ = f.frame;
@@ -90,7 +92,7 @@ AuditOutcome BasinAudit::finish(const AuditFrame& f, LocalizerCounters& counters
   const double reach = sp.radius + sp.step;
   if (dx * dx + dy * dy > reach * reach) return out;
   const double tracked_tight = evaluate_registration(job_.scan(), f.map, tracked_at_start_, sp.select_distance).fitness;
-  if (!(s.best_tight_fitness > params_.audit_switch_ratio * tracked_tight)) return out;
+  if (!(s.best_tight_fitness > params_.switch_ratio * tracked_tight)) return out;
   const Mat4d nominated = s.best.transform * se3_inverse(odom_at_start_) * f.odom_T_body.matrix();
   Mat4d refined = Mat4d::Identity();
   if (!wins_on_full_scan(f, nominated, refined)) return out;
@@ -106,13 +108,13 @@ AuditOutcome BasinAudit::finish(const AuditFrame& f, LocalizerCounters& counters
 // fitness.
 bool BasinAudit::wins_on_full_scan(const AuditFrame& f, const Mat4d& nominated, Mat4d& refined) const {
   const Mat4d& tracked = f.tracked.matrix();
-  const double select = params_.search.select_distance;
+  const double select = search_.select_distance;
   const std::span<const Vec3f> scan = f.tracking_scan.empty() ? f.scan : f.tracking_scan;
-  const RegistrationResult full = icp(scan, f.map, nominated, params_.icp, f.icp_hints);
+  const RegistrationResult full = icp(scan, f.map, nominated, icp_, f.icp_hints);
   const double tracked_full = evaluate_registration(f.scan, f.map, tracked, select).fitness;
   const double cand_full = full.ok() ? evaluate_registration(f.scan, f.map, full.transform, select).fitness : 0.0;
-  if (!full.ok() || !distinct_basin(tracked, full.transform, params_.search) ||
-      !(cand_full > params_.audit_full_switch_ratio * tracked_full)) {
+  if (!full.ok() || !distinct_basin(tracked, full.transform, search_) ||
+      !(cand_full > params_.full_switch_ratio * tracked_full)) {
     return false;
   }
   refined = full.transform;

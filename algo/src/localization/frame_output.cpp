@@ -21,7 +21,7 @@ void FrameOutput::fill(const OutputFrame& f, const PoseFilter& filter, Localizer
 
 void FrameOutput::fill_from_filter(const PoseFilter& filter, LocalizerFrameOutput& out) const {
   out.fused_pose = filter.pose();
-  out.fused_pose_ungated = params_.shadow_ungated_filter ? filter.shadow_pose() : out.fused_pose;
+  out.fused_pose_ungated = filter.has_shadow() ? filter.shadow_pose() : out.fused_pose;
   const EkfCovariance& P = filter.ekf().covariance();
   out.sigma_x = std::sqrt(P(ekf_index::kPosX, ekf_index::kPosX));
   out.sigma_y = std::sqrt(P(ekf_index::kPosY, ekf_index::kPosY));
@@ -36,7 +36,7 @@ void FrameOutput::fill_before_start(const OutputFrame& f, LocalizerFrameOutput& 
   pose.topRightCorner<3, 1>() = f.gnss.enu;
   double road_z = 0.0;
   if (f.gnss.valid && f.map_ready &&
-      road_height_near(f.map_points, f.gnss.enu, params_.global_map_radius, road_z, params_.road_height_min_points)) {
+      road_height_near(f.map_points, f.gnss.enu, params_.road_height_radius, road_z, params_.road_height_min_points)) {
     pose(2, 3) = road_z;
     ++counters.road_height_outputs;
   }

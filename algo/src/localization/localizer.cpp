@@ -20,19 +20,19 @@ void Localizer::configure(const LocalizerParams& params, const GeodeticOrigin& o
   have_frame_ = false;
   vehicle_ = {};
   gnss_ = {};
-  course_.configure(params);
+  course_.configure(params.course);
   odom_T_body_ = Pose3d::Identity();
-  scan_.configure(params);
+  scan_.configure(params.scan, params.use_vehicle_signals);
   odometry_.configure(params.odometry);
   odometry_.reset();
-  map_.configure(params);
+  map_.configure(params.map, params.tracking.icp.max_correspondence_distance);
   work_.configure(params.work);
   tracking_forecast_ = 0.0;
   rebuild_deferred_ = 0;
-  filter_.configure(params);
-  startup_.configure(params);
-  tracking_.configure(params);
-  frame_output_.configure(params);
+  filter_.configure(params.filter, params.use_vehicle_signals);
+  startup_.configure(params.startup, params.tracking.icp, params.filter.ekf.gates.gnss_sigma_inflation);
+  tracking_.configure(params.tracking, params.audit, params.startup.search);
+  frame_output_.configure(params.output);
 }
 
 void Localizer::on_vehicle(const VehicleInput& in) {
@@ -188,7 +188,7 @@ RegistrationResult Localizer::track(double t, const Mat4d& body_T_lidar) {
                             frame_,               odom_T_body_,
                             map_.busy(),          params_.work.enabled ? &work_ : nullptr};
   const double before = work_.spent();
-  const TrackingOutcome o = tracking_.step(frame, counters_);
+  const TrackingOutcome o = tracking_.step(frame, search_scratch_, counters_);
   tracking_forecast_ = work_.spent() - before;  // the next period's rebuild decision expects as much
   output_.basin_audited = o.audit.audited;
   if (o.audit.switch_basin) {
@@ -224,7 +224,7 @@ StartupOutcome Localizer::search(double t, const Mat4d& body_T_lidar) {
   frame.icp_hints = icp_hints();
   frame.probe = probe_;
   if (params_.work.enabled) frame.work = &work_;
-  const StartupOutcome s = startup_.step(frame, counters_);
+  const StartupOutcome s = startup_.step(frame, search_scratch_, counters_);
   if (s.status == StartupStatus::kStartFilter) filter_.start(t, Pose3d(s.registration.transform), vehicle_);
   const StartupSearchReport& r = s.report;
   if (r.searched) {

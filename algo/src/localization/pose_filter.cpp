@@ -7,8 +7,9 @@
 
 namespace v2xloc {
 
-void PoseFilter::configure(const LocalizerParams& params) {
+void PoseFilter::configure(const PoseFilterParams& params, bool use_vehicle_signals) {
   params_ = params;
+  use_vehicle_signals_ = use_vehicle_signals;
   // Fresh filters built in place: `ekf_ = Ekf(...)` would first build each one's ~50 KB history
   // on the stack (the bare-metal target's stack is 64 KiB, docs/target.md).
   for (Ekf* ekf : {&ekf_, &shadow_}) {
@@ -38,7 +39,7 @@ bool PoseFilter::can_track() const {
 }
 
 void PoseFilter::on_vehicle(double t, double wheel_speed, double yaw_rate) {
-  if (!params_.use_vehicle_signals || !ekf_.initialized()) return;
+  if (!use_vehicle_signals_ || !ekf_.initialized()) return;
   ekf_.on_vehicle_signals(t, wheel_speed, yaw_rate);
   if (params_.shadow_ungated_filter) shadow_.on_vehicle_signals(t, wheel_speed, yaw_rate);
 }
@@ -55,7 +56,7 @@ GnssFusion PoseFilter::on_gnss(double t, const Vec3d& enu, double h_acc, double 
       return GnssFusion::kDiverged;
     }
   }
-  if (!params_.use_gnss || !ekf_.initialized()) return GnssFusion::kIgnored;
+  if (!ekf_.initialized()) return GnssFusion::kIgnored;
   ekf_.on_gnss(t, enu, h_acc, v_acc);
   if (params_.shadow_ungated_filter) shadow_.on_gnss(t, enu, h_acc, v_acc);
   return GnssFusion::kFused;

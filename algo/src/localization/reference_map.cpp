@@ -6,9 +6,10 @@
 
 namespace v2xloc {
 
-void ReferenceMap::configure(const LocalizerParams& params) {
+void ReferenceMap::configure(const ReferenceMapParams& params, double icp_gate) {
   params_ = params;
-  fusion_.configure(params.map);
+  icp_gate_ = icp_gate;
+  fusion_.configure(params.fusion);
   targets_[0].points.clear();
   targets_[1].points.clear();
   active_ = 0;
@@ -26,10 +27,10 @@ void ReferenceMap::configure(const LocalizerParams& params) {
 bool ReferenceMap::wants(std::uint32_t source_id, double t) const {
   for (const MapSourceInfo& s : fusion_.sources()) {
     // Not newer at all: fusion refuses it as stale (and counts it), at no cost.
-    if (s.active && s.id == source_id) return !(t > s.timestamp) || !(t - s.timestamp < params_.map_cloud_interval);
+    if (s.active && s.id == source_id) return !(t > s.timestamp) || !(t - s.timestamp < params_.cloud_interval);
   }
   for (const Attempt& a : attempts_) {
-    if (a.used && a.id == source_id) return !(t - a.t < params_.map_cloud_interval);  // older than the last: paced too
+    if (a.used && a.id == source_id) return !(t - a.t < params_.cloud_interval);  // older than the last: paced too
   }
   return true;
 }
@@ -63,11 +64,11 @@ MapInsertResult ReferenceMap::insert(const MapCloudInput& in) {
 IcpTarget ReferenceMap::target() {
   Target& m = targets_[active_];
   return IcpTarget{m.points.span(), std::span<const Vec3f>(m.normals, m.points.size()), &m.tree.tree,
-                   params_.map_vicinity_cell > 0.0f ? &m.vicinity : nullptr, &m.lazy};
+                   params_.vicinity_cell > 0.0f ? &m.vicinity : nullptr, &m.lazy};
 }
 
 bool ReferenceMap::refresh(double t, LazyNormalCounters& normals, bool may_build) {
-  normals = targets_[active_].lazy.new_period(params_.map_normals_per_period);
+  normals = targets_[active_].lazy.new_period(params_.normals_per_period);
   busy_ = fused_this_period_;
   fused_this_period_ = false;
   steps_run_ = 0;
@@ -92,20 +93,20 @@ bool ReferenceMap::next_step_activates() const {
 bool ReferenceMap::build_due(double t) const {
   if (phase_ != BuildPhase::kIdle) return true;
   if (fusion_.revision() == revision_) return false;
-  if (ready_ && t - built_t_ < params_.map_refresh_period) return false;
+  if (ready_ && t - built_t_ < params_.refresh_period) return false;
   // Sources send in bursts: the rebuild waits for the burst to end (all its clouds in one
   // rebuild, none of its periods also extracting), but not forever.
-  return !(ready_ && busy_ && t - built_t_ < params_.map_refresh_period + params_.map_refresh_quiet_wait);
+  return !(ready_ && busy_ && t - built_t_ < params_.refresh_period + params_.refresh_quiet_wait);
 }
 
 std::size_t ReferenceMap::tree_quota() const {
-  return ready_ && params_.map_tree_work_per_period > 0 ? params_.map_tree_work_per_period : ~std::size_t{0};
+  return ready_ && params_.tree_work_per_period > 0 ? params_.tree_work_per_period : ~std::size_t{0};
 }
 
 // The vicinity bitmap over the map's bounding box, reach = the tracking ICP's gate + 1 cm (the
 // ICP asks it only for gates within its reach, less a rounding slack).
 void ReferenceMap::build_vicinity(Target& target) const {
-  if (!(params_.map_vicinity_cell > 0.0f)) return;
+  if (!(params_.vicinity_cell > 0.0f)) return;
   Vec3d lo = Vec3d::Constant(1e300), hi = Vec3d::Constant(-1e300);
   for (const Vec3f& p : target.points) {
     if (!p.allFinite()) continue;
@@ -113,8 +114,8 @@ void ReferenceMap::build_vicinity(Target& target) const {
     hi = hi.cwiseMax(p.cast<double>());
   }
   ProximityGridParams gp;
-  gp.cell = params_.map_vicinity_cell;
-  gp.reach = static_cast<float>(params_.icp.max_correspondence_distance + 0.01);
+  gp.cell = params_.vicinity_cell;
+  gp.reach = static_cast<float>(icp_gate_ + 0.01);
   if (!(lo.x() <= hi.x())) {
     target.vicinity.build({}, Vec3d::Zero(), Vec3d::Zero(), gp);  // no finite point: an empty grid
     return;
@@ -125,15 +126,15 @@ void ReferenceMap::build_vicinity(Target& target) const {
 // The built target becomes the registration's; its normals start empty (computed on first use).
 void ReferenceMap::activate(Target& next) {
   NormalParams np;
-  np.radius = params_.map_normal_radius;
+  np.radius = params_.normal_radius;
   np.orient_to_viewpoint = false;  // point-to-plane residuals do not care about the sign
   next.lazy.reset(&next.tree.tree, np, std::span<Vec3f>(next.normals, config::kMaxMapPoints),
                   std::span<std::uint64_t>(next.normal_done, (config::kMaxMapPoints + 63) / 64),
-                  params_.map_normals_per_period);
+                  params_.normals_per_period);
   active_ = 1 - active_;
   revision_ = build_revision_;
   phase_ = BuildPhase::kIdle;
-  ready_ = next.points.size() >= params_.map_min_points;
+  ready_ = next.points.size() >= params_.min_points;
 }
 
 bool ReferenceMap::build_step(double t, bool& finished) {

@@ -17,8 +17,9 @@ Vec3f transform_point(const Mat4d& T, const Vec3f& p) {
 
 }  // namespace
 
-void ScanPreparation::configure(const LocalizerParams& params) {
+void ScanPreparation::configure(const ScanPreparationParams& params, bool use_vehicle_signals) {
   params_ = params;
+  use_vehicle_signals_ = use_vehicle_signals;
   have_vehicle_delta_ = false;
   stereo_down_.clear();
 }
@@ -31,7 +32,7 @@ void ScanPreparation::configure(const LocalizerParams& params) {
 std::uint32_t ScanPreparation::prepare(const EgoScanInput& in, const VehicleMotion& vehicle, std::uint32_t& dropped,
                                        std::uint32_t& coarsened) {
   stereo_down_.clear();
-  have_vehicle_delta_ = vehicle.valid && params_.use_vehicle_signals;
+  have_vehicle_delta_ = vehicle.valid && use_vehicle_signals_;
   Mat4d delta = Mat4d::Identity();
   if (have_vehicle_delta_) {
     Vec6d xi = Vec6d::Zero();
@@ -45,8 +46,7 @@ std::uint32_t ScanPreparation::prepare(const EgoScanInput& in, const VehicleMoti
   ip.max_range = params_.max_range;
   ip.voxel = params_.registration_voxel;
   ip.frame_period = params_.frame_period;
-  const bool deskew_now = params_.deskew && have_vehicle_delta_;
-  const ScanIngestResult r = ingest_.run(in.points, in.point_times, deskew_now ? &delta : nullptr, ip);
+  const ScanIngestResult r = ingest_.run(in.points, in.point_times, have_vehicle_delta_ ? &delta : nullptr, ip);
   dropped += r.non_finite_dropped + r.range_dropped + r.capacity_dropped;
   coarsened += r.coarsened > 0 ? 1u : 0u;
   return 1u + r.coarsened;

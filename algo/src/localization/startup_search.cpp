@@ -16,19 +16,20 @@ double horizontal_distance(const Mat4d& pose, const Vec3d& enu) {
 
 }  // namespace
 
-void StartupSearch::configure(const LocalizerParams& params) {
+void StartupSearch::configure(const StartupSearchParams& params, const IcpParams& final_icp,
+                              double gnss_sigma_inflation) {
   params_ = params;
+  final_icp_ = final_icp;
+  gnss_sigma_inflation_ = gnss_sigma_inflation;
   candidate_ = {};
   track_count_ = 0;
-  frames_since_search_ = params.global_retry_frames;  // allow a search at the first frame
-  job_kind_ = JobKind::kNone;
-  final_running_ = false;
+  frames_since_search_ = params.retry_frames;  // allow a search at the first frame
+  transition(Event::kStop);
   finalist_count_ = 0;
-  acquired_ = false;
-  first_search_started_ = false;
+  acquisition_ = Acquisition::kNoSearchYet;
   first_search_frame_ = 0;
   region_scale_ = 1.0;
-  job_.set_proximity_grid(params.search_on_proximity_grid ? &grid_ : nullptr);
+  job_.set_proximity_grid(&grid_);
 }
 
 void StartupSearch::on_frame(bool odometry_ok, const Pose3d& odom_T_body, const GnssFix& gnss) {
@@ -50,10 +51,8 @@ void StartupSearch::on_frame(bool odometry_ok, const Pose3d& odom_T_body, const 
 void StartupSearch::on_track_lost() {
   candidate_.valid = false;
   finalist_count_ = 0;
-  job_kind_ = JobKind::kNone;
-  final_running_ = false;
-  provisional_valid_ = false;
-  frames_since_search_ = params_.global_retry_frames;
+  transition(Event::kStop);
+  frames_since_search_ = params_.retry_frames;
   region_scale_ = 1.0;
 }
 
@@ -67,8 +66,8 @@ void StartupSearch::nominate(std::uint32_t frame, const Pose3d& pose, const Pose
 }
 
 bool StartupSearch::candidate_pose(std::uint32_t frame, const Pose3d& odom_T_body, Pose3d& pose) const {
-  if (!candidate_.valid || !candidate_.output || frame - candidate_.frame > params_.global_confirm_window) {
-    if (job_kind_ != JobKind::kExhaustive || !provisional_valid_) return false;
+  if (!candidate_.valid || !candidate_.output || frame - candidate_.frame > params_.confirm_window) {
+    if (!(state_ == State::kSearch || state_ == State::kSearchFinalIcp) || !provisional_valid_) return false;
     // The running search's best pose so far, carried from the frame it started at; from a widened
     // search only inside the normal region (beyond it nothing but the scan match vouches for it).
     if (horizontal_distance(provisional_, job_fix_) > job_floor_region_) return false;
@@ -79,67 +78,91 @@ bool StartupSearch::candidate_pose(std::uint32_t frame, const Pose3d& odom_T_bod
   return true;
 }
 
-// One period of the search job (started when due), then, in the period it finishes: the
-// ambiguity check, the final ICP and the acceptance checks the symmetric
-// intersection needs (inside the GNSS uncertainty region, enough of the scan explained).
-StartupOutcome StartupSearch::step(const StartupFrame& f, LocalizerCounters& counters) {
+StartupSearch::State StartupSearch::next(State state, Event event) {
+  switch (event) {
+    case Event::kStartSearch: return state == State::kIdle ? State::kSearch : state;
+    case Event::kStartConfirm: return state == State::kIdle ? State::kConfirm : state;
+    case Event::kJobDone:
+      return state == State::kSearch ? State::kSearchFinalIcp : state == State::kConfirm ? State::kConfirmFinalIcp : state;
+    case Event::kFinalIcpDone:
+      return state == State::kSearchFinalIcp || state == State::kConfirmFinalIcp ? State::kIdle : state;
+    case Event::kStop: return State::kIdle;
+  }
+  return state;
+}
+
+void StartupSearch::transition(Event event) {
+  state_ = next(state_, event);
+  if (state_ == State::kIdle) provisional_valid_ = false;  // the best pose so far belongs to a job
+}
+
+// One period of the search: the job (started when due), then, in the period it finishes, the
+// ambiguity check, the final ICP and the acceptance checks the symmetric intersection needs
+// (inside the GNSS uncertainty region, enough of the scan explained). Each state's work runs
+// in its own method; a state finished hands over to the next within the period.
+StartupOutcome StartupSearch::step(const StartupFrame& f, PoseSearchScratch& scratch, LocalizerCounters& counters) {
   StartupOutcome out;
-  if (job_kind_ != JobKind::kNone &&
-      (job_track_broken_ || f.frame - job_frame_ >= params_.startup_max_frames)) {
-    job_kind_ = JobKind::kNone;  // its result could not be carried here, or it took too long
-    final_running_ = false;
-    provisional_valid_ = false;
+  if (state_ != State::kIdle && (job_track_broken_ || f.frame - job_frame_ >= params_.max_frames)) {
+    transition(Event::kStop);  // its result could not be carried here, or it took too long
     ++counters.global_searches_dropped;
   }
-  bool started = false;
-  if (job_kind_ == JobKind::kNone) {
-    if (!f.gnss.valid || frames_since_search_ < params_.global_retry_frames) return out;
-    // Its set-up (road height over the whole map, the proximity grid) is one piece: a search
-    // starts in a period with room for it (the first acquisition does not wait).
-    if (!first_acquisition_pending(f.frame) && f.work != nullptr && f.work->left() < f.work->params().search_start) return out;
-    frames_since_search_ = 0;
-    if (!first_search_started_) {
-      first_search_started_ = true;
-      first_search_frame_ = f.frame;
-    }
-    f.probe(LocalizerStage::kGlobalSearch);
-    ++counters.global_searches;
-    start_job(f, counters);
-    started = true;
-  } else {
-    f.probe(LocalizerStage::kGlobalSearch);
-  }
-  // This period's work, including the set-up start_job() did (a new job's work starts at 0).
-  if (!final_running_) {
-    const std::uint64_t before = started ? 0 : job_.work();
-    const bool finished = job_.step(f.map, slice_budget(f), first_scores_whole(f.frame));
-    const std::uint64_t spent = job_.work() - before;
-    if (f.work != nullptr) f.work->add(static_cast<double>(spent) * f.work->params().search_unit);
-    counters.global_search_work += spent;
-    if (!finished) {
-      if (job_kind_ == JobKind::kExhaustive) provisional_valid_ = job_.provisional(provisional_);
-      out.status = StartupStatus::kSearching;
-      f.probe(LocalizerStage::kFusion);
-      return out;
-    }
-    finish_job(f, out.report, counters);
-  }
-  if (!continue_final_icp(f, counters)) {  // out of room: it goes on in the next period
-    ++counters.global_final_icp_paused;
-    out.status = StartupStatus::kSearching;
-    f.probe(LocalizerStage::kFusion);
-    return out;
-  }
-  const JobKind kind = job_kind_;
-  job_kind_ = JobKind::kNone;
-  final_running_ = false;
-  provisional_valid_ = false;
-  out.status = accept(f, final_, out.registration, counters);
-  if (out.status == StartupStatus::kStartFilter) acquired_ = true;
-  if (kind == JobKind::kExhaustive) widen_region(out.status, f.frame, final_.searched.best);
-  if (out.status == StartupStatus::kRejected && candidate_.valid && candidate_.frame == f.frame) keep_finalists(f);
+  const bool started = state_ == State::kIdle && start_when_due(f, counters);
+  if (state_ == State::kIdle) return out;
+  if (!started) f.probe(LocalizerStage::kGlobalSearch);
+  if (state_ == State::kSearch || state_ == State::kConfirm) run_job(f, scratch, started, out.report, counters);
+  if (state_ == State::kSearchFinalIcp || state_ == State::kConfirmFinalIcp) run_final_icp(f, out, counters);
+  if (state_ != State::kIdle) out.status = StartupStatus::kSearching;
   f.probe(LocalizerStage::kFusion);
   return out;
+}
+
+// kIdle: a job starts with a GNSS fix, retry_frames after the last one, in a period with
+// room for its set-up (road height over the whole map, the proximity grid: one piece; the first
+// acquisition does not wait). True when one started.
+bool StartupSearch::start_when_due(const StartupFrame& f, LocalizerCounters& counters) {
+  if (!f.gnss.valid || frames_since_search_ < params_.retry_frames) return false;
+  if (!first_acquisition_pending(f.frame) && f.work != nullptr && f.work->left() < f.work->params().search_start) return false;
+  frames_since_search_ = 0;
+  if (acquisition_ == Acquisition::kNoSearchYet) {
+    acquisition_ = Acquisition::kFirst;
+    first_search_frame_ = f.frame;
+  }
+  f.probe(LocalizerStage::kGlobalSearch);
+  ++counters.global_searches;
+  start_job(f, counters);
+  return true;
+}
+
+// kSearch / kConfirm: this period's slice of the job, counting the set-up start_job() did (a new
+// job's work starts at 0). Done, its result is taken and the final ICP begins.
+void StartupSearch::run_job(const StartupFrame& f, PoseSearchScratch& scratch, bool started, StartupSearchReport& report,
+                            LocalizerCounters& counters) {
+  const std::uint64_t before = started ? 0 : job_.work();
+  const bool finished = job_.step(f.map, scratch, slice_budget(f), first_scores_whole(f.frame));
+  const std::uint64_t spent = job_.work() - before;
+  if (f.work != nullptr) f.work->add(static_cast<double>(spent) * f.work->params().search_unit);
+  counters.global_search_work += spent;
+  if (!finished) {
+    if (state_ == State::kSearch) provisional_valid_ = job_.provisional(provisional_);
+    return;
+  }
+  finish_job(f, report, counters);
+  transition(Event::kJobDone);
+}
+
+// kSearchFinalIcp / kConfirmFinalIcp: this period's slice of the final ICP (out of room: it goes
+// on in the next period). Done, the acceptance checks decide the outcome and the search is idle.
+void StartupSearch::run_final_icp(const StartupFrame& f, StartupOutcome& out, LocalizerCounters& counters) {
+  if (!continue_final_icp(f, counters)) {
+    ++counters.global_final_icp_paused;
+    return;
+  }
+  const bool exhaustive = state_ == State::kSearchFinalIcp;
+  transition(Event::kFinalIcpDone);
+  out.status = accept(f, final_, out.registration, counters);
+  if (out.status == StartupStatus::kStartFilter) acquisition_ = Acquisition::kAcquired;
+  if (exhaustive) widen_region(out.status, f.frame, final_.searched.best);
+  if (out.status == StartupStatus::kRejected && candidate_.valid && candidate_.frame == f.frame) keep_finalists(f);
 }
 
 // The period the job finishes in: its result carried here, the ambiguity check, the report,
@@ -162,43 +185,41 @@ void StartupSearch::finish_job(const StartupFrame& f, StartupSearchReport& r, Lo
 }
 
 // (2) The tracking ICP from the pick, on this frame's tracking subsample (the registration scan
-// without one). Up to icp.max_work (~44 M instructions from a poor start): run in slices on a copy
-// of the scan; a scan larger than the copy is refined at once, as a tracking ICP would be.
+// without one). Up to final_icp_.max_work (~44 M instructions from a poor start): run in slices
+// on a copy of the scan; a scan larger than the copy is refined at once, as a tracking ICP would be.
 void StartupSearch::begin_final_icp(const StartupFrame& f, LocalizerCounters& counters) {
-  final_running_ = true;
   final_frame_ = f.frame;
   final_odom_ = f.odom_T_body.matrix();
   final_scan_.clear();
   final_run_ = IcpRun{};
   final_run_.result = final_.best;  // not ok: nothing to refine (finished)
   if (!final_.best.ok()) return;
-  const bool subsample = params_.startup_icp_on_tracking_scan && !f.tracking_scan.empty();
-  const std::span<const Vec3f> scan = subsample ? f.tracking_scan : f.scan;
+  const std::span<const Vec3f> scan = f.tracking_scan.empty() ? f.scan : f.tracking_scan;
   if (scan.size() > final_scan_.capacity()) {
-    final_run_.result = icp(scan, f.map, final_.best.transform, params_.icp, f.icp_hints);
+    final_run_.result = icp(scan, f.map, final_.best.transform, final_icp_, f.icp_hints);
     const std::uint64_t work = final_run_.result.node_visits + (final_run_.result.iterations + 1) * scan.size();
     counters.global_search_work += work;
     if (f.work != nullptr) f.work->add(static_cast<double>(work) * f.work->params().search_unit);
     return;
   }
   for (const Vec3f& p : scan) final_scan_.push_back(p);
-  icp_begin(final_run_, final_scan_.span(), f.map, final_.best.transform, params_.icp,
+  icp_begin(final_run_, final_scan_.span(), f.map, final_.best.transform, final_icp_,
             std::span<std::uint32_t>(final_hints_, final_scan_.size()));
 }
 
 // One period's slice of the final ICP, counted as search work: all the period has left, at least
 // the job's floor (a short piece: the job's quota keeps the search's steady share); whole without
-// a period budget and under the power-up exception (first_exempt). True once finished; out of icp.max_work in all
-// it ends kDidNotConverge, as icp() does.
+// a period budget and under the power-up exception (first_exempt). True once finished; out of
+// final_icp_.max_work in all it ends kDidNotConverge, as icp() does.
 bool StartupSearch::continue_final_icp(const StartupFrame& f, LocalizerCounters& counters) {
   if (final_run_.finished) return true;
-  const std::uint64_t cap = params_.icp.max_work > 0 ? params_.icp.max_work : ~std::uint64_t{0};
+  const std::uint64_t cap = final_icp_.max_work > 0 ? final_icp_.max_work : ~std::uint64_t{0};
   const std::uint64_t left = cap > final_run_.work ? cap - final_run_.work : 0;
   const std::uint64_t slice = first_exempt(f.frame)
                                   ? ~std::uint64_t{0}
-                                  : room_slice(f, params_.startup_min_work_per_period, ~std::uint64_t{0});
+                                  : room_slice(f, params_.min_work_per_period, ~std::uint64_t{0});
   const std::uint64_t before = final_run_.work;
-  bool finished = icp_continue(final_run_, final_scan_.span(), f.map, params_.icp, ~std::uint32_t{0},
+  bool finished = icp_continue(final_run_, final_scan_.span(), f.map, final_icp_, ~std::uint32_t{0},
                                std::span<std::uint32_t>(final_hints_, final_scan_.size()), slice < left ? slice : left);
   const std::uint64_t spent = final_run_.work - before;
   if (f.work != nullptr) f.work->add(static_cast<double>(spent) * f.work->params().search_unit);
@@ -212,13 +233,13 @@ bool StartupSearch::continue_final_icp(const StartupFrame& f, LocalizerCounters&
 
 // This period's slice: what the period has left (period_work.hpp), between the floor that keeps
 // the search moving in crowded periods and the fixed quota (all of it without a period budget).
-// Under the power-up exception, at least startup_first_work_per_period.
+// Under the power-up exception, at least first_work_per_period.
 std::uint64_t StartupSearch::slice_budget(const StartupFrame& f) const {
-  const std::uint64_t quota = params_.startup_work_per_period;
+  const std::uint64_t quota = params_.work_per_period;
   if (quota == 0) return ~std::uint64_t{0};
-  const std::uint64_t floor = params_.startup_min_work_per_period < quota ? params_.startup_min_work_per_period : quota;
+  const std::uint64_t floor = params_.min_work_per_period < quota ? params_.min_work_per_period : quota;
   std::uint64_t slice = room_slice(f, floor, quota);
-  if (first_exempt(f.frame) && params_.startup_first_work_per_period > slice) slice = params_.startup_first_work_per_period;
+  if (first_exempt(f.frame) && params_.first_work_per_period > slice) slice = params_.first_work_per_period;
   return slice;
 }
 
@@ -232,28 +253,28 @@ std::uint64_t StartupSearch::room_slice(const StartupFrame& f, std::uint64_t flo
 }
 
 double StartupSearch::floor_region(const StartupFrame& f) const {
-  const double region = params_.global_gnss_gate_sigmas * (f.gnss.sigma * params_.ekf.gates.gnss_sigma_inflation + 1.0);
-  return region < params_.global_min_region ? params_.global_min_region : region;
+  const double region = params_.gnss_gate_sigmas * (f.gnss.sigma * gnss_sigma_inflation_ + 1.0);
+  return region < params_.min_region ? params_.min_region : region;
 }
 
 double StartupSearch::widened(double floor) const {
   if (!(region_scale_ > 1.0)) return floor;
   const double wide = floor * region_scale_;
-  const double cap = params_.global_max_region > floor ? params_.global_max_region : floor;
+  const double cap = params_.max_region > floor ? params_.max_region : floor;
   return wide < cap ? wide : cap;
 }
 
 // An exhaustive search whose best pose matched nothing well (no candidate set, no filter started,
-// its best below global_min_fitness): the true pose may lie outside the region (a canyon fix
+// its best below min_fitness): the true pose may lie outside the region (a canyon fix
 // further off than the floor), so the next search looks wider. A search that matched, even one
 // refused as ambiguous, returns to the normal region. The work stays bounded: hypotheses grow
 // with the area (45 m: 2.25x), spread over periods like any search.
 void StartupSearch::widen_region(StartupStatus status, std::uint32_t frame, const RegistrationResult& best) {
-  const bool matched = best.ok() && best.fitness >= params_.global_min_fitness;
+  const bool matched = best.ok() && best.fitness >= params_.min_fitness;
   const bool found = matched || status == StartupStatus::kStartFilter || status == StartupStatus::kAccepted ||
                      (candidate_.valid && candidate_.frame == frame);
-  region_scale_ = found ? 1.0 : region_scale_ * params_.global_region_growth;
-  if (!(region_scale_ < 1e3)) region_scale_ = 1e3;  // capped by global_max_region anyway
+  region_scale_ = found ? 1.0 : region_scale_ * params_.region_growth;
+  if (!(region_scale_ < 1e3)) region_scale_ = 1e3;  // capped by max_region anyway
 }
 
 // (1) Exhaustive, GNSS-seeded search over position and heading; or, to confirm a candidate, the
@@ -264,8 +285,8 @@ void StartupSearch::start_job(const StartupFrame& f, LocalizerCounters& counters
   job_fix_ = f.gnss.enu;
   PoseSearchParams& sp = job_params_;
   sp = params_.search;
-  // A widened region (widen_region) may exceed the search's own radius, up to global_max_region.
-  const double radius_cap = region_scale_ > 1.0 && params_.global_max_region > sp.radius ? params_.global_max_region
+  // A widened region (widen_region) may exceed the search's own radius, up to max_region.
+  const double radius_cap = region_scale_ > 1.0 && params_.max_region > sp.radius ? params_.max_region
                                                                                        : sp.radius;
   sp.radius = job_region_ < radius_cap ? job_region_ : radius_cap;
   sp.sensor_in_body = f.sensor_in_body;
@@ -273,30 +294,30 @@ void StartupSearch::start_job(const StartupFrame& f, LocalizerCounters& counters
   if (f.course_known) {
     sp.use_yaw_prior = true;
     sp.yaw_prior = f.course;
-    sp.yaw_prior_tolerance = params_.heading_search_tolerance;
+    sp.yaw_prior_tolerance = params_.heading_tolerance;
     ++counters.heading_searches;
   }
-  sp.provisional = params_.startup_output_provisional && params_.startup_work_per_period > 0;
+  sp.provisional = params_.work_per_period > 0;  // a search over several periods outputs its best pose so far
   sp.provisional_scored = sp.provisional && first_scores_whole(f.frame);
   job_frame_ = f.frame;
   job_odom_ = f.odom_T_body.matrix();
   job_track_broken_ = false;
   provisional_valid_ = false;
-  const bool confirm_finalists = params_.global_confirm_finalists && finalist_count_ > 0 && candidate_.valid &&
-                                 f.frame - candidate_.frame <= params_.global_confirm_window;
+  const bool confirm_finalists = finalist_count_ > 0 && candidate_.valid &&
+                                 f.frame - candidate_.frame <= params_.confirm_window;
   // The GNSS region a result must lie in: around this fix, or for a confirming search around the
   // fix its candidate's search started from (both checked where they were taken).
   region_fix_ = confirm_finalists ? candidate_.region_fix : f.gnss.enu;
   region_odom_ = confirm_finalists ? candidate_.region_odom : job_odom_;
   if (!confirm_finalists) {
-    job_kind_ = JobKind::kExhaustive;
+    transition(Event::kStartSearch);
     job_.start(f.search_scan, f.map, f.gnss.enu, sp);
     return;
   }
   Mat4d carried[kPoseSearchRefine];
   const Mat4d to_now = se3_inverse(candidate_.odom) * job_odom_;
   for (std::uint32_t i = 0; i < finalist_count_; ++i) carried[i] = finalists_[i] * to_now;
-  job_kind_ = JobKind::kFinalists;
+  transition(Event::kStartConfirm);
   job_.start_from_poses(f.search_scan, f.map, std::span<const Mat4d>(carried, finalist_count_), finalists_ground_z_,
                         sp);
 }
@@ -318,7 +339,7 @@ void StartupSearch::take_result(const StartupFrame& f, Search& s) const {
 void StartupSearch::resolve_ambiguity(const StartupFrame& f, Search& s, LocalizerCounters& counters) const {
   const PoseSearchResult& searched = s.searched;
   const bool distinct = searched.best_tight_fitness > 0.0 &&
-                        searched.runner_up_tight_fitness < params_.global_max_ambiguity * searched.best_tight_fitness;
+                        searched.runner_up_tight_fitness < params_.max_ambiguity * searched.best_tight_fitness;
   if (distinct) return;
   s.best.status = RegistrationStatus::kDidNotConverge;
   const Mat4d& odom = f.odom_T_body.matrix();
@@ -365,18 +386,17 @@ StartupStatus StartupSearch::accept(const StartupFrame& f, const Search& s, Regi
   if (!result.ok()) return StartupStatus::kRejected;
   const Mat4d& odom = f.odom_T_body.matrix();
   double track_distance = 0.0;
-  const bool track_known = params_.use_gnss && track_gnss_distance(result.transform, odom, track_distance);
+  const bool track_known = track_gnss_distance(result.transform, odom, track_distance);
   const bool heading_agrees =
       f.course_known &&
-      std::abs(det::wrap_pi(yaw_of(result.transform.topLeftCorner<3, 3>()) - f.course)) <= params_.heading_search_tolerance;
-  if (result.horizontal_constraint < params_.global_min_horizontal_constraint) {
+      std::abs(det::wrap_pi(yaw_of(result.transform.topLeftCorner<3, 3>()) - f.course)) <= params_.heading_tolerance;
+  if (result.horizontal_constraint < params_.min_horizontal_constraint) {
     ++counters.global_unconstrained;  // an along-street alias fits as well (see the parameter)
     result.status = RegistrationStatus::kDegenerate;
     return StartupStatus::kRejected;
   }
-  if (result.fitness < params_.global_min_fitness || result.inlier_rmse > params_.max_inlier_rmse ||
-      (f.course_known && !heading_agrees) ||
-      (params_.use_gnss && distance_from_region_fix(result.transform, odom) > s.region) ||
+  if (result.fitness < params_.min_fitness || (f.course_known && !heading_agrees) ||
+      distance_from_region_fix(result.transform, odom) > s.region ||
       (track_known && track_distance > params_.track_max_distance)) {
     result.status = RegistrationStatus::kDidNotConverge;
     return StartupStatus::kRejected;
@@ -397,12 +417,12 @@ StartupStatus StartupSearch::accept(const StartupFrame& f, const Search& s, Regi
 
 bool StartupSearch::confirm(std::uint32_t frame, const Mat4d& pose, const Mat4d& odom_T_body, bool output,
                             LocalizerCounters& counters) {
-  if (params_.global_confirm_window == 0) return true;
-  if (candidate_.valid && frame - candidate_.frame <= params_.global_confirm_window) {
+  if (params_.confirm_window == 0) return true;
+  if (candidate_.valid && frame - candidate_.frame <= params_.confirm_window) {
     const Mat4d predicted = candidate_.pose * se3_inverse(candidate_.odom) * odom_T_body;
     const double dyaw = det::wrap_pi(yaw_of(pose.topLeftCorner<3, 3>()) - yaw_of(predicted.topLeftCorner<3, 3>()));
-    if (horizontal_distance(pose, predicted.topRightCorner<3, 1>()) <= params_.global_confirm_distance &&
-        std::abs(dyaw) <= params_.global_confirm_yaw) {
+    if (horizontal_distance(pose, predicted.topRightCorner<3, 1>()) <= params_.confirm_distance &&
+        std::abs(dyaw) <= params_.confirm_yaw) {
       candidate_.valid = false;
       ++counters.global_confirmed;
       return true;

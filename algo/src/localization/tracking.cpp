@@ -4,20 +4,18 @@
 
 namespace v2xloc {
 
-void TrackingRegistration::configure(const LocalizerParams& params) {
+void TrackingRegistration::configure(const TrackingParams& params, const BasinAuditParams& audit,
+                                     const PoseSearchParams& search) {
   params_ = params;
-  audit_.configure(params);
+  audit_.configure(audit, search, params.icp);
 }
 
-TrackingOutcome TrackingRegistration::step(const TrackingFrame& f, LocalizerCounters& counters) {
+TrackingOutcome TrackingRegistration::step(const TrackingFrame& f, PoseSearchScratch& scratch, LocalizerCounters& counters) {
   TrackingOutcome out;
   ++counters.tracking_registrations;
   RegistrationResult& result = out.registration;
   result = icp(f.tracking_scan, f.map, f.predicted.matrix(), params_.icp, f.icp_hints);
-  if (result.status == RegistrationStatus::kDidNotConverge) ++counters.tracking_work_capped;  // icp.max_work
-  if (result.ok() && result.inlier_rmse > params_.max_inlier_rmse) {
-    result.status = RegistrationStatus::kDidNotConverge;  // counted as a failed frame
-  }
+  if (result.status == RegistrationStatus::kDidNotConverge) ++counters.tracking_work_capped;  // params_.icp.max_work
   const std::uint64_t queries = (static_cast<std::uint64_t>(result.iterations) + 1) * f.tracking_scan.size();
   counters.tracking_queries += queries;
   std::uint64_t audit_cap = ~std::uint64_t{0};
@@ -34,7 +32,7 @@ TrackingOutcome TrackingRegistration::step(const TrackingFrame& f, LocalizerCoun
                      f.probe, f.frame, f.odom_T_body, f.map_busy};
     audit.work_cap = audit_cap;
     audit.room_to_start = room_to_start;
-    out.audit = audit_.step(audit, counters);
+    out.audit = audit_.step(audit, scratch, counters);
     if (out.audit.switch_basin) result.status = RegistrationStatus::kDidNotConverge;
   }
   if (result.ok() && f.stereo_cloud.size() >= params_.stereo_min_points) {

@@ -10,19 +10,11 @@ namespace v2xloc {
 
 namespace {
 
-// A climb's points, rotated by its heading and lifted to the road once: every position it tries
-// only adds its x and y (in double, as climb_score computes them, so both give the same bits).
-// Shared by all climbs (one thread, like the pose search's lattice table).
-struct ClimbPoint {
-  double x = 0.0, y = 0.0;
-  float z = 0.0f;
-};
-ClimbPoint g_points[kMaxClimbPoints];
-
 // The even subsample of above-ground points at a fractional stride: the a-th above-ground point
 // is taken when floor(a * take / above) steps up (all of them when above <= want). An integer
 // stride would take the first `want` points, one sector of the sweep, when want < above < 2 want.
-std::uint32_t rotate_subsample(std::span<const Vec3f> scan_body, double yaw, const BasinClimbParams& params) {
+std::uint32_t rotate_subsample(std::span<const Vec3f> scan_body, double yaw, const BasinClimbParams& params,
+                               ClimbScratch& scratch) {
   const std::uint32_t want = params.points < kMaxClimbPoints ? params.points : kMaxClimbPoints;
   std::uint64_t above = 0;
   for (const Vec3f& p : scan_body) above += p.z() > params.min_height ? 1u : 0u;
@@ -35,7 +27,7 @@ std::uint32_t rotate_subsample(std::span<const Vec3f> scan_body, double yaw, con
     if (!(p.z() > params.min_height)) continue;
     const std::uint64_t i = a++;
     if ((i + 1) * take / above == i * take / above) continue;
-    g_points[n++] = ClimbPoint{c * p.x() - s * p.y(), s * p.x() + c * p.y(), static_cast<float>(p.z() + params.ground_z)};
+    scratch.points[n++] = ClimbPoint{c * p.x() - s * p.y(), s * p.x() + c * p.y(), static_cast<float>(p.z() + params.ground_z)};
   }
   return n;
 }
@@ -55,12 +47,13 @@ Lookup lookup_of(const ClimbTarget& target, const BasinClimbParams& params) {
 }
 
 // Score of the rotated points placed at (x, y); -1 without points or map.
-double score_at(const Lookup& lookup, std::uint32_t n, double x, double y, ClimbWork* work) {
+double score_at(const Lookup& lookup, const ClimbScratch& scratch, std::uint32_t n, double x, double y, ClimbWork* work) {
   if (n == 0 || !lookup.usable()) return -1.0;
   std::uint32_t hits = 0;
   std::uint64_t visits = 0;
   for (std::uint32_t i = 0; i < n; ++i) {
-    const Vec3f q(static_cast<float>(g_points[i].x + x), static_cast<float>(g_points[i].y + y), g_points[i].z);
+    const ClimbPoint& p = scratch.points[i];
+    const Vec3f q(static_cast<float>(p.x + x), static_cast<float>(p.y + y), p.z);
     hits += (lookup.grid != nullptr ? lookup.grid->near(q) : lookup.tree->any_within(q, lookup.d2max, &visits)) ? 1u : 0u;
   }
   if (work != nullptr) {
@@ -82,14 +75,16 @@ double peak_offset(double before, double at, double after) {
 }  // namespace
 
 double climb_score(const ClimbTarget& target, double x, double y, double yaw, const BasinClimbParams& params,
-                   ClimbWork* work) {
-  return score_at(lookup_of(target, params), rotate_subsample(target.scan_body, yaw, params), x, y, work);
+                   ClimbScratch& scratch, ClimbWork* work) {
+  const std::uint32_t n = rotate_subsample(target.scan_body, yaw, params, scratch);
+  return score_at(lookup_of(target, params), scratch, n, x, y, work);
 }
 
-void climb_pose(const ClimbTarget& target, PoseSearchCandidate& h, const BasinClimbParams& params, ClimbWork* work) {
+void climb_pose(const ClimbTarget& target, PoseSearchCandidate& h, const BasinClimbParams& params,
+                ClimbScratch& scratch, ClimbWork* work) {
   const Lookup lookup = lookup_of(target, params);
-  const std::uint32_t n = rotate_subsample(target.scan_body, h.yaw, params);
-  h.score = score_at(lookup, n, h.x, h.y, work);
+  const std::uint32_t n = rotate_subsample(target.scan_body, h.yaw, params, scratch);
+  h.score = score_at(lookup, scratch, n, h.x, h.y, work);
   if (!(h.score >= 0.0)) return;
   const std::uint32_t rounds = params.rounds < kMaxClimbRounds ? params.rounds : kMaxClimbRounds;
   for (std::uint32_t round = 0; round < rounds; ++round) {
@@ -101,7 +96,7 @@ void climb_pose(const ClimbTarget& target, PoseSearchCandidate& h, const BasinCl
       for (int dx = -1; dx <= 1; ++dx) {
         if (dx == 0 && dy == 0) continue;
         const double nx = h.x + dx * params.step, ny = h.y + dy * params.step;
-        const double score = score_at(lookup, n, nx, ny, work);
+        const double score = score_at(lookup, scratch, n, nx, ny, work);
         around[dy + 1][dx + 1] = score;
         if (score > best.score) best = PoseSearchCandidate{score, nx, ny, h.yaw};
       }

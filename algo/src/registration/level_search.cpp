@@ -153,7 +153,7 @@ LevelSearchResult level_search(std::span<const Vec3f> source, std::span<const Ve
   bp.min_height = 0.0;  // the score points are above ground already
   bp.ground_z = gz;
   const ClimbTarget climb_target{std::span<const Vec3f>(ws.score_points, n), &ws.grid, nullptr};
-  for (std::uint32_t i = 0; i < count && params.climb_rounds > 0; ++i) climb_pose(climb_target, ws.candidates[i], bp);
+  for (std::uint32_t i = 0; i < count && params.climb_rounds > 0; ++i) climb_pose(climb_target, ws.candidates[i], bp, ws.climb);
   rank_basins(std::span<PoseSearchCandidate>(ws.candidates, count), params.distinct_distance, params.distinct_yaw,
               0.5 * params.climb_step);
   const double z = out.target_ground_z - out.source_ground_z;

@@ -19,22 +19,12 @@ constexpr std::uint64_t kGridBuildPerUnit = 2;
 constexpr std::uint64_t kRoadHeightPointsPerUnit = 4;
 constexpr std::uint64_t kHypothesisUnits = 2;  // a hypothesis's own set-up and ranking
 
-PoseSearch g_search;  // search_pose()'s job: ~40 kB, static
-
 // The lattice form of scoring (proximity_grid.hpp cell_xy / near_cell): hypotheses a whole number
 // of grid cells apart put a score point into its cell at the search's centre shifted by whole
-// cells, so each score point's cell is taken once per heading and each hypothesis only adds its
-// offset (~33 instructions a lookup with its loop instead of ~65). Shared by the PoseSearch instances (one
-// thread), filled for the job that scores (its job number). A cell's edge counts with the
-// real-valued position: a point within rounding of a cell edge may fall on the other side
-// than the float query of near() puts it.
-struct LatticeCell {
-  std::int32_t x = 0, y = 0;
-};
-constexpr std::size_t kLatticeCells = 4096;  // headings x score points (24 x 96 by default)
-LatticeCell g_lattice[kLatticeCells];
-std::uint64_t g_lattice_job = 0;    // the job the table is filled for (PoseSearch::job_number_)
-std::uint64_t g_jobs_started = 0;   // start()s of every PoseSearch: job numbers are unique
+// cells, so each score point's cell is taken once per heading (PoseSearchScratch::lattice) and
+// each hypothesis only adds its offset (~33 instructions a lookup with its loop instead of ~65).
+// A cell's edge counts with the real-valued position: a point within rounding of a cell edge may
+// fall on the other side than the float query of near() puts it.
 constexpr std::uint32_t kLatticeLookupsPerUnit = 3;  // ~33 instructions a lookup with its loop (callgrind)
 
 bool same_basin(const Candidate& a, const Candidate& b, const PoseSearchParams& params) {
@@ -180,12 +170,12 @@ double ray_conflict_ratio(std::span<const Vec3f> scan_body, const IcpTarget& map
   return rays > 0 ? static_cast<double>(conflicts) / rays : -1.0;
 }
 
-PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& map,
-                             const Vec3d& center, const PoseSearchParams& params) {
-  g_search.start(scan_body, map, center, params);
-  while (!g_search.step(map, ~std::uint64_t{0})) {
+const PoseSearchResult& PoseSearch::run(std::span<const Vec3f> scan_body, const IcpTarget& map, const Vec3d& center,
+                                        const PoseSearchParams& params, PoseSearchScratch& scratch) {
+  start(scan_body, map, center, params);
+  while (!step(map, scratch, ~std::uint64_t{0})) {
   }
-  return g_search.result();
+  return result_;
 }
 
 // Resets the job and copies the scan; false (result kInvalidInput) when nothing can be searched.
@@ -195,6 +185,7 @@ bool PoseSearch::copy_scan(std::span<const Vec3f> scan_body, const IcpTarget& ma
   work_ = 0;
   step_from_ = 0;
   phase_ = Phase::kDone;
+  lattice_filled_ = false;
   from_given_ = false;
   for (std::int8_t& r : rated_) r = -1;
   grid_source_ = {};  // a grid serves the ray checks of the job that built it only
@@ -229,7 +220,6 @@ void PoseSearch::start(std::span<const Vec3f> scan_body, const IcpTarget& map, c
                        const PoseSearchParams& params) {
   params_ = params;
   center_ = center;
-  job_number_ = ++g_jobs_started;
   if (!copy_scan(scan_body, map)) return;
   // Fixed subsample of above-ground points (every k-th), in body coordinates, in scan order.
   const std::span<const Vec3f> body = scan_body.first(scan_count_);
@@ -300,23 +290,23 @@ void PoseSearch::start_from_poses(std::span<const Vec3f> scan_body, const IcpTar
   phase_ = Phase::kRefine;
 }
 
-bool PoseSearch::step(const IcpTarget& map, std::uint64_t budget, bool score_whole) {
+bool PoseSearch::step(const IcpTarget& map, PoseSearchScratch& scratch, std::uint64_t budget, bool score_whole) {
   // From the previous step's end (or the job's start, so that start()'s own work counts here).
   const std::uint64_t stop = budget > ~std::uint64_t{0} - step_from_ ? ~std::uint64_t{0} : step_from_ + budget;
   if (phase_ != Phase::kDone && (map.tree == nullptr || map.points.empty())) {
     result_.best.status = RegistrationStatus::kInvalidInput;  // the map went away mid-search
     phase_ = Phase::kDone;
   }
-  if (score_whole && phase_ == Phase::kScore) score_hypotheses(map, ~std::uint64_t{0});
-  while (score_whole && phase_ == Phase::kClimb) climb_candidate(map);
+  if (score_whole && phase_ == Phase::kScore) score_hypotheses(map, ~std::uint64_t{0}, scratch);
+  while (score_whole && phase_ == Phase::kClimb) climb_candidate(map, scratch.climb);
   // At power-up the output until a refined pose exists: the best hypothesis' coarse ICP.
   while (score_whole && params_.provisional_scored && phase_ == Phase::kRefine && candidate_ == 0 && !refining_fine_) {
     refine_candidate(map, ~std::uint64_t{0});
   }
   while (phase_ != Phase::kDone && work_ < stop) {
     switch (phase_) {
-      case Phase::kScore: score_hypotheses(map, stop); break;
-      case Phase::kClimb: climb_candidate(map); break;
+      case Phase::kScore: score_hypotheses(map, stop, scratch); break;
+      case Phase::kClimb: climb_candidate(map, scratch.climb); break;
       case Phase::kRefine: refine_candidate(map, stop); break;
       case Phase::kSelect: select_candidate(map); break;
       case Phase::kDone: break;
@@ -327,7 +317,7 @@ bool PoseSearch::step(const IcpTarget& map, std::uint64_t budget, bool score_who
 }
 
 // Hypotheses in grid order (rows, columns, yaws), each costing score_count_ bounded queries.
-void PoseSearch::score_hypotheses(const IcpTarget& map, std::uint64_t stop) {
+void PoseSearch::score_hypotheses(const IcpTarget& map, std::uint64_t stop, PoseSearchScratch& scratch) {
   // A hit needs a map point within score_distance: any_within answers exactly that and stops at
   // the first one (the unbounded nearest of a point in free space visits most of the tree).
   const float d2max_f = squared_radius_not_above(params_.score_distance);
@@ -335,7 +325,7 @@ void PoseSearch::score_hypotheses(const IcpTarget& map, std::uint64_t stop) {
   // The proximity bitmap built at start(): same question, looser answer (a hit may be up to a
   // few cells farther), ~30x cheaper.
   const ProximityGrid* grid = grid_ != nullptr && grid_->ready() && grid_->valid() ? grid_ : nullptr;
-  const std::int64_t lattice = grid != nullptr ? lattice_step(*grid) : 0;
+  const std::int64_t lattice = grid != nullptr ? lattice_step(*grid, scratch) : 0;
   // Every hypothesis puts a score point at the same height: its grid plane is looked up once.
   std::int64_t plane[kMaxScorePoints];
   for (std::uint32_t i = 0; i < score_count_ && lattice > 0; ++i) {
@@ -360,7 +350,7 @@ void PoseSearch::score_hypotheses(const IcpTarget& map, std::uint64_t stop) {
         const std::int64_t to_beat = worst_kept_hits();
         std::uint32_t hits = 0, scored = 0;
         if (lattice > 0) {
-          const LatticeCell* cells = &g_lattice[static_cast<std::size_t>(yaw_index_) * score_count_];
+          const PoseSearchLatticeCell* cells = &scratch.lattice[static_cast<std::size_t>(yaw_index_) * score_count_];
           const std::int64_t dx = ix_ * lattice, dy = iy_ * lattice;
           const std::uint32_t n = score_count_;
           for (; scored < n && static_cast<std::int64_t>(hits + (n - scored)) > to_beat; ++scored) {
@@ -389,7 +379,7 @@ void PoseSearch::score_hypotheses(const IcpTarget& map, std::uint64_t stop) {
 
 // One kept hypothesis climbed to its basin's bottom (basin_climb.hpp); after the last, the list
 // ranked again, one per basin first.
-void PoseSearch::climb_candidate(const IcpTarget& map) {
+void PoseSearch::climb_candidate(const IcpTarget& map, ClimbScratch& scratch) {
   if (candidate_ >= kPoseSearchRefine) {
     // Climbs that end a step apart (diagonal included) found the same bottom.
     rank_basins(top_, params_.basin_distance, params_.distinct_yaw, 1.5 * params_.climb_step);
@@ -404,19 +394,19 @@ void PoseSearch::climb_candidate(const IcpTarget& map) {
                             .min_height = params_.min_height, .score_distance = params_.score_distance,
                             .ground_z = result_.ground_z};
   ClimbWork w;
-  climb_pose(ClimbTarget{scan(), grid, grid != nullptr ? nullptr : map.tree}, h, cp, &w);
+  climb_pose(ClimbTarget{scan(), grid, grid != nullptr ? nullptr : map.tree}, h, cp, scratch, &w);
   work_ += grid != nullptr ? (w.lookups + kGridLookupsPerUnit - 1) / kGridLookupsPerUnit : w.lookups + w.node_visits;
   work_ += kHypothesisUnits;
 }
 
 // Grid cells between neighbouring hypotheses when the lattice form applies (step a whole number
-// of the grid's cells, the table large enough), the table filled for this job; else 0.
-std::int64_t PoseSearch::lattice_step(const ProximityGrid& grid) {
+// of the grid's cells, the table large enough), the scratch's table filled for this job; else 0.
+std::int64_t PoseSearch::lattice_step(const ProximityGrid& grid, PoseSearchScratch& scratch) {
   const double ratio = params_.step / grid.cell();
   const double whole = std::floor(ratio + 0.5);
   if (!(whole >= 1.0 && whole <= 1e6 && std::abs(ratio - whole) <= 1e-9 * whole)) return 0;
-  if (static_cast<std::size_t>(params_.yaw_steps) * score_count_ > kLatticeCells) return 0;
-  if (g_lattice_job != job_number_) {
+  if (static_cast<std::size_t>(params_.yaw_steps) * score_count_ > kPoseSearchLatticeCells) return 0;
+  if (!lattice_filled_ || scratch.lattice_owner != this) {
     for (std::uint32_t k = 0; k < params_.yaw_steps; ++k) {
       const double yaw = 2.0 * det::kPi * k / params_.yaw_steps;
       const bool tabled = k < kMaxYawTable;
@@ -428,11 +418,12 @@ std::int64_t PoseSearch::lattice_step(const ProximityGrid& grid) {
         grid.cell_xy(c * p.x() - s * p.y() + center_.x(), s * p.x() + c * p.y() + center_.y(), x, y);
         // Beyond +-2^30 cells is far outside the grid whatever the offset (<= 2^21 cells).
         constexpr std::int64_t kFar = std::int64_t{1} << 30;
-        g_lattice[k * score_count_ + i] = {static_cast<std::int32_t>(x < -kFar ? -kFar : (x > kFar ? kFar : x)),
-                                           static_cast<std::int32_t>(y < -kFar ? -kFar : (y > kFar ? kFar : y))};
+        scratch.lattice[k * score_count_ + i] = {static_cast<std::int32_t>(x < -kFar ? -kFar : (x > kFar ? kFar : x)),
+                                                 static_cast<std::int32_t>(y < -kFar ? -kFar : (y > kFar ? kFar : y))};
       }
     }
-    g_lattice_job = job_number_;
+    scratch.lattice_owner = this;
+    lattice_filled_ = true;
   }
   return static_cast<std::int64_t>(whole);
 }

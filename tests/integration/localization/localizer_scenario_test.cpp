@@ -119,11 +119,11 @@ TEST(LocalizerScenario, ShortDriveFusesToCentimetres) {
   }
 
   // Filter restarts at late registrations: with a registration NIS gate nothing passes, every
-  // reset_after_rejections-th fixed-lag registration (w/2 frames old) restarts the filter. The
+  // filter.reset_after_rejections-th fixed-lag registration (w/2 frames old) restarts the filter. The
   // restart must land at the current frame (the registration carried forward by the odometry):
   // restarting at the registration's own time left that frame's output ~3 m behind.
   eval::RunOptions restarts = options;
-  restarts.params.ekf.gates.registration_nis_threshold = 1e-12;
+  restarts.params.filter.ekf.gates.registration_nis_threshold = 1e-12;
   std::vector<eval::FrameRecord> restarted;
   ASSERT_TRUE(eval::run_offline(reader, g_localizer, restarts, restarted, stats, error)) << error;
   EXPECT_GE(stats.counters.filter_resets, 3u);
@@ -142,8 +142,8 @@ TEST(LocalizerScenario, ShortDriveFusesToCentimetres) {
   // flagged localized), the filter starts within 20 frames and the revised start-up frames and
   // the gate-valid frames are as good as with the search in one period.
   eval::RunOptions spread = options;
-  spread.params.startup_work_per_period = 80000;  // a tenth of the default: several periods
-  spread.params.startup_first_work_per_period = 0;  // the first acquisition on that quota too
+  spread.params.startup.work_per_period = 80000;  // a tenth of the default: several periods
+  spread.params.startup.first_work_per_period = 0;  // the first acquisition on that quota too
   std::vector<eval::FrameRecord> spread_records;
   ASSERT_TRUE(eval::run_offline(reader, g_localizer, spread, spread_records, stats, error)) << error;
   int first_result = -1, first_on_map = -1, spread_first = -1;

@@ -6,9 +6,15 @@
 #include <vector>
 
 #include "corner_map.hpp"
+#include "v2xloc/algo/localization/localizer_params.hpp"
 
 namespace v2xloc {
 namespace {
+
+// Configured as the Localizer configures it.
+void configure(BasinAudit& audit, const LocalizerParams& params) {
+  audit.configure(params.audit, params.startup.search, params.tracking.icp);
+}
 
 struct AuditMarks {
   int audit = 0;
@@ -23,6 +29,7 @@ struct AuditScene {
   std::vector<Vec3f> scan;
   std::vector<std::uint32_t> hints;
   AuditMarks marks;
+  std::unique_ptr<PoseSearchScratch> scratch = std::make_unique<PoseSearchScratch>();
 
   AuditScene() {
     scan.assign(map.points.begin(), map.points.begin() + 600);
@@ -46,11 +53,11 @@ TEST(BasinAudit, WaitsOutPeriodsThatFusedMapClouds) {
   ASSERT_TRUE(scene.map.normals_ok);
   AuditMarks& marks = scene.marks;
   LocalizerParams params;
-  params.audit_period_frames = 1;
-  params.audit_work_per_period = 1000;  // a job over many periods
-  params.audit_work_per_busy_period = 0;
+  params.audit.period_frames = 1;
+  params.audit.work_per_period = 1000;  // a job over many periods
+  params.audit.work_per_busy_period = 0;
   auto audit = std::make_unique<BasinAudit>();
-  audit->configure(params);
+  configure(*audit, params);
   LocalizerCounters counters;
   AuditFrame f = scene.frame();
   // A new track's first audit takes the period's whole room (here unbounded: it ends at once),
@@ -58,7 +65,7 @@ TEST(BasinAudit, WaitsOutPeriodsThatFusedMapClouds) {
   const auto first_audit_of_track = [&](std::uint32_t frame) {
     f.map_busy = true;
     f.frame = frame;
-    EXPECT_TRUE(audit->step(f, counters).audited) << "the first audit of a track";
+    EXPECT_TRUE(audit->step(f, *scene.scratch, counters).audited) << "the first audit of a track";
     marks.audit = 0;
   };
   first_audit_of_track(0);
@@ -66,50 +73,50 @@ TEST(BasinAudit, WaitsOutPeriodsThatFusedMapClouds) {
   f.map_busy = true;
   for (std::uint32_t k = 0; k < 3; ++k) {
     f.frame = k;
-    EXPECT_FALSE(audit->step(f, counters).audited);
+    EXPECT_FALSE(audit->step(f, *scene.scratch, counters).audited);
   }
   EXPECT_EQ(marks.audit, 0) << "due, but no audit starts in a busy period";
   f.map_busy = false;
   f.frame = 3;
-  audit->step(f, counters);
+  audit->step(f, *scene.scratch, counters);
   EXPECT_EQ(marks.audit, 1) << "started in the first quiet period";
   f.map_busy = true;
   f.frame = 4;
-  EXPECT_FALSE(audit->step(f, counters).audited);
+  EXPECT_FALSE(audit->step(f, *scene.scratch, counters).audited);
   EXPECT_EQ(marks.audit, 1) << "paused";
   f.map_busy = false;
   f.frame = 5;
-  audit->step(f, counters);
+  audit->step(f, *scene.scratch, counters);
   EXPECT_EQ(marks.audit, 2) << "resumed";
 
-  params.audit_work_per_busy_period = 500;  // busy periods advance it, by less
-  audit->configure(params);
+  params.audit.work_per_busy_period = 500;  // busy periods advance it, by less
+  configure(*audit, params);
   first_audit_of_track(6);
   f.map_busy = true;
   f.frame = 7;
-  EXPECT_FALSE(audit->step(f, counters).audited);
+  EXPECT_FALSE(audit->step(f, *scene.scratch, counters).audited);
   EXPECT_EQ(marks.audit, 1) << "a busy quota: started in a busy period";
 }
 
 
-// A new track (power-up, or after a lost one) is audited after audit_first_frames tracked frames
+// A new track (power-up, or after a lost one) is audited after audit.first_frames tracked frames
 // (a start-up search on a map missing a unit's shares can accept an alias); later audits come
-// every audit_period_frames.
+// every audit.period_frames.
 TEST(BasinAudit, NewTrackIsAuditedEarly) {
   AuditScene scene;
   ASSERT_TRUE(scene.map.normals_ok);
   LocalizerParams params;
-  params.audit_period_frames = 30;
-  params.audit_first_frames = 5;
-  params.audit_work_per_period = 0;  // each audit in one period
+  params.audit.period_frames = 30;
+  params.audit.first_frames = 5;
+  params.audit.work_per_period = 0;  // each audit in one period
   auto audit = std::make_unique<BasinAudit>();
-  audit->configure(params);
+  configure(*audit, params);
   LocalizerCounters counters;
   AuditFrame f = scene.frame();
   std::vector<std::uint32_t> audited;
   for (std::uint32_t k = 0; k < 70; ++k) {
     f.frame = k;
-    if (audit->step(f, counters).audited) audited.push_back(k);
+    if (audit->step(f, *scene.scratch, counters).audited) audited.push_back(k);
   }
   ASSERT_GE(audited.size(), 2u);
   EXPECT_EQ(audited[0], 4u) << "the fifth tracked frame";
@@ -117,14 +124,14 @@ TEST(BasinAudit, NewTrackIsAuditedEarly) {
   audit->cancel();  // track lost: the next track is new
   f.frame = 100;
   for (std::uint32_t k = 0; k < 5; ++k, ++f.frame) {
-    EXPECT_EQ(audit->step(f, counters).audited, k == 4) << "tracked frame " << k << " of the new track";
+    EXPECT_EQ(audit->step(f, *scene.scratch, counters).audited, k == 4) << "tracked frame " << k << " of the new track";
   }
-  params.audit_first_frames = 30;  // no early audit: the first after a whole period
-  audit->configure(params);
+  params.audit.first_frames = 30;  // no early audit: the first after a whole period
+  configure(*audit, params);
   std::uint32_t first = 0;
   for (std::uint32_t k = 0; k < 40 && first == 0; ++k) {
     f.frame = 200 + k;
-    if (audit->step(f, counters).audited) first = k + 1;
+    if (audit->step(f, *scene.scratch, counters).audited) first = k + 1;
   }
   EXPECT_EQ(first, 30u);
 }

@@ -5,6 +5,8 @@
 #include <memory>
 #include <vector>
 
+#include "v2xloc/algo/localization/localizer_params.hpp"
+
 namespace v2xloc {
 namespace {
 
@@ -29,12 +31,12 @@ MapCloudInput cloud(std::uint32_t id, double t, const std::vector<Vec3f>& points
 std::unique_ptr<ReferenceMap> paced_map(double interval) {
   auto map = std::make_unique<ReferenceMap>();
   LocalizerParams params;
-  params.map_cloud_interval = interval;
-  map->configure(params);
+  params.map.cloud_interval = interval;
+  map->configure(params.map, params.tracking.icp.max_correspondence_distance);
   return map;
 }
 
-// A source's clouds closer than map_cloud_interval to its stored one are not fused (the rebuild
+// A source's clouds closer than map.cloud_interval to its stored one are not fused (the rebuild
 // would take a later one); wants() says so beforehand; a new source, a later cloud and a stale
 // one take their usual paths.
 TEST(ReferenceMap, CloudsWithinTheIntervalOfTheSourcesLastArePaced) {
@@ -84,14 +86,14 @@ TEST(ReferenceMap, RefusedSourcesArePacedOnTheirLastAttempt) {
 }
 
 // refresh() closes a period: busy() tells whether clouds were fused since the previous one. A due
-// rebuild waits for a period without clouds (the end of a burst), at most map_refresh_quiet_wait.
+// rebuild waits for a period without clouds (the end of a burst), at most map.refresh_quiet_wait.
 TEST(ReferenceMap, DueRebuildWaitsForAQuietPeriodButNotForever) {
   auto map = std::make_unique<ReferenceMap>();
   LocalizerParams params;
-  params.map_cloud_interval = 0.0;
-  params.map_refresh_period = 1.0;
-  params.map_refresh_quiet_wait = 0.5;
-  map->configure(params);
+  params.map.cloud_interval = 0.0;
+  params.map.refresh_period = 1.0;
+  params.map.refresh_quiet_wait = 0.5;
+  map->configure(params.map, params.tracking.icp.max_correspondence_distance);
   const std::vector<Vec3f> points = wall();
   LazyNormalCounters normals;
 

@@ -87,6 +87,12 @@ std::vector<Vec3f> courtyard(std::mt19937_64& rng) {
   return pts;
 }
 
+// The pose-search jobs' scratch, shared by every job here as the localizer's searches share one.
+PoseSearchScratch& search_scratch() {
+  static PoseSearchScratch scratch;
+  return scratch;
+}
+
 struct CourtyardTarget {
   std::vector<Vec3f> points;
   std::vector<Vec3f> normals;
@@ -128,7 +134,8 @@ TEST(PoseSearchRobustness, MirrorIsMeasuredAsRunnerUpAndExcludedByHeadingPrior) 
   sp.fine_icp.max_correspondence_distance = 0.3;
   const Vec3d gnss(2.0, 1.0, 0.0);
 
-  const PoseSearchResult open = search_pose(scan, target, gnss, sp);
+  static PoseSearch search;
+  const PoseSearchResult open = search.run(scan, target, gnss, sp, search_scratch());
   ASSERT_TRUE(open.best.ok());
   // One hypothesis per basin reaches the refinement, so the mirror is there to be measured.
   EXPECT_GT(open.runner_up_tight_fitness, 0.85 * open.best_tight_fitness)
@@ -136,7 +143,7 @@ TEST(PoseSearchRobustness, MirrorIsMeasuredAsRunnerUpAndExcludedByHeadingPrior) 
 
   sp.use_yaw_prior = true;
   sp.yaw_prior = 0.3 + 0.4;  // a prior 23 deg off, well inside +-60 deg
-  const PoseSearchResult prior = search_pose(scan, target, gnss, sp);
+  const PoseSearchResult prior = search.run(scan, target, gnss, sp, search_scratch());
   ASSERT_TRUE(prior.best.ok());
   const Mat4d d = se3_inverse(truth) * prior.best.transform;
   EXPECT_LT(std::hypot(d(0, 3), d(1, 3)), 0.05);
@@ -147,7 +154,7 @@ TEST(PoseSearchRobustness, MirrorIsMeasuredAsRunnerUpAndExcludedByHeadingPrior) 
 
   // A canyon fix can be 50 m off vertically (Sim 2's first fix): the hypotheses still sit on the
   // map's road, not at the fix's altitude, and the search finds the same pose.
-  const PoseSearchResult high = search_pose(scan, target, Vec3d(gnss.x(), gnss.y(), 60.0), sp);
+  const PoseSearchResult high = search.run(scan, target, Vec3d(gnss.x(), gnss.y(), 60.0), sp, search_scratch());
   ASSERT_TRUE(high.best.ok());
   EXPECT_NEAR(high.ground_z, 0.0, 0.11);  // half a 0.2 m bin
   const Mat4d dh = se3_inverse(prior.best.transform) * high.best.transform;
@@ -198,7 +205,7 @@ PoseSearchParams courtyard_search_params() {
 }
 
 // The start-up search and the basin audit run as a job over several periods: stepped with a
-// small query budget it reaches exactly search_pose()'s result, and no step overruns its budget
+// small query budget it reaches exactly run()'s result, and no step overruns its budget
 // by more than one indivisible unit (a hypothesis, an ICP pass, one candidate's ray check).
 TEST(PoseSearchRobustness, SteppedSearchEqualsOneCallAndKeepsItsBudget) {
   static CourtyardScene scene;
@@ -209,7 +216,8 @@ TEST(PoseSearchRobustness, SteppedSearchEqualsOneCallAndKeepsItsBudget) {
   sp.max_conflicts = 0.5;
   sp.sensor_in_body = Vec3d(0.0, 0.0, 1.0);
   const Vec3d gnss(1.5, 0.5, 0.0);
-  const PoseSearchResult once = search_pose(scan, target, gnss, sp);
+  static PoseSearch one_piece;
+  const PoseSearchResult& once = one_piece.run(scan, target, gnss, sp, search_scratch());
   ASSERT_TRUE(once.best.ok());
 
   static PoseSearch job;
@@ -221,7 +229,7 @@ TEST(PoseSearchRobustness, SteppedSearchEqualsOneCallAndKeepsItsBudget) {
   int steps = 0;
   for (;;) {
     const std::uint64_t before = job.work();
-    const bool done = job.step(target, budget);
+    const bool done = job.step(target, search_scratch(), budget);
     EXPECT_LE(job.work() - before, budget + unit);
     ++steps;
     if (done) break;
@@ -249,7 +257,7 @@ TEST(PoseSearchRobustness, FinalistsAreReDecidedWithoutScoring) {
   const PoseSearchParams sp = courtyard_search_params();
   static PoseSearch full;
   full.start(scan, target, Vec3d(1.5, 0.5, 0.0), sp);
-  ASSERT_TRUE(full.step(target, ~std::uint64_t{0}));
+  ASSERT_TRUE(full.step(target, search_scratch(), ~std::uint64_t{0}));
   ASSERT_TRUE(full.result().best.ok());
   Mat4d finalists[kPoseSearchRefine];
   const std::uint32_t n = full.finalists(finalists);
@@ -263,7 +271,7 @@ TEST(PoseSearchRobustness, FinalistsAreReDecidedWithoutScoring) {
   for (std::uint32_t i = 0; i < n; ++i) finalists[i] = finalists[i] * nudge;
   static PoseSearch again;
   again.start_from_poses(scan, target, std::span<const Mat4d>(finalists, n), full.result().ground_z, sp);
-  ASSERT_TRUE(again.step(target, ~std::uint64_t{0}));
+  ASSERT_TRUE(again.step(target, search_scratch(), ~std::uint64_t{0}));
   const PoseSearchResult& r = again.result();
   ASSERT_TRUE(r.best.ok());
   EXPECT_EQ(r.hypotheses, 0u) << "nothing scored";
@@ -293,11 +301,11 @@ TEST(PoseSearchRobustness, RefineSubsampleFindsTheSamePoseForLessWork) {
   const Vec3d gnss(1.5, 0.5, 0.0);
   static PoseSearch all_job, sub_job;
   all_job.start(scan, target, gnss, sp);
-  ASSERT_TRUE(all_job.step(target, ~std::uint64_t{0}));
+  ASSERT_TRUE(all_job.step(target, search_scratch(), ~std::uint64_t{0}));
   sp.refine_points = static_cast<std::uint32_t>(scan.size() / 4);
   sub_job.start(scan, target, gnss, sp);
   EXPECT_EQ(sub_job.scan().size(), all_job.scan().size()) << "every point is kept for the selection";
-  ASSERT_TRUE(sub_job.step(target, ~std::uint64_t{0}));
+  ASSERT_TRUE(sub_job.step(target, search_scratch(), ~std::uint64_t{0}));
   const PoseSearchResult& a = all_job.result();
   const PoseSearchResult& b = sub_job.result();
   ASSERT_TRUE(a.best.ok());
@@ -329,14 +337,14 @@ TEST(PoseSearchRobustness, GridScoredSearchFindsTheTreeScoredPose) {
   static PoseSearch tree_job, grid_job;
   static ProximityGrid grid;
   tree_job.start(scan, target, gnss, sp);
-  ASSERT_TRUE(tree_job.step(target, ~std::uint64_t{0}));
+  ASSERT_TRUE(tree_job.step(target, search_scratch(), ~std::uint64_t{0}));
   grid_job.set_proximity_grid(&grid);
   grid_job.start(scan, target, gnss, sp);
   ASSERT_TRUE(grid.ready());
   ASSERT_TRUE(grid.valid());
   EXPECT_EQ(grid.points_outside(), 0u) << "the courtyard lies inside the searched box";
   EXPECT_GT(grid.points_marked(), 0u);
-  ASSERT_TRUE(grid_job.step(target, ~std::uint64_t{0}));
+  ASSERT_TRUE(grid_job.step(target, search_scratch(), ~std::uint64_t{0}));
   const PoseSearchResult& a = tree_job.result();
   const PoseSearchResult& b = grid_job.result();
   ASSERT_TRUE(a.best.ok());
@@ -350,6 +358,53 @@ TEST(PoseSearchRobustness, GridScoredSearchFindsTheTreeScoredPose) {
   // With grid_reach = score_distance the grid's hits are a superset of the tree's (no false
   // negatives): scores never drop.
   EXPECT_GE(b.best_score, a.best_score);
+}
+
+// Two grid-scored jobs with different score points (different lattice tables) stepped in turns
+// on one scratch, as the localizer's start-up search and basin audit share one: each finds its
+// table taken by the other, fills it again, and ends with the same result, bit for bit, as when
+// run alone on a scratch of its own.
+TEST(PoseSearchRobustness, JobsSharingAScratchEqualJobsRunAlone) {
+  static CourtyardScene scene;
+  build_courtyard_scene(scene);
+  const IcpTarget& target = scene.target;
+  PoseSearchParams sp[2] = {courtyard_search_params(), courtyard_search_params()};
+  for (PoseSearchParams& p : sp) {
+    p.score_distance = 0.5;
+    p.grid_cell = 0.25f;
+    p.grid_reach = 0.5f;
+    p.climb_points = 128;
+  }
+  sp[1].score_points = 96;
+  const Vec3d centres[2] = {Vec3d(1.5, 0.5, 0.0), Vec3d(-0.5, -1.0, 0.0)};
+  static PoseSearch alone[2], shared[2];
+  static ProximityGrid grids[4];
+  static PoseSearchScratch own[2];
+  for (int i = 0; i < 2; ++i) {
+    alone[i].set_proximity_grid(&grids[i]);
+    alone[i].run(scene.scan, target, centres[i], sp[i], own[i]);
+    ASSERT_TRUE(alone[i].result().best.ok());
+    shared[i].set_proximity_grid(&grids[2 + i]);
+    shared[i].start(scene.scan, target, centres[i], sp[i]);
+  }
+  bool done[2] = {false, false};
+  int turns = 0;
+  for (; !(done[0] && done[1]) && turns < 100000; ++turns) {
+    const int i = turns % 2;
+    if (!done[i]) done[i] = shared[i].step(target, search_scratch(), 500);
+  }
+  ASSERT_TRUE(done[0] && done[1]);
+  EXPECT_GT(turns, 20) << "the jobs alternated while scoring";
+  for (int i = 0; i < 2; ++i) {
+    const PoseSearchResult& a = alone[i].result();
+    const PoseSearchResult& b = shared[i].result();
+    EXPECT_EQ(a.hypotheses, b.hypotheses);
+    EXPECT_EQ(a.best_score, b.best_score);
+    EXPECT_TRUE(a.best.transform == b.best.transform);
+    EXPECT_EQ(a.best_tight_fitness, b.best_tight_fitness);
+    EXPECT_EQ(a.runner_up_tight_fitness, b.runner_up_tight_fitness);
+    EXPECT_EQ(alone[i].work(), shared[i].work());
+  }
 }
 
 TEST(PoseSearchRobustness, RoadHeightIgnoresTheFixAltitudeAndSaysWhenTheMapIsAbsent) {

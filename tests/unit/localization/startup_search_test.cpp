@@ -6,16 +6,23 @@
 #include <vector>
 
 #include "corner_map.hpp"
+#include "v2xloc/algo/localization/localizer_params.hpp"
 #include "v2xloc/algo/localization/period_work.hpp"
 
 namespace v2xloc {
 namespace {
+
+// Configured as the Localizer configures it.
+void configure(StartupSearch& search, const LocalizerParams& params) {
+  search.configure(params.startup, params.tracking.icp, params.filter.ekf.gates.gnss_sigma_inflation);
+}
 
 // The corner map; the scan is a part of it (body = world).
 struct CornerScene {
   testing::CornerMap map;
   std::vector<Vec3f> scan;
   std::vector<std::uint32_t> hints;
+  std::unique_ptr<PoseSearchScratch> scratch = std::make_unique<PoseSearchScratch>();
 
   CornerScene() {
     scan.assign(map.points.begin(), map.points.begin() + 900);
@@ -39,76 +46,76 @@ struct CornerScene {
 };
 
 // A canyon fix can be further off than the region's floor: a search that leaves nothing standing
-// makes the next one look wider (up to global_max_region), and a new track starts at the floor.
+// makes the next one look wider (up to startup.max_region), and a new track starts at the floor.
 TEST(StartupSearch, RegionWidensAfterASearchFindsNothing) {
   CornerScene scene;
   LocalizerParams params;
   auto search = std::make_unique<StartupSearch>();
-  search->configure(params);
+  configure(*search, params);
   LocalizerCounters counters;
   const Vec3d fix(300.0, 300.0, 0.0);  // no map anywhere near it: nothing can be found
   std::vector<double> regions;
   for (std::uint32_t frame = 0; frame < 40 && regions.size() < 3; ++frame) {
     search->on_frame(true, Pose3d::Identity(), GnssFix{});
-    const StartupOutcome out = search->step(scene.frame(frame, fix), counters);
+    const StartupOutcome out = search->step(scene.frame(frame, fix), *scene.scratch, counters);
     if (!out.report.searched) continue;
     EXPECT_EQ(out.status, StartupStatus::kRejected);
     regions.push_back(out.report.region);
   }
   ASSERT_EQ(regions.size(), 3u);
-  EXPECT_DOUBLE_EQ(regions[0], params.global_min_region);
-  EXPECT_DOUBLE_EQ(regions[1], params.global_min_region * params.global_region_growth);
-  EXPECT_DOUBLE_EQ(regions[2], params.global_max_region) << "capped";
+  EXPECT_DOUBLE_EQ(regions[0], params.startup.min_region);
+  EXPECT_DOUBLE_EQ(regions[1], params.startup.min_region * params.startup.region_growth);
+  EXPECT_DOUBLE_EQ(regions[2], params.startup.max_region) << "capped";
   EXPECT_EQ(counters.global_accepted, 0u);
 
   search->on_track_lost();  // a new track: back to the floor
   for (std::uint32_t frame = 40; frame < 80; ++frame) {
     search->on_frame(true, Pose3d::Identity(), GnssFix{});
-    const StartupOutcome out = search->step(scene.frame(frame, fix), counters);
+    const StartupOutcome out = search->step(scene.frame(frame, fix), *scene.scratch, counters);
     if (!out.report.searched) continue;
-    EXPECT_DOUBLE_EQ(out.report.region, params.global_min_region);
+    EXPECT_DOUBLE_EQ(out.report.region, params.startup.min_region);
     break;
   }
 }
 
 // The localizer takes no map clouds while the first acquisition is pending (its searches' first
 // slices score every hypothesis): that window opens with the first search, however late a map
-// arrives after power-up, and ends startup_first_frames later or with the filter's start.
+// arrives after power-up, and ends startup.first_frames later or with the filter's start.
 TEST(StartupSearch, FirstAcquisitionWindowOpensWithTheFirstSearch) {
   CornerScene scene;
   LocalizerParams params;
   auto search = std::make_unique<StartupSearch>();
-  search->configure(params);
+  configure(*search, params);
   EXPECT_TRUE(search->first_acquisition_pending(0));
   EXPECT_TRUE(search->first_acquisition_pending(500)) << "no search yet: no map or no fix so far";
   LocalizerCounters counters;
   constexpr std::uint32_t kFirstMapFrame = 22;  // e.g. the roadside unit comes into V2X range
   search->on_frame(true, Pose3d::Identity(), GnssFix{});
   StartupFrame f = scene.frame(kFirstMapFrame, Vec3d(7.0, 3.0, 0.0));
-  search->step(f, counters);
+  search->step(f, *scene.scratch, counters);
   ASSERT_EQ(counters.global_searches, 1u);
-  EXPECT_TRUE(search->first_acquisition_pending(kFirstMapFrame + params.startup_first_frames - 1));
-  EXPECT_FALSE(search->first_acquisition_pending(kFirstMapFrame + params.startup_first_frames));
+  EXPECT_TRUE(search->first_acquisition_pending(kFirstMapFrame + params.startup.first_frames - 1));
+  EXPECT_FALSE(search->first_acquisition_pending(kFirstMapFrame + params.startup.first_frames));
 
-  params.startup_first_frames = 0;  // no power-up window once a search ran
-  search->configure(params);
+  params.startup.first_frames = 0;  // no power-up window once a search ran
+  configure(*search, params);
   search->on_frame(true, Pose3d::Identity(), GnssFix{});
   LocalizerCounters again;
-  search->step(scene.frame(0, Vec3d(7.0, 3.0, 0.0)), again);
+  search->step(scene.frame(0, Vec3d(7.0, 3.0, 0.0)), *scene.scratch, again);
   ASSERT_EQ(again.global_searches, 1u);
   EXPECT_FALSE(search->first_acquisition_pending(0));
 }
 
-// A finished search's final ICP (up to icp.max_work) keeps to the period budget like the search:
+// A finished search's final ICP (up to tracking.icp.max_work) keeps to the period budget like the search:
 // with little room left it runs over several periods, and its result is bit-identical to the
 // same ICP in one piece (no period budget).
 TEST(StartupSearch, FinalIcpRunsInSlicesWithTheSameResult) {
   CornerScene scene;
   for (Vec3f& p : scene.scan) p -= Vec3f(5.0f, 5.0f, 0.0f);  // the body 5 m out from both walls
   LocalizerParams params;
-  params.startup_first_work_per_period = 0;  // no power-up exception: every period on the budget
-  params.startup_work_per_period = 0;        // the search in one piece: it spends the period ...
-  params.startup_min_work_per_period = 200;  // ... and the final ICP's slices in a full period are a few points
+  params.startup.first_work_per_period = 0;  // no power-up exception: every period on the budget
+  params.startup.work_per_period = 0;        // the search in one piece: it spends the period ...
+  params.startup.min_work_per_period = 200;  // ... and the final ICP's slices in a full period are a few points
   const Vec3d fix(7.0, 3.0, 0.0);
   struct Run {
     StartupOutcome outcome;
@@ -118,7 +125,7 @@ TEST(StartupSearch, FinalIcpRunsInSlicesWithTheSameResult) {
   const auto run = [&](bool budget) {
     Run r;
     auto search = std::make_unique<StartupSearch>();
-    search->configure(params);
+    configure(*search, params);
     bool searched = false;
     for (std::uint32_t frame = 0; frame < 60; ++frame) {
       search->on_frame(true, Pose3d::Identity(), GnssFix{});
@@ -127,7 +134,7 @@ TEST(StartupSearch, FinalIcpRunsInSlicesWithTheSameResult) {
       work.add(params.work.budget - params.work.search_start - 1e5);  // room to start a search, little more
       StartupFrame f = scene.frame(frame, fix);
       if (budget) f.work = &work;
-      const StartupOutcome out = search->step(f, r.counters);
+      const StartupOutcome out = search->step(f, *scene.scratch, r.counters);
       if (out.report.searched && !searched) {
         searched = true;
         r.searched_frame = frame;

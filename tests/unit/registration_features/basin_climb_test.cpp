@@ -19,6 +19,7 @@ namespace {
 
 static ProximityGrid g_grid;              // ~MBs of bitmap: static, not the stack
 static KdTreeStorage<Vec3f, 16384> g_tree;
+static ClimbScratch g_climb;
 
 // A street corner with irregular features: two facades (x = 8, y = 6), posts along them at
 // uneven spacing, a kiosk. Points 0.25 m apart from 0.6 m to 4 m high.
@@ -72,9 +73,9 @@ class BasinClimbTest : public ::testing::Test {
 TEST_F(BasinClimbTest, ScoresTheTruthHighestAndFarPosesLow) {
   const ClimbTarget target{scan_, &g_grid, nullptr};
   BasinClimbParams p;
-  const double truth = climb_score(target, kTrueX, kTrueY, kTrueYaw, p);
+  const double truth = climb_score(target, kTrueX, kTrueY, kTrueYaw, p, g_climb);
   EXPECT_DOUBLE_EQ(truth, 1.0);  // every point lies on the map
-  EXPECT_LT(climb_score(target, kTrueX + 9.0, kTrueY - 7.0, kTrueYaw, p), 0.6);
+  EXPECT_LT(climb_score(target, kTrueX + 9.0, kTrueY - 7.0, kTrueYaw, p, g_climb), 0.6);
 }
 
 TEST_F(BasinClimbTest, ClimbsFromALatticeOffsetToTheBottomOnGridAndTree) {
@@ -84,9 +85,9 @@ TEST_F(BasinClimbTest, ClimbsFromALatticeOffsetToTheBottomOnGridAndTree) {
   for (int use_grid = 0; use_grid < 2; ++use_grid) {
     const ClimbTarget target{scan_, use_grid ? &g_grid : nullptr, use_grid ? nullptr : &g_tree.tree};
     PoseSearchCandidate h{0.0, kTrueX + 2.6, kTrueY - 2.2, kTrueYaw};
-    const double before = climb_score(target, h.x, h.y, h.yaw, p);
+    const double before = climb_score(target, h.x, h.y, h.yaw, p, g_climb);
     ClimbWork work;
-    climb_pose(target, h, p, &work);
+    climb_pose(target, h, p, g_climb, &work);
     SCOPED_TRACE(use_grid ? "grid" : "tree");
     EXPECT_GT(h.score, before);
     EXPECT_LT(std::hypot(h.x - kTrueX, h.y - kTrueY), 1.5);  // was 3.4 m off
@@ -108,9 +109,9 @@ TEST_F(BasinClimbTest, ZeroRoundsOnlyRescores) {
   p.rounds = 0;
   PoseSearchCandidate h{0.123, kTrueX + 2.0, kTrueY, kTrueYaw};
   ClimbWork work;
-  climb_pose(target, h, p, &work);
+  climb_pose(target, h, p, g_climb, &work);
   EXPECT_DOUBLE_EQ(h.x, kTrueX + 2.0);
-  EXPECT_DOUBLE_EQ(h.score, climb_score(target, kTrueX + 2.0, kTrueY, kTrueYaw, p));
+  EXPECT_DOUBLE_EQ(h.score, climb_score(target, kTrueX + 2.0, kTrueY, kTrueYaw, p, g_climb));
   EXPECT_EQ(work.lookups, p.points);
 }
 
@@ -129,26 +130,26 @@ TEST_F(BasinClimbTest, SubsampleHasExactlyTheRequestedSizeAndSpansTheScan) {
   p.points = 256;
   p.score_distance = 0.1;
   ClimbWork work;
-  const double score = climb_score(ClimbTarget{scan, nullptr, &tree.tree}, 0.0, 0.0, 0.0, p, &work);
+  const double score = climb_score(ClimbTarget{scan, nullptr, &tree.tree}, 0.0, 0.0, 0.0, p, g_climb, &work);
   EXPECT_EQ(work.lookups, 256u);
   EXPECT_GT(score, 15.0 / 256.0);  // ~17 of the 20 points near the far end are in the subsample
   p.points = 1000;                 // more than there are: all 300
   work = {};
-  climb_score(ClimbTarget{scan, nullptr, &tree.tree}, 0.0, 0.0, 0.0, p, &work);
+  climb_score(ClimbTarget{scan, nullptr, &tree.tree}, 0.0, 0.0, 0.0, p, g_climb, &work);
   EXPECT_EQ(work.lookups, 300u);
 }
 
 TEST_F(BasinClimbTest, BadInputScoresMinusOne) {
   BasinClimbParams p;
-  EXPECT_EQ(climb_score(ClimbTarget{scan_, nullptr, nullptr}, 0.0, 0.0, 0.0, p), -1.0);  // no map
-  EXPECT_EQ(climb_score(ClimbTarget{{}, &g_grid, nullptr}, 0.0, 0.0, 0.0, p), -1.0);     // no scan
+  EXPECT_EQ(climb_score(ClimbTarget{scan_, nullptr, nullptr}, 0.0, 0.0, 0.0, p, g_climb), -1.0);  // no map
+  EXPECT_EQ(climb_score(ClimbTarget{{}, &g_grid, nullptr}, 0.0, 0.0, 0.0, p, g_climb), -1.0);     // no scan
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const std::vector<Vec3f> bad{{nan, 0.0f, 1.0f}, {1.0f, 1.0f, nan}, {2.0f, 2.0f, 0.0f}};
   // NaN height and ground: nothing to score; a NaN coordinate scores as a miss.
-  EXPECT_EQ(climb_score(ClimbTarget{std::span<const Vec3f>(bad).subspan(1), &g_grid, nullptr}, 0.0, 0.0, 0.0, p), -1.0);
-  EXPECT_EQ(climb_score(ClimbTarget{bad, &g_grid, nullptr}, 0.0, 0.0, 0.0, p), 0.0);
+  EXPECT_EQ(climb_score(ClimbTarget{std::span<const Vec3f>(bad).subspan(1), &g_grid, nullptr}, 0.0, 0.0, 0.0, p, g_climb), -1.0);
+  EXPECT_EQ(climb_score(ClimbTarget{bad, &g_grid, nullptr}, 0.0, 0.0, 0.0, p, g_climb), 0.0);
   PoseSearchCandidate h{0.5, 1.0, 1.0, 0.0};
-  climb_pose(ClimbTarget{scan_, nullptr, nullptr}, h, p);
+  climb_pose(ClimbTarget{scan_, nullptr, nullptr}, h, p, g_climb);
   EXPECT_EQ(h.score, -1.0);
   EXPECT_EQ(h.x, 1.0);  // not moved
 }

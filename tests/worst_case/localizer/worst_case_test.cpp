@@ -173,7 +173,7 @@ class Drive {
   // Past power-up (counted on its own: PowerUpFirstAcquisition): the adversarial periods come
   // after the first acquisition.
   void past_first_acquisition() {
-    while (frames_ < static_cast<int>(g_localizer.params().startup_first_frames)) warm_up(1);
+    while (frames_ < static_cast<int>(g_localizer.params().startup.first_frames)) warm_up(1);
   }
 
   // Map clouds reach the localizer as the firmware hands them over (firmware/wire/share_schedule.hpp):
@@ -358,14 +358,14 @@ TEST(WorstCase, AdversarialPeriods) {
 }
 
 // Power-up: the first map and the first acquisition's search counted from the first period.
-// Default (startup_first_work_per_period 0): within the budget, the search's first slice scores
+// Default (startup.first_work_per_period 0): within the budget, the search's first slice scores
 // and climbs every hypothesis and every period fits. The opt-in power-up exemption (1.5M units a
 // period) runs the whole search in period 0, over the budget (a known gap: InstructionBudget's
 // ceiling). A pose comes out every frame in both.
 TEST(WorstCase, PowerUpFirstAcquisition) {
   for (const bool exempt : {true, false}) {
     LocalizerParams params;
-    params.startup_first_work_per_period = exempt ? 1500000u : 0u;
+    params.startup.first_work_per_period = exempt ? 1500000u : 0u;
     Drive d(exempt ? "power_up_exempt" : "power_up_within_budget", Scene::kCanyon, params);
     for (int i = 0; i < 6; ++i) {
       Period p;

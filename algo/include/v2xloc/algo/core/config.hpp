@@ -64,7 +64,7 @@ inline constexpr std::uint32_t kIcpMaxIterations = 64;
 // Pose search (start-up, lost track, basin audit): scan points its hypotheses are refined and
 // compared on, a uniform subsample of the registration scan. Its ICPs are 2 x 10 candidates x
 // <= 30 iterations: this caps their nearest-neighbour queries at ~1.2 M per search whatever the
-// scan size (LocalizerParams::search_points picks the number, <= this).
+// scan size (ScanPreparationParams::search_points picks the number, <= this).
 inline constexpr std::size_t kMaxSearchPoints = 2048;
 
 // ---- Localization ---------------------------------------------------------------------------

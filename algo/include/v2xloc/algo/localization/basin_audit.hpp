@@ -1,11 +1,11 @@
-// The basin audit: every audit_period_frames tracked frames a local exhaustive pose search
-// around the tracked pose asks whether tracking sits in an aliased basin (a street repeats
-// itself along its length). The search runs as a job spread over the following tracked frames,
-// audit_work_per_period work units each (pose_search.hpp), on the scan and
-// tracked pose of the frame it started at; its answer is carried to the current frame by the
-// odometry. The search's subsample only nominates another basin; the switch is decided on the
-// current full scan after the tracking ICP. Owns its period count and the job; one entry point
-// per tracked frame (step) with everything it reads in an AuditFrame.
+// The basin audit: every period_frames tracked frames a local exhaustive pose search around the
+// tracked pose asks whether tracking sits in an aliased basin (a street repeats itself along its
+// length). The search runs as a job spread over the following tracked frames, work_per_period
+// work units each (pose_search.hpp), on the scan and tracked pose of the frame it started at; its
+// answer is carried to the current frame by the odometry. The search's subsample only nominates
+// another basin; the switch is decided on the current full scan after the tracking ICP. Owns its
+// period count and the job; one entry point per tracked frame (step) with everything it reads in
+// an AuditFrame; its settings are BasinAuditParams (localizer_params.hpp).
 #pragma once
 
 #include <cstdint>
@@ -44,8 +44,11 @@ struct AuditOutcome {
 
 class BasinAudit {
  public:
-  void configure(const LocalizerParams& params);
-  AuditOutcome step(const AuditFrame& frame, LocalizerCounters& counters);
+  // search: the start-up search's pose search (lattice, scoring, ICPs; radius and candidates are
+  // the audit's); icp: the tracking ICP, which decides a switch on the full scan.
+  void configure(const BasinAuditParams& params, const PoseSearchParams& search, const IcpParams& icp);
+  // scratch: the pose search's (pose_search.hpp), shared with the caller's other searches.
+  AuditOutcome step(const AuditFrame& frame, PoseSearchScratch& scratch, LocalizerCounters& counters);
   // Tracking was lost: a running search no longer describes the track, and the next track is
   // audited early (see first_audit_due()).
   void cancel() {
@@ -57,22 +60,24 @@ class BasinAudit {
  private:
   void start(const AuditFrame& f);
   // A new track was accepted by a search, possibly on a map still missing sources (shares lost
-  // at start-up): its first audit is due after audit_first_frames tracked frames, not a whole
-  // audit_period_frames.
+  // at start-up): its first audit is due after first_frames tracked frames, not a whole
+  // period_frames.
   std::uint32_t first_audit_due() const {
-    return params_.audit_period_frames > params_.audit_first_frames ? params_.audit_period_frames - params_.audit_first_frames : 0u;
+    return params_.period_frames > params_.first_frames ? params_.period_frames - params_.first_frames : 0u;
   }
   AuditOutcome finish(const AuditFrame& f, LocalizerCounters& counters) const;
   // Refines the nominated basin on the full scan; true when it still differs from the tracked
-  // pose and beats it by audit_full_switch_ratio.
+  // pose and beats it by full_switch_ratio.
   bool wins_on_full_scan(const AuditFrame& f, const Mat4d& nominated, Mat4d& refined) const;
 
-  LocalizerParams params_{};
+  BasinAuditParams params_{};
+  PoseSearchParams search_{};  // as configured; search_params_ is the running job's
+  IcpParams icp_{};
   std::uint32_t frames_since_audit_ = 0;
   bool first_of_track_ = true;  // the next audit is the track's first (it takes the period's room)
   PoseSearch job_{};
-  // The audit's own hypothesis scoring bitmap (search_on_proximity_grid), as the start-up
-  // search's: scoring on the map's k-d tree was ~40 % of an audit's instructions.
+  // The audit's own hypothesis scoring bitmap, as the start-up search's (TUNING.md, "Candidates
+  // and grid").
   ProximityGrid grid_{};
   PoseSearchParams search_params_{};
   bool running_ = false;

@@ -27,7 +27,7 @@ struct OutputFrame {
 
 class FrameOutput {
  public:
-  void configure(const LocalizerParams& params) { params_ = params; }
+  void configure(const FrameOutputParams& params) { params_ = params; }
   void fill(const OutputFrame& frame, const PoseFilter& filter, LocalizerFrameOutput& out,
             LocalizerCounters& counters) const;
 
@@ -35,7 +35,7 @@ class FrameOutput {
   void fill_from_filter(const PoseFilter& filter, LocalizerFrameOutput& out) const;
   void fill_before_start(const OutputFrame& frame, LocalizerFrameOutput& out, LocalizerCounters& counters) const;
 
-  LocalizerParams params_{};
+  FrameOutputParams params_{};
 };
 
 }  // namespace v2xloc

@@ -10,14 +10,14 @@ namespace v2xloc {
 
 class GnssCourse {
  public:
-  void configure(const LocalizerParams& params);
+  void configure(const GnssCourseParams& params);
   // Takes the fix's course when it is usable; true when it was (counted by the caller).
   bool update(const GnssInput& fix, const VehicleMotion& vehicle);
   // The course carried to time t [s] by the yaw rate; false when none is usable.
   bool at(double t, double yaw_rate, double& yaw) const;
 
  private:
-  LocalizerParams params_{};
+  GnssCourseParams params_{};
   bool have_ = false;
   double yaw_ = 0.0;  // [rad] ENU yaw: 0 = east, counter-clockwise
   double t_ = 0.0;    // [s]

@@ -137,6 +137,9 @@ class Localizer {
   // ICP scratch shared by the stages: each scan point's map match of the last ICP iteration
   // seeds its next search (same matches, fewer k-d tree nodes); reset by every ICP call.
   std::uint32_t icp_hints_[config::kMaxDownsampledPoints];
+  // The pose search jobs' scratch (lattice table, climb points), shared by the start-up search
+  // and the basin audit: one runs at a time, and a job refills a table it finds another's in.
+  PoseSearchScratch search_scratch_;
 };
 
 }  // namespace v2xloc

@@ -1,20 +1,21 @@
-// Every tuning value of the localizer: one line each, unit and rule. Defaults are what v2xloc-eval
-// runs; the ablations flip the switches at the bottom. Why a value is what it is, measured on
-// which recording: algo/TUNING.md.
+// Every tuning value of the localizer: one line each, unit and rule, grouped by the stage component
+// that reads it (each component is configured with its own group; a value another stage needs is
+// passed to it explicitly, named where the group is). Defaults are what v2xloc-eval runs; its
+// ablations flip the switches. Why a value is what it is, measured on which recording:
+// algo/TUNING.md.
 #pragma once
 
 #include <cstdint>
 
 #include "v2xloc/algo/core/config.hpp"
 #include "v2xloc/algo/localization/ekf.hpp"
-#include "v2xloc/algo/registration/icp.hpp"
 #include "v2xloc/algo/localization/map_fusion.hpp"
 #include "v2xloc/algo/localization/odometry.hpp"
 #include "v2xloc/algo/localization/period_work.hpp"
-#include "v2xloc/algo/registration/pose_search.hpp"
-#include "v2xloc/algo/registration/register_clouds.hpp"
 #include "v2xloc/algo/localization/stereo_cloud.hpp"
 #include "v2xloc/algo/localization/validity_gate.hpp"
+#include "v2xloc/algo/registration/icp.hpp"
+#include "v2xloc/algo/registration/pose_search.hpp"
 
 namespace v2xloc {
 
@@ -24,133 +25,208 @@ enum class GateMode : std::uint8_t {
   kOff,       // every successful registration is fused (the paper's "Fused" column)
 };
 
-struct LocalizerParams {
-  // ---- Scan preprocessing ----
+// ScanPreparation (scan_preparation.hpp); also given LocalizerParams::use_vehicle_signals.
+struct ScanPreparationParams {
   double frame_period = 0.1;          // [s] LiDAR sweep period: deskew span and vehicle-signal delta
   float min_range = 3.0f;             // [m] returns closer than this are the ego body: dropped
   float max_range = 80.0f;            // [m] returns farther than this are sparse and noisy: dropped
   float registration_voxel = 0.5f;    // [m] ingest voxel (LiDAR frame): odometry's 0.5 v frame and the registration scan
   std::uint32_t tracking_points = 1500;  // [points] even scan subsample the tracking ICP registers (0: all; TUNING.md)
-  double odometry_prediction_max_gap = 1.0;  // [s] frame gap up to which the signals predict odometry
-
-  // ---- Reference map ----
-  MapFusionParams map{};              // fused infrastructure + agent clouds (map_fusion.hpp)
-  // [s] rebuild map points / tree / vicinity bitmap at most this often (host 2, EMBEDDED 1; TUNING.md)
-  double map_refresh_period = config::kEmbeddedProfile ? 1.0 : 2.0;
-  // [clouds/period] map clouds taken per period while tracking (start-up: the caller's schedule; 0: no limit)
-  std::uint32_t map_clouds_per_period_tracking = 1;
-  // [switch] no map clouds after the first map until the first acquisition ends (host only; TUNING.md)
-  bool defer_map_clouds_first_search = !config::kEmbeddedProfile;
-  double map_refresh_quiet_wait = 0.5;  // [s] a due rebuild waits this long at most for a period without new clouds
-  // [s] a source's cloud is fused at most this often, just under map_refresh_period (0: every cloud)
-  double map_cloud_interval = config::kEmbeddedProfile ? 0.9 : 1.9;
-  float map_normal_radius = 0.6f;     // [m] normal estimation radius on the map (3 map voxels)
-  std::uint32_t map_min_points = 100; // [points] a map with fewer is not registered against
-  // [normals/period] map normals computed on first ICP match (lazy_normals.hpp); past it a pair has none
-  std::uint32_t map_normals_per_period = 8192;
-  // [point visits/period] the next map's k-d tree is built this much per period (0: at once)
-  std::uint32_t map_tree_work_per_period = 125000;
-  // [m] vicinity bitmap cell (grows to fit the map); ICP queries it proves empty skip the tree (0: off)
-  float map_vicinity_cell = 0.5f;
-
-  // ---- Period budget ----
-  // [instructions] per-period estimate; rebuild steps and the audit take only what is left (period_work.hpp)
-  PeriodWorkParams work = default_work();
-
-  // ---- Odometry ----
-  OdometryParams odometry = default_odometry();  // KISS-ICP-style LiDAR odometry (odometry.hpp)
-
-  // ---- Registration to the map ----
-  IcpParams icp = default_icp();      // tracking ICP: point-to-plane from the EKF prediction
-  PoseSearchParams search = default_search();        // start-up GNSS-seeded exhaustive search
   // [points] even scan subsample the pose search scores and refines on (<= config::kMaxSearchPoints)
   std::uint32_t search_points = 1024;
-  double global_map_radius = 70.0;    // [m] map crop (and road-height disc) around the GNSS fix
-  double global_gnss_gate_sigmas = 4.0;  // [sigma] start-up region radius in inflated GNSS sigmas (+1 m)
-  double global_min_region = 30.0;    // [m] start-up region radius floor (canyon NLOS; TUNING.md)
-  double global_max_region = 45.0;    // [m] start-up region radius ceiling after searches that matched nothing
-  double global_region_growth = 1.5;  // [ratio] region growth per such search; back to the floor on a match
-  double global_max_vertical = 3.0;   // [m] RANSAC prior: hypothesis height off the road surface
-  double global_min_fitness = 0.3;    // [0-1] start-up solution needs at least this ICP fitness
-  // [0-0.5] start-up solution's final-ICP horizontal constraint at least this (0: off; off on EMBEDDED)
-  double global_min_horizontal_constraint = config::kEmbeddedProfile ? 0.0 : 0.04;
-  std::uint32_t road_height_min_points = 50;  // [points] in the 0.2 m bin to output the road height
-  double global_max_ambiguity = 0.85; // [0-1] runner-up / winner tight fitness above: ambiguous
-  double max_inlier_rmse = 1e9;       // [m] registration above this RMSE fails (1e9: off; TUNING.md)
-  double tracking_max_sigma_xy = 0.5; // [m] EKF position sigma above which we search globally
-  std::uint32_t max_failed_frames = 10;   // [frames] consecutive unfused registrations -> global search
-  std::uint32_t global_retry_frames = 2;  // [frames] between two global searches (bounded cost)
-  std::uint32_t startup_work_per_period = 800000;    // [work units/period] search slice ceiling (0: all at once)
-  std::uint32_t startup_min_work_per_period = 30000;  // [work units/period] search slice floor, budget or not
-  std::uint32_t startup_first_frames = 10;  // [frames] since the first search: the first acquisition at most
-  // [work units/period] first-acquisition slice floor, budget or not (0: within the budget; TUNING.md)
-  std::uint32_t startup_first_work_per_period = 0;
-  // [switch] the first acquisition's first slice scores and climbs every hypothesis, budget or not
-  bool startup_first_score_whole = true;
-  std::uint32_t startup_max_frames = 20;  // [frames] a search job not finished within this is dropped
-  // [switch] output a running search's best pose so far (not localized, not fused)
-  bool startup_output_provisional = true;
-  // [switch] the confirming search re-decides the first search's finalists instead of the whole region
-  bool global_confirm_finalists = true;
-  bool startup_icp_on_tracking_scan = true;  // [switch] an accepted pose's final ICP on the tracking subsample
-  // [switch] score hypotheses on a proximity bitmap of the region (search.grid_cell), not the k-d tree
-  bool search_on_proximity_grid = true;
-  std::uint32_t global_confirm_window = 10;  // [frames] a second search within this confirms (0: off)
-  double global_confirm_distance = 0.5;   // [m] confirmation: horizontal disagreement allowed
-  double global_confirm_yaw = 0.035;      // [rad] confirmation: heading disagreement allowed (2 deg)
-  // [frames] from one basin audit's end to the next one's start while tracking (0: off)
-  std::uint32_t audit_period_frames = 30;
-  // [frames] a new track's first audit starts after this many, with all the period's room left
-  std::uint32_t audit_first_frames = 1;
-  double audit_radius = 8.0;              // [m] basin audit: search disc around the tracked pose
-  // [work units/period] audit slice per tracked frame, at most the room left (0: whole search at once)
-  std::uint32_t audit_work_per_period = 90000;
-  // [work units/period] ... in a period that fused a map cloud (0: the audit pauses there)
-  std::uint32_t audit_work_per_busy_period = 45000;
-  std::uint32_t audit_max_frames = 60;    // [frames] an audit not finished within this is dropped (pauses count)
-  // [hypotheses] the audit refines by ICP (<= kPoseSearchRefine; TUNING.md)
-  std::uint32_t audit_refine_candidates = 5;
-  double audit_switch_ratio = 1.15;       // [ratio] audit pose's tight fitness over tracked: switch
-  double audit_full_switch_ratio = 1.15;  // [ratio] ... and again on the full scan after ICP: switch
-  std::uint32_t track_frames = 30;        // [frames] GNSS track compared (<= kTrackFrames)
-  std::uint32_t track_min_fixes = 10;     // [fixes] needed in the track to decide
-  double track_distance_ratio = 0.6;      // [ratio] winner's mean track distance < ratio * loser's
-  double track_distance_margin = 5.0;     // [m] ... and smaller by at least this
-  double track_max_distance = 25.0;       // [m] a solution whose track is farther is wrong
-  bool use_gnss_heading = true;           // GNSS course over ground as start-up yaw window
-  double heading_min_speed = 3.0;         // [m/s] Doppler and wheel speed both above this
-  double heading_max_sigma = 0.17;        // [rad] course sigma atan(speed_acc / speed) at most this
-  double heading_max_age = 1.0;           // [s] a course older than this is not used
-  double heading_search_tolerance = 0.79; // [rad] yaw window half-width around the course (45 deg)
-  double gnss_divergence_distance = 30.0; // [m] lost track: fix farther than max(this, sigmas * h_acc)
-  double gnss_divergence_sigmas = 6.0;    // [sigma] ... in reported h_acc
-  std::uint32_t gnss_divergence_fixes = 10;  // [fixes] in a row -> restart globally (2 s at 5 Hz)
-
-  // ---- Stereo modality (LiDAR + stereo configuration) ----
-  bool use_stereo = false;            // register and fuse the stereo cloud while tracking
   StereoParams stereo = default_stereo();  // disparity -> cloud (stereo_cloud.hpp)
   float stereo_voxel = 0.3f;          // [m] stereo cloud downsampling
-  std::uint32_t stereo_min_points = 200;   // [points] fewer after downsampling: not registered
-  double stereo_covariance_scale = 25.0;   // [ratio] stereo covariance over the ICP's (TUNING.md)
-  IcpParams stereo_icp = default_icp();    // stereo ICP from the same prediction
 
-  // ---- Validity gate and fusion ----
+  static StereoParams default_stereo() {
+    StereoParams p;
+    p.stride = 4;                   // every 4th pixel in u and v: ~1/16 of the image
+    p.min_disparity = 2.0;          // [px]
+    p.disparity_sigma = 0.5;        // [px] overridden by the calibration's value when known
+    p.max_depth_sigma = 0.3;        // [m] ~15-20 m range for the ego rig
+    return p;
+  }
+};
+
+// ReferenceMap (reference_map.hpp); also given tracking.icp's gate (the vicinity bitmap's reach).
+struct ReferenceMapParams {
+  MapFusionParams fusion{};           // fused infrastructure + agent clouds (map_fusion.hpp)
+  // [s] rebuild map points / tree / vicinity bitmap at most this often (host 2, EMBEDDED 1; TUNING.md)
+  double refresh_period = config::kEmbeddedProfile ? 1.0 : 2.0;
+  double refresh_quiet_wait = 0.5;    // [s] a due rebuild waits this long at most for a period without new clouds
+  // [s] a source's cloud is fused at most this often, just under refresh_period (0: every cloud)
+  double cloud_interval = config::kEmbeddedProfile ? 0.9 : 1.9;
+  float normal_radius = 0.6f;         // [m] normal estimation radius on the map (3 map voxels)
+  std::uint32_t min_points = 100;     // [points] a map with fewer is not registered against
+  // [normals/period] map normals computed on first ICP match (lazy_normals.hpp); past it a pair has none
+  std::uint32_t normals_per_period = 8192;
+  // [point visits/period] the next map's k-d tree is built this much per period (0: at once)
+  std::uint32_t tree_work_per_period = 125000;
+  // [m] vicinity bitmap cell (grows to fit the map); ICP queries it proves empty skip the tree (0: off)
+  float vicinity_cell = 0.5f;
+};
+
+// TrackingRegistration (tracking.hpp).
+struct TrackingParams {
+  IcpParams icp = default_icp();      // tracking ICP: point-to-plane from the EKF prediction
+  std::uint32_t stereo_min_points = 200;  // [points] fewer after downsampling: not registered
+  IcpParams stereo_icp = default_icp();   // stereo ICP from the same prediction
+
+  static IcpParams default_icp() {
+    IcpParams p;
+    p.method = IcpMethod::kPointToPlane;  // [-] point-to-plane (map normals)
+    p.max_correspondence_distance = 1.0;  // [m] tracking gate around the EKF prediction
+    p.criteria.max_iterations = 20;       // [iterations] cap (one nearest-neighbour pass each)
+    p.criteria.relative_fitness = 1e-3;   // [-] stop below this fitness change ... (TUNING.md)
+    p.criteria.relative_rmse = 1e-3;      // [m] ... and below this RMSE change
+    p.kernel.type = RobustKernelType::kTukey;  // [-] robust kernel
+    p.kernel.scale = 0.3;                 // [m] Tukey scale: residuals beyond it weigh nothing
+    // [work units] ~44 M instructions; past it kDidNotConverge, counted tracking_work_capped
+    p.max_work = 400000;
+    return p;
+  }
+};
+
+// StartupSearch (startup_search.hpp); also given tracking.icp (the final ICP) and
+// filter.ekf.gates.gnss_sigma_inflation (the region's GNSS sigma).
+struct StartupSearchParams {
+  PoseSearchParams search = default_search();  // GNSS-seeded exhaustive search (the basin audit's too)
+  double gnss_gate_sigmas = 4.0;      // [sigma] region radius in inflated GNSS sigmas (+1 m)
+  double min_region = 30.0;           // [m] region radius floor (canyon NLOS; TUNING.md)
+  double max_region = 45.0;           // [m] region radius ceiling after searches that matched nothing
+  double region_growth = 1.5;         // [ratio] region growth per such search; back to the floor on a match
+  double min_fitness = 0.3;           // [0-1] a solution needs at least this ICP fitness
+  // [0-0.5] a solution's final-ICP horizontal constraint at least this (0: off; off on EMBEDDED)
+  double min_horizontal_constraint = config::kEmbeddedProfile ? 0.0 : 0.04;
+  double max_ambiguity = 0.85;        // [0-1] runner-up / winner tight fitness above: ambiguous
+  std::uint32_t retry_frames = 2;     // [frames] between two searches (bounded cost)
+  std::uint32_t work_per_period = 800000;    // [work units/period] search slice ceiling (0: all at once)
+  std::uint32_t min_work_per_period = 30000;  // [work units/period] search slice floor, budget or not
+  std::uint32_t first_frames = 10;    // [frames] since the first search: the first acquisition at most
+  // [work units/period] first-acquisition slice floor, budget or not (0: within the budget; TUNING.md)
+  std::uint32_t first_work_per_period = 0;
+  std::uint32_t max_frames = 20;      // [frames] a search job not finished within this is dropped
+  std::uint32_t confirm_window = 10;  // [frames] a second search within this confirms (0: off)
+  double confirm_distance = 0.5;      // [m] confirmation: horizontal disagreement allowed
+  double confirm_yaw = 0.035;         // [rad] confirmation: heading disagreement allowed (2 deg)
+  std::uint32_t track_frames = 30;    // [frames] GNSS track compared (<= kTrackFrames)
+  std::uint32_t track_min_fixes = 10; // [fixes] needed in the track to decide
+  double track_distance_ratio = 0.6;  // [ratio] winner's mean track distance < ratio * loser's
+  double track_distance_margin = 5.0; // [m] ... and smaller by at least this
+  double track_max_distance = 25.0;   // [m] a solution whose track is farther is wrong
+  double heading_tolerance = 0.79;    // [rad] yaw window half-width around the GNSS course (45 deg)
+
+  static PoseSearchParams default_search() {
+    PoseSearchParams p;
+    p.icp.method = IcpMethod::kPointToPlane;  // [-] coarse ICP: point-to-plane
+    p.icp.max_correspondence_distance = 2.0;  // [m] coarse ICP gate: about half a grid cell's diagonal
+    p.icp.criteria.max_iterations = 20;      // [iterations]
+    p.icp.criteria.relative_fitness = 1e-3;  // [-] the coarse ICP only picks the basin
+    p.icp.criteria.relative_rmse = 1e-3;     // [m]
+    p.icp.kernel.type = RobustKernelType::kTukey;  // [-] robust kernel
+    // [m] coarse ICP's Tukey scale = its gate (TUNING.md)
+    p.icp.kernel.scale = 2.0;
+    p.yaw_steps = 24;               // [headings] 15 deg apart; the coarse ICP pulls in +-7.5 deg
+    p.step = 3.0;                   // [m] position grid spacing
+    p.radius = 30.0;                // [m] = min_region (bounded work: ~8k hypotheses)
+    p.score_points = 64;            // [points] scan points scored per hypothesis (the climb re-ranks on 256)
+    p.refine_candidates = 5;        // [hypotheses] the best distinct ones refined by ICP
+    p.climb_points = 256;           // [points] the kept hypotheses climb to their basins' bottoms (TUNING.md)
+    p.refine_min_score_ratio = 0.8; // [0-1] and only those within 20 % of the best climbed score are refined
+    // [points] candidates' ICPs on this many search points (host 256 = every 4th; EMBEDDED 0: all)
+    p.refine_points = config::kEmbeddedProfile ? 0u : 256u;
+    p.score_distance = 2.0;         // [m] score hit radius: half the grid cell's diagonal (TUNING.md)
+    p.max_conflicts = 0.12;         // [0-1] ray conflict ratio above which a pose is no candidate (TUNING.md)
+    p.fine_icp = TrackingParams::default_icp();  // [-] fine ICP: the tracking ICP's settings ...
+    p.fine_icp.criteria.relative_fitness = 1e-5;  // [-] ... converged fully: candidates compare fitness
+    p.fine_icp.criteria.relative_rmse = 1e-5;     // [m]
+    return p;
+  }
+};
+
+// BasinAudit (basin_audit.hpp, run by TrackingRegistration); also given startup.search (its
+// lattice, radius and candidates replaced below) and tracking.icp (the switch's full-scan ICP).
+struct BasinAuditParams {
+  // [frames] from one audit's end to the next one's start while tracking (0: off)
+  std::uint32_t period_frames = 30;
+  // [frames] a new track's first audit starts after this many, with all the period's room left
+  std::uint32_t first_frames = 1;
+  double radius = 8.0;                // [m] search disc around the tracked pose
+  // [work units/period] audit slice per tracked frame, at most the room left (0: whole search at once)
+  std::uint32_t work_per_period = 90000;
+  // [work units/period] ... in a period that fused a map cloud (0: the audit pauses there)
+  std::uint32_t work_per_busy_period = 45000;
+  std::uint32_t max_frames = 60;      // [frames] an audit not finished within this is dropped (pauses count)
+  std::uint32_t refine_candidates = 5;  // [hypotheses] the audit refines by ICP (<= kPoseSearchRefine; TUNING.md)
+  double switch_ratio = 1.15;         // [ratio] audit pose's tight fitness over tracked: switch
+  double full_switch_ratio = 1.15;    // [ratio] ... and again on the full scan after ICP: switch
+};
+
+// GnssCourse (gnss_course.hpp).
+struct GnssCourseParams {
+  bool enabled = true;                // GNSS course over ground as start-up yaw window and pre-filter heading
+  double min_speed = 3.0;             // [m/s] Doppler and wheel speed both above this
+  double max_sigma = 0.17;            // [rad] course sigma atan(speed_acc / speed) at most this
+  double max_age = 1.0;               // [s] a course older than this is not used
+};
+
+// PoseFilter (pose_filter.hpp); also given LocalizerParams::use_vehicle_signals.
+struct PoseFilterParams {
   GateMode gate_mode = GateMode::kFixedLag;  // which validity gate feeds the EKF
   ValidityGateParams gate = default_gate();  // paper's envelope + absolute floors (TUNING.md)
   EkfParams ekf{};                           // filter noise and NIS gates (ekf.hpp)
   RegistrationCovarianceParams registration_covariance{};  // ICP information -> pose covariance
   std::uint32_t reset_after_rejections = 3;  // [registrations] NIS-rejected in a row -> restart
-  double localized_sigma_xy = 0.10;   // [m] fused 1-sigma budget (Reid et al. 2019 local street)
   // [m, m, m, rad, m/s, rad/s, rad/s, -] 1-sigma of each state (ekf_index order) at a (re)start.
   double restart_sigmas[kEkfStateSize] = {0.1, 0.1, 0.1, 0.01, 0.5, 0.05, 0.005, 0.02};
-
-  // ---- Switches (ablations) ----
-  bool use_gnss = true;               // fuse GNSS fixes (and use them for track checks)
-  bool use_vehicle_signals = true;    // fuse wheel speed / yaw rate; deskew and predict with them
-  bool use_odometry = true;           // fuse the LiDAR odometry's relative motion
-  bool deskew = true;                 // deskew scans with per-point times
+  double tracking_max_sigma_xy = 0.5;        // [m] EKF position sigma above which the start-up search runs
+  std::uint32_t max_failed_frames = 10;      // [frames] consecutive unfused registrations -> start-up search
+  double gnss_divergence_distance = 30.0;    // [m] lost track: fix farther than max(this, sigmas * h_acc)
+  double gnss_divergence_sigmas = 6.0;       // [sigma] ... in reported h_acc
+  std::uint32_t gnss_divergence_fixes = 10;  // [fixes] in a row -> restart globally (2 s at 5 Hz)
+  double stereo_covariance_scale = 25.0;     // [ratio] stereo covariance over the ICP's (TUNING.md)
+  bool use_odometry = true;                  // [switch] fuse the LiDAR odometry's relative motion
   // [switch] evaluation only: an ungated second filter for the paper's "Fused" column (ECU: off)
   bool shadow_ungated_filter = false;
+
+  static ValidityGateParams default_gate() {
+    ValidityGateParams p;
+    p.min_fitness = 0.3;            // [0-1] a registration with a lower ICP fitness is not fused (TUNING.md)
+    // [m] a registration with a higher inlier RMSE is not fused (TUNING.md)
+    p.max_rmse = 0.53;
+    return p;
+  }
+};
+
+// FrameOutput (frame_output.hpp).
+struct FrameOutputParams {
+  double localized_sigma_xy = 0.10;   // [m] fused 1-sigma budget (Reid et al. 2019 local street)
+  double road_height_radius = 70.0;   // [m] before the filter: road height of the map within this of the fix
+  std::uint32_t road_height_min_points = 50;  // [points] in the 0.2 m bin to output the road height
+};
+
+struct LocalizerParams {
+  // ---- The Localizer's own ----
+  // [instructions] per-period estimate; rebuild steps and the audit take only what is left (period_work.hpp)
+  PeriodWorkParams work = default_work();
+  double odometry_prediction_max_gap = 1.0;  // [s] frame gap up to which the signals predict odometry
+  // [clouds/period] map clouds taken per period while tracking (start-up: the caller's schedule; 0: no limit)
+  std::uint32_t map_clouds_per_period_tracking = 1;
+  // [switch] no map clouds after the first map until the first acquisition ends (host only; TUNING.md)
+  bool defer_map_clouds_first_search = !config::kEmbeddedProfile;
+  // [switch] fuse wheel speed / yaw rate; deskew and predict with them (ScanPreparation, PoseFilter)
+  bool use_vehicle_signals = true;
+  bool use_stereo = false;            // [switch] register and fuse the stereo cloud while tracking
+
+  // ---- The stages, in on_ego_scan's order ----
+  ScanPreparationParams scan{};
+  OdometryParams odometry = default_odometry();  // KISS-ICP-style LiDAR odometry (odometry.hpp)
+  ReferenceMapParams map{};
+  StartupSearchParams startup{};
+  TrackingParams tracking{};
+  BasinAuditParams audit{};
+  GnssCourseParams course{};
+  PoseFilterParams filter{};
+  FrameOutputParams output{};
 
   static PeriodWorkParams default_work() {
     PeriodWorkParams p;  // per-unit costs: callgrind, x86-64 -O2, Sim 0 / 4_infra_2_agent (TUNING.md)
@@ -169,60 +245,6 @@ struct LocalizerParams {
     // [stride] every k-th 0.5 v point (host 2, EMBEDDED 1; TUNING.md)
     p.fine_decimation = config::kEmbeddedProfile ? 1u : 2u;
     p.convergence = 1e-3;  // [m, rad] stop once |d xi| is below this (TUNING.md)
-    return p;
-  }
-  static IcpParams default_icp() {
-    IcpParams p;
-    p.method = IcpMethod::kPointToPlane;  // [-] point-to-plane (map normals)
-    p.max_correspondence_distance = 1.0;  // [m] tracking gate around the EKF prediction
-    p.criteria.max_iterations = 20;       // [iterations] cap (one nearest-neighbour pass each)
-    p.criteria.relative_fitness = 1e-3;   // [-] stop below this fitness change ... (TUNING.md)
-    p.criteria.relative_rmse = 1e-3;      // [m] ... and below this RMSE change
-    p.kernel.type = RobustKernelType::kTukey;  // [-] robust kernel
-    p.kernel.scale = 0.3;                 // [m] Tukey scale: residuals beyond it weigh nothing
-    // [work units] ~44 M instructions; past it kDidNotConverge, counted tracking_work_capped
-    p.max_work = 400000;
-    return p;
-  }
-  static ValidityGateParams default_gate() {
-    ValidityGateParams p;
-    p.min_fitness = 0.3;            // [0-1] a registration with a lower ICP fitness is not fused (TUNING.md)
-    // [m] a registration with a higher inlier RMSE is not fused (TUNING.md)
-    p.max_rmse = 0.53;
-    return p;
-  }
-  static StereoParams default_stereo() {
-    StereoParams p;
-    p.stride = 4;                   // every 4th pixel in u and v: ~1/16 of the image
-    p.min_disparity = 2.0;          // [px]
-    p.disparity_sigma = 0.5;        // [px] overridden by the calibration's value when known
-    p.max_depth_sigma = 0.3;        // [m] ~15-20 m range for the ego rig
-    return p;
-  }
-  static PoseSearchParams default_search() {
-    PoseSearchParams p;
-    p.icp.method = IcpMethod::kPointToPlane;  // [-] coarse ICP: point-to-plane
-    p.icp.max_correspondence_distance = 2.0;  // [m] coarse ICP gate: about half a grid cell's diagonal
-    p.icp.criteria.max_iterations = 20;      // [iterations]
-    p.icp.criteria.relative_fitness = 1e-3;  // [-] the coarse ICP only picks the basin
-    p.icp.criteria.relative_rmse = 1e-3;     // [m]
-    p.icp.kernel.type = RobustKernelType::kTukey;  // [-] robust kernel
-    // [m] coarse ICP's Tukey scale = its gate (TUNING.md)
-    p.icp.kernel.scale = 2.0;
-    p.yaw_steps = 24;               // [headings] 15 deg apart; the coarse ICP pulls in +-7.5 deg
-    p.step = 3.0;                   // [m] position grid spacing
-    p.radius = 30.0;                // [m] = global_min_region (bounded work: ~8k hypotheses)
-    p.score_points = 64;            // [points] scan points scored per hypothesis (the climb re-ranks on 256)
-    p.refine_candidates = 5;        // [hypotheses] the best distinct ones refined by ICP
-    p.climb_points = 256;           // [points] the kept hypotheses climb to their basins' bottoms (TUNING.md)
-    p.refine_min_score_ratio = 0.8; // [0-1] and only those within 20 % of the best climbed score are refined
-    // [points] candidates' ICPs on this many search points (host 256 = every 4th; EMBEDDED 0: all)
-    p.refine_points = config::kEmbeddedProfile ? 0u : 256u;
-    p.score_distance = 2.0;         // [m] score hit radius: half the grid cell's diagonal (TUNING.md)
-    p.max_conflicts = 0.12;         // [0-1] ray conflict ratio above which a pose is no candidate (TUNING.md)
-    p.fine_icp = default_icp();                   // [-] fine ICP: the tracking ICP's settings ...
-    p.fine_icp.criteria.relative_fitness = 1e-5;  // [-] ... converged fully: candidates compare fitness
-    p.fine_icp.criteria.relative_rmse = 1e-5;     // [m]
     return p;
   }
 };

@@ -60,7 +60,7 @@ struct EgoScanInput {
 
 enum class LocalizationMode : std::uint8_t {
   kUninitialized,  // no GNSS / no map yet
-  kGlobalSearch,   // FPFH + RANSAC within the GNSS uncertainty region
+  kGlobalSearch,   // start-up pose search within the GNSS uncertainty region
   kTracking,       // ICP from the EKF prediction
 };
 
@@ -117,7 +117,7 @@ struct LocalizerCounters {
   std::uint32_t registrations_fused = 0;       // main EKF
   std::uint32_t registrations_gate_rejected = 0;
   std::uint32_t map_rebuilds = 0;
-  std::uint32_t map_clouds_paced = 0;          // clouds not fused: their source's last is recent (map_cloud_interval)
+  std::uint32_t map_clouds_paced = 0;          // clouds not fused: their source's last is recent (map.cloud_interval)
   std::uint32_t map_normals_computed = 0;      // map normals computed on first use
   std::uint32_t map_normals_refused = 0;       // asked past the per-period cap: pair skipped
   std::uint32_t gnss_received = 0;
@@ -147,7 +147,7 @@ struct LocalizerCounters {
   std::uint64_t global_search_work = 0;        // start-up / lost-track search work units
   std::uint32_t odometry_query_capped = 0;     // odometry frames whose iterations max_queries ended
   std::uint32_t odometry_frames_thinned = 0;   // odometry frames thinned to max_fine_points
-  std::uint32_t tracking_work_capped = 0;      // tracking ICPs that ran out of work (icp.max_work)
+  std::uint32_t tracking_work_capped = 0;      // tracking ICPs that ran out of work (tracking.icp.max_work)
   std::uint32_t rebuild_steps_deferred = 0;    // map rebuild steps that waited for a period with room
   std::uint32_t audit_periods_starved = 0;     // running audits that got no work in a period
 };

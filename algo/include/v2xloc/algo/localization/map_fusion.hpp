@@ -119,7 +119,7 @@ enum class MapInsertStatus : std::uint8_t {
   kRejectedInconsistent,
   kInvalidInput,        // non-finite pose or time
   kHeldBack,            // too little overlap to be checked: an agent, or infrastructure facing a quorum
-  kPaced,               // within map_cloud_interval of the source's stored cloud: not needed (reference_map.hpp)
+  kPaced,               // within map.cloud_interval of the source's stored cloud: not needed (reference_map.hpp)
   kBackgroundMismatch,  // infrastructure cloud off its unit's surveyed background
 };
 

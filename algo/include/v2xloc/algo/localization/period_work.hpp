@@ -11,7 +11,7 @@
 namespace v2xloc {
 
 struct PeriodWorkParams {
-  bool enabled = true;                 // false: fixed quotas only (audit_work_per_period, every rebuild step)
+  bool enabled = true;                 // false: fixed quotas only (audit.work_per_period, every rebuild step)
   double budget = 92e6;                // [instructions] target per period (100 M less the estimate's error)
   double scan = 10.5e6;                // [instructions] scan ingest and registration downsampling, per scan
   // [instructions] per point of a map cloud handed to map fusion: the recordings' ~16k-point clouds

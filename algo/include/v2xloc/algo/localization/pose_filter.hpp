@@ -4,7 +4,7 @@
 // decision, the NIS-rejection count that restarts the filter at a registration, the GNSS
 // divergence monitor and the count of frames without a fused registration.
 // The optional shadow filter takes every ok registration without the validity gate (the
-// evaluator's "Fused (ungated)" column); with LocalizerParams::shadow_ungated_filter off it is
+// evaluator's "Fused (ungated)" column); with PoseFilterParams::shadow_ungated_filter off it is
 // never touched.
 #pragma once
 
@@ -41,12 +41,14 @@ enum class GnssFusion : std::uint8_t { kIgnored, kFused, kDiverged };
 
 class PoseFilter {
  public:
-  void configure(const LocalizerParams& params);
+  // use_vehicle_signals: wheel speed and yaw rate are fused.
+  void configure(const PoseFilterParams& params, bool use_vehicle_signals);
 
   bool initialized() const { return ekf_.initialized(); }
   const Ekf& ekf() const { return ekf_; }
   Pose3d pose() const { return ekf_.state().pose(); }
   Pose3d shadow_pose() const { return shadow_.state().pose(); }
+  bool has_shadow() const { return params_.shadow_ungated_filter; }  // the ungated shadow filter runs
   double sigma_xy() const;  // [m] horizontal 1-sigma of the main filter
   // Tracking continues from the prediction while the filter is tight and fuses registrations.
   bool can_track() const;
@@ -98,7 +100,8 @@ class PoseFilter {
   bool fuse_into(Which which, const Pending& reg, const Now& now, LocalizerCounters& counters);
   void restart(Ekf& ekf, double t, const Mat4d& pose, const VehicleMotion& vehicle) const;
 
-  LocalizerParams params_{};
+  PoseFilterParams params_{};
+  bool use_vehicle_signals_ = true;
   Ekf ekf_{};
   Ekf shadow_{};
   FixedLagValidityGate fixed_lag_gate_{};

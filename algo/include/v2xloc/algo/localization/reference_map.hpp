@@ -1,7 +1,7 @@
 // The reference map the ego scan registers to: the fused infrastructure and agent clouds
 // (map_fusion.hpp) and, double-buffered, the registration target built from them (points, k-d
 // tree, vicinity bitmap, normals on first use). Registration reads the active target while the next one is built over several
-// periods, at most every map_refresh_period: infrastructure clouds arrive several times per
+// periods, at most every refresh_period: infrastructure clouds arrive several times per
 // second and the static scene hardly changes between them.
 #pragma once
 
@@ -23,9 +23,10 @@ namespace v2xloc {
 
 class ReferenceMap {
  public:
-  void configure(const LocalizerParams& params);
+  // icp_gate: [m] the tracking ICP's correspondence gate, the vicinity bitmap's reach.
+  void configure(const ReferenceMapParams& params, double icp_gate);
 
-  // A cloud within map_cloud_interval of its source's stored cloud is not fused (kPaced): the
+  // A cloud within cloud_interval of its source's stored cloud is not fused (kPaced): the
   // next rebuild would take the source's later cloud anyway. A source without a stored cloud (its
   // last one rejected or held back) is paced on its last attempt the same way, so a sender the
   // consistency check keeps refusing costs one check per interval, not one per share. wants() is
@@ -48,9 +49,9 @@ class ReferenceMap {
   // computed as the registration first asks: a costlier registration that period).
   bool next_step_activates() const;
 
-  bool ready() const { return ready_; }  // the active target has at least map_min_points
+  bool ready() const { return ready_; }  // the active target has at least min_points
   // Clouds were fused in the period refresh() closed (arrived since the previous scan): its spare
-  // work is spent, so a due rebuild waits for a quiet period (at most map_refresh_quiet_wait) and
+  // work is spent, so a due rebuild waits for a quiet period (at most refresh_quiet_wait) and
   // so does the basin audit.
   bool busy() const { return busy_; }
   IcpTarget target();  // non-const: its normals are computed as the registration asks for them
@@ -76,7 +77,8 @@ class ReferenceMap {
   void activate(Target& next);
   void record_attempt(std::uint32_t source_id, double t);
 
-  LocalizerParams params_{};
+  ReferenceMapParams params_{};
+  double icp_gate_ = 1.0;  // [m]
   MapFusion fusion_{};
   Target targets_[2];
   std::uint32_t active_ = 0;

@@ -18,7 +18,8 @@ namespace v2xloc {
 
 class ScanPreparation {
  public:
-  void configure(const LocalizerParams& params);
+  // use_vehicle_signals: deskew and the odometry's prediction take the wheel speed and yaw rate.
+  void configure(const ScanPreparationParams& params, bool use_vehicle_signals);
 
   // Finite points within [min_range, max_range] (the rest counted in dropped), deskewed with the
   // vehicle signals' motion over one frame; the stereo cloud is cleared.
@@ -44,7 +45,8 @@ class ScanPreparation {
  private:
   static void subsample(std::span<const Vec3f> in, std::size_t want, BoundedVector<Vec3f>& out);
 
-  LocalizerParams params_{};
+  ScanPreparationParams params_{};
+  bool use_vehicle_signals_ = true;
   bool have_vehicle_delta_ = false;
   ScanIngest ingest_{};
   FixedVector<Vec3f, config::kMaxDownsampledPoints> down_;

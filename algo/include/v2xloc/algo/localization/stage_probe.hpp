@@ -19,7 +19,7 @@ enum class LocalizerStage : std::uint8_t {
   kDownsample,    // body-frame scan for registration
   kTracking,      // tracking ICP (+ stereo ICP)
   kAudit,         // basin audit (local exhaustive pose search)
-  kGlobalSearch,  // start-up / lost-track search (pose search, FPFH + RANSAC, ICP)
+  kGlobalSearch,  // start-up / lost-track search (pose search, final ICP)
   kFusion,        // validity gate, EKF registration updates, output
   kCount,
 };

@@ -2,13 +2,13 @@
 // to go by. A GNSS-seeded exhaustive pose search (pose_search.hpp), refined by the tracking ICP
 // and checked against the GNSS region, the course over ground and the GNSS track the odometry
 // implies. An accepted solution starts the filter only when a second search within
-// global_confirm_window frames agrees with it through the odometry (the candidate); that search
-// may re-decide only the first one's finalists (global_confirm_finalists). The search is a job:
-// startup_work_per_period bounds its work per frame, its result is carried to the frame it
-// finishes in by the odometry; its final ICP then takes what the periods have left, its result
-// carried the same way. Owns all its state: the job, the candidate, the track of recent odometry
-// / GNSS positions and the retry spacing. One entry point per frame (step), everything it reads
-// in a StartupFrame.
+// confirm_window frames agrees with it through the odometry (the candidate); that search
+// re-decides only the first one's finalists. The search is a job: work_per_period bounds its
+// work per frame, its result is carried to the frame it finishes in by the odometry; its final
+// ICP then takes what the periods have left, its result carried the same way. Owns all its
+// state: the job, the candidate, the track of recent odometry / GNSS positions and the retry
+// spacing. One entry point per frame (step), everything it reads in a StartupFrame; its
+// settings are StartupSearchParams (localizer_params.hpp).
 #pragma once
 
 #include <cstdint>
@@ -55,7 +55,7 @@ struct StartupSearchReport {
 };
 
 enum class StartupStatus : std::uint8_t {
-  kNotDue,       // no GNSS yet, or within global_retry_frames of the last search
+  kNotDue,       // no GNSS yet, or within retry_frames of the last search
   kSearching,    // a search job is running (its work spread over the frames)
   kRejected,     // searched; no solution, or one not (yet) trusted (reported, not fused)
   kAccepted,     // a solution for the running filter (gated and fused like a tracking one)
@@ -70,12 +70,15 @@ struct StartupOutcome {
 
 class StartupSearch {
  public:
-  void configure(const LocalizerParams& params);
+  // final_icp: the tracking ICP, which refines a finished search's pick; gnss_sigma_inflation: the
+  // EKF's (EkfGates), applied to the fix's reported sigma for the region's radius.
+  void configure(const StartupSearchParams& params, const IcpParams& final_icp, double gnss_sigma_inflation);
 
   // Every valid frame, before step(): the track sample (odometry and GNSS position) and the
   // retry spacing. A failed odometry breaks the track.
   void on_frame(bool odometry_ok, const Pose3d& odom_T_body, const GnssFix& gnss);
-  StartupOutcome step(const StartupFrame& frame, LocalizerCounters& counters);
+  // scratch: the pose search's (pose_search.hpp), shared with the caller's other searches.
+  StartupOutcome step(const StartupFrame& frame, PoseSearchScratch& scratch, LocalizerCounters& counters);
 
   // Tracking was lost: drop the candidate, search at the next frame.
   void on_track_lost();
@@ -84,12 +87,13 @@ class StartupSearch {
   // The unconfirmed candidate carried to this frame by the odometry, when it is a better
   // estimate than the GNSS fix.
   bool candidate_pose(std::uint32_t frame, const Pose3d& odom_T_body, Pose3d& pose) const;
-  // Power-up: no filter started yet, within startup_first_frames of the first search (the
+  // Power-up: no filter started yet, within first_frames of the first search (the
   // localizer takes no map clouds meanwhile; the searches' first slices score every hypothesis).
   // Counted from the first search, not from configure(): the ECU may run for seconds before a
   // map exists (no roadside unit in V2X range yet).
   bool first_acquisition_pending(std::uint32_t frame) const {
-    return !acquired_ && (!first_search_started_ || frame - first_search_frame_ < params_.startup_first_frames);
+    return acquisition_ == Acquisition::kNoSearchYet ||
+           (acquisition_ == Acquisition::kFirst && frame - first_search_frame_ < params_.first_frames);
   }
 
  private:
@@ -113,17 +117,31 @@ class StartupSearch {
     PoseSearchResult searched{};     // carried to the frame the job finished in
     RegistrationResult best{};       // the basin picked so far
   };
-  enum class JobKind : std::uint8_t { kNone, kExhaustive, kFinalists };
+  // The job's life, one state at a time. kIdle -(start)-> kSearch (exhaustive, over the GNSS
+  // region), or kConfirm (re-deciding the candidate's finalists); -(job done)-> the final ICP of
+  // its pick, kSearchFinalIcp / kConfirmFinalIcp; -(final ICP done)-> kIdle. Dropped (odometry
+  // broken, max_frames) or a lost track: kIdle from any state.
+  enum class State : std::uint8_t { kIdle, kSearch, kConfirm, kSearchFinalIcp, kConfirmFinalIcp };
+  enum class Event : std::uint8_t { kStartSearch, kStartConfirm, kJobDone, kFinalIcpDone, kStop };
+  // The power-up window (first_acquisition_pending): no search yet, the first one under way, or a
+  // filter started once.
+  enum class Acquisition : std::uint8_t { kNoSearchYet, kFirst, kAcquired };
+
+  // The transition function; an event a state does not expect leaves it where it is.
+  static State next(State state, Event event);
+  void transition(Event event);  // entering kIdle forgets the running job's best pose so far
+  bool start_when_due(const StartupFrame& f, LocalizerCounters& counters);  // kIdle
+  void run_job(const StartupFrame& f, PoseSearchScratch& scratch, bool started, StartupSearchReport& report,
+               LocalizerCounters& counters);  // kSearch, kConfirm
+  void run_final_icp(const StartupFrame& f, StartupOutcome& out, LocalizerCounters& counters);  // the final ICP states
 
   std::uint64_t slice_budget(const StartupFrame& f) const;
-  // Power-up exception (startup_first_work_per_period > 0): the slices ignore the budget.
+  // Power-up exception (first_work_per_period > 0): the slices ignore the budget.
   bool first_exempt(std::uint32_t frame) const {
-    return first_acquisition_pending(frame) && params_.startup_first_work_per_period > 0;
+    return first_acquisition_pending(frame) && params_.first_work_per_period > 0;
   }
-  // Power-up: a search's first slice scores every hypothesis (startup_first_score_whole).
-  bool first_scores_whole(std::uint32_t frame) const {
-    return params_.startup_first_score_whole && first_acquisition_pending(frame);
-  }
+  // Power-up: a search's first slice scores and climbs every hypothesis, whatever the budget.
+  bool first_scores_whole(std::uint32_t frame) const { return first_acquisition_pending(frame); }
   std::uint64_t room_slice(const StartupFrame& f, std::uint64_t floor, std::uint64_t cap) const;
   // The region around the fix before widening, and the same widened by region_scale_.
   double floor_region(const StartupFrame& f) const;
@@ -145,7 +163,12 @@ class StartupSearch {
   // hypothesis of this frame implies through the odometry; false when too few fixes.
   bool track_gnss_distance(const Mat4d& pose, const Mat4d& odom_T_body, double& mean_distance) const;
 
-  LocalizerParams params_{};
+  StartupSearchParams params_{};
+  IcpParams final_icp_{};
+  double gnss_sigma_inflation_ = 1.0;
+  State state_ = State::kIdle;
+  Acquisition acquisition_ = Acquisition::kNoSearchYet;
+  std::uint32_t first_search_frame_ = 0;  // the frame the first search started in (kFirst)
   Candidate candidate_{};
   TrackSample track_[kTrackFrames];
   std::uint32_t track_count_ = 0;    // consecutive samples pushed (reset by odometry failures)
@@ -153,12 +176,9 @@ class StartupSearch {
   // The running search job and what its result needs: the frame it started at and that frame's
   // odometry pose (to carry the result), its region and parameters.
   PoseSearch job_;
-  ProximityGrid grid_;               // the job's hypothesis scoring (search_on_proximity_grid)
-  JobKind job_kind_ = JobKind::kNone;
-  bool acquired_ = false;            // the filter was started once (the first acquisition is over)
-  bool first_search_started_ = false;
-  std::uint32_t first_search_frame_ = 0;  // the frame the first search started in
-  bool job_track_broken_ = false;    // the odometry failed since the job started
+  ProximityGrid grid_;               // the job's hypothesis scoring
+  // The odometry failed since the job started: its result cannot be carried, the next step drops it.
+  bool job_track_broken_ = false;
   std::uint32_t job_frame_ = 0;
   Mat4d job_odom_ = Mat4d::Identity();
   double job_region_ = 0.0;
@@ -177,9 +197,8 @@ class StartupSearch {
   std::uint32_t finalist_count_ = 0;
   double finalists_ground_z_ = 0.0;
   // The finished job's pick (final_) refined by the tracking ICP in slices like the job's (a whole
-  // one costs up to icp.max_work): on a copy of the tracking subsample of the frame the job
+  // one costs up to final_icp_.max_work): on a copy of the tracking subsample of the frame the job
   // finished in (final_frame_, final_odom_), its result carried from there by the odometry.
-  bool final_running_ = false;
   Search final_{};
   IcpRun final_run_{};
   std::uint32_t final_frame_ = 0;

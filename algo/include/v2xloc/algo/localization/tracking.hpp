@@ -13,6 +13,7 @@
 #include "v2xloc/algo/localization/localizer_types.hpp"
 #include "v2xloc/algo/localization/stage_probe.hpp"
 #include "v2xloc/algo/registration/icp.hpp"
+#include "v2xloc/algo/registration/pose_search.hpp"
 
 namespace v2xloc {
 
@@ -41,12 +42,14 @@ struct TrackingOutcome {
 
 class TrackingRegistration {
  public:
-  void configure(const LocalizerParams& params);
-  TrackingOutcome step(const TrackingFrame& frame, LocalizerCounters& counters);
+  // audit, search: the basin audit's own and the start-up search's pose search (basin_audit.hpp).
+  void configure(const TrackingParams& params, const BasinAuditParams& audit, const PoseSearchParams& search);
+  // scratch: the basin audit's pose search scratch (pose_search.hpp).
+  TrackingOutcome step(const TrackingFrame& frame, PoseSearchScratch& scratch, LocalizerCounters& counters);
   void on_track_lost() { audit_.cancel(); }
 
  private:
-  LocalizerParams params_{};
+  TrackingParams params_{};
   BasinAudit audit_{};
 };
 

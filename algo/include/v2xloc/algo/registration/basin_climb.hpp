@@ -26,8 +26,19 @@ struct PoseSearchCandidate {
   double x = 0.0, y = 0.0, yaw = 0.0;
 };
 
-inline constexpr std::uint32_t kMaxClimbPoints = 512;  // [points] scored per climb position (12 kB static)
+inline constexpr std::uint32_t kMaxClimbPoints = 512;  // [points] scored per climb position
 inline constexpr std::uint32_t kMaxClimbRounds = 16;    // [moves] per hypothesis
+
+// A climb's points, rotated by its heading and lifted to the road once: every position it tries
+// only adds its x and y (in double, as climb_score computes them, so both give the same bits).
+struct ClimbPoint {
+  double x = 0.0, y = 0.0;
+  float z = 0.0f;
+};
+// The caller's scratch for climbs (12 KiB): each call fills it anew, nothing is kept between calls.
+struct ClimbScratch {
+  ClimbPoint points[kMaxClimbPoints];
+};
 
 struct BasinClimbParams {
   std::uint32_t points = 256;   // [points] above-ground scan points scored (<= kMaxClimbPoints)
@@ -53,14 +64,14 @@ struct ClimbWork {
 };
 
 // Score of one pose on an even subsample of at most params.points above-ground points; -1 when
-// no point qualifies or there is no map.
+// no point qualifies or there is no map. scratch: the rotated points.
 double climb_score(const ClimbTarget& target, double x, double y, double yaw, const BasinClimbParams& params,
-                   ClimbWork* work = nullptr);
+                   ClimbScratch& scratch, ClimbWork* work = nullptr);
 
 // Rescores h on the subsample, then moves it to its best neighbour while that scores higher, at
 // most params.rounds moves. h.score becomes the climbed score (comparable between climbs only).
 void climb_pose(const ClimbTarget& target, PoseSearchCandidate& h, const BasinClimbParams& params,
-                ClimbWork* work = nullptr);
+                ClimbScratch& scratch, ClimbWork* work = nullptr);
 
 // Orders climbed hypotheses best first, each basin's best ahead of the rest: a hypothesis within
 // basin_distance and basin_yaw of a better leader follows all the basins' leaders; one within

@@ -66,6 +66,7 @@ struct LevelSearchWorkspace {
   Vec3f score_points[kLevelSearchMaxScorePoints];   // source, shifted so its ground is z = 0
   Vec3f rotated[kLevelSearchMaxScorePoints];
   PoseSearchCandidate candidates[kLevelSearchMaxKept];
+  ClimbScratch climb;                               // the kept hypotheses' basin climbs
 };
 
 // Searches p_target = T p_source with T = [Rz(yaw) | (x, y, z)] around center_x, center_y,

@@ -15,6 +15,7 @@
 // wrong pose, a sparse map, noise).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <span>
 
@@ -144,19 +145,46 @@ bool road_height(std::span<const Vec3f> map, const Vec3d& center, double radius,
 
 // The same without a height prior (a canyon's GNSS altitude can be tens of metres off): the
 // histogram is centred on the mean height of the map points within `radius` of center's x, y
-// (moved by whole bins from center.z). search_pose uses this one.
+// (moved by whole bins from center.z). PoseSearch uses this one.
 bool road_height_near(std::span<const Vec3f> map, const Vec3d& center, double radius, double& height,
                       std::uint32_t min_points = 1);
+
+class PoseSearch;
+
+// One score point's proximity-grid cell at one heading, the hypothesis at the search's centre
+// (the lattice form of scoring, pose_search.cpp).
+struct PoseSearchLatticeCell {
+  std::int32_t x = 0, y = 0;
+};
+// [cells] headings x score points the lattice table holds (the localizer's 24 x 64 use 1,536);
+// a larger search scores point by point.
+inline constexpr std::size_t kPoseSearchLatticeCells = 4096;
+
+// What a PoseSearch job works in while it steps, owned by the caller (44 KiB): the jobs of one
+// thread may share one (the localizer's start-up search and basin audit do). The lattice table is
+// filled for one job at a time; a job that finds another's there fills it again (the same
+// values), so sharing changes no result. The climb's points are filled anew by every climb.
+struct PoseSearchScratch {
+  PoseSearchLatticeCell lattice[kPoseSearchLatticeCells];
+  const PoseSearch* lattice_owner = nullptr;  // the job the table is filled for
+  ClimbScratch climb;
+};
 
 // The search as a job spread over several periods (start-up, basin audit): start() copies the
 // scan (<= config::kMaxSearchPoints points) and takes the road height; each step() runs until
 // `budget` work units are spent (scored hypotheses, ICP passes, ray checks, fitness passes; one
 // of them is never split, so a step overruns by at most one) and returns true when result() is
 // final. start() counts its own work (road height, proximity grid) towards the first step. Run to
-// completion it is exactly search_pose(). The map may be swapped between steps (a rebuilt
-// map of the same scene): ICP hints are only seeds, results stay exact for the map given.
+// completion it is exactly run(). The map may be swapped between steps (a rebuilt map of the
+// same scene): ICP hints are only seeds, results stay exact for the map given. Each instance is
+// independent of every other (no state outside the object and the scratch its steps are given).
 class PoseSearch {
  public:
+  // The search in one piece: start(), then step() without a budget until done.
+  // Work: hypotheses * score_points bounded nearest queries, then 2 * kPoseSearchRefine ICPs over
+  // scan_body (<= config::kMaxSearchPoints points are searched, the rest counted).
+  const PoseSearchResult& run(std::span<const Vec3f> scan_body, const IcpTarget& map, const Vec3d& center,
+                              const PoseSearchParams& params, PoseSearchScratch& scratch);
   void start(std::span<const Vec3f> scan_body, const IcpTarget& map, const Vec3d& center,
              const PoseSearchParams& params);
   // Re-decides between known poses (world_T_body, e.g. a finished search's finalists carried to
@@ -165,8 +193,8 @@ class PoseSearch {
   void start_from_poses(std::span<const Vec3f> scan_body, const IcpTarget& map, std::span<const Mat4d> poses,
                         double ground_z, const PoseSearchParams& params);
   // score_whole: the scoring phase and the basin climb, if under way, finish in this step
-  // whatever the budget.
-  bool step(const IcpTarget& map, std::uint64_t budget, bool score_whole = false);
+  // whatever the budget. scratch: the lattice table and the climb's points (any job's).
+  bool step(const IcpTarget& map, PoseSearchScratch& scratch, std::uint64_t budget, bool score_whole = false);
   // Score hypotheses on this caller-owned proximity grid (proximity_grid.hpp), built by start()
   // over the searched region, instead of the map's k-d tree (nullptr: the tree).
   void set_proximity_grid(ProximityGrid* grid) { grid_ = grid; }
@@ -186,10 +214,10 @@ class PoseSearch {
  private:
   enum class Phase : std::uint8_t { kScore, kClimb, kRefine, kSelect, kDone };
   static constexpr std::uint32_t kMaxScorePoints = 512;
-  void score_hypotheses(const IcpTarget& map, std::uint64_t stop);
+  void score_hypotheses(const IcpTarget& map, std::uint64_t stop, PoseSearchScratch& scratch);
   std::int64_t worst_kept_hits() const;
-  void climb_candidate(const IcpTarget& map);
-  std::int64_t lattice_step(const ProximityGrid& grid);
+  void climb_candidate(const IcpTarget& map, ClimbScratch& scratch);
+  std::int64_t lattice_step(const ProximityGrid& grid, PoseSearchScratch& scratch);
   void refine_candidate(const IcpTarget& map, std::uint64_t stop);
   void select_candidate(const IcpTarget& map);
   void finish();
@@ -210,7 +238,7 @@ class PoseSearch {
   Phase phase_ = Phase::kDone;
   std::uint64_t work_ = 0;
   std::uint64_t step_from_ = 0;                   // work_ when the current step began
-  std::uint64_t job_number_ = 0;                  // unique over all instances (the lattice table's owner)
+  bool lattice_filled_ = false;                   // this job filled a scratch's lattice table (lattice_step)
   Vec3f scan_[config::kMaxSearchPoints];
   std::uint32_t hints_[config::kMaxSearchPoints];
   std::size_t scan_count_ = 0;
@@ -244,11 +272,5 @@ class PoseSearch {
   Mat4d leader_coarse_ = Mat4d::Identity();
   std::uint32_t winner_ = kPoseSearchRefine;
 };
-
-// Work: hypotheses * score_points bounded nearest queries, then 2 * kPoseSearchRefine ICPs over
-// scan_body (<= config::kMaxSearchPoints points are searched, the rest counted). One PoseSearch
-// job run to completion; it keeps its own ICP match hints.
-PoseSearchResult search_pose(std::span<const Vec3f> scan_body, const IcpTarget& map,
-                             const Vec3d& center, const PoseSearchParams& params);
 
 }  // namespace v2xloc
