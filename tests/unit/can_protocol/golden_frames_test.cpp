@@ -148,9 +148,14 @@ struct Subject {
   MessageBinding binding;
 };
 
+// In identifier order (the DBC's).
 std::vector<Subject> subjects(const Dbc& dbc) {
   std::vector<Subject> out;
-  for (const MessageBinding& b : message_bindings()) out.push_back({&dbc.messages.at(b.id), b});
+  for (const auto& [id, m] : dbc.messages) {
+    for (const MessageBinding& b : message_bindings())
+      if (b.id == id) out.push_back({&m, b});
+  }
+  EXPECT_EQ(out.size(), dbc.messages.size());
   return out;
 }
 
