@@ -6,6 +6,8 @@
 #include <cstring>
 #include <limits>
 
+#include "message_bindings.hpp"
+
 namespace v2xloc::protocol {
 namespace {
 
@@ -169,6 +171,34 @@ TEST(CanMessages, OutOfRangeRawValuesFlagged) {
   h.data[7] = frame_crc(h.id, h.data);
   Heartbeat hb;
   EXPECT_EQ(unpack(h, hb), DecodeStatus::kOutOfRange);
+}
+
+// For every message of the table: a frame refused for its id, DLC or CRC leaves every member of the
+// output as it was.
+TEST(CanMessages, EveryMessageLeavesItsOutputUntouchedOnRejection) {
+  int messages = 0;
+  for_each_can_message([&](const auto& layout) {
+    using M = typename std::remove_cvref_t<decltype(layout)>::Message;
+    ++messages;
+    M before;
+    test::Values filled;
+    layout.for_each_field([&](const auto& f) { filled[f.signal.name] = f.signal.max; });
+    test::set_values(layout, filled, before);
+    const CanFrame good = pack(M{});
+    CanFrame wrong_id = good, short_frame = good, bad_crc = good;
+    wrong_id.id ^= 0x001u;
+    short_frame.dlc = 7;
+    bad_crc.data[7] ^= 0x80u;
+    for (const CanFrame* f : {&wrong_id, &short_frame, &bad_crc}) {
+      M out = before;
+      EXPECT_NE(unpack(*f, out), DecodeStatus::kOk) << layout.name;
+      EXPECT_EQ(test::values_of(layout, out), test::values_of(layout, before)) << layout.name;
+    }
+    M decoded = before;
+    EXPECT_EQ(unpack(good, decoded), DecodeStatus::kOk) << layout.name;
+    EXPECT_NE(test::values_of(layout, decoded), test::values_of(layout, before)) << layout.name << ": a good frame writes";
+  });
+  EXPECT_EQ(messages, 17);
 }
 
 // Every inbound frame, the GNSS position and time included, carries the CRC over id and payload.
