@@ -6,7 +6,11 @@
 // Formats: firmware/WIRE_FORMATS.md (## CAN).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <tuple>
+#include <type_traits>
+#include <utility>
 
 #include "firmware/protocol/can_message_table.hpp"
 #include "firmware/protocol/can_message_types.hpp"
@@ -48,24 +52,41 @@ bool put_signal(std::uint8_t* data, const CanSignal& s, double physical);
 // Reads a signal; sets out_of_range for a scaled value outside [min, max] (half a step of tolerance).
 double get_signal(const std::uint8_t* data, const CanSignal& s, bool& out_of_range);
 
-// The value of the layout's multiplexer (-1 without one): from the struct (the low bits that go on
-// the wire), or from a frame's bits.
-template <class Layout, class M>
-int mux_of(const Layout& layout, const M& m) {
+// Field I of M's layout as a compile-time constant (FieldOf<M, I>::value), so that every choice the
+// codec makes per signal (its kind, its multiplexer value) is made when compiling.
+template <class M, std::size_t I>
+struct FieldOf {
+  static constexpr const auto& value = std::get<I>(can_layout<M>().fields);
+};
+
+// Calls visit(FieldOf<M, I>{}) for every field I of M's layout, in table order.
+template <class M, class Visit>
+void visit_fields(Visit&& visit) {
+  constexpr std::size_t n = std::tuple_size_v<std::remove_cvref_t<decltype(can_layout<M>().fields)>>;
+  [&]<std::size_t... I>(std::index_sequence<I...>) { (visit(FieldOf<M, I>{}), ...); }(std::make_index_sequence<n>{});
+}
+
+// The value of M's multiplexer (-1 without one): from the struct (the low bits that go on the wire),
+// or from a frame's bits.
+template <class M>
+int mux_of(const M& m) {
   int mux = -1;
-  layout.for_each_field([&](const auto& f) {
-    const std::uint64_t mask = (std::uint64_t{1} << f.signal.length) - 1u;
-    if (f.signal.kind == SignalKind::kMultiplexer)
-      mux = static_cast<int>(static_cast<std::uint64_t>(to_physical(f.of(m))) & mask);
+  visit_fields<M>([&](auto field) {
+    constexpr const CanSignal& s = decltype(field)::value.signal;
+    if constexpr (s.kind == SignalKind::kMultiplexer) {
+      const std::uint64_t mask = (std::uint64_t{1} << s.length) - 1u;
+      mux = static_cast<int>(static_cast<std::uint64_t>(to_physical(decltype(field)::value.of(m))) & mask);
+    }
   });
   return mux;
 }
-template <class Layout>
-int mux_in(const Layout& layout, const std::uint8_t* data) {
+template <class M>
+int mux_in(const std::uint8_t* data) {
   int mux = -1;
-  bool ignored = false;
-  layout.for_each_field([&](const auto& f) {
-    if (f.signal.kind == SignalKind::kMultiplexer) mux = static_cast<int>(get_signal(data, f.signal, ignored));
+  visit_fields<M>([&](auto field) {
+    constexpr const CanSignal& s = decltype(field)::value.signal;
+    bool ignored = false;
+    if constexpr (s.kind == SignalKind::kMultiplexer) mux = static_cast<int>(get_signal(data, s, ignored));
   });
   return mux;
 }
@@ -75,17 +96,21 @@ int mux_in(const Layout& layout, const std::uint8_t* data) {
 // clamped flag (RegClamped, OdomClamped) is also set when any other of its signals was clamped.
 template <CanMessage M>
 CanFrame pack(const M& m, PackStats* stats = nullptr) {
-  constexpr const auto& layout = can_layout<M>();
-  CanFrame f = detail::start_frame(layout.id);
-  const int mux = detail::mux_of(layout, m);
+  CanFrame f = detail::start_frame(can_layout<M>().id);
+  const int mux = detail::mux_of(m);
   std::uint32_t saturated = 0;
-  layout.for_each_field([&](const auto& field) {
-    if (field.signal.kind != SignalKind::kClampedFlag && field.signal.carried(mux))
-      saturated += detail::put_signal(f.data, field.signal, to_physical(field.of(m))) ? 1u : 0u;
+  detail::visit_fields<M>([&](auto field) {
+    constexpr const CanSignal& s = decltype(field)::value.signal;
+    if constexpr (s.kind != SignalKind::kClampedFlag) {
+      if (s.carried(mux)) saturated += detail::put_signal(f.data, s, to_physical(decltype(field)::value.of(m))) ? 1u : 0u;
+    }
   });
-  layout.for_each_field([&](const auto& field) {
-    if (field.signal.kind == SignalKind::kClampedFlag)
-      detail::put_signal(f.data, field.signal, to_physical(field.of(m)) != 0.0 || saturated != 0u ? 1.0 : 0.0);
+  detail::visit_fields<M>([&](auto field) {
+    constexpr const CanSignal& s = decltype(field)::value.signal;
+    if constexpr (s.kind == SignalKind::kClampedFlag) {
+      const bool clamped = decltype(field)::value.of(m) || saturated != 0u;
+      detail::put_signal(f.data, s, clamped ? 1.0 : 0.0);
+    }
   });
   if (stats != nullptr) stats->saturated += saturated;
   detail::seal(f);
@@ -96,13 +121,13 @@ CanFrame pack(const M& m, PackStats* stats = nullptr) {
 // kBadChecksum the output is left untouched; on kOutOfRange every value is written.
 template <CanMessage M>
 DecodeStatus unpack(const CanFrame& f, M& m) {
-  constexpr const auto& layout = can_layout<M>();
-  const DecodeStatus checked = detail::check_frame(f, layout.id);
+  const DecodeStatus checked = detail::check_frame(f, can_layout<M>().id);
   if (checked != DecodeStatus::kOk) return checked;
-  const int mux = detail::mux_in(layout, f.data);
+  const int mux = detail::mux_in<M>(f.data);
   bool out_of_range = false;
-  layout.for_each_field([&](const auto& field) {
-    if (field.signal.carried(mux)) assign_physical(field.of(m), detail::get_signal(f.data, field.signal, out_of_range));
+  detail::visit_fields<M>([&](auto field) {
+    constexpr const CanSignal& s = decltype(field)::value.signal;
+    if (s.carried(mux)) assign_physical(decltype(field)::value.of(m), detail::get_signal(f.data, s, out_of_range));
   });
   return out_of_range ? DecodeStatus::kOutOfRange : DecodeStatus::kOk;
 }

@@ -31,7 +31,7 @@ void set_values(const Layout& layout, const Values& v, M& m) {
   layout.for_each_field([&](const auto& f) {
     if (f.signal.kind == protocol::SignalKind::kMultiplexer) protocol::assign_physical(f.of(m), get(f.signal.name));
   });
-  const int mux = protocol::detail::mux_of(layout, m);
+  const int mux = protocol::detail::mux_of(m);
   layout.for_each_field([&](const auto& f) {
     if (f.signal.carried(mux)) protocol::assign_physical(f.of(m), get(f.signal.name));
   });
@@ -41,7 +41,7 @@ void set_values(const Layout& layout, const Values& v, M& m) {
 template <class Layout, class M>
 Values values_of(const Layout& layout, const M& m) {
   Values v;
-  const int mux = protocol::detail::mux_of(layout, m);
+  const int mux = protocol::detail::mux_of(m);
   layout.for_each_field([&](const auto& f) {
     if (f.signal.carried(mux)) v[f.signal.name] = protocol::to_physical(f.of(m));
   });
