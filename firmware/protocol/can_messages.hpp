@@ -1,42 +1,24 @@
-// CAN messages of v2xloc, bit-exact with tools/dbc/v2xloc.dbc (classic CAN, 500 kbit/s, 11-bit ids,
-// Intel / little-endian signals). Physical-value structs, pack/unpack per message, range clamping
-// with a saturation count, a 4-bit rolling counter and a CRC-8 (SAE J1850) on every frame (CAN
-// layout 2; layout 1 had neither on 0x130/0x132, host_sim/canlog/can_layout.hpp converts such logs).
-// Allocation-free, no exceptions: shared by the firmware and the host tools.
+// The CAN codec of v2xloc, bit-exact with tools/dbc/v2xloc.dbc (classic CAN, 500 kbit/s, 11-bit ids,
+// Intel / little-endian signals): one generic pack() and unpack() over the message table
+// (can_message_table.hpp) for every message struct (can_message_types.hpp). Range clamping with a
+// saturation count, a 4-bit rolling counter and a CRC-8 (SAE J1850) on every frame.
+// Allocation-free, no exceptions: shared by the firmware (also bare metal) and the host tools.
 // Formats: firmware/WIRE_FORMATS.md (## CAN).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
-#include <span>
+#include <tuple>
+#include <type_traits>
+#include <utility>
 
+#include "firmware/protocol/can_message_table.hpp"
+#include "firmware/protocol/can_message_types.hpp"
 #include "hal/can_frame.hpp"
 
 namespace v2xloc::protocol {
 
 using hal::CanFrame;  // the frame type belongs to the hardware layer; codecs fill it
-
-// ---- Identifiers (lower id wins arbitration: motion first, then GNSS, pose, status) ----------
-inline constexpr std::uint32_t kVehicleMotionId = 0x120;
-inline constexpr std::uint32_t kGnssPositionId = 0x130;
-inline constexpr std::uint32_t kGnssStatusId = 0x131;
-inline constexpr std::uint32_t kGnssTimeId = 0x132;
-inline constexpr std::uint32_t kGnssVelocityId = 0x133;
-inline constexpr std::uint32_t kGnssDopId = 0x134;
-inline constexpr std::uint32_t kPosePositionId = 0x200;
-inline constexpr std::uint32_t kPoseAttitudeId = 0x201;
-inline constexpr std::uint32_t kPoseSigmaId = 0x202;
-// Diagnostics out, once per ego frame after the pose frames (evaluation / logging; 0x210-0x21F).
-inline constexpr std::uint32_t kRegistrationPositionId = 0x210;
-inline constexpr std::uint32_t kRegistrationQualityId = 0x211;
-inline constexpr std::uint32_t kGateDecisionId = 0x212;
-inline constexpr std::uint32_t kOdometryPositionId = 0x213;
-inline constexpr std::uint32_t kOdometryAttitudeId = 0x214;
-inline constexpr std::uint32_t kHeartbeatId = 0x300;
-// Security diagnostics, 1 Hz after the heartbeat: what the trust layer and the input guards refused.
-inline constexpr std::uint32_t kTrustRejectionsId = 0x301;
-inline constexpr std::uint32_t kInputGuardsId = 0x302;
-
-inline constexpr std::uint8_t kCounterModulo = 16;  // 4-bit rolling counters
 
 enum class DecodeStatus : std::uint8_t {
   kOk = 0,
@@ -59,249 +41,96 @@ struct PackStats {
   std::uint32_t saturated = 0;
 };
 
-// ---- Vehicle motion (0x120, 10-100 Hz): wheel speed, yaw rate --------------------------------
-struct VehicleMotion {
-  double wheel_speed_mps = 0.0;  // signed: negative when reversing; [-327.68, 327.67], 0.01 m/s
-  double yaw_rate_rps = 0.0;     // [-3.2768, 3.2767], 1e-4 rad/s, counter-clockwise positive
-  bool speed_valid = false;
-  bool yaw_rate_valid = false;
-  std::uint8_t counter = 0;      // 0..15
+namespace detail {
+// The steps of pack() and unpack() that do not depend on the message (can_messages.cpp).
+CanFrame start_frame(std::uint32_t id);
+void seal(CanFrame& f);  // the CRC into byte 7
+// kWrongId, kWrongDlc (not 8), kBadChecksum or kOk.
+DecodeStatus check_frame(const CanFrame& f, std::uint32_t id);
+// Writes a signal's physical value as its kind says; returns whether the value had to be clamped.
+bool put_signal(std::uint8_t* data, const CanSignal& s, double physical);
+// Reads a signal; sets out_of_range for a scaled value outside [min, max] (half a step of tolerance).
+double get_signal(const std::uint8_t* data, const CanSignal& s, bool& out_of_range);
+
+// Field I of M's layout as a compile-time constant (FieldOf<M, I>::value), so that every choice the
+// codec makes per signal (its kind, its multiplexer value) is made when compiling.
+template <class M, std::size_t I>
+struct FieldOf {
+  static constexpr const auto& value = std::get<I>(can_layout<M>().fields);
 };
 
-// ---- GNSS, 1-10 Hz: one fix is 0x130 (latitude), 0x130 (longitude), 0x131 status, 0x133 velocity,
-// 0x134 DOP, 0x132 time (closes the fix). Every frame carries a rolling counter and a CRC. --------
-// 0x130 is multiplexed (PositionMux): 32 bits at 1e-7 deg (cm, what RTK needs) for each of
-// latitude and longitude leave no room for a counter and a CRC in one frame, so the latitude goes
-// first and the longitude follows with the next counter value (GnssPositionPairer).
-enum class GnssPositionHalf : std::uint8_t { kLatitude = 0, kLongitude = 1 };  // PositionMux
+// Calls visit(FieldOf<M, I>{}) for every field I of M's layout, in table order.
+template <class M, class Visit>
+void visit_fields(Visit&& visit) {
+  constexpr std::size_t n = std::tuple_size_v<std::remove_cvref_t<decltype(can_layout<M>().fields)>>;
+  [&]<std::size_t... I>(std::index_sequence<I...>) { (visit(FieldOf<M, I>{}), ...); }(std::make_index_sequence<n>{});
+}
 
-struct GnssPosition {
-  GnssPositionHalf half = GnssPositionHalf::kLatitude;
-  double deg = 0.0;          // latitude [-90, 90] or longitude [-180, 180], 1e-7 deg
-  std::uint8_t counter = 0;  // +1 per frame of 0x130: the longitude carries the latitude's + 1
-};
+// The value of M's multiplexer (-1 without one): from the struct (the low bits that go on the wire),
+// or from a frame's bits.
+template <class M>
+int mux_of(const M& m) {
+  int mux = -1;
+  visit_fields<M>([&](auto field) {
+    constexpr const CanSignal& s = decltype(field)::value.signal;
+    if constexpr (s.kind == SignalKind::kMultiplexer) {
+      const std::uint64_t mask = (std::uint64_t{1} << s.length) - 1u;
+      mux = static_cast<int>(static_cast<std::uint64_t>(to_physical(decltype(field)::value.of(m))) & mask);
+    }
+  });
+  return mux;
+}
+template <class M>
+int mux_in(const std::uint8_t* data) {
+  int mux = -1;
+  visit_fields<M>([&](auto field) {
+    constexpr const CanSignal& s = decltype(field)::value.signal;
+    bool ignored = false;
+    if constexpr (s.kind == SignalKind::kMultiplexer) mux = static_cast<int>(get_signal(data, s, ignored));
+  });
+  return mux;
+}
+}  // namespace detail
 
-enum class GnssFixType : std::uint8_t { kNoFix = 0, kFix2D = 1, kFix3D = 2, kDeadReckoning = 3 };
+// Packing never fails: out-of-range values are clamped (counted in stats, if given); a frame's
+// clamped flag (RegClamped, OdomClamped) is also set when any other of its signals was clamped.
+template <CanMessage M>
+CanFrame pack(const M& m, PackStats* stats = nullptr) {
+  CanFrame f = detail::start_frame(can_layout<M>().id);
+  const int mux = detail::mux_of(m);
+  std::uint32_t saturated = 0;
+  detail::visit_fields<M>([&](auto field) {
+    constexpr const CanSignal& s = decltype(field)::value.signal;
+    if constexpr (s.kind != SignalKind::kClampedFlag) {
+      if (s.carried(mux)) saturated += detail::put_signal(f.data, s, to_physical(decltype(field)::value.of(m))) ? 1u : 0u;
+    }
+  });
+  detail::visit_fields<M>([&](auto field) {
+    constexpr const CanSignal& s = decltype(field)::value.signal;
+    if constexpr (s.kind == SignalKind::kClampedFlag) {
+      const bool clamped = decltype(field)::value.of(m) || saturated != 0u;
+      detail::put_signal(f.data, s, clamped ? 1.0 : 0.0);
+    }
+  });
+  if (stats != nullptr) stats->saturated += saturated;
+  detail::seal(f);
+  return f;
+}
 
-struct GnssStatus {
-  double alt_m = 0.0;        // [-1000, 9485.75], 0.01 m (height above the ellipsoid)
-  double h_acc_m = 0.0;      // [0, 204.75], 0.05 m
-  double v_acc_m = 0.0;      // [0, 204.75], 0.05 m
-  std::uint8_t num_sats = 0; // [0, 63]
-  GnssFixType fix_type = GnssFixType::kNoFix;
-  std::uint8_t counter = 0;
-};
-
-// Doppler velocity of the same fix (0x133, sent before the closing 0x132): what a receiver's
-// NAV-PVT-style output carries; its course over ground is a heading while the vehicle moves.
-struct GnssVelocity {
-  double vel_east_mps = 0.0;   // [-327.68, 327.67], 0.01 m/s
-  double vel_north_mps = 0.0;  // [-327.68, 327.67], 0.01 m/s
-  double vel_up_mps = 0.0;     // [-10.24, 10.23], 0.01 m/s
-  double speed_acc_mps = 0.0;  // [0, 5.1], 0.02 m/s, receiver-reported 1 sigma per axis (saturates)
-  bool valid = false;          // the receiver has a velocity solution
-  std::uint8_t counter = 0;
-};
-
-struct GnssTime {
-  double time_of_week_s = 0.0;  // [0, 604799.999], 1 ms
-  std::uint16_t week = 0;       // GPS week (full, no rollover)
-  std::uint8_t counter = 0;
-};
-
-struct GnssDop {
-  double hdop = 0.0;  // [0, 25.5], 0.1 (saturates)
-  double pdop = 0.0;  // [0, 25.5], 0.1 (saturates)
-  std::uint8_t counter = 0;
-};
-
-// ---- Fused pose out (0x200..0x202, at the localizer's frame rate) -----------------------------
-struct PoseFlags {
-  bool pose_valid = false;          // the localizer vouches for this pose
-  bool registration_valid = false;  // the latest registration passed the validity gate
-  bool gnss_used = false;           // GNSS contributed since the last frame
-  bool degraded = false;            // dead-reckoning only for longer than the configured limit
-};
-
-struct PosePosition {
-  double x_m = 0.0;  // local ENU frame, [-8388.608, 8388.607], 1 mm
-  double y_m = 0.0;
-  PoseFlags flags;
-  std::uint8_t counter = 0;
-};
-
-struct PoseAttitude {
-  double z_m = 0.0;            // [-327.68, 327.67], 0.01 m
-  double yaw_rad = 0.0;        // [-3.1416, 3.1416], 1e-4 rad (ENU: 0 = east, CCW positive)
-  std::uint16_t frame_counter = 0;  // localizer frame index mod 65536 (ties the three frames)
-  PoseFlags flags;
-  std::uint8_t counter = 0;
-};
-
-struct PoseSigma {
-  double sigma_x_m = 0.0;      // [0, 20.475], 0.005 m (1 sigma)
-  double sigma_y_m = 0.0;
-  double sigma_z_m = 0.0;
-  double sigma_yaw_rad = 0.0;  // [0, 0.4095], 1e-4 rad
-  std::uint8_t counter = 0;
-};
-
-// ---- Diagnostics out (0x210..0x214, once per ego frame, after the pose frames) ----------------
-// What the paper's Table 1 needs beyond the fused pose: this frame's registration, the fixed-lag
-// gate decision that became available, and the odometry pose. Every value that does not fit its
-// signal is clamped and the frame's `clamped` flag is set (in addition to PackStats): a receiver
-// never sees a silently wrapped number.
-struct RegistrationPosition {
-  double x_m = 0.0;             // world (local ENU), [-8388.608, 8388.607], 1 mm
-  double y_m = 0.0;
-  bool attempted = false;       // a registration ran this frame
-  bool ok = false;              // it returned RegistrationStatus::kOk
-  bool clamped = false;         // a signal of 0x210 or 0x211 of this frame was saturated
-  std::uint8_t counter = 0;
-};
-
-struct RegistrationQuality {
-  double z_m = 0.0;             // [-32.768, 32.767], 1 mm
-  double fitness = 0.0;         // [0, 1.023], 0.001 (inlier fraction)
-  double inlier_rmse_m = 0.0;   // [0, 1.023], 1 mm
-  std::uint16_t frame_counter = 0;
-  std::uint8_t counter = 0;
-};
-
-enum class LocalizerModeCode : std::uint8_t { kUninitialized = 0, kGlobalSearch = 1, kTracking = 2 };
-inline constexpr std::uint8_t kLocalizerModeMax = 2;
-
-struct GateDecision {
-  std::uint16_t decided_frame = 0;  // frame index (mod 65536) the decision is about
-  std::uint16_t frame_counter = 0;  // the frame that published it
-  bool decided = false;             // a decision became available at this frame
-  bool valid = false;               // the decided frame's registration passed the envelope
-  LocalizerModeCode mode = LocalizerModeCode::kUninitialized;
-  bool filter_initialized = false;  // the fused pose comes from the EKF (else: the GNSS fix)
-  std::uint8_t counter = 0;
-};
-
-struct OdometryPosition {
-  double x_m = 0.0;             // odom frame (LiDAR frame of the first scan), [-8388.608, 8388.607], 1 mm
-  double y_m = 0.0;
-  bool odometry_ok = false;
-  bool clamped = false;         // a signal of 0x213 or 0x214 of this frame was saturated
-  std::uint8_t counter = 0;
-};
-
-struct OdometryAttitude {
-  double z_m = 0.0;             // [-32.768, 32.767], 1 mm
-  double yaw_rad = 0.0;         // [-3.1416, 3.1416], 1e-4 rad (wrapped, never clamped)
-  std::uint16_t frame_counter = 0;
-  bool odometry_ok = false;
-  bool clamped = false;
-  std::uint8_t counter = 0;
-};
-
-// ---- Status / heartbeat (0x300, 1 Hz) --------------------------------------------------------
-enum class LocalizerState : std::uint8_t {
-  kInit = 0, kWaitingForGnss = 1, kLocalizing = 2, kLocalized = 3, kDegraded = 4, kFault = 5
-};
-inline constexpr std::uint8_t kLocalizerStateMax = 5;
-
-// Heartbeat ErrorFlags bits (DBC comment of 0x300 ErrorFlags, WIRE_FORMATS.md).
-namespace heartbeat_error {
-inline constexpr std::uint8_t kCanTimeout = 1u << 0;        // no CAN frame within the input timeout
-inline constexpr std::uint8_t kUdpTimeout = 1u << 1;        // no datagram within the input timeout
-inline constexpr std::uint8_t kGnssTimeout = 1u << 2;       // no GNSS fix within the GNSS timeout
-inline constexpr std::uint8_t kCapacityOverflow = 1u << 3;  // reassembly ran out of capacity
-}  // namespace heartbeat_error
-
-struct Heartbeat {
-  LocalizerState state = LocalizerState::kInit;
-  std::uint8_t error_flags = 0;    // heartbeat_error bits (4 bits)
-  double uptime_s = 0.0;           // [0, 1677721.5], 0.1 s
-  std::uint8_t can_rx_errors = 0;  // saturating counters since start-up, [0, 255]
-  std::uint8_t udp_dropped = 0;
-  std::uint8_t counter = 0;
-};
-
-// ---- Security diagnostics (0x301, 0x302; 1 Hz, after the heartbeat) ----------------------------
-// Saturating counts since start-up of what the firmware refused. 0x301: V2X map shares refused by
-// the trust layer, per reason; 0x302: CAN frames refused by CRC/DLC/range or by their rolling
-// counter, ego scans refused by the time guard, map shares that arrived unsigned, and signed
-// infrastructure clouds map fusion refused as off their unit's surveyed background.
-struct TrustRejections {
-  std::uint8_t unknown_signer = 0;   // [0, 255] each
-  std::uint8_t bad_signature = 0;
-  std::uint8_t too_old = 0;
-  std::uint8_t future = 0;
-  std::uint8_t replay = 0;
-  std::uint8_t queue_overflow = 0;   // admitted shares dropped from the full verification queue
-  std::uint8_t pose_mismatch = 0;    // [0, 15] infrastructure shares declaring a pose off their survey
-  std::uint8_t counter = 0;
-};
-
-struct InputGuards {
-  std::uint16_t can_crc_rejected = 0;      // [0, 4095] each: DLC / CRC / range failures
-  std::uint16_t can_counter_rejected = 0;  // rolling counter repeated (stale or replayed frame)
-  std::uint16_t ego_time_rejected = 0;     // ego scans dated implausibly against the local clock
-  std::uint16_t missing_signature = 0;     // map shares without a signature
-  std::uint8_t background_mismatch = 0;    // [0, 15] infrastructure clouds off their surveyed background
-  std::uint8_t counter = 0;
-};
-inline constexpr std::uint16_t kInputGuardsMax = 4095;
-
-// The codec's scaled-signal table (the constants pack/unpack use), by message id and DBC signal
-// name. Flags, rolling counters and CRC bytes sit at fixed bits; tests/unit/can_protocol checks
-// this table, and every frame the codec packs, against tools/dbc/v2xloc.dbc.
-struct NamedCanSignal {
-  std::uint32_t message_id;
-  const char* name;
-  unsigned start;   // LSB, Intel byte order
-  unsigned length;
-  bool is_signed;
-  double factor;    // physical = raw * factor + offset
-  double offset;
-  double min;       // physical range
-  double max;
-};
-std::span<const NamedCanSignal> can_signal_table();
-
-// Packing never fails: out-of-range values are clamped (counted in stats, if given).
-CanFrame pack(const VehicleMotion& m, PackStats* stats = nullptr);
-CanFrame pack(const GnssPosition& m, PackStats* stats = nullptr);
-CanFrame pack(const GnssStatus& m, PackStats* stats = nullptr);
-CanFrame pack(const GnssTime& m, PackStats* stats = nullptr);
-CanFrame pack(const GnssVelocity& m, PackStats* stats = nullptr);
-CanFrame pack(const GnssDop& m, PackStats* stats = nullptr);
-CanFrame pack(const PosePosition& m, PackStats* stats = nullptr);
-CanFrame pack(const PoseAttitude& m, PackStats* stats = nullptr);
-CanFrame pack(const PoseSigma& m, PackStats* stats = nullptr);
-CanFrame pack(const Heartbeat& m, PackStats* stats = nullptr);
-CanFrame pack(const TrustRejections& m, PackStats* stats = nullptr);
-CanFrame pack(const InputGuards& m, PackStats* stats = nullptr);
-// Diagnostics: a saturated signal also sets the frame's clamped flag (where the frame has one).
-CanFrame pack(const RegistrationPosition& m, PackStats* stats = nullptr);
-CanFrame pack(const RegistrationQuality& m, PackStats* stats = nullptr);
-CanFrame pack(const GateDecision& m, PackStats* stats = nullptr);
-CanFrame pack(const OdometryPosition& m, PackStats* stats = nullptr);
-CanFrame pack(const OdometryAttitude& m, PackStats* stats = nullptr);
-
-// Unpacking checks id, DLC (exactly 8), CRC, and DBC ranges. On kWrongId /
-// kWrongDlc / kBadChecksum the output is left untouched.
-DecodeStatus unpack(const CanFrame& f, VehicleMotion& m);
-DecodeStatus unpack(const CanFrame& f, GnssPosition& m);
-DecodeStatus unpack(const CanFrame& f, GnssStatus& m);
-DecodeStatus unpack(const CanFrame& f, GnssTime& m);
-DecodeStatus unpack(const CanFrame& f, GnssVelocity& m);
-DecodeStatus unpack(const CanFrame& f, GnssDop& m);
-DecodeStatus unpack(const CanFrame& f, PosePosition& m);
-DecodeStatus unpack(const CanFrame& f, PoseAttitude& m);
-DecodeStatus unpack(const CanFrame& f, PoseSigma& m);
-DecodeStatus unpack(const CanFrame& f, Heartbeat& m);
-DecodeStatus unpack(const CanFrame& f, TrustRejections& m);
-DecodeStatus unpack(const CanFrame& f, InputGuards& m);
-DecodeStatus unpack(const CanFrame& f, RegistrationPosition& m);
-DecodeStatus unpack(const CanFrame& f, RegistrationQuality& m);
-DecodeStatus unpack(const CanFrame& f, GateDecision& m);
-DecodeStatus unpack(const CanFrame& f, OdometryPosition& m);
-DecodeStatus unpack(const CanFrame& f, OdometryAttitude& m);
+// Unpacking checks id, DLC (exactly 8), CRC, and DBC ranges. On kWrongId / kWrongDlc /
+// kBadChecksum the output is left untouched; on kOutOfRange every value is written.
+template <CanMessage M>
+DecodeStatus unpack(const CanFrame& f, M& m) {
+  const DecodeStatus checked = detail::check_frame(f, can_layout<M>().id);
+  if (checked != DecodeStatus::kOk) return checked;
+  const int mux = detail::mux_in<M>(f.data);
+  bool out_of_range = false;
+  detail::visit_fields<M>([&](auto field) {
+    constexpr const CanSignal& s = decltype(field)::value.signal;
+    if (s.carried(mux)) assign_physical(decltype(field)::value.of(m), detail::get_signal(f.data, s, out_of_range));
+  });
+  return out_of_range ? DecodeStatus::kOutOfRange : DecodeStatus::kOk;
+}
 
 // Receiver-side rolling-counter supervision (one per message id): counts frames lost in between
 // and repeated (stale) frames.

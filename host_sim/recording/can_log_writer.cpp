@@ -6,11 +6,14 @@
 #include <vector>
 
 #include "firmware/protocol/can_messages.hpp"
-#include "host_sim/canlog/can_layout.hpp"
 #include "host_sim/canlog/candump_log.hpp"
 
 namespace v2xloc::sim {
 namespace {
+
+// The manifest's can_log.gnss note: one fix's frames in the order they are sent.
+constexpr const char* kGnssFrameOrder =
+    "0x130 latitude, 0x130 longitude, 0x131 status, 0x133 velocity, 0x134 DOP, 0x132 time at the GNSS rate";
 
 struct TimedCanFrame {
   std::int64_t us;
@@ -106,8 +109,8 @@ bool write_gnss_vehicle_can_log(const std::string& path, const std::string& file
   can_json["format"] = "candump -L: (unix_seconds.microseconds) can0 ID#HEXDATA";
   can_json["frames"] = writer.frames_written();
   can_json["vehicle_motion"] = "0x120 at 100 Hz (wheel speed, yaw rate)";
-  can_json["gnss"] = kCanLayoutGnssFrames;
-  can_json["layout_version"] = kCanLayoutVersion;
+  can_json["gnss"] = kGnssFrameOrder;
+  can_json["layout_version"] = protocol::kCanLayoutVersion;
   can_json["codec"] = "firmware/protocol/can_messages.hpp";
   return true;
 }

@@ -1,6 +1,6 @@
 #include "host_sim/recording/recording_reader.hpp"
 
-#include "host_sim/canlog/can_layout.hpp"
+#include "firmware/protocol/can_message_types.hpp"
 #include "host_sim/canlog/candump_log.hpp"
 #include "host_sim/cloud_io/pcd.hpp"
 #include "host_sim/common/text_file.hpp"
@@ -98,9 +98,9 @@ bool check_can_layout_version(const Fields& top) {
   const Json* v = can != nullptr && can->is_object() && can->contains("layout_version") ? &(*can)["layout_version"] : nullptr;
   if (v == nullptr)
     return top.fail("can_log.layout_version", "missing (a CAN layout 1 log); " + std::string(kRegenerate));
-  if (!v->is_number_integer() || v->get<std::int64_t>() != kCanLayoutVersion)
+  if (!v->is_number_integer() || v->get<std::int64_t>() != protocol::kCanLayoutVersion)
     return top.fail("can_log.layout_version",
-                    v->dump() + ", not " + std::to_string(kCanLayoutVersion) + "; " + kRegenerate);
+                    v->dump() + ", not " + std::to_string(protocol::kCanLayoutVersion) + "; " + kRegenerate);
   return true;
 }
 

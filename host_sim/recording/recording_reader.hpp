@@ -51,7 +51,7 @@ inline constexpr std::size_t kMaxManifestBytes = 64u << 20;
 class RecordingReader {
  public:
   // The manifest format_version written and read: quantised .pcdz clouds, a trust list, CAN
-  // layout 2 (host_sim/canlog/can_layout.hpp).
+  // layout 2 (protocol::kCanLayoutVersion, firmware/protocol/can_message_types.hpp).
   static constexpr int kFormatVersion = 2;
 
   bool open(const std::string& dir, std::string& error);

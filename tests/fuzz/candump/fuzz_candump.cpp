@@ -1,36 +1,30 @@
 // candump -L logs (host_sim/canlog): every line parses or is reported with a reason; a parsed
-// record formats to a line that parses back to the same record. The parsed log, read as CAN layout
-// 1 and converted, keeps every other frame as it was and turns each 8-byte 0x130 / 0x132 frame into
-// two CRC-sealed frames of the same stamp.
+// record formats to a line that parses back to the same record. Every parsed frame of a known id
+// goes through the CAN codec's unpack of that message: any bytes give a status, never a crash, and
+// only a frame of DLC 8 with its CRC right is decoded.
 #include <cstdlib>
 #include <cstring>
 #include <sstream>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "firmware/protocol/can_messages.hpp"
-#include "host_sim/canlog/can_layout.hpp"
 #include "host_sim/canlog/candump_log.hpp"
 
 namespace {
 
 using namespace v2xloc;
 
-// The converted log against the parsed one, record by record.
-void check_conversion(const std::vector<sim::CandumpRecord>& in) {
-  std::vector<sim::CandumpRecord> out = in;
-  const sim::CanLayoutConversion done = sim::convert_can_layout_1_to_2(out);
-  if (out.size() != in.size() + done.positions + done.times) std::abort();
-  std::size_t j = 0;
-  for (const sim::CandumpRecord& r : in) {
-    const bool split = (r.frame.id == protocol::kGnssPositionId || r.frame.id == protocol::kGnssTimeId) && r.frame.dlc == 8;
-    for (std::size_t k = 0; k < (split ? 2u : 1u); ++k, ++j) {
-      const hal::CanFrame& f = out[j].frame;
-      if (out[j].timestamp_us != r.timestamp_us) std::abort();
-      if (split && (f.dlc != 8 || f.data[7] != protocol::frame_crc(f.id, f.data))) std::abort();
-      if (!split && (f.id != r.frame.id || f.dlc != r.frame.dlc || std::memcmp(f.data, r.frame.data, 8) != 0)) std::abort();
-    }
-  }
+void check_decoding(const hal::CanFrame& frame) {
+  protocol::for_each_can_message([&](const auto& layout) {
+    if (layout.id != frame.id) return;
+    typename std::remove_cvref_t<decltype(layout)>::Message m;
+    const protocol::DecodeStatus s = protocol::unpack(frame, m);
+    const bool decoded = s == protocol::DecodeStatus::kOk || s == protocol::DecodeStatus::kOutOfRange;
+    if (decoded && (frame.dlc != 8 || frame.data[7] != protocol::frame_crc(frame.id, frame.data))) std::abort();
+    if (!decoded && s != protocol::DecodeStatus::kWrongDlc && s != protocol::DecodeStatus::kBadChecksum) std::abort();
+  });
 }
 
 }  // namespace
@@ -49,6 +43,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         std::memcmp(back.frame.data, r.frame.data, r.frame.dlc) != 0)
       std::abort();
   }
-  check_conversion(log.records);
+  for (const CandumpRecord& r : log.records) check_decoding(r.frame);
   return 0;
 }

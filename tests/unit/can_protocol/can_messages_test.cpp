@@ -5,6 +5,10 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <utility>
+#include <vector>
+
+#include "message_bindings.hpp"
 
 namespace v2xloc::protocol {
 namespace {
@@ -171,38 +175,46 @@ TEST(CanMessages, OutOfRangeRawValuesFlagged) {
   EXPECT_EQ(unpack(h, hb), DecodeStatus::kOutOfRange);
 }
 
-// Every inbound frame, the GNSS position and time included, carries the CRC over id and payload.
-TEST(CanMessages, EveryInboundFrameIsCrcProtected) {
-  const CanFrame frames[] = {pack(VehicleMotion{}),
-                             pack(GnssPosition{GnssPositionHalf::kLatitude, 48.0, 0}),
-                             pack(GnssPosition{GnssPositionHalf::kLongitude, 11.0, 1}),
-                             pack(GnssStatus{}),
-                             pack(GnssVelocity{}),
-                             pack(GnssDop{}),
-                             pack(GnssTime{})};
-  for (const CanFrame& good : frames) {
-    EXPECT_EQ(good.data[7], frame_crc(good.id, good.data)) << std::hex << good.id;
-    for (int bit = 0; bit < 64; ++bit) {
+// For every message of the table, packed from zeros and from every signal at its maximum: any
+// single bit flipped fails the CRC (the GNSS position and time included), and a frame refused for
+// its id, DLC or CRC leaves every member of the output as it was.
+TEST(CanMessages, EveryMessageIsCrcProtectedAndLeavesItsOutputUntouchedOnRejection) {
+  int messages = 0;
+  for_each_can_message([&](const auto& layout) {
+    using M = typename std::remove_cvref_t<decltype(layout)>::Message;
+    ++messages;
+    test::Values at_max;
+    layout.for_each_field([&](const auto& f) { at_max[f.signal.name] = f.signal.max; });
+    M filled;
+    test::set_values(layout, at_max, filled);
+    const test::Values before = test::values_of(layout, filled);
+    for (const CanFrame& good : {pack(M{}), pack(filled)}) {
+      EXPECT_EQ(good.data[7], frame_crc(good.id, good.data)) << layout.name;
+      std::vector<std::pair<CanFrame, DecodeStatus>> refused;
       CanFrame f = good;
-      f.data[bit / 8] = static_cast<std::uint8_t>(f.data[bit / 8] ^ (1u << (bit % 8)));
-      GnssPosition gp;
-      GnssTime gt;
-      GnssDop gd;
-      VehicleMotion vm;
-      GnssStatus gs;
-      GnssVelocity gv;
-      DecodeStatus s = DecodeStatus::kOk;
-      switch (f.id) {
-        case kGnssPositionId: s = unpack(f, gp); break;
-        case kGnssTimeId: s = unpack(f, gt); break;
-        case kGnssDopId: s = unpack(f, gd); break;
-        case kVehicleMotionId: s = unpack(f, vm); break;
-        case kGnssStatusId: s = unpack(f, gs); break;
-        default: s = unpack(f, gv); break;
+      f.id ^= 0x001u;
+      refused.push_back({f, DecodeStatus::kWrongId});
+      f = good;
+      f.dlc = 7;
+      refused.push_back({f, DecodeStatus::kWrongDlc});
+      for (int bit = 0; bit < 64; ++bit) {
+        f = good;
+        f.data[bit / 8] = static_cast<std::uint8_t>(f.data[bit / 8] ^ (1u << (bit % 8)));
+        refused.push_back({f, DecodeStatus::kBadChecksum});
       }
-      EXPECT_EQ(s, DecodeStatus::kBadChecksum) << std::hex << good.id << " bit " << std::dec << bit;
+      for (const auto& [frame, status] : refused) {
+        M out = filled;
+        EXPECT_EQ(unpack(frame, out), status) << layout.name;
+        EXPECT_EQ(test::values_of(layout, out), before) << layout.name;
+      }
+      M decoded = filled;
+      EXPECT_EQ(unpack(good, decoded), DecodeStatus::kOk) << layout.name;
     }
-  }
+    M zero_decoded = filled;
+    ASSERT_EQ(unpack(pack(M{}), zero_decoded), DecodeStatus::kOk);
+    EXPECT_NE(test::values_of(layout, zero_decoded), before) << layout.name << ": a good frame writes";
+  });
+  EXPECT_EQ(messages, 17);
 }
 
 TEST(CanMessages, GnssPositionPairsOnlyConsecutiveHalves) {

@@ -1,7 +1,7 @@
 // Recordings are untrusted: every defect measured against the old reader (printf-format scan
 // patterns, unchecked counts and rates, short ground truth, silently ignored CAN stamps) is a test
 // here expecting a clear error naming the field, on a small hand-built recording.
-#include "host_sim/canlog/can_layout.hpp"
+#include "firmware/protocol/can_message_types.hpp"
 #include "host_sim/cloud_io/pcd.hpp"
 #include "host_sim/common/text_file.hpp"
 #include "host_sim/recording/recording_reader.hpp"
@@ -41,7 +41,7 @@ class HostileRecording : public test::RecordingDirTest {
     write("ground_truth_100hz.tum", "0 0 0 0 0 0 0 1\n0.01 0.1 0 0 0 0 0 1\n0.02 0.2 0 0 0 0 0 1\n");
     write("can.log", "(1700000000.050000) can0 120#0000000000000000\n(1700000000.100000) can0 18FF0001#01\n");
     m_["files"]["can_log"] = "can.log";
-    m_["can_log"] = {{"layout_version", kCanLayoutVersion}};
+    m_["can_log"] = {{"layout_version", protocol::kCanLayoutVersion}};
     m_["sensors"] = Json::array({{{"name", "ego_lidar"}, {"carrier", "ego"}, {"mount_in_body", pose(1.9)}},
                                  {{"name", "infra_0"}, {"carrier", "infrastructure"}, {"surveyed_pose_enu", pose(5)}}});
     m_["map_clouds"]["clouds"] = Json::array({{{"sensor", "infra_0"},
