@@ -6,6 +6,7 @@
 
 #include "firmware/protocol/crc32.hpp"
 #include "firmware/protocol/round_half_away.hpp"
+#include "v2xloc/algo/core/even_thinning.hpp"
 #include "hal/little_endian.hpp"
 
 namespace v2xloc::protocol {
@@ -437,15 +438,14 @@ void PointCloudReassembler::open_slot(std::size_t index, const CloudFragmentHead
 namespace {
 
 // Where a cloud's points go in a slot: all of them in order, or, for a cloud of more points than
-// the slot holds, `kept` of them evenly spread over the cloud (point i when floor(i * kept / total)
-// steps up, stored at its rank floor((i + 1) * kept / total) - 1), so the whole sweep arrives at
-// a lower density instead of its first sectors only. Depends on the point's index alone: fragments
-// may arrive in any order.
+// the slot holds, `kept` of them evenly spread over the cloud at their rank among the kept
+// (even_thinning.hpp: by the point's index alone, so fragments may arrive in any order), so the
+// whole sweep arrives at a lower density instead of its first sectors only.
 struct PointPlacement {
   std::uint64_t total = 0, kept = 0;
   bool thins() const { return kept < total; }
-  bool keeps(std::uint64_t i) const { return !thins() || (i + 1) * kept / total != i * kept / total; }
-  std::uint64_t rank(std::uint64_t i) const { return thins() ? (i + 1) * kept / total - 1 : i; }
+  bool keeps(std::uint64_t i) const { return !thins() || kept_evenly(i, total, kept); }
+  std::uint64_t rank(std::uint64_t i) const { return thins() ? kept_rank(i, total, kept) : i; }
 };
 
 PointPlacement placement_of(const CloudFragmentHeader& h, std::uint32_t max_points) {

@@ -4,19 +4,13 @@
 #include <cmath>
 
 #include "v2xloc/algo/core/det_math.hpp"
+#include "v2xloc/algo/core/even_thinning.hpp"
 #include "v2xloc/algo/core/spatial_hash.hpp"
 
 namespace v2xloc {
 
 namespace {
 constexpr auto kMaxProbes = static_cast<std::uint32_t>(config::kVoxelMaxProbes);
-
-// Whether the j-th of n items is one of k (<= n) kept evenly along the order: item j is kept when
-// floor(j k / n) steps up at j + 1, which happens exactly k times.
-bool kept_evenly(std::size_t j, std::size_t n, std::size_t k) {
-  const auto jj = static_cast<std::uint64_t>(j), nn = static_cast<std::uint64_t>(n), kk = static_cast<std::uint64_t>(k);
-  return (jj + 1) * kk / nn > jj * kk / nn;
-}
 
 }  // namespace
 

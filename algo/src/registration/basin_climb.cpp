@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "v2xloc/algo/core/det_math.hpp"
+#include "v2xloc/algo/core/even_thinning.hpp"
 #include "v2xloc/algo/search/kdtree.hpp"
 #include "v2xloc/algo/search/proximity_grid.hpp"
 
@@ -26,7 +27,7 @@ std::uint32_t rotate_subsample(std::span<const Vec3f> scan_body, double yaw, con
   for (const Vec3f& p : scan_body) {
     if (!(p.z() > params.min_height)) continue;
     const std::uint64_t i = a++;
-    if ((i + 1) * take / above == i * take / above) continue;
+    if (!kept_evenly(i, above, take)) continue;
     scratch.points[n++] = ClimbPoint{c * p.x() - s * p.y(), s * p.x() + c * p.y(), static_cast<float>(p.z() + params.ground_z)};
   }
   return n;

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "v2xloc/algo/core/det_math.hpp"
+#include "v2xloc/algo/core/even_thinning.hpp"
 #include "v2xloc/algo/registration/pose_search.hpp"
 
 namespace v2xloc {
@@ -36,7 +37,7 @@ std::uint32_t pick_score_points(std::span<const Vec3f> source, double ground_z, 
   for (const Vec3f& p : source) {
     if (!in_band(p)) continue;
     const std::uint64_t i = a++;
-    if ((i + 1) * take / band == i * take / band) continue;
+    if (!kept_evenly(i, band, take)) continue;
     out[n++] = Vec3f(p.x(), p.y(), static_cast<float>(p.z() - ground_z));
   }
   return n;

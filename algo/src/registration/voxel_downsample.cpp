@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "v2xloc/algo/core/even_thinning.hpp"
 #include "v2xloc/algo/core/finite.hpp"
 #include "v2xloc/algo/core/spatial_hash.hpp"
 #include "v2xloc/algo/core/unroll.hpp"
@@ -17,14 +18,14 @@ struct VoxelIndex {
   bool operator==(const VoxelIndex&) const = default;
 };
 
-// The points a call uses: all of them, or `take` of them evenly spread over the cloud (the i-th
-// when floor(i * take / n) steps up), so a cloud over the limit keeps its whole extent at a lower
-// density instead of losing its tail (for a scan, the sweep's last sectors).
+// The points a call uses: all of them, or `take` of them evenly spread over the cloud
+// (even_thinning.hpp), so a cloud over the limit keeps its whole extent at a lower density
+// instead of losing its tail (for a scan, the sweep's last sectors).
 class EvenSelection {
  public:
   EvenSelection(std::size_t n, std::size_t take) : n_(n), take_(take < n ? take : n) {}
   bool all() const { return take_ == n_; }
-  bool kept(std::size_t i) const { return all() || (i + 1) * take_ / n_ != i * take_ / n_; }
+  bool kept(std::size_t i) const { return all() || kept_evenly(i, n_, take_); }
   std::size_t skipped() const { return n_ - take_; }
 
  private:
