@@ -43,6 +43,13 @@ void Localizer::on_vehicle(const VehicleInput& in) {
   filter_.on_vehicle(in.t, in.wheel_speed, in.yaw_rate);
 }
 
+void Localizer::on_imu(const ImuInput& in) {
+  ++counters_.imu_received;
+  bool finite = std::isfinite(in.t);
+  for (int i = 0; i < 3; ++i) finite = finite && std::isfinite(in.gyro[i]) && std::isfinite(in.accel[i]);
+  if (!finite || in.saturated) ++counters_.imu_invalid;
+}
+
 void Localizer::on_gnss(const GnssInput& in) {
   ++counters_.gnss_received;
   if (!in.valid || !std::isfinite(in.lat_deg) || !std::isfinite(in.lon_deg) ||

@@ -46,6 +46,7 @@ class Localizer {
 
   void on_vehicle(const VehicleInput& input);
   void on_gnss(const GnssInput& input);
+  void on_imu(const ImuInput& input);
   MapInsertResult on_map_cloud(const MapCloudInput& input);
   // Provisioning, after configure(): infrastructure unit source_id's surveyed background (cells in
   // the caller's storage, read for as long as the localizer runs); its clouds are then checked

@@ -18,6 +18,14 @@ struct VehicleInput {
   double yaw_rate = 0.0;         // [rad/s]
 };
 
+// One inertial sample (hal/HID_IMU_REPORT.md), its sensor time already on the inputs' clock.
+struct ImuInput {
+  double t = 0.0;                  // [s] sample time
+  double gyro[3] = {0, 0, 0};      // [rad/s] angular rate, body frame (x forward, y left, z up)
+  double accel[3] = {0, 0, 0};     // [m/s^2] specific force, body frame
+  bool saturated = false;          // the sensor flagged an axis at its range limit
+};
+
 struct GnssInput {
   double t = 0.0;                // [s]
   double lat_deg = 0.0, lon_deg = 0.0, alt_m = 0.0;
@@ -122,6 +130,8 @@ struct LocalizerCounters {
   std::uint32_t map_normals_refused = 0;       // asked past the per-period cap: pair skipped
   std::uint32_t gnss_received = 0;
   std::uint32_t gnss_invalid = 0;
+  std::uint32_t imu_received = 0;
+  std::uint32_t imu_invalid = 0;               // non-finite, saturated or out of time order
   std::uint32_t scan_points_dropped = 0;       // non-finite, out of range or over capacity
   std::uint32_t scans_coarsened = 0;           // sweeps over the ingest capacity, read again with a coarser voxel
   std::uint32_t odometry_failures = 0;
