@@ -5,8 +5,8 @@
 //       the localizer as a fixture; --outputs: that run's period lines.
 //   play FIXTURE OUTPUT [--callgrind]
 //       plays the fixture into this build's Localizer and writes its period lines: the host
-//       reference the target image's lines must equal, bit for bit. --callgrind: one callgrind
-//       dump per period (tools/timing/fixture_instructions.py).
+//       reference the target image's lines must equal, bit for bit. --callgrind: callgrind dumps
+//       per period and bucket (tools/timing/fixture_instructions.py).
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -19,6 +19,7 @@
 #endif
 
 #include "firmware/fixture/fixture_player.hpp"
+#include "firmware/fixture/period_buckets.hpp"
 #include "host_sim/recording/recording_reader.hpp"
 #include "host_sim/replay/event_stream.hpp"
 #include "tools/target/fixture_writer.hpp"
@@ -111,30 +112,41 @@ class FileSource final : public v2xloc::fixture::ByteSource {
 };
 
 // Under callgrind (--callgrind, valgrind --collect-atstart=no): instructions are collected only
-// inside the localizer calls, as the target's PMU counts them, and dumped once per period.
-class CallgrindMeter : public v2xloc::fixture::CallMeter {
+// inside the localizer calls, as the target's PMU counts them, and dumped at every change of
+// bucket (period_buckets.hpp) as "period P BUCKET", the target's split of the same work.
+class CallgrindMeter final : public v2xloc::fixture::CallMeter, public v2xloc::fixture::BucketTracker {
  public:
   explicit CallgrindMeter(bool on) : on_(on) {}
-  void begin() override { toggle(); }
+  void begin(v2xloc::fixture::Tag call) override {
+    call_begins(call);
+    toggle();
+  }
   void end() override { toggle(); }
-  void period_done(std::uint32_t period) {
-#ifdef V2XLOC_HAVE_CALLGRIND
-    if (!on_) return;
-    char label[32];
-    std::snprintf(label, sizeof label, "period %u", period);
-    CALLGRIND_DUMP_STATS_AT(label);
-#else
-    (void)period;
-#endif
+  void period_done() {
+    dump(current());
+    reset();
+    ++period_;
   }
 
  private:
+  void entered(v2xloc::fixture::Bucket from) override { dump(from); }
+  void dump(v2xloc::fixture::Bucket b) {
+#ifdef V2XLOC_HAVE_CALLGRIND
+    if (!on_ || b == v2xloc::fixture::Bucket::kCount) return;
+    char label[64];
+    std::snprintf(label, sizeof label, "period %u %s", period_, v2xloc::fixture::bucket_name(b));
+    CALLGRIND_DUMP_STATS_AT(label);
+#else
+    (void)b;
+#endif
+  }
   void toggle() {
 #ifdef V2XLOC_HAVE_CALLGRIND
     if (on_) CALLGRIND_TOGGLE_COLLECT;
 #endif
   }
   bool on_;
+  std::uint32_t period_ = 0;
 };
 
 int play(int argc, char** argv) {
@@ -152,9 +164,10 @@ int play(int argc, char** argv) {
     return 1;
   }
   CallgrindMeter meter(callgrind);
+  if (callgrind) g_localizer.set_stage_probe(meter.probe());
   for (;;) {
     const v2xloc::fixture::Step step = g_player.step(g_localizer, meter);
-    if (step == v2xloc::fixture::Step::kPeriod) meter.period_done(g_player.period() - 1);
+    if (step == v2xloc::fixture::Step::kPeriod) meter.period_done();
     if (step == v2xloc::fixture::Step::kEnd) break;
     if (step == v2xloc::fixture::Step::kError) {
       std::fprintf(stderr, "v2xloc-fixture: %s: %s\n", argv[2], g_player.error());
