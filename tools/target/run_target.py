@@ -4,11 +4,17 @@
 In a working folder of its own: (1) the inputs: a short recording made by v2xloc-sim and turned
 into a fixture by `v2xloc-fixture record` (the offline wire path's localizer calls), or the
 worst-case suite's adversarial drive (WorstCase.AdversarialPeriods with V2XLOC_TARGET_FIXTURE);
-(2) the host reference: `v2xloc-fixture play` in this EMBEDDED build; (3) the target run:
-`qemu-system-arm -M virt -cpu max -icount shift=0` with semihosting, under a timeout. Fails unless
+(2) the host reference: `v2xloc-fixture play` in this EMBEDDED build, checked against the
+committed golden file (--golden); (3) the target run: `qemu-system-arm -M virt -cpu max -icount
+shift=0` with semihosting, under a timeout. Fails unless the host reference equals the golden,
 QEMU exits 0, every period's line equals the host's bit for bit (and, for a recording, the
 recording run's own lines), and every period outside "setup" retires <= --budget instructions.
-Exit 77 (ctest: skipped, with the reason) without qemu-system-arm or the target image.
+Exit 77 (ctest: skipped, with the reason) without qemu-system-arm or the target image, after the
+golden check.
+
+Goldens: --update-golden (or V2XLOC_UPDATE_GOLDEN=1 in the environment, e.g.
+`V2XLOC_UPDATE_GOLDEN=1 ctest --preset target`) writes the host reference as the golden instead
+of comparing with it; the rest of the run is unchanged.
 """
 import argparse
 import os
@@ -19,6 +25,8 @@ import sys
 
 QEMU = ["qemu-system-arm", "-M", "virt", "-cpu", "max", "-m", "128M", "-nographic", "-monitor", "none",
         "-serial", "none", "-nic", "none", "-icount", "shift=0"]
+REGENERATE = "V2XLOC_UPDATE_GOLDEN=1 ctest --preset target"
+HOW_TO_UPDATE = f"{REGENERATE} (all goldens), or this command with --update-golden (this one)"
 
 
 def run(cmd, cwd, timeout, log):
@@ -44,36 +52,8 @@ def pose_part(line):
     return line.split(" instr ")[0]
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--name", required=True)
-    ap.add_argument("--workdir", required=True)
-    ap.add_argument("--image", required=True, help="v2xloc_target.elf (cortex-r52 preset)")
-    ap.add_argument("--fixture-tool", required=True, help="v2xloc-fixture of this EMBEDDED build")
-    ap.add_argument("--sim", help="v2xloc-sim: make the recording with it")
-    ap.add_argument("--generate", nargs=argparse.REMAINDER, default=[],
-                    help="v2xloc-sim generate arguments (last option)")
-    ap.add_argument("--recording", help="an existing recording folder instead of --sim/--generate")
-    ap.add_argument("--worst-case", help="test_worst_case_localizer: its adversarial drive is the fixture")
-    ap.add_argument("--budget", type=float, default=100e6, help="instructions per period outside 'setup'")
-    ap.add_argument("--timeout", type=int, default=900, help="seconds for the QEMU run")
-    ap.add_argument("--golden", help="committed host lines this run's must also equal")
-    ap.add_argument("--known-over", type=float, default=0.0,
-                    help="a known gap (docs/target.md): periods over --budget pass up to this ceiling, reported")
-    a = ap.parse_args()
-
-    if shutil.which("qemu-system-arm") is None:
-        print("run_target: SKIPPED: qemu-system-arm not installed (apt-get install qemu-system-arm)")
-        return 77
-    if not os.path.exists(a.image):
-        print(f"run_target: SKIPPED: no target image {a.image} (cmake --build --preset cortex-r52 first)")
-        return 77
-
-    wd = os.path.abspath(a.workdir)
-    shutil.rmtree(wd, ignore_errors=True)
-    os.makedirs(wd)
-    fixture, host, target, recorded = (os.path.join(wd, n) for n in ("inputs.fix", "host.txt", "target.txt", "recorded.txt"))
-
+def make_inputs(a, wd, fixture, recorded):
+    """The fixture: the worst-case drive's, or a (generated) recording's through `v2xloc-fixture record`."""
     if a.worst_case:
         env = dict(os.environ, V2XLOC_TARGET_FIXTURE=fixture)
         log = os.path.join(wd, "worst_case.log")
@@ -81,20 +61,61 @@ def main():
             rc = subprocess.run([a.worst_case, "--gtest_filter=WorstCase.AdversarialPeriods"], cwd=wd, env=env,
                                 stdout=f, stderr=subprocess.STDOUT, timeout=1200).returncode
         need(rc == 0, "the worst-case drive that writes the fixture", log)
-    else:
-        rec = os.path.abspath(a.recording) if a.recording else "rec"
-        if not a.recording:
-            need(a.sim and a.generate, "--sim and --generate, --recording, or --worst-case")
-            log = os.path.join(wd, "generate.log")
-            need(run([a.sim, "generate", *a.generate, "--out", "rec"], wd, 900, log) == 0, "v2xloc-sim generate", log)
-        log = os.path.join(wd, "record.log")
-        need(run([a.fixture_tool, "record", rec, fixture, "--label", a.name, "--outputs", recorded], wd, 900, log) == 0,
-             "v2xloc-fixture record", log)
-        print(open(log).read().strip())
+        return
+    rec = os.path.abspath(a.recording) if a.recording else "rec"
+    if not a.recording:
+        need(a.sim and a.generate, "--sim and --generate, --recording, or --worst-case")
+        log = os.path.join(wd, "generate.log")
+        need(run([a.sim, "generate", *a.generate, "--out", "rec"], wd, 900, log) == 0, "v2xloc-sim generate", log)
+    log = os.path.join(wd, "record.log")
+    need(run([a.fixture_tool, "record", rec, fixture, "--label", a.name, "--outputs", recorded], wd, 900, log) == 0,
+         "v2xloc-fixture record", log)
+    print(open(log).read().strip())
 
-    log = os.path.join(wd, "play.log")
-    need(run([a.fixture_tool, "play", fixture, host], wd, 900, log) == 0, "v2xloc-fixture play (host reference)", log)
 
+def golden_lines(path):
+    return [l for l in open(path).read().splitlines() if l and not l.startswith("#")]
+
+
+def write_golden(path, name, host_lines):
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    with open(path, "w") as f:
+        f.write(f"# Target.{name}: the host EMBEDDED build's period lines, the bits the target's must equal\n"
+                f"# (docs/target.md). Regenerate: {REGENERATE}\n")
+        f.write("\n".join(host_lines) + "\n")
+    print(f"run_target: golden written: {path} ({len(host_lines)} periods)")
+
+
+def golden_mismatch(path, host_lines):
+    """None if the host reference equals the committed golden, else what differs first."""
+    if not os.path.exists(path):
+        return f"no golden file {path}; create it with {HOW_TO_UPDATE}"
+    gold = golden_lines(path)
+    first = next((i for i, (g, h) in enumerate(zip(gold, host_lines)) if g != h), None)
+    if first is None and len(gold) == len(host_lines):
+        return None
+    if first is None:
+        return (f"the host reference has {len(host_lines)} periods, the golden {path} {len(gold)}; if the change "
+                f"is intended, regenerate: {HOW_TO_UPDATE}")
+    differing = sum(g != h for g, h in zip(gold, host_lines))
+    return (f"the host reference differs from the golden {path} first at period {first} ({differing} of "
+            f"{min(len(gold), len(host_lines))} periods differ)\n  golden {gold[first]}\n  host   {host_lines[first]}\n"
+            f"  if the change of behaviour is intended, regenerate: {HOW_TO_UPDATE}")
+
+
+def check_golden(a, host_lines):
+    """Writes or compares the golden; the mismatch text (None when it matches or there is no --golden)."""
+    if not a.golden:
+        return None
+    if a.update_golden:
+        write_golden(a.golden, a.name, host_lines)
+        return None
+    mismatch = golden_mismatch(a.golden, host_lines)
+    print(f"run_target: GOLDEN MISMATCH: {mismatch}" if mismatch else f"run_target: golden matches: {a.golden}")
+    return mismatch
+
+
+def run_qemu(a, wd):
     log = os.path.join(wd, "qemu.log")
     image = os.path.abspath(a.image)
     cmd = QEMU + ["-semihosting-config", f"enable=on,target=native,arg={image},arg=inputs.fix,arg=target.txt",
@@ -102,11 +123,11 @@ def main():
     rc = run(cmd, wd, a.timeout, log)
     need(rc == 0, f"the target run (QEMU exit status {rc})", log)
 
-    host_lines = open(host).read().splitlines()
+
+def compare(a, host_lines, target, recorded):
+    """The target's period lines (the '#' summary apart) after checking them against the host's."""
     lines = open(target).read().splitlines()
     periods = [l for l in lines if not l.startswith("#")]
-    summary = [l for l in lines if l.startswith("#")]
-    need(len(host_lines) > 0, "no periods in the host reference")
     need(len(periods) == len(host_lines), f"{len(periods)} target periods, {len(host_lines)} host periods")
     diff = [(h, t) for h, t in zip(host_lines, periods) if pose_part(t) != h]
     for h, t in diff[:5]:
@@ -115,9 +136,10 @@ def main():
     if not a.worst_case:
         rec = open(recorded).read().splitlines()
         need(rec == host_lines, "the fixture's host play differs from the recording's own run")
-    if a.golden:
-        need(open(a.golden).read().splitlines() == host_lines, f"host lines differ from the golden {a.golden}")
+    return periods, [l for l in lines if l.startswith("#")]
 
+
+def check_budget(a, periods, summary):
     counted = []
     for l in periods:
         f = l.split()
@@ -149,6 +171,60 @@ def main():
               f"(max {max(instr) / 1e6:.1f} M); failing only above the ceiling {a.known_over / 1e6:.0f} M")
         over = [c for c in over if c[2] > a.known_over]
     need(not over, f"{len(over)} periods over {max(a.budget, a.known_over) / 1e6:.0f} M instructions")
+
+
+def parse_args():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--name", required=True)
+    ap.add_argument("--workdir", required=True)
+    ap.add_argument("--image", required=True, help="v2xloc_target.elf (cortex-r52 preset)")
+    ap.add_argument("--fixture-tool", required=True, help="v2xloc-fixture of this EMBEDDED build")
+    ap.add_argument("--sim", help="v2xloc-sim: make the recording with it")
+    ap.add_argument("--generate", nargs=argparse.REMAINDER, default=[],
+                    help="v2xloc-sim generate arguments (last option)")
+    ap.add_argument("--recording", help="an existing recording folder instead of --sim/--generate")
+    ap.add_argument("--worst-case", help="test_worst_case_localizer: its adversarial drive is the fixture")
+    ap.add_argument("--budget", type=float, default=100e6, help="instructions per period outside 'setup'")
+    ap.add_argument("--timeout", type=int, default=900, help="seconds for the QEMU run")
+    ap.add_argument("--golden", help="the committed host lines the host reference must equal")
+    ap.add_argument("--update-golden", action="store_true",
+                    default=os.environ.get("V2XLOC_UPDATE_GOLDEN", "") not in ("", "0"),
+                    help="write the host reference to --golden instead of comparing (env V2XLOC_UPDATE_GOLDEN=1)")
+    ap.add_argument("--known-over", type=float, default=0.0,
+                    help="a known gap (docs/target.md): periods over --budget pass up to this ceiling, reported")
+    a = ap.parse_args()
+    for tool in ("fixture_tool", "sim", "worst_case"):  # the steps run in the working folder
+        if getattr(a, tool):
+            setattr(a, tool, os.path.abspath(getattr(a, tool)))
+    return a
+
+
+def main():
+    a = parse_args()
+    wd = os.path.abspath(a.workdir)
+    shutil.rmtree(wd, ignore_errors=True)
+    os.makedirs(wd)
+    fixture, host, target, recorded = (os.path.join(wd, n) for n in ("inputs.fix", "host.txt", "target.txt", "recorded.txt"))
+    make_inputs(a, wd, fixture, recorded)
+    log = os.path.join(wd, "play.log")
+    need(run([a.fixture_tool, "play", fixture, host], wd, 900, log) == 0, "v2xloc-fixture play (host reference)", log)
+    host_lines = open(host).read().splitlines()
+    need(len(host_lines) > 0, "no periods in the host reference")
+    mismatch = check_golden(a, host_lines)
+
+    skip = None
+    if shutil.which("qemu-system-arm") is None:
+        skip = "qemu-system-arm not installed (apt-get install qemu-system-arm)"
+    elif not os.path.exists(a.image):
+        skip = f"no target image {a.image} (cmake --build --preset cortex-r52 first)"
+    if skip and not mismatch:
+        print(f"run_target: SKIPPED the target run: {skip}")
+        return 77
+    if not skip:
+        run_qemu(a, wd)
+        periods, summary = compare(a, host_lines, target, recorded)
+    need(not mismatch, "the golden check (above)")
+    check_budget(a, periods, summary)
     return 0
 
 
