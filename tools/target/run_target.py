@@ -8,7 +8,8 @@ worst-case suite's adversarial drive (WorstCase.AdversarialPeriods with V2XLOC_T
 committed golden file (--golden); (3) the target run: `qemu-system-arm -M virt -cpu max -icount
 shift=0` with semihosting, under a timeout. Fails unless the host reference equals the golden,
 QEMU exits 0, every period's line equals the host's bit for bit (and, for a recording, the
-recording run's own lines), and every period outside "setup" retires <= --budget instructions.
+recording run's own lines), every period's per-stage counts sum to its total, and every period
+outside "setup" retires <= --budget instructions.
 Exit 77 (ctest: skipped, with the reason) without qemu-system-arm or the target image, after the
 golden check.
 
@@ -144,6 +145,9 @@ def check_budget(a, periods, summary):
     for l in periods:
         f = l.split()
         instr, cycles = int(f[f.index("instr") + 1]), int(f[f.index("cycles") + 1])
+        need("stages" in f, f"period {f[0]}: no per-stage counts in the target's line")
+        buckets = f[f.index("stages") + 1:]
+        need(sum(int(n) for n in buckets[1::2]) == instr, f"period {f[0]}: the stages do not sum to instr {instr}")
         counted.append((f[1], int(f[0]), instr, cycles))
     inside = [c for c in counted if c[0] != "setup"]
     over = [c for c in inside if c[2] > a.budget]
