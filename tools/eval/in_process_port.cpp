@@ -1,9 +1,45 @@
 #include "tools/eval/in_process_port.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <vector>
+
+#include "firmware/wire/cloud_input_decoder.hpp"
+#include "v2xloc/algo/core/even_thinning.hpp"
 
 namespace v2xloc::eval {
+
+namespace {
+
+// The entries of one per-point attribute that the thinning keeps, in order (an attribute the
+// cloud does not carry, of another size, is left alone).
+template <class T>
+void keep_evenly(std::vector<T>& v, std::size_t n, std::size_t kept) {
+  if (v.size() != n) return;
+  std::size_t out = 0;
+  for (std::size_t j = 0; j < n; ++j) {
+    if (kept_evenly(j, n, kept)) v[out++] = v[j];
+  }
+  v.resize(out);
+}
+
+// A recorded cloud over the firmware's cloud capacity, thinned as its reassembler thins the wire
+// cloud (firmware/protocol/pointcloud_udp.cpp: the same points, kept evenly by index), so both
+// paths give the localizer the same points but for the wire's quantisation.
+void thin_like_reassembler(cloud_io::PointCloud& cloud) {
+  const std::size_t n = cloud.points.size();
+  const std::size_t kept = std::min(n, firmware::kMaxCloudPoints);
+  if (kept == n) return;
+  keep_evenly(cloud.time, n, kept);
+  keep_evenly(cloud.intensity, n, kept);
+  keep_evenly(cloud.normals, n, kept);
+  keep_evenly(cloud.points, n, kept);
+  cloud.width = 0;  // no longer organized
+  cloud.height = 1;
+}
+
+}  // namespace
 
 void InProcessPort::begin(LocalizerStage stage) {
   stages_.mark(stage);
@@ -20,11 +56,13 @@ void InProcessPort::keep_share(std::uint32_t sender_id, std::int64_t stamp_ns, c
   for (auto it = shares_.begin(); it != shares_.end();) {
     it = it->first.second < drop_before_ns ? shares_.erase(it) : std::next(it);
   }
+  thin_like_reassembler(cloud);
   shares_[{sender_id, stamp_ns}] = std::move(cloud);
 }
 
 void InProcessPort::set_scan(cloud_io::PointCloud&& scan, const StereoInput& stereo) {
   scan_ = std::move(scan);
+  thin_like_reassembler(scan_);
   has_scan_ = true;
   stereo_ = stereo;
 }

@@ -2,8 +2,9 @@
 // driver decides, on the decoded wire inputs, which shares are admitted, checked and handed to the
 // map, exactly as in the firmware; this port then hands the localizer the recording's
 // full-precision clouds instead of the 4 mm wire-quantised ones (points and per-point times only:
-// source, time stamps and poses are the decoded ones), adds the frame's stereo disparity (not on
-// the wire) and times every localizer call.
+// source, time stamps and poses are the decoded ones; a cloud over the firmware's capacity thinned
+// as its reassembler thins it), adds the frame's stereo disparity (not on the wire) and times
+// every localizer call.
 #pragma once
 
 #include <chrono>
