@@ -140,6 +140,19 @@ def compare(a, host_lines, target, recorded):
     return periods, [l for l in lines if l.startswith("#")]
 
 
+def print_stages(periods):
+    """The target's instructions over the run by bucket (firmware/fixture/period_buckets.hpp), largest first."""
+    totals = {}
+    for l in periods:
+        f = l.split()
+        pairs = f[f.index("stages") + 1:]
+        for name, n in zip(pairs[0::2], pairs[1::2]):
+            totals[name] = totals.get(name, 0) + int(n)
+    whole = sum(totals.values())
+    top = sorted(totals.items(), key=lambda kv: -kv[1])
+    print("  by stage: " + ", ".join(f"{name} {100.0 * n / whole:.1f} %" for name, n in top if n * 1000 >= whole))
+
+
 def check_budget(a, periods, summary):
     counted = []
     for l in periods:
@@ -159,6 +172,7 @@ def check_budget(a, periods, summary):
           f"max {max(instr) / 1e6:.1f} M (period {max(inside, key=lambda c: c[2])[1]}), "
           f"cycles median {statistics.median(cycles) / 1e6:.1f} M max {max(cycles) / 1e6:.1f} M; "
           + "; ".join(s[2:] for s in summary))
+    print_stages(periods)
     if a.worst_case:
         cases = {}
         for c in inside:
