@@ -35,6 +35,13 @@ void PeriodDriver::count_insert(const MapInsertResult& result, bool is_agent) {
   }
 }
 
+// Every IMU sample received up to the period's close, oldest first (the decoder keeps them in
+// strictly increasing time).
+void PeriodDriver::release_imu() {
+  ImuInput sample;
+  while (decoder_.imu().take(sample)) localizer_.on_imu(sample);
+}
+
 // The period's share budget: the schedule's cap or the localizer's (one while tracking). Shares
 // refused before their signature check do not use it (ShareVerificationQueue::next_verified_share).
 void PeriodDriver::release_shares() {
@@ -48,6 +55,7 @@ void PeriodDriver::release_shares() {
 
 const PeriodOutput& PeriodDriver::close_period(const DecodedCloud& scan) {
   ++counters_.periods;
+  release_imu();
   release_shares();
   // Trust work (hashing, ECDSA) counts against this period's budget; a refused scan ends the
   // period without a localizer frame, so its work is dropped with it.

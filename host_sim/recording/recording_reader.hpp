@@ -8,6 +8,7 @@
 // with the command that makes it again.
 #pragma once
 
+#include "hal/emulated/hid_script.hpp"
 #include "host_sim/canlog/candump_log.hpp"
 #include "host_sim/common/png.hpp"
 #include "host_sim/recording/pose_io.hpp"
@@ -118,6 +119,13 @@ class RecordingReader {
   // The same log as candump records (unix time stamps).
   bool can_records(std::vector<CandumpRecord>& out, std::string& error) const;
 
+  // The ego IMU's HID input reports (manifest files.imu_reports, optional; hal/HID_IMU_REPORT.md),
+  // one per line "<receive time ns of recording time> <hex bytes>" (hal/emulated/hid_script.hpp):
+  // empty path when the recording has none. imu_reports() fails on a malformed line or times
+  // going backwards.
+  std::string imu_reports_path() const;
+  bool imu_reports(std::vector<hal::HidScriptLine>& out, std::string& error) const;
+
   // A per-frame file name: literal text around one `%0Nd` token (N = 1..9), e.g. "ego_lidar/%06d.pcd".
   struct IndexPattern {
     std::string prefix, suffix;
@@ -153,7 +161,7 @@ class RecordingReader {
   std::uint64_t seed_ = 1;
   bool quick_ = false;
   IndexPattern scan_pattern_, disparity_pattern_;
-  std::string gt_file_, gt100_file_, can_log_file_, trust_list_file_;
+  std::string gt_file_, gt100_file_, can_log_file_, trust_list_file_, imu_reports_file_;
   std::vector<Eigen::Isometry3d> infra_poses_;
   std::vector<std::string> infra_names_;
   Eigen::Isometry3d ego_lidar_mount_ = Eigen::Isometry3d::Identity();

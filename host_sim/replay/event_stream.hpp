@@ -153,6 +153,7 @@ class LocalizerInputTap {
  public:
   virtual void vehicle(const VehicleInput& input) = 0;
   virtual void gnss(const GnssInput& input) = 0;
+  virtual void imu(const ImuInput& input) = 0;
   virtual void map_cloud(const MapCloudInput& input) = 0;
   virtual void period_work(double instructions) = 0;
   virtual void ego_scan(const EgoScanInput& input) = 0;
@@ -195,6 +196,10 @@ class WireEventDecoder {
     void on_gnss(const GnssInput& input) override {
       if (tap != nullptr) tap->gnss(input);
       inner.on_gnss(input);
+    }
+    void on_imu(const ImuInput& input) override {
+      if (tap != nullptr) tap->imu(input);
+      inner.on_imu(input);
     }
     MapInsertResult on_map_cloud(const MapCloudInput& input) override {
       if (tap != nullptr) tap->map_cloud(input);
