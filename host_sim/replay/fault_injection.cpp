@@ -22,7 +22,7 @@ bool to_double(const std::string& v, double lo, double hi, double& out) {
 bool FaultSpec::any() const {
   return loss > 0 || frag_loss > 0 || reorder > 0 || duplicate > 0 || delay_s > 0 || gnss_outage_s > 0 ||
          infra_dropout_s > 0 || can_burst > 0 || rogue_shift_m != 0 || rogue_future_s != 0 || rogue_ids > 0 ||
-         ego_time_jump_frame >= 0;
+         ego_time_jump_frame >= 0 || imu.any();
 }
 
 bool parse_fault_spec(const std::string& spec, FaultSpec& out, std::string& error) {
@@ -73,7 +73,7 @@ bool parse_fault_spec(const std::string& spec, FaultSpec& out, std::string& erro
     } else if (key == "ego-time-jump") {
       ok = to_double(value, 0, 1e9, d);
       f.ego_time_jump_frame = static_cast<int>(d);
-    } else {
+    } else if (!parse_imu_fault(key, value, f.imu, ok)) {
       error = "unknown fault '" + key + "'";
       return false;
     }
@@ -101,6 +101,7 @@ std::string describe(const FaultSpec& f) {
   if (f.rogue_future_s > 0) o << " rogue-future=" << f.rogue_future_s;
   if (f.rogue_ids > 0) o << " rogue-ids=" << f.rogue_ids;
   if (f.ego_time_jump_frame >= 0) o << " ego-time-jump=" << f.ego_time_jump_frame;
+  o << describe(f.imu);
   const std::string s = o.str();
   return s.empty() ? "none" : s.substr(1);
 }
