@@ -81,6 +81,10 @@ void force_receive_buffer(int fd, int bytes) {
 void print_imu_counters(const FirmwareApp& app) {
   const ImuCounters& i = app.decoder().imu().counters();
   const FirmwareCounters& c = app.counters();
+  const LocalizerCounters& l = g_localizer.counters();
+  std::printf("v2xloc-firmware: imu to the localizer %llu (digest %016llx), received %u invalid %u\n",
+              (unsigned long long)app.period_counters().imu_handed, (unsigned long long)app.period_counters().imu_digest,
+              l.imu_received, l.imu_invalid);
   std::printf("v2xloc-firmware: imu reports %llu decoded %llu handed %llu lost %llu repeated %llu out_of_order %llu"
               " saturated %llu rejected %llu (malformed %llu self_test_failed %llu time_rejected %llu) unsynced %llu"
               " queue_dropped %llu read_errors %llu command_failed %llu\n",

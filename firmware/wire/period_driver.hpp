@@ -39,6 +39,8 @@ struct PeriodCounters {
   std::uint64_t map_stale = 0;           // not newer than the source's stored cloud
   std::uint64_t map_paced = 0;           // not fused: the source's stored cloud is recent (map.cloud_interval)
   std::uint64_t ego_frames_held = 0;     // ego scans refused for their time: last pose published again
+  std::uint64_t imu_handed = 0;          // IMU samples handed to the localizer
+  std::uint64_t imu_digest = 0xcbf29ce484222325ull;  // FNV-1a of those samples' bits in order (runs compare it)
 };
 
 // What one period publishes. `output` refers to the localizer's (or the driver's held) output and
