@@ -82,8 +82,9 @@ void transport_faults(const ImuFaultSpec& spec, std::uint64_t seed, std::vector<
   if (spec.reorder > 0) {
     for (std::size_t i = 0; i + 1 < out.size(); ++i) {
       if (rng.bernoulli(spec.reorder)) {
-        std::swap(out[i].bytes, out[i + 1].bytes);  // arrival slots stay in time order
-        std::swap(out[i].size, out[i + 1].size);
+        // The earlier report is held back behind the later one: both arrive at the later time.
+        std::swap(out[i], out[i + 1]);
+        out[i + 1].timestamp_ns = out[i].timestamp_ns;
         ++stats.reordered;
         ++i;
       }

@@ -5,7 +5,8 @@
 //   imu-stuck=AXIS      gx gy gz ax ay az: that axis repeats its value at imu-stuck-at (default 1.0)
 //   imu-bias-step=DPS   gyro z (yaw rate) offset by DPS deg/s from imu-bias-step-at (default 1.0)
 //   imu-repeat=P        each report delivered twice with probability P (transport)
-//   imu-reorder=P       each report swapped with the next with probability P (transport)
+//   imu-reorder=P       each report delivered after the next one (both at the next one's arrival)
+//                       with probability P (transport)
 // Seeded from the fault seed on a stream of its own: the other faults draw as without them.
 #pragma once
 
@@ -35,7 +36,7 @@ struct ImuFaultStats {
 // True when `key` is an IMU fault key (then ok says whether its value parsed).
 bool parse_imu_fault(const std::string& key, const std::string& value, ImuFaultSpec& spec, bool& ok);
 std::string describe(const ImuFaultSpec& spec);
-// Applies every IMU fault of `spec` to `reports` (time order kept: a swap exchanges contents).
+// Applies every IMU fault of `spec` to `reports` (arrival times stay in order).
 void apply_imu_faults(const ImuFaultSpec& spec, std::uint64_t seed, std::vector<hal::HidScriptLine>& reports,
                       ImuFaultStats& stats);
 
