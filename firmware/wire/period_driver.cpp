@@ -1,24 +1,19 @@
 #include "firmware/wire/period_driver.hpp"
 
-
 namespace v2xloc::firmware {
-namespace {
 
-std::uint64_t fnv1a(std::uint64_t h, const void* data, std::size_t n) {
-  const auto* b = static_cast<const unsigned char*>(data);
-  for (std::size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 0x100000001b3ull;
-  return h;
-}
-
-std::uint64_t digest(std::uint64_t h, const ImuInput& s) {
+std::uint64_t imu_digest_step(std::uint64_t h, const ImuInput& s) {
+  const auto fnv1a = [](std::uint64_t d, const void* data, std::size_t n) {
+    const auto* b = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n; ++i) d = (d ^ b[i]) * 0x100000001b3ull;
+    return d;
+  };
   h = fnv1a(h, &s.t, sizeof s.t);
   h = fnv1a(h, s.gyro, sizeof s.gyro);
   h = fnv1a(h, s.accel, sizeof s.accel);
   const unsigned char saturated = s.saturated ? 1 : 0;
   return fnv1a(h, &saturated, 1);
 }
-
-}  // namespace
 
 PeriodDriver::PeriodDriver(InputDecoder& decoder, LocalizerPort& localizer) : decoder_(decoder), localizer_(localizer) {
   decoder_.set_share_filter(&localizer_);
@@ -59,7 +54,7 @@ void PeriodDriver::release_imu() {
   ImuInput sample;
   while (decoder_.imu().take(sample)) {
     ++counters_.imu_handed;
-    counters_.imu_digest = digest(counters_.imu_digest, sample);
+    counters_.imu_digest = imu_digest_step(counters_.imu_digest, sample);
     localizer_.on_imu(sample);
   }
 }

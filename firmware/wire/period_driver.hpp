@@ -26,6 +26,11 @@
 
 namespace v2xloc::firmware {
 
+// FNV-1a over an IMU sample's bits (t, gyro, accel, saturated), chained from kImuDigestStart: two
+// runs that handed the localizer the same samples in the same order have the same digest.
+inline constexpr std::uint64_t kImuDigestStart = 0xcbf29ce484222325ull;
+std::uint64_t imu_digest_step(std::uint64_t digest, const ImuInput& sample);
+
 // Map fusion's answers to the shares the driver handed it, and the periods without a scan.
 struct PeriodCounters {
   std::uint64_t periods = 0;
@@ -40,7 +45,7 @@ struct PeriodCounters {
   std::uint64_t map_paced = 0;           // not fused: the source's stored cloud is recent (map.cloud_interval)
   std::uint64_t ego_frames_held = 0;     // ego scans refused for their time: last pose published again
   std::uint64_t imu_handed = 0;          // IMU samples handed to the localizer
-  std::uint64_t imu_digest = 0xcbf29ce484222325ull;  // FNV-1a of those samples' bits in order (runs compare it)
+  std::uint64_t imu_digest = kImuDigestStart;  // imu_digest_step over those samples in order (runs compare it)
 };
 
 // What one period publishes. `output` refers to the localizer's (or the driver's held) output and
