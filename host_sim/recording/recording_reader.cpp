@@ -453,19 +453,26 @@ std::string RecordingReader::imu_reports_path() const {
   return imu_reports_file_.empty() ? std::string() : dir_ + "/" + imu_reports_file_;
 }
 
-bool RecordingReader::imu_reports(std::vector<hal::HidScriptLine>& out, std::string& error) const {
-  out.clear();
-  std::string path;
-  if (imu_reports_file_.empty()) {
-    error = "recording has no IMU reports";
+bool RecordingReader::open_listed(const std::string& file, const char* what, std::ifstream& in, std::string& path,
+                                  std::string& error) const {
+  if (file.empty()) {
+    error = std::string("recording has no ") + what;
     return false;
   }
-  if (!resolve(imu_reports_file_, path, error)) return false;
-  std::ifstream in(path);
+  if (!resolve(file, path, error)) return false;
+  in.open(path);
   if (!in) {
     error = "cannot open " + path;
     return false;
   }
+  return true;
+}
+
+bool RecordingReader::imu_reports(std::vector<hal::HidScriptLine>& out, std::string& error) const {
+  out.clear();
+  std::string path;
+  std::ifstream in;
+  if (!open_listed(imu_reports_file_, "IMU reports", in, path, error)) return false;
   std::string line;
   std::size_t number = 0;
   hal::HidScriptLine report;
@@ -485,16 +492,8 @@ bool RecordingReader::imu_reports(std::vector<hal::HidScriptLine>& out, std::str
 bool RecordingReader::can_records(std::vector<CandumpRecord>& out, std::string& error) const {
   out.clear();
   std::string path;
-  if (can_log_file_.empty()) {
-    error = "recording has no CAN log";
-    return false;
-  }
-  if (!resolve(can_log_file_, path, error)) return false;
-  std::ifstream in(path);
-  if (!in) {
-    error = "cannot open " + path;
-    return false;
-  }
+  std::ifstream in;
+  if (!open_listed(can_log_file_, "CAN log", in, path, error)) return false;
   std::string line;
   std::size_t number = 0;
   while (std::getline(in, line)) {

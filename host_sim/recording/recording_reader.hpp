@@ -16,6 +16,7 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -141,6 +142,9 @@ class RecordingReader {
  private:
   // dir_/rel, provided rel is a plain relative path whose real location is inside the recording.
   bool resolve(const std::string& rel, std::string& path, std::string& error) const;
+  // A file the manifest lists (empty name: "recording has no <what>"), resolved and opened.
+  bool open_listed(const std::string& file, const char* what, std::ifstream& in, std::string& path,
+                   std::string& error) const;
   // The steps of parse_manifest, each over the parsed manifest; false + error naming the field.
   bool read_timing_and_origin(const Json& m, std::string& error);
   bool read_files(const Json& m, std::string& error);

@@ -16,14 +16,6 @@ namespace hid = hal::hid_imu;
 
 const char* const kAxes[] = {"gx", "gy", "gz", "ax", "ay", "az"};
 
-bool number(const std::string& v, double lo, double hi, double& out) {
-  char* end = nullptr;
-  const double d = std::strtod(v.c_str(), &end);
-  if (v.empty() || end != v.c_str() + v.size() || !(d >= lo && d <= hi)) return false;
-  out = d;
-  return true;
-}
-
 double seconds(const hal::HidScriptLine& r) { return static_cast<double>(r.timestamp_ns) * 1e-9; }
 
 std::int16_t& axis(hid::RawReport& r, int k) { return k < 3 ? r.gyro[k] : r.accel[k - 3]; }
@@ -95,15 +87,23 @@ void transport_faults(const ImuFaultSpec& spec, std::uint64_t seed, std::vector<
 
 }  // namespace
 
+bool parse_fault_number(const std::string& text, double lo, double hi, double& out) {
+  char* end = nullptr;
+  const double d = std::strtod(text.c_str(), &end);
+  if (text.empty() || end != text.c_str() + text.size() || !(d >= lo && d <= hi)) return false;
+  out = d;
+  return true;
+}
+
 bool parse_imu_fault(const std::string& key, const std::string& value, ImuFaultSpec& spec, bool& ok) {
   ok = true;
-  if (key == "imu-dropout") ok = number(value, 0.0, 1e6, spec.dropout_s);
-  else if (key == "imu-dropout-at") ok = number(value, 0.0, 1e6, spec.dropout_at_s);
-  else if (key == "imu-stuck-at") ok = number(value, 0.0, 1e6, spec.stuck_at_s);
-  else if (key == "imu-bias-step") ok = number(value, -300.0, 300.0, spec.bias_step_dps);
-  else if (key == "imu-bias-step-at") ok = number(value, 0.0, 1e6, spec.bias_step_at_s);
-  else if (key == "imu-repeat") ok = number(value, 0.0, 1.0, spec.repeat);
-  else if (key == "imu-reorder") ok = number(value, 0.0, 1.0, spec.reorder);
+  if (key == "imu-dropout") ok = parse_fault_number(value, 0.0, 1e6, spec.dropout_s);
+  else if (key == "imu-dropout-at") ok = parse_fault_number(value, 0.0, 1e6, spec.dropout_at_s);
+  else if (key == "imu-stuck-at") ok = parse_fault_number(value, 0.0, 1e6, spec.stuck_at_s);
+  else if (key == "imu-bias-step") ok = parse_fault_number(value, -300.0, 300.0, spec.bias_step_dps);
+  else if (key == "imu-bias-step-at") ok = parse_fault_number(value, 0.0, 1e6, spec.bias_step_at_s);
+  else if (key == "imu-repeat") ok = parse_fault_number(value, 0.0, 1.0, spec.repeat);
+  else if (key == "imu-reorder") ok = parse_fault_number(value, 0.0, 1.0, spec.reorder);
   else if (key == "imu-stuck") {
     ok = false;
     for (int k = 0; k < 6; ++k) {

@@ -33,6 +33,8 @@ struct ImuFaultStats {
   std::uint64_t dropped = 0, stuck = 0, biased = 0, repeated = 0, reordered = 0;
 };
 
+// A fault value: the whole text is a number within [lo, hi] (false otherwise, `out` unchanged).
+bool parse_fault_number(const std::string& text, double lo, double hi, double& out);
 // True when `key` is an IMU fault key (then ok says whether its value parsed).
 bool parse_imu_fault(const std::string& key, const std::string& value, ImuFaultSpec& spec, bool& ok);
 std::string describe(const ImuFaultSpec& spec);
