@@ -4,6 +4,8 @@
 
 #include <cmath>
 
+#include "hal/hid_imu_report.hpp"
+
 namespace v2xloc::firmware {
 namespace {
 
@@ -31,6 +33,14 @@ hal::Status FirmwareApp::start() {
   next_heartbeat_ns_ = start_ns_ + config_.heartbeat_period_ns;
   last_can_ns_ = last_datagram_ns_ = last_gnss_ns_ = start_ns_;
   if (hal_.led != nullptr) hal_.led->set_value(false);
+  if (hal_.imu != nullptr) {
+    std::array<std::uint8_t, hal::hid_imu::kOutputReportBytes> command{};
+    hal::hid_imu::encode_command(hal::hid_imu::Command::kSetRate, config_.imu_rate_hz, command);
+    if (hal_.imu->write_report(command) != hal::Status::kOk) ++counters_.imu_command_failed;
+    ImuDecoderConfig imu;
+    imu.rate_hz = config_.imu_rate_hz;
+    decoder_.imu().configure(imu);
+  }
   return hal_.can.accept_all();
 }
 
@@ -38,6 +48,7 @@ std::size_t FirmwareApp::poll_once() {
   ++counters_.polls;
   std::size_t handled = drain_can();
   handled += poll_pps();
+  handled += drain_imu();
   handled += drain_datagrams();
   decoder_.expire(hal_.clock.monotonic_ns());
   maybe_heartbeat();
@@ -97,6 +108,26 @@ std::size_t FirmwareApp::poll_pps() {
   return n;
 }
 
+// Every queued HID report into the IMU decoder, stamped on the disciplined clock; the samples reach
+// the localizer when the period closes (PeriodDriver), so when they are read does not matter.
+std::size_t FirmwareApp::drain_imu() {
+  if (hal_.imu == nullptr) return 0;
+  std::size_t n = 0;
+  hal::HidReportInfo info;
+  while (n < config_.max_imu_reports_per_drain) {
+    const hal::Status s = hal_.imu->read_report(imu_buffer_, info);
+    if (s == hal::Status::kWouldBlock) break;
+    ++n;
+    if (s != hal::Status::kOk) {
+      ++counters_.imu_reads_failed;
+      if (s != hal::Status::kBufferTooSmall) break;  // a device error: try again next poll
+      continue;
+    }
+    driver_.on_imu_report(std::span<const std::uint8_t>(imu_buffer_.data(), info.size), disciplined(info.timestamp_ns));
+  }
+  return n;
+}
+
 std::size_t FirmwareApp::drain_datagrams() {
   // V2X first: the shares received before an ego scan reach its period boundary (the input order
   // the offline paths use: map clouds up to t, then the scan at t).
@@ -131,6 +162,7 @@ std::size_t FirmwareApp::drain_link(hal::DatagramLink& link, bool ego_link) {
     // first (two sockets have no common order): the input order is then a function of the
     // datagrams, not of the read timing.
     if (ego_link) drain_link(hal_.clouds, false);
+    drain_imu();  // every report received by the period boundary
     publish(driver_.close_period(decoded));
   }
   return n;

@@ -17,6 +17,7 @@
 #include "hal/clock.hpp"
 #include "hal/datagram_link.hpp"
 #include "hal/gpio_line.hpp"
+#include "hal/hid_device.hpp"
 
 namespace v2xloc::firmware {
 
@@ -27,6 +28,7 @@ struct FirmwareHal {
   hal::Clock& clock;
   hal::GpioLine* pps = nullptr;  // GNSS PPS input (optional)
   hal::GpioLine* led = nullptr;  // "localized" LED output (optional)
+  hal::HidDevice* imu = nullptr;  // USB HID IMU (optional; hal/HID_IMU_REPORT.md)
 };
 
 struct FirmwareConfig {
@@ -38,6 +40,8 @@ struct FirmwareConfig {
   std::int64_t max_clock_step_ns = 1'000'000'000;
   std::size_t max_datagrams_per_poll = 4096;       // bounded work per poll
   std::size_t max_can_frames_per_drain = 65536;
+  std::size_t max_imu_reports_per_drain = 1024;    // > the hidraw queue (64 reports)
+  std::uint16_t imu_rate_hz = 200;                 // commanded at start (HID output report 2)
 };
 
 struct FirmwareCounters {
@@ -54,6 +58,8 @@ struct FirmwareCounters {
   std::uint64_t clock_disciplined = 0;
   std::uint64_t gnss_time_rejected = 0;  // GNSS time implausible against the running clock: not applied
   std::uint64_t led_changes = 0;
+  std::uint64_t imu_reads_failed = 0;    // HID read errors other than "nothing queued"
+  std::uint64_t imu_command_failed = 0;  // the set-rate command at start was not accepted
 };
 
 class FirmwareApp {
@@ -80,6 +86,7 @@ class FirmwareApp {
   std::size_t drain_datagrams();
   std::size_t drain_link(hal::DatagramLink& link, bool ego_link);
   std::size_t poll_pps();
+  std::size_t drain_imu();
   void maybe_heartbeat();
   void publish(const PeriodOutput& period);
   void discipline_clock(std::int64_t rx_monotonic_ns);
@@ -101,6 +108,7 @@ class FirmwareApp {
   bool pps_pending_ = false;
   std::int64_t pps_edge_ns_ = 0;
   std::array<std::uint8_t, 2048> datagram_buffer_{};  // > 1400-byte fragments; larger ones are counted
+  std::array<std::uint8_t, 64> imu_buffer_{};         // a full-speed HID report; a longer one is malformed
 };
 
 }  // namespace v2xloc::firmware

@@ -26,8 +26,10 @@
 #include "firmware/app/configure_localizer.hpp"
 #include "firmware/trust/trust_list.hpp"
 #include "hal/emulated/emulated_can_bus.hpp"
+#include "hal/emulated/scripted_hid_device.hpp"
 #include "hal/emulated/sim_clock.hpp"
 #include "hal/linux/gpiod_line.hpp"
+#include "hal/linux/hidapi_device.hpp"
 #include "hal/linux/linux_clock.hpp"
 #include "hal/linux/socketcan_bus.hpp"
 #include "hal/linux/udp_link.hpp"
@@ -72,6 +74,26 @@ void force_receive_buffer(int fd, int bytes) {
   socklen_t len = sizeof actual;
   getsockopt(fd, SOL_SOCKET, SO_RCVBUF, &actual, &len);
   std::printf("v2xloc-firmware: cloud socket receive buffer %d bytes\n", actual);
+}
+
+// Every IMU report read lands in one count: samples + malformed + self_test_failed + repeated +
+// out_of_order + time_rejected = reports.
+void print_imu_counters(const FirmwareApp& app) {
+  const ImuCounters& i = app.decoder().imu().counters();
+  const FirmwareCounters& c = app.counters();
+  const LocalizerCounters& l = g_localizer.counters();
+  std::printf("v2xloc-firmware: imu to the localizer %llu (digest %016llx), received %u invalid %u\n",
+              (unsigned long long)app.period_counters().imu_handed, (unsigned long long)app.period_counters().imu_digest,
+              l.imu_received, l.imu_invalid);
+  std::printf("v2xloc-firmware: imu reports %llu decoded %llu handed %llu lost %llu repeated %llu out_of_order %llu"
+              " saturated %llu rejected %llu (malformed %llu self_test_failed %llu time_rejected %llu) unsynced %llu"
+              " queue_dropped %llu read_errors %llu command_failed %llu\n",
+              (unsigned long long)i.reports, (unsigned long long)i.samples, (unsigned long long)i.handed,
+              (unsigned long long)i.lost, (unsigned long long)i.repeated, (unsigned long long)i.out_of_order,
+              (unsigned long long)i.saturated, (unsigned long long)i.rejected(), (unsigned long long)i.malformed,
+              (unsigned long long)i.self_test_failed, (unsigned long long)i.time_rejected, (unsigned long long)i.unsynced,
+              (unsigned long long)i.queue_dropped, (unsigned long long)c.imu_reads_failed,
+              (unsigned long long)c.imu_command_failed);
 }
 
 void print_counters(const FirmwareApp& app) {
@@ -135,6 +157,7 @@ void print_counters(const FirmwareApp& app) {
               (unsigned long long)r.frames_timed_out, (unsigned long long)r.frames_evicted,
               (unsigned long long)r.bad_crc, (unsigned long long)r.truncated, (unsigned long long)r.malformed,
               (unsigned long long)r.over_capacity, (unsigned long long)r.points_thinned);
+  print_imu_counters(app);
 }
 
 // ---- Options: command line, or `key=value` lines in --config FILE (the command line wins). ----
@@ -153,9 +176,13 @@ struct Options {
   int can_bring_up = 0;
   std::string pps_chip = "gpiochip0", led_chip = "gpiochip0";
   int pps_line = -1, led_line = -1;  // -1: not used
+  int imu = 1;                        // open the HID IMU (hidapi, VID:PID of hal/HID_IMU_REPORT.md)
+  std::string imu_hidraw;             // its hidraw path instead of VID:PID
+  int imu_rate = 200;                 // commanded output rate [Hz]
   // Emulated backends.
   int can_port = 47100, can_peer_port = 47101;
   int pps = 1;
+  std::string imu_script;  // HID IMU reports (hal/emulated/hid_script.hpp); empty: no IMU
 };
 
 // A dotted IPv4 address the UDP backend accepts.
@@ -203,6 +230,13 @@ int parse_options(int argc, char** argv, Options& o) {
   app.add_option("--pps-line", o.pps_line, "real: PPS input line (absent: no PPS)")->check(CLI::Range(0, 65535));
   app.add_option("--led-chip", o.led_chip, "real: GPIO chip of the status LED")->capture_default_str();
   app.add_option("--led-line", o.led_line, "real: status LED line (absent: no LED)")->check(CLI::Range(0, 65535));
+  app.add_option("--imu", o.imu, "real: open the USB HID IMU (absent device: logged once, run without)")
+      ->capture_default_str()->check(CLI::Range(0, 1));
+  app.add_option("--imu-hidraw", o.imu_hidraw, "real: the IMU's hidraw path instead of its VID:PID")->type_name("PATH");
+  app.add_option("--imu-rate", o.imu_rate, "IMU output rate commanded at start, Hz")->capture_default_str()
+      ->check(CLI::Range(1, 1000));
+  app.add_option("--imu-script", o.imu_script, "emulated: the IMU's HID reports, '<time_ns> <hex bytes>' lines")
+      ->check(CLI::ExistingFile)->type_name("FILE");
   app.add_option("--can-port", o.can_port, "emulated: the firmware's CAN-over-UDP port (0 = ephemeral)")->capture_default_str()
       ->check(port);
   app.add_option("--can-peer-port", o.can_peer_port, "emulated: where CAN replies go")->capture_default_str()->check(port);
@@ -230,6 +264,7 @@ struct Backends {
   hal::Clock* clock = nullptr;
   hal::GpioLine* pps = nullptr;
   hal::GpioLine* led = nullptr;
+  hal::HidDevice* imu = nullptr;
   int poll_fds[4] = {-1, -1, -1, -1};    // cloud socket, CAN socket, PPS events, ego socket
   // Emulation only, for the exit report.
   hal::SimClock* sim_clock = nullptr;
@@ -370,6 +405,16 @@ bool open_emulated_backends(const Options& options, std::int64_t epoch_ns, Backe
     b.pps = &pps;
   }
   b.led = &led;
+  if (!options.imu_script.empty()) {
+    static hal::ScriptedHidDevice imu(sim_clock);
+    if (imu.load_script(options.imu_script.c_str()) != hal::Status::kOk) {
+      std::fprintf(stderr, "v2xloc-firmware: IMU script %s: not '<time_ns> <hex bytes>' lines in time order\n",
+                   options.imu_script.c_str());
+      return false;
+    }
+    std::printf("v2xloc-firmware: IMU: emulated HID device, %zu reports scripted\n", imu.pending_reports());
+    b.imu = &imu;
+  }
   b.poll_fds[1] = can_link.fd();
   b.sim_clock = &sim_clock;
   b.emulated_can = &emulated_can;
@@ -387,6 +432,21 @@ bool open_gpio_line(hal::GpiodLine& line, const std::string& chip, long long off
   if (line.open(g) == hal::Status::kOk) return true;
   std::fprintf(stderr, "v2xloc-firmware: %s: %s\n", what, line.last_error());
   return false;
+}
+
+// The USB HID IMU through hidapi; an ECU without one runs without (logged once here).
+void open_imu(const Options& options, Backends& b) {
+  if (options.imu == 0) return;
+  static hal::HidapiDevice imu;
+  static const std::string hidraw = options.imu_hidraw;
+  hal::HidapiOptions o;
+  if (!hidraw.empty()) o.path = hidraw.c_str();
+  if (imu.open(o) != hal::Status::kOk) {
+    std::printf("v2xloc-firmware: IMU: no HID device (%s): running without an IMU\n", imu.last_error());
+    return;
+  }
+  std::printf("v2xloc-firmware: IMU: HID device open\n");
+  b.imu = &imu;
 }
 
 // SocketCAN, the Linux clock, and PPS / LED on GPIO lines when their line numbers are given.
@@ -420,6 +480,7 @@ bool open_real_backends(const Options& options, Backends& b) {
     }
     b.led = &led;
   }
+  open_imu(options, b);
   return true;
 }
 
@@ -470,7 +531,10 @@ int main(int argc, char** argv) {
   if (!open_cloud_link(options, b)) return 1;
   if (!provision_trust(options)) return 1;
   if (!(options.emulated ? open_emulated_backends(options, epoch_ns, b) : open_real_backends(options, b))) return 1;
-  static FirmwareApp app(FirmwareHal{*b.can, *b.cloud_link, *b.ego_link, *b.clock, b.pps, b.led}, g_decoder, port);
+  FirmwareConfig config;
+  config.imu_rate_hz = static_cast<std::uint16_t>(options.imu_rate);
+  static FirmwareApp app(FirmwareHal{*b.can, *b.cloud_link, *b.ego_link, *b.clock, b.pps, b.led, b.imu}, g_decoder, port,
+                         config);
   if (app.start() != hal::Status::kOk) {
     std::fprintf(stderr, "v2xloc-firmware: CAN filter set-up failed\n");
     return 1;

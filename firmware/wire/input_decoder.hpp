@@ -2,14 +2,16 @@
 // routes between them.
 //   CanInputDecoder (can_input_decoder.hpp): CAN frames -> vehicle inputs and GNSS fixes;
 //   CloudInputDecoder (cloud_input_decoder.hpp): datagrams -> reassembled clouds, ego scans;
-//   ShareVerificationQueue (share_verification_queue.hpp): map shares -> verified map clouds.
+//   ShareVerificationQueue (share_verification_queue.hpp): map shares -> verified map clouds;
+//   ImuInputDecoder (imu_input_decoder.hpp): HID IMU reports -> IMU samples, queued in time order.
 // The decoder RETURNS typed inputs and never calls the localizer: the period driver
 // (period_driver.hpp) does, for the firmware loop, the replayer's in-process path and the
 // offline evaluator alike, so every path applies exactly the firmware's decoding and checks.
 //
 // Input order (the firmware's contract; every other path follows it): a completed cloud is handed
 // to the localizer only after every CAN frame received before its last fragment, so per ego frame
-// the localizer sees CAN inputs (receive order), then map clouds, then the ego scan.
+// the localizer sees CAN inputs (receive order), then the IMU samples received up to the scan's
+// completion (time order), then map clouds, then the ego scan.
 // Allocation-free; all storage (reassembler, decoded cloud, share queue) is inside: make the object static.
 #pragma once
 
@@ -18,6 +20,7 @@
 
 #include "firmware/wire/can_input_decoder.hpp"
 #include "firmware/wire/cloud_input_decoder.hpp"
+#include "firmware/wire/imu_input_decoder.hpp"
 #include "firmware/wire/share_verification_queue.hpp"
 
 namespace v2xloc::firmware {
@@ -25,10 +28,11 @@ namespace v2xloc::firmware {
 class InputDecoder {
  public:
   // epoch_ns: disciplined time that maps to localizer time 0 (see localizer_time_s).
-  explicit InputDecoder(std::int64_t epoch_ns = 0) : can_(epoch_ns), clouds_(epoch_ns) {}
+  explicit InputDecoder(std::int64_t epoch_ns = 0) : can_(epoch_ns), clouds_(epoch_ns), imu_(epoch_ns) {}
   void set_epoch_ns(std::int64_t epoch_ns) {
     can_.set_epoch_ns(epoch_ns);
     clouds_.set_epoch_ns(epoch_ns);
+    imu_.set_epoch_ns(epoch_ns);
   }
   std::int64_t epoch_ns() const { return clouds_.epoch_ns(); }
   // Provisioned trust list (start-up). Without one, every map share is refused (unknown signer).
@@ -38,6 +42,12 @@ class InputDecoder {
 
   // One CAN frame received at disciplined time time_ns.
   DecodedCan decode_can(const hal::CanFrame& frame, std::int64_t time_ns) { return can_.decode(frame, time_ns); }
+
+  // One HID IMU input report received at disciplined time time_ns; a sample waits in the IMU
+  // queue until the period driver hands it on.
+  ImuReportKind decode_imu(std::span<const std::uint8_t> report, std::int64_t time_ns) {
+    return imu_.decode(report, time_ns);
+  }
 
   // One datagram received at monotonic now_ns. True when it completed a cloud: the caller first
   // drains earlier inputs (CAN), then calls decode_completed() before the next datagram.
@@ -71,6 +81,8 @@ class InputDecoder {
   const CloudInputDecoder& clouds() const { return clouds_; }
   const ShareVerificationQueue& shares() const { return shares_; }
   ShareVerificationQueue& shares() { return shares_; }
+  const ImuInputDecoder& imu() const { return imu_; }
+  ImuInputDecoder& imu() { return imu_; }
 
  private:
   // A cloud as CloudInputDecoder completed it, routed: a map share to the queue; an ego scan opens
@@ -80,6 +92,7 @@ class InputDecoder {
   CanInputDecoder can_;
   CloudInputDecoder clouds_;
   ShareVerificationQueue shares_;
+  ImuInputDecoder imu_;
 };
 
 }  // namespace v2xloc::firmware

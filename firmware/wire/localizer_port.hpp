@@ -1,7 +1,7 @@
-// The period driver's view of the localizer (period_driver.hpp): the four input calls and the
+// The period driver's view of the localizer (period_driver.hpp): the five input calls and the
 // per-frame output, behind a small virtual interface so the driver does not depend on which
 // localizer type its user links in. LocalizerAdapter binds any type with the v2xloc::Localizer API
-// (on_vehicle / on_gnss / on_map_cloud / on_ego_scan and the share questions) without copying: the
+// (on_vehicle / on_gnss / on_imu / on_map_cloud / on_ego_scan and the share questions) without copying: the
 // localizer object itself stays a static owned by main. The in-process evaluator has its own port
 // (tools/eval/in_process_port.hpp).
 #pragma once
@@ -23,6 +23,7 @@ class LocalizerPort : public MapShareWanted {
   virtual void add_period_work(double /*instructions*/) {}
   virtual void on_vehicle(const VehicleInput& input) = 0;
   virtual void on_gnss(const GnssInput& input) = 0;
+  virtual void on_imu(const ImuInput& input) = 0;
   virtual MapInsertResult on_map_cloud(const MapCloudInput& input) = 0;
   virtual const LocalizerFrameOutput& on_ego_scan(const EgoScanInput& input) = 0;
 
@@ -31,7 +32,7 @@ class LocalizerPort : public MapShareWanted {
 };
 
 // The share questions and the budget answered by a localizer with the v2xloc::Localizer API; the
-// four input calls are left to the port (the adapter below forwards them, the in-process
+// five input calls are left to the port (the adapter below forwards them, the in-process
 // evaluator's swaps in the recorded clouds).
 template <class LocalizerT>
 class LocalizerQuestions : public LocalizerPort {
@@ -58,6 +59,7 @@ class LocalizerAdapter final : public LocalizerQuestions<LocalizerT> {
   explicit LocalizerAdapter(LocalizerT& localizer) : LocalizerQuestions<LocalizerT>(localizer) {}
   void on_vehicle(const VehicleInput& input) override { this->localizer_.on_vehicle(input); }
   void on_gnss(const GnssInput& input) override { this->localizer_.on_gnss(input); }
+  void on_imu(const ImuInput& input) override { this->localizer_.on_imu(input); }
   MapInsertResult on_map_cloud(const MapCloudInput& input) override { return this->localizer_.on_map_cloud(input); }
   const LocalizerFrameOutput& on_ego_scan(const EgoScanInput& input) override {
     return this->localizer_.on_ego_scan(input);

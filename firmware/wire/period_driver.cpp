@@ -2,6 +2,19 @@
 
 namespace v2xloc::firmware {
 
+std::uint64_t imu_digest_step(std::uint64_t h, const ImuInput& s) {
+  const auto fnv1a = [](std::uint64_t d, const void* data, std::size_t n) {
+    const auto* b = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n; ++i) d = (d ^ b[i]) * 0x100000001b3ull;
+    return d;
+  };
+  h = fnv1a(h, &s.t, sizeof s.t);
+  h = fnv1a(h, s.gyro, sizeof s.gyro);
+  h = fnv1a(h, s.accel, sizeof s.accel);
+  const unsigned char saturated = s.saturated ? 1 : 0;
+  return fnv1a(h, &saturated, 1);
+}
+
 PeriodDriver::PeriodDriver(InputDecoder& decoder, LocalizerPort& localizer) : decoder_(decoder), localizer_(localizer) {
   decoder_.set_share_filter(&localizer_);
 }
@@ -35,6 +48,17 @@ void PeriodDriver::count_insert(const MapInsertResult& result, bool is_agent) {
   }
 }
 
+// Every IMU sample received up to the period's close, oldest first (the decoder keeps them in
+// strictly increasing time).
+void PeriodDriver::release_imu() {
+  ImuInput sample;
+  while (decoder_.imu().take(sample)) {
+    ++counters_.imu_handed;
+    counters_.imu_digest = imu_digest_step(counters_.imu_digest, sample);
+    localizer_.on_imu(sample);
+  }
+}
+
 // The period's share budget: the schedule's cap or the localizer's (one while tracking). Shares
 // refused before their signature check do not use it (ShareVerificationQueue::next_verified_share).
 void PeriodDriver::release_shares() {
@@ -48,6 +72,7 @@ void PeriodDriver::release_shares() {
 
 const PeriodOutput& PeriodDriver::close_period(const DecodedCloud& scan) {
   ++counters_.periods;
+  release_imu();
   release_shares();
   // Trust work (hashing, ECDSA) counts against this period's budget; a refused scan ends the
   // period without a localizer frame, so its work is dropped with it.

@@ -4,9 +4,12 @@
 //
 // The period (the input order; firmware/wire/input_decoder.hpp):
 //   1. CAN frames as they arrive: decoded, a vehicle input or a closed GNSS fix to the localizer;
-//   2. clouds as they complete: a map share is admitted to the decoder's verification queue
+//   2. HID IMU reports as they are read: decoded and queued (ImuInputDecoder), nothing reaches the
+//      localizer yet;
+//   3. clouds as they complete: a map share is admitted to the decoder's verification queue
 //      (signer, sender id, surveyed pose, replay) and nothing reaches the map yet;
-//   3. an ego scan (used or refused for its time stamp) closes the period: the waiting shares are
+//   4. an ego scan (used or refused for its time stamp) closes the period: the queued IMU samples go
+//      to the localizer first (time order: every report received up to then), then the waiting shares are
 //      released oldest first, up to shares_this_period(), each checked for freshness, need and
 //      surveyed background, then its signature, then handed to map fusion; the period's trust
 //      work goes into the localizer's budget; then the scan (or, refused, the last pose again);
@@ -23,6 +26,11 @@
 
 namespace v2xloc::firmware {
 
+// FNV-1a over an IMU sample's bits (t, gyro, accel, saturated), chained from kImuDigestStart: two
+// runs that handed the localizer the same samples in the same order have the same digest.
+inline constexpr std::uint64_t kImuDigestStart = 0xcbf29ce484222325ull;
+std::uint64_t imu_digest_step(std::uint64_t digest, const ImuInput& sample);
+
 // Map fusion's answers to the shares the driver handed it, and the periods without a scan.
 struct PeriodCounters {
   std::uint64_t periods = 0;
@@ -36,6 +44,8 @@ struct PeriodCounters {
   std::uint64_t map_stale = 0;           // not newer than the source's stored cloud
   std::uint64_t map_paced = 0;           // not fused: the source's stored cloud is recent (map.cloud_interval)
   std::uint64_t ego_frames_held = 0;     // ego scans refused for their time: last pose published again
+  std::uint64_t imu_handed = 0;          // IMU samples handed to the localizer
+  std::uint64_t imu_digest = kImuDigestStart;  // imu_digest_step over those samples in order (runs compare it)
 };
 
 // What one period publishes. `output` refers to the localizer's (or the driver's held) output and
@@ -58,7 +68,11 @@ class PeriodDriver {
 
   // Step 1: one received CAN frame at disciplined time time_ns, decoded and applied.
   DecodedCan on_can(const hal::CanFrame& frame, std::int64_t time_ns);
-  // Step 2: the cloud InputDecoder::on_datagram() just completed, after the caller applied every
+  // Step 2: one HID IMU input report read at disciplined time time_ns (queued, not yet applied).
+  ImuReportKind on_imu_report(std::span<const std::uint8_t> report, std::int64_t time_ns) {
+    return decoder_.decode_imu(report, time_ns);
+  }
+  // Step 3: the cloud InputDecoder::on_datagram() just completed, after the caller applied every
   // CAN frame received before it. local_time_ns: the disciplined clock read after those frames.
   DecodedCloud take_completed(std::int64_t local_time_ns);
   // The same with the decoder's own clock relation (emulation: epoch + receive time).
@@ -67,7 +81,7 @@ class PeriodDriver {
   static bool closes_period(const DecodedCloud& cloud) {
     return cloud.kind == CloudKind::kEgoScan || cloud.kind == CloudKind::kEgoRejected;
   }
-  // Step 3: `scan` (closes_period) closes the period. Its points must still be valid: the caller
+  // Step 4: `scan` (closes_period) closes the period. Its points must still be valid: the caller
   // may read further V2X datagrams first (they do not touch the scan's buffer).
   const PeriodOutput& close_period(const DecodedCloud& scan);
 
@@ -76,6 +90,7 @@ class PeriodDriver {
   const LocalizerFrameOutput* latest() const { return has_output_ ? &latest_ : nullptr; }
 
  private:
+  void release_imu();
   void release_shares();
   void count_insert(const MapInsertResult& result, bool is_agent);
 

@@ -1,8 +1,9 @@
 #include "hal/emulated/scripted_hid_device.hpp"
 
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
+
+#include "hal/emulated/hid_script.hpp"
 
 namespace v2xloc::hal {
 
@@ -22,26 +23,12 @@ Status ScriptedHidDevice::load_script(const char* path) {
   if (f == nullptr) return Status::kIoError;
   char line[512];
   Status result = Status::kOk;
+  HidScriptLine report;
   while (result == Status::kOk && std::fgets(line, sizeof line, f) != nullptr) {
-    if (char* hash = std::strchr(line, '#')) *hash = '\0';
-    char* cursor = line;
-    char* end = nullptr;
-    const long long t = std::strtoll(cursor, &end, 10);
-    if (end == cursor) continue;  // blank line
-    cursor = end;
-    std::array<std::uint8_t, kMaxReportBytes> bytes{};
-    std::size_t n = 0;
-    for (;;) {
-      const unsigned long v = std::strtoul(cursor, &end, 16);
-      if (end == cursor) break;
-      if (v > 0xFF || n == bytes.size()) {
-        result = Status::kMalformed;
-        break;
-      }
-      bytes[n++] = static_cast<std::uint8_t>(v);
-      cursor = end;
-    }
-    if (result == Status::kOk) result = push_report(t, std::span<const std::uint8_t>(bytes.data(), n));
+    const HidScriptParse parsed = parse_hid_script_line(line, report);
+    if (parsed == HidScriptParse::kMalformed) result = Status::kMalformed;
+    if (parsed == HidScriptParse::kReport)
+      result = push_report(report.timestamp_ns, std::span<const std::uint8_t>(report.bytes.data(), report.size));
   }
   std::fclose(f);
   return result;
@@ -57,7 +44,7 @@ Status ScriptedHidDevice::read_report(std::span<std::uint8_t> buffer, HidReportI
   }
   std::memcpy(buffer.data(), r.bytes.data(), r.size);
   info.size = r.size;
-  info.timestamp_ns = clock_.monotonic_ns();
+  info.timestamp_ns = r.timestamp_ns;  // its arrival, however late it is read
   return Status::kOk;
 }
 

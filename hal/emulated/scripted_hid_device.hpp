@@ -1,6 +1,7 @@
 // HID device driven by a script of timestamped input reports (e.g. the IMU reports of a
-// recording): a report becomes readable once the clock reaches its time stamp. Output reports
-// written by the firmware are recorded.
+// recording): a report becomes readable once the clock reaches its time stamp, and is read with
+// that stamp (its arrival, as a driver stamping in the interrupt would give), so a replay does not
+// depend on when the reader polls. Output reports written by the firmware are recorded.
 #pragma once
 
 #include <array>
@@ -9,13 +10,14 @@
 #include <vector>
 
 #include "hal/clock.hpp"
+#include "hal/emulated/hid_script.hpp"
 #include "hal/hid_device.hpp"
 
 namespace v2xloc::hal {
 
 class ScriptedHidDevice final : public HidDevice {
  public:
-  static constexpr std::size_t kMaxReportBytes = 64;  // full-speed USB interrupt packet
+  static constexpr std::size_t kMaxReportBytes = kMaxHidScriptReportBytes;
   struct Report {
     std::int64_t timestamp_ns = 0;
     std::uint8_t size = 0;
@@ -26,7 +28,7 @@ class ScriptedHidDevice final : public HidDevice {
 
   // Reports must be queued in non-decreasing time order; at most 64 bytes.
   Status push_report(std::int64_t timestamp_ns, std::span<const std::uint8_t> report);
-  // Text script, one report per line: "<monotonic_ns> <hex bytes>", e.g. "1000 01 2a 00 ...".
+  // Text script (hal/emulated/hid_script.hpp), one report per line: "<monotonic_ns> <hex bytes>".
   Status load_script(const char* path);
   std::size_t pending_reports() const { return reports_.size(); }
   const std::vector<Report>& written_reports() const { return written_; }

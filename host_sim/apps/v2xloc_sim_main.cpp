@@ -1,6 +1,6 @@
 // v2xloc-sim generate --scenario 0..3 --perm 4_infra_2_agent|4_infra|2_infra --out DIR [--seed N]
-//                     [--duration S] [--quick] [--no-stereo]
-// v2xloc-sim generate --all --out DIR [--seed N] [--duration S] [--quick] [--no-stereo]
+//                     [--duration S] [--quick] [--no-stereo] [--no-imu]
+// v2xloc-sim generate --all --out DIR [--seed N] [--duration S] [--quick] [--no-stereo] [--no-imu]
 // --all writes DIR/sim<k>_<perm>/ for all 12 combinations (one after the other; tools/run-demo.sh
 // runs one process per recording instead, on every core).
 // v2xloc-sim export-pcd RECORDING_DIR --out DIR [--encoding binary_compressed|binary|ascii]
@@ -127,6 +127,8 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   generate->add_flag("--quick", base.quick, "CI configuration: few beams / azimuth steps, coarse stereo");
   generate->add_flag("--no-stereo", no_stereo, "no disparity maps");
+  bool no_imu = false;
+  generate->add_flag("--no-imu", no_imu, "no IMU reports (imu_reports.txt)");
   CLI::App* export_pcd = app.add_subcommand(
       "export-pcd", "standard PCD copies of a recording's clouds (float32 x y z intensity t) for PCL / Open3D");
   std::string export_in, export_out, encoding_name = "binary_compressed";
@@ -144,5 +146,6 @@ int main(int argc, char** argv) {
   }
   if (export_pcd->parsed()) return run_export(export_in, export_out, encoding_name);
   base.stereo = !no_stereo;
+  base.imu = !no_imu;
   return run_generate(base, all, scenario, perm_name, out);
 }

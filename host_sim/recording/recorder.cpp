@@ -17,6 +17,7 @@
 #include "host_sim/recording/gnss_drive.hpp"
 #include "host_sim/vehicle/vehicle_signals.hpp"
 #include "host_sim/recording/can_log_writer.hpp"
+#include "host_sim/recording/imu_reports.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -37,7 +38,8 @@ constexpr const char* kCloudFields =
     " v2xloc-sim export-pcd writes float32 PCD)";
 
 // Stream ids for derive_seed (each sensor/frame gets its own noise stream).
-enum Stream : std::uint64_t { kEgoLidar = 1, kStereo = 2, kInfra = 3, kAgentLidar = 4, kAgentPose = 5, kVehicle = 7 /* 6: GNSS, gnss_drive.cpp */ };
+enum Stream : std::uint64_t { kEgoLidar = 1, kStereo = 2, kInfra = 3, kAgentLidar = 4, kAgentPose = 5, kVehicle = 7 /* 6: GNSS, gnss_drive.cpp */, kImu = 8 };
+constexpr const char* kImuReportsFile = "imu_reports.txt";
 
 std::string frame_file(const char* dir, int index, const char* ext) {
   char buf[64];
@@ -357,6 +359,37 @@ void write_can_log(Session& s, const std::vector<GnssFix>& fixes, Json& can_json
   }
 }
 
+// The ego IMU's HID input reports (imu_reports.hpp), from the ego's true trajectory.
+void write_imu_reports(Session& s) {
+  if (!s.cfg.imu) return;
+  const Scenario& sc = s.scenario();
+  const PoseAt pose = [&sc](double t) { return sc.ego.body_to_enu(t); };
+  const ImuReportStream stream =
+      simulate_imu_reports(ImuConfig{}, derive_seed(s.cfg.seed, {kImu}), pose, sc.duration, s.cfg.time_origin_unix_s);
+  if (!write_text_file((s.root / kImuReportsFile).string(), imu_reports_text(stream.reports), s.err)) {
+    s.errors.push_back(s.err);
+  }
+}
+
+Json imu_json() {
+  const ImuConfig c;
+  constexpr double kDeg = 180.0 / M_PI;
+  Json j = Json::object();
+  j["name"] = "ego_imu";
+  j["type"] = "imu";
+  j["carrier"] = "ego";
+  j["mount_in_body"] = pose_to_json(c.mount);
+  j["rate_hz"] = c.rate_hz;
+  j["report_format"] = "hal/HID_IMU_REPORT.md input report 1; sensor time = Unix us mod 2^32 (time-synced)";
+  j["gyro_noise_density_dps_rthz"] = c.gyro_noise_density * kDeg;
+  j["gyro_turn_on_bias_sigma_dps"] = c.gyro_turn_on_bias_sigma * kDeg;
+  j["gyro_bias_instability_dph"] = c.gyro_bias_instability * kDeg * 3600.0;
+  j["accel_noise_density_ug_rthz"] = c.accel_noise_density / 9.80665 * 1e6;
+  j["accel_turn_on_bias_sigma_mg"] = c.accel_turn_on_bias_sigma / 9.80665 * 1e3;
+  j["model"] = "host_sim/README.md (IMU)";
+  return j;
+}
+
 void summarize_scans(const std::vector<double>& pts_per_scan, RecordingSummary& summary) {
   if (pts_per_scan.empty()) return;
   double sum = 0;
@@ -379,6 +412,7 @@ Json manifest_files(const Session& s) {
   files["agent_ground_truth"] = agt;
   files["can_log"] = "gnss_vehicle.log";
   files["trust_list"] = kTrustListFile;
+  if (s.cfg.imu) files["imu_reports"] = kImuReportsFile;
   return files;
 }
 
@@ -470,6 +504,7 @@ Json manifest_sensors(const Session& s) {
     j["surveyed_pose_enu"] = pose_to_json(site.sensor_to_enu);
     sensors.push_back(std::move(j));
   }
+  if (cfg.imu) sensors.push_back(imu_json());
   if (s.agents) {
     for (std::size_t a = 0; a < sc.agents.size(); ++a) {
       const LidarConfig acfg = agent_lidar_config(cfg.quick);
@@ -573,6 +608,7 @@ bool generate_recording(const RecorderConfig& cfg, RecordingSummary& summary, st
   Json can_json;
   const std::vector<GnssFix> fixes = record_gnss(s, summary, gnss_json);
   write_can_log(s, fixes, can_json);
+  write_imu_reports(s);
   if (s.failed(error)) return false;
 
   summary.name = recording_name(cfg.scenario, cfg.permutation);

@@ -305,7 +305,8 @@ bool RecordingReader::read_files(const Json& m, std::string& error) {
   std::string scan, disparity;
   if (!f.string("ego_scan_pattern", scan) || !f.string("disparity_pattern", disparity, false) ||
       !f.path("ground_truth", gt_file_) || !f.path("ground_truth_100hz", gt100_file_) ||
-      !f.path("can_log", can_log_file_, false) || !f.path("trust_list", trust_list_file_))
+      !f.path("can_log", can_log_file_, false) || !f.path("trust_list", trust_list_file_) ||
+      !f.path("imu_reports", imu_reports_file_, false))
     return false;
   if (!can_log_file_.empty() && !check_can_layout_version(top)) return false;
   std::string why;
@@ -448,19 +449,51 @@ std::string RecordingReader::can_log_path() const {
   return can_log_file_.empty() ? std::string() : dir_ + "/" + can_log_file_;
 }
 
-bool RecordingReader::can_records(std::vector<CandumpRecord>& out, std::string& error) const {
-  out.clear();
-  std::string path;
-  if (can_log_file_.empty()) {
-    error = "recording has no CAN log";
+std::string RecordingReader::imu_reports_path() const {
+  return imu_reports_file_.empty() ? std::string() : dir_ + "/" + imu_reports_file_;
+}
+
+bool RecordingReader::open_listed(const std::string& file, const char* what, std::ifstream& in, std::string& path,
+                                  std::string& error) const {
+  if (file.empty()) {
+    error = std::string("recording has no ") + what;
     return false;
   }
-  if (!resolve(can_log_file_, path, error)) return false;
-  std::ifstream in(path);
+  if (!resolve(file, path, error)) return false;
+  in.open(path);
   if (!in) {
     error = "cannot open " + path;
     return false;
   }
+  return true;
+}
+
+bool RecordingReader::imu_reports(std::vector<hal::HidScriptLine>& out, std::string& error) const {
+  out.clear();
+  std::string path;
+  std::ifstream in;
+  if (!open_listed(imu_reports_file_, "IMU reports", in, path, error)) return false;
+  std::string line;
+  std::size_t number = 0;
+  hal::HidScriptLine report;
+  while (std::getline(in, line)) {
+    ++number;
+    const hal::HidScriptParse parsed = hal::parse_hid_script_line(line.c_str(), report);
+    if (parsed == hal::HidScriptParse::kBlank) continue;
+    if (parsed == hal::HidScriptParse::kMalformed || (!out.empty() && report.timestamp_ns < out.back().timestamp_ns)) {
+      error = path + ":" + std::to_string(number) + ": not \"<time_ns> <hex bytes>\" in time order";
+      return false;
+    }
+    out.push_back(report);
+  }
+  return true;
+}
+
+bool RecordingReader::can_records(std::vector<CandumpRecord>& out, std::string& error) const {
+  out.clear();
+  std::string path;
+  std::ifstream in;
+  if (!open_listed(can_log_file_, "CAN log", in, path, error)) return false;
   std::string line;
   std::size_t number = 0;
   while (std::getline(in, line)) {

@@ -8,6 +8,7 @@
 // with the command that makes it again.
 #pragma once
 
+#include "hal/emulated/hid_script.hpp"
 #include "host_sim/canlog/candump_log.hpp"
 #include "host_sim/common/png.hpp"
 #include "host_sim/recording/pose_io.hpp"
@@ -15,6 +16,7 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -118,6 +120,13 @@ class RecordingReader {
   // The same log as candump records (unix time stamps).
   bool can_records(std::vector<CandumpRecord>& out, std::string& error) const;
 
+  // The ego IMU's HID input reports (manifest files.imu_reports, optional; hal/HID_IMU_REPORT.md),
+  // one per line "<receive time ns of recording time> <hex bytes>" (hal/emulated/hid_script.hpp):
+  // empty path when the recording has none. imu_reports() fails on a malformed line or times
+  // going backwards.
+  std::string imu_reports_path() const;
+  bool imu_reports(std::vector<hal::HidScriptLine>& out, std::string& error) const;
+
   // A per-frame file name: literal text around one `%0Nd` token (N = 1..9), e.g. "ego_lidar/%06d.pcd".
   struct IndexPattern {
     std::string prefix, suffix;
@@ -133,6 +142,9 @@ class RecordingReader {
  private:
   // dir_/rel, provided rel is a plain relative path whose real location is inside the recording.
   bool resolve(const std::string& rel, std::string& path, std::string& error) const;
+  // A file the manifest lists (empty name: "recording has no <what>"), resolved and opened.
+  bool open_listed(const std::string& file, const char* what, std::ifstream& in, std::string& path,
+                   std::string& error) const;
   // The steps of parse_manifest, each over the parsed manifest; false + error naming the field.
   bool read_timing_and_origin(const Json& m, std::string& error);
   bool read_files(const Json& m, std::string& error);
@@ -153,7 +165,7 @@ class RecordingReader {
   std::uint64_t seed_ = 1;
   bool quick_ = false;
   IndexPattern scan_pattern_, disparity_pattern_;
-  std::string gt_file_, gt100_file_, can_log_file_, trust_list_file_;
+  std::string gt_file_, gt100_file_, can_log_file_, trust_list_file_, imu_reports_file_;
   std::vector<Eigen::Isometry3d> infra_poses_;
   std::vector<std::string> infra_names_;
   Eigen::Isometry3d ego_lidar_mount_ = Eigen::Isometry3d::Identity();

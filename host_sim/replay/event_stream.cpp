@@ -52,6 +52,10 @@ bool EventStream::open(const RecordingReader& reader, const EventStreamConfig& c
       return false;
     }
   }
+  if (config.imu && !reader.imu_reports_path().empty()) {
+    if (!reader.imu_reports(imu_, error)) return false;
+    apply_imu_faults(config.faults.imu, config.faults.seed, imu_, stats_.faults.imu);
+  }
   signers_ = recording_signers(reader);
   if (!recording_trust_list(reader, signers_, trust_list_, error)) return false;
   faults_.configure(config.faults);
@@ -152,6 +156,7 @@ bool EventStream::next_frame(int i, std::vector<WireEvent>& out, std::string& er
   ++next_frame_;
   const std::int64_t t_i = frame_time_ns(i);
   append_can(t_i, out);
+  append_imu(t_i, out);
   if (!send_map_clouds(t_i, error)) return false;
   deliver_due_shares(t_i, out);
   return append_ego_scan(i, t_i, out, error);
@@ -171,6 +176,17 @@ void EventStream::append_can(std::int64_t t_i, std::vector<WireEvent>& out) {
     out.push_back(ev);
     ++stats_.can_frames;
     append_can_burst(ev, out);
+  }
+}
+
+void EventStream::append_imu(std::int64_t t_i, std::vector<WireEvent>& out) {
+  for (; next_imu_ < imu_.size() && imu_[next_imu_].timestamp_ns <= t_i; ++next_imu_) {
+    WireEvent ev;
+    ev.kind = WireEvent::Kind::kImuReport;
+    ev.time_ns = imu_[next_imu_].timestamp_ns;
+    ev.imu = imu_[next_imu_];
+    out.push_back(std::move(ev));
+    ++stats_.imu_reports;
   }
 }
 
@@ -347,6 +363,11 @@ bool EventStream::append_ego_scan(int i, std::int64_t t_i, std::vector<WireEvent
 bool WireEventDecoder::feed(const WireEvent& event, DecodedFrame& frame) {
   if (event.kind == WireEvent::Kind::kCan) {
     driver_.on_can(event.can, decoder_.epoch_ns() + event.time_ns);
+    return false;
+  }
+  if (event.kind == WireEvent::Kind::kImuReport) {
+    driver_.on_imu_report(std::span<const std::uint8_t>(event.imu.bytes.data(), event.imu.size),
+                          decoder_.epoch_ns() + event.time_ns);
     return false;
   }
   bool produced = false;

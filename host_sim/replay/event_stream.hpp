@@ -2,8 +2,10 @@
 // (over emulated CAN + UDP), so both feed the localizer identically. It is the firmware's input
 // order (firmware/wire/input_decoder.hpp) applied to a recording:
 //   for each frame i at t_i: every CAN frame of the recording's candump log with t <= t_i not yet
-//   emitted (log order); then every map cloud (infra / agent) with stamp <= t_i not yet emitted
-//   (stamp order); then ego scan i.
+//   emitted (log order); then every IMU HID report (recordings with one) received at or before t_i
+//   not yet emitted (receive order; the period driver queues them and hands them on when the
+//   period closes, so where they stand before the scan does not matter); then every map cloud
+//   (infra / agent) with stamp <= t_i not yet emitted (stamp order); then ego scan i.
 // Events are wire bytes: CAN frames as hal::CanFrame, clouds as the UDP datagrams of the
 // point-cloud fragmenter (quantized exactly as sent). WireEventDecoder hands them to the firmware's
 // own InputDecoder and period driver, so the offline path sees the firmware's bits.
@@ -33,10 +35,11 @@
 namespace v2xloc::sim::replay {
 
 struct WireEvent {
-  enum class Kind : std::uint8_t { kCan, kMapCloud, kEgoScan };
+  enum class Kind : std::uint8_t { kCan, kMapCloud, kEgoScan, kImuReport };
   Kind kind = Kind::kCan;
   std::int64_t time_ns = 0;             // recording time [ns] (CAN log stamp, cloud stamp, frame stamp)
   hal::CanFrame can{};             // kCan
+  hal::HidScriptLine imu{};        // kImuReport: the report bytes (time_ns = its receive time)
   std::vector<std::vector<std::uint8_t>> datagrams;  // clouds: the fragments, in send order
   std::uint32_t sender_id = 0;          // clouds
   std::uint32_t points_sent = 0;        // clouds: after the fragmenter's drops
@@ -54,10 +57,11 @@ struct EventStreamConfig {
   bool sign_map_shares = true;          // signature datagram before each share (sim test keys)
   bool keep_source_clouds = false;      // WireEvent::source set (the in-process evaluator's full precision)
   FaultSpec faults{};                   // fault injection (fault_injection.hpp); default none
+  bool imu = true;                      // the recording's IMU reports, when it has them
 };
 
 struct EventStreamStats {
-  std::size_t can_frames = 0, map_clouds = 0, ego_scans = 0, datagrams = 0;
+  std::size_t can_frames = 0, map_clouds = 0, ego_scans = 0, datagrams = 0, imu_reports = 0;
   std::uint64_t points_dropped = 0, times_clamped = 0;
   FaultStats faults{};
 };
@@ -73,6 +77,9 @@ class EventStream {
   // Appends frame i's events in canonical order. Frames must be requested in order 0, 1, 2, ...
   bool next_frame(int i, std::vector<WireEvent>& out, std::string& error);
   const EventStreamStats& stats() const { return stats_; }
+  // The IMU reports the stream delivers (IMU faults applied), all of them: the emulated firmware's
+  // HID script (its device releases each once the clock reaches its receive time).
+  const std::vector<hal::HidScriptLine>& imu_reports() const { return imu_; }
   // The trust list the firmware is provisioned with: the recording's trust_list.txt, or, for
   // recordings made before it existed, the same list derived from the map-cloud sensor names.
   const trust::TrustList& trust_list() const { return trust_list_; }
@@ -100,6 +107,7 @@ class EventStream {
 
   // The steps of next_frame(), in order.
   void append_can(std::int64_t t_i, std::vector<WireEvent>& out);
+  void append_imu(std::int64_t t_i, std::vector<WireEvent>& out);
   void append_can_burst(const WireEvent& after, std::vector<WireEvent>& out);
   bool send_map_clouds(std::int64_t t_i, std::string& error);
   bool share_events(const MapCloudInfo& info, std::vector<WireEvent>& shares, std::string& error);
@@ -125,7 +133,8 @@ class EventStream {
     hal::CanFrame frame;
   };
   std::vector<TimedCan> can_;
-  std::size_t next_can_ = 0, next_cloud_ = 0;
+  std::size_t next_can_ = 0, next_cloud_ = 0, next_imu_ = 0;
+  std::vector<hal::HidScriptLine> imu_;
   int next_frame_ = 0;
   std::vector<std::uint32_t> cloud_seq_;  // per sender id
   EventStreamStats stats_{};
@@ -153,6 +162,7 @@ class LocalizerInputTap {
  public:
   virtual void vehicle(const VehicleInput& input) = 0;
   virtual void gnss(const GnssInput& input) = 0;
+  virtual void imu(const ImuInput& input) = 0;
   virtual void map_cloud(const MapCloudInput& input) = 0;
   virtual void period_work(double instructions) = 0;
   virtual void ego_scan(const EgoScanInput& input) = 0;
@@ -195,6 +205,10 @@ class WireEventDecoder {
     void on_gnss(const GnssInput& input) override {
       if (tap != nullptr) tap->gnss(input);
       inner.on_gnss(input);
+    }
+    void on_imu(const ImuInput& input) override {
+      if (tap != nullptr) tap->imu(input);
+      inner.on_imu(input);
     }
     MapInsertResult on_map_cloud(const MapCloudInput& input) override {
       if (tap != nullptr) tap->map_cloud(input);

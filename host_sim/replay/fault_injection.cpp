@@ -7,22 +7,10 @@
 #include <utility>
 
 namespace v2xloc::sim::replay {
-namespace {
-
-bool to_double(const std::string& v, double lo, double hi, double& out) {
-  char* end = nullptr;
-  const double d = std::strtod(v.c_str(), &end);
-  if (v.empty() || end != v.c_str() + v.size() || !(d >= lo && d <= hi)) return false;
-  out = d;
-  return true;
-}
-
-}  // namespace
-
 bool FaultSpec::any() const {
   return loss > 0 || frag_loss > 0 || reorder > 0 || duplicate > 0 || delay_s > 0 || gnss_outage_s > 0 ||
          infra_dropout_s > 0 || can_burst > 0 || rogue_shift_m != 0 || rogue_future_s != 0 || rogue_ids > 0 ||
-         ego_time_jump_frame >= 0;
+         ego_time_jump_frame >= 0 || imu.any();
 }
 
 bool parse_fault_spec(const std::string& spec, FaultSpec& out, std::string& error) {
@@ -36,12 +24,12 @@ bool parse_fault_spec(const std::string& spec, FaultSpec& out, std::string& erro
     const std::string value = eq == std::string::npos ? "" : item.substr(eq + 1);
     double d = 0;
     bool ok = true;
-    const auto prob = [&](double& field) { ok = to_double(value, 0.0, 1.0, field); };
-    const auto secs = [&](double& field) { ok = to_double(value, 0.0, 1e6, field); };
+    const auto prob = [&](double& field) { ok = parse_fault_number(value, 0.0, 1.0, field); };
+    const auto secs = [&](double& field) { ok = parse_fault_number(value, 0.0, 1e6, field); };
     if (key == "none" && eq == std::string::npos) {
       // no fault (a baseline run that still reports the counts)
     } else if (key == "seed") {
-      ok = to_double(value, 0, 1e15, d);
+      ok = parse_fault_number(value, 0, 1e15, d);
       f.seed = static_cast<std::uint64_t>(d);
     } else if (key == "loss") prob(f.loss);
     else if (key == "frag-loss") prob(f.frag_loss);
@@ -53,10 +41,10 @@ bool parse_fault_spec(const std::string& spec, FaultSpec& out, std::string& erro
     else if (key == "infra-dropout") secs(f.infra_dropout_s);
     else if (key == "infra-dropout-at") secs(f.infra_dropout_at_s);
     else if (key == "can-burst") {
-      ok = to_double(value, 0, 100000, d);
+      ok = parse_fault_number(value, 0, 100000, d);
       f.can_burst = static_cast<int>(d);
     } else if (key == "can-burst-at") secs(f.can_burst_at_s);
-    else if (key == "rogue-shift") ok = to_double(value, -1e5, 1e5, f.rogue_shift_m);
+    else if (key == "rogue-shift") ok = parse_fault_number(value, -1e5, 1e5, f.rogue_shift_m);
     else if (key == "rogue-source") {
       f.rogue_source = value;
       ok = !value.empty();
@@ -68,12 +56,12 @@ bool parse_fault_spec(const std::string& spec, FaultSpec& out, std::string& erro
       f.rogue_points = value == "1";
     } else if (key == "rogue-future") secs(f.rogue_future_s);
     else if (key == "rogue-ids") {
-      ok = to_double(value, 0, 1000, d);
+      ok = parse_fault_number(value, 0, 1000, d);
       f.rogue_ids = static_cast<int>(d);
     } else if (key == "ego-time-jump") {
-      ok = to_double(value, 0, 1e9, d);
+      ok = parse_fault_number(value, 0, 1e9, d);
       f.ego_time_jump_frame = static_cast<int>(d);
-    } else {
+    } else if (!parse_imu_fault(key, value, f.imu, ok)) {
       error = "unknown fault '" + key + "'";
       return false;
     }
@@ -101,6 +89,7 @@ std::string describe(const FaultSpec& f) {
   if (f.rogue_future_s > 0) o << " rogue-future=" << f.rogue_future_s;
   if (f.rogue_ids > 0) o << " rogue-ids=" << f.rogue_ids;
   if (f.ego_time_jump_frame >= 0) o << " ego-time-jump=" << f.ego_time_jump_frame;
+  o << describe(f.imu);
   const std::string s = o.str();
   return s.empty() ? "none" : s.substr(1);
 }

@@ -26,6 +26,8 @@
 //                      (signed with rogue-signed=1: by a key not in the trust list)
 //   rogue-ids=N        an outsider floods N invented agent sender ids (unsigned) every share period
 //   ego-time-jump=F    ego scan F is stamped 1e18 ns (year 2001 + 31 years of ns: far future)
+//   imu-*              IMU dropout, stuck axis, bias step, repeated and reordered reports
+//                      (host_sim/replay/imu_faults.hpp)
 #pragma once
 
 #include <cstdint>
@@ -33,6 +35,7 @@
 #include <vector>
 
 #include "host_sim/common/rng.hpp"
+#include "host_sim/replay/imu_faults.hpp"
 
 namespace v2xloc::sim::replay {
 
@@ -51,6 +54,7 @@ struct FaultSpec {
   double rogue_future_s = 0.0;
   int rogue_ids = 0;
   int ego_time_jump_frame = -1;
+  ImuFaultSpec imu{};
   bool any() const;
 };
 
@@ -64,6 +68,7 @@ struct FaultStats {
   std::uint64_t shares_lost = 0, datagrams_dropped = 0, datagrams_reordered = 0, datagrams_duplicated = 0;
   std::uint64_t shares_delayed = 0, gnss_frames_dropped = 0, infra_shares_dropped = 0, can_corrupt_sent = 0;
   std::uint64_t rogue_shares = 0, ego_time_jumps = 0;
+  ImuFaultStats imu{};
 };
 
 class FaultInjector {

@@ -112,6 +112,9 @@ void print_counters(const ReplayOptions& options, const ReplayResult& result) {
               (unsigned long long)fs.gnss_frames_dropped, (unsigned long long)fs.infra_shares_dropped,
               (unsigned long long)fs.can_corrupt_sent, (unsigned long long)fs.rogue_shares,
               (unsigned long long)fs.ego_time_jumps);
+  std::printf("v2xloc-replay: IMU reports %zu; faults: dropped %llu stuck %llu biased %llu repeated %llu reordered %llu\n",
+              s.imu_reports, (unsigned long long)fs.imu.dropped, (unsigned long long)fs.imu.stuck,
+              (unsigned long long)fs.imu.biased, (unsigned long long)fs.imu.repeated, (unsigned long long)fs.imu.reordered);
   std::printf("v2xloc-replay: heartbeats %zu, pose decode errors %zu, diagnostic decode errors %zu, timeouts %d, "
               "send retries %zu\n",
               result.heartbeats, result.pose_decode_errors, result.diagnostic_decode_errors, result.timeouts,

@@ -8,13 +8,16 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <string>
 #include <thread>
 
 #include "firmware/wire/wire_conventions.hpp"
 #include "hal/emulated/emulated_can_bus.hpp"
 #include "hal/emulated/sim_clock.hpp"
 #include "hal/linux/udp_link.hpp"
+#include "host_sim/recording/imu_reports.hpp"
 
 namespace v2xloc::sim::replay {
 namespace {
@@ -267,6 +270,10 @@ class Lockstep {
                                   "--can-peer-port", std::to_string(can_link_.local_endpoint().port),
                                   "--epoch-ns", std::to_string(stream_.epoch_ns()),
                                   "--origin", origin};
+    if (!stream_.imu_reports().empty()) {
+      if (!write_imu_script(error)) return false;
+      args.insert(args.end(), {"--imu-script", imu_script_.path});
+    }
     args.insert(args.end(), options_.firmware_args.begin(), options_.firmware_args.end());
     if (!process_.start(options_.firmware_path, args, error)) return false;
     if (!process_.wait_ready(options_.startup_timeout_s, can_port, cloud_port, ego_port, error)) {
@@ -274,6 +281,23 @@ class Lockstep {
       return false;
     }
     return true;
+  }
+
+  // The stream's IMU reports (faults applied) as the emulated firmware's HID script, in a
+  // temporary file removed with the session.
+  bool write_imu_script(std::string& error) {
+    char path[] = "/tmp/v2xloc-imu-XXXXXX";
+    const int fd = mkstemp(path);
+    if (fd < 0) {
+      error = std::string("IMU script: ") + std::strerror(errno);
+      return false;
+    }
+    imu_script_.path = path;
+    const std::string text = imu_reports_text(stream_.imu_reports());
+    const bool written = write(fd, text.data(), text.size()) == static_cast<ssize_t>(text.size());
+    close(fd);
+    if (!written) error = "IMU script: short write to " + imu_script_.path;
+    return written;
   }
 
   bool connect_firmware(std::string& error) {
@@ -307,6 +331,7 @@ class Lockstep {
   bool send_events(int i, const std::vector<WireEvent>& events, std::string& error) {
     for (const WireEvent& ev : events) {
       bool ok = true;
+      if (ev.kind == WireEvent::Kind::kImuReport) continue;  // the firmware's HID script carries them
       if (ev.kind == WireEvent::Kind::kCan) {
         ok = send_time(ev.time_ns) && send_can(ev.can);
       } else {
@@ -394,6 +419,12 @@ class Lockstep {
   hal::EmulatedCanBus can_;
   FirmwareProcess process_;
   std::int64_t last_time_sent_ = -1;
+  struct TempFile {
+    std::string path;
+    ~TempFile() {
+      if (!path.empty()) std::remove(path.c_str());
+    }
+  } imu_script_;
 };
 
 }  // namespace

@@ -79,6 +79,12 @@ void InProcessPort::on_gnss(const GnssInput& input) {
   end(LocalizerStage::kIdle);
 }
 
+void InProcessPort::on_imu(const ImuInput& input) {
+  begin(LocalizerStage::kInputs);
+  localizer_.on_imu(input);
+  end(LocalizerStage::kIdle);
+}
+
 MapInsertResult InProcessPort::on_map_cloud(const MapCloudInput& input) {
   // The decoded time is stamp_ns * 1e-9 (localizer_time_s): rounding it back gives the stamp.
   const auto it = shares_.find({input.source_id, std::llround(input.t * 1e9)});

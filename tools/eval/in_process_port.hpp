@@ -42,6 +42,7 @@ class InProcessPort final : public firmware::LocalizerQuestions<Localizer> {
 
   void on_vehicle(const VehicleInput& input) override;
   void on_gnss(const GnssInput& input) override;
+  void on_imu(const ImuInput& input) override;
   MapInsertResult on_map_cloud(const MapCloudInput& input) override;
   const LocalizerFrameOutput& on_ego_scan(const EgoScanInput& input) override;
 

@@ -72,6 +72,14 @@ void FixtureWriter::gnss(const GnssInput& g) {
   put(g.speed_acc);
 }
 
+void FixtureWriter::imu(const ImuInput& input) {
+  put(Tag::kImu);
+  put(input.t);
+  for (const double g : input.gyro) put(g);
+  for (const double a : input.accel) put(a);
+  put(static_cast<std::uint8_t>(input.saturated ? 1 : 0));
+}
+
 void FixtureWriter::map_cloud(const MapCloudInput& m) {
   put(Tag::kMapCloud);
   put(m.source_id);

@@ -28,6 +28,7 @@ class FixtureWriter final : public sim::replay::LocalizerInputTap {
   void label(const std::string& name);
   void vehicle(const VehicleInput& input) override;
   void gnss(const GnssInput& input) override;
+  void imu(const ImuInput& input) override;
   void map_cloud(const MapCloudInput& input) override;
   void period_work(double instructions) override;
   void ego_scan(const EgoScanInput& input) override;

@@ -287,7 +287,7 @@ TEST_F(ReplayE2e, EventStreamIsInCanonicalOrder) {
   EventStream stream;
   std::string error;
   ASSERT_TRUE(stream.open(reader_, EventStreamConfig{}, error)) << error;
-  std::int64_t previous_frame_ns = -1, last_can_ns = -1, last_cloud_ns = -1;
+  std::int64_t previous_frame_ns = -1, last_can_ns = -1, last_cloud_ns = -1, last_imu_ns = -1;
   std::vector<WireEvent> events;
   for (int i = 0; i < stream.frame_count(); ++i) {
     events.clear();
@@ -297,9 +297,12 @@ TEST_F(ReplayE2e, EventStreamIsInCanonicalOrder) {
     ASSERT_EQ(events.back().kind, WireEvent::Kind::kEgoScan);
     EXPECT_EQ(events.back().frame, i);
     EXPECT_EQ(events.back().time_ns, t_i);
-    int phase = 0;  // 0 CAN, 1 map clouds, 2 ego
+    int phase = 0;  // 0 CAN, 1 IMU reports, 2 map clouds, 3 ego
     for (const WireEvent& ev : events) {
-      const int p = ev.kind == WireEvent::Kind::kCan ? 0 : ev.kind == WireEvent::Kind::kMapCloud ? 1 : 2;
+      const int p = ev.kind == WireEvent::Kind::kCan         ? 0
+                    : ev.kind == WireEvent::Kind::kImuReport ? 1
+                    : ev.kind == WireEvent::Kind::kMapCloud  ? 2
+                                                             : 3;
       EXPECT_GE(p, phase) << "frame " << i;
       phase = p;
       EXPECT_LE(ev.time_ns, t_i);
@@ -307,6 +310,11 @@ TEST_F(ReplayE2e, EventStreamIsInCanonicalOrder) {
         EXPECT_GT(ev.time_ns, previous_frame_ns);  // not already due in an earlier frame
         EXPECT_GE(ev.time_ns, last_can_ns);        // log order
         last_can_ns = ev.time_ns;
+      } else if (ev.kind == WireEvent::Kind::kImuReport) {
+        EXPECT_GT(ev.time_ns, previous_frame_ns);  // received after the previous frame
+        EXPECT_GE(ev.time_ns, last_imu_ns);        // receive order
+        last_imu_ns = ev.time_ns;
+        EXPECT_EQ(ev.imu.size, 22u);
       } else if (ev.kind == WireEvent::Kind::kMapCloud) {
         EXPECT_GT(ev.time_ns, previous_frame_ns);
         EXPECT_GE(ev.time_ns, last_cloud_ns);      // stamp order
@@ -322,6 +330,7 @@ TEST_F(ReplayE2e, EventStreamIsInCanonicalOrder) {
   }
   EXPECT_EQ(stream.stats().ego_scans, static_cast<std::size_t>(reader_.frame_count()));
   EXPECT_GT(stream.stats().can_frames, 0u);
+  EXPECT_GT(stream.stats().imu_reports, 0u);  // the simulator writes the IMU stream
 }
 
 TEST_F(ReplayE2e, MissingFirmwareFailsWithNonZeroStatus) {

@@ -77,6 +77,7 @@ class RecordingPort final : public LocalizerPort {
  public:
   void on_vehicle(const VehicleInput&) override { calls += "v"; }
   void on_gnss(const GnssInput&) override { calls += "g"; }
+  void on_imu(const ImuInput&) override { calls += "i"; }
   MapInsertResult on_map_cloud(const MapCloudInput&) override {
     calls += "m";
     MapInsertResult r;
