@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "v2xloc/algo/core/det_math.hpp"
+#include "v2xloc/algo/core/even_thinning.hpp"
 #include "v2xloc/algo/core/rigid_motion.hpp"
 #include "v2xloc/algo/registration/pose_search.hpp"
 
@@ -14,7 +15,38 @@ double horizontal_distance(const Mat4d& pose, const Vec3d& enu) {
   return std::sqrt(dx * dx + dy * dy);
 }
 
+constexpr std::uint32_t kMaxSpacingSamples = 256;
+
 }  // namespace
+
+double map_point_spacing(const IcpTarget& map, std::uint32_t samples, std::uint64_t& work) {
+  const std::size_t n = map.points.size();
+  if (map.tree == nullptr || n < 2 || samples == 0) return 0.0;
+  const std::uint32_t want = samples < kMaxSpacingSamples ? samples : kMaxSpacingSamples;
+  const std::uint64_t k = want < n ? want : n;
+  double d[kMaxSpacingSamples];
+  std::uint32_t m = 0;
+  Neighbor nb[2];
+  for (std::size_t j = 0; j < n && m < k; ++j) {
+    if (!kept_evenly(j, n, k)) continue;
+    const KdQueryResult r = map.tree->knn(map.points[j], 2, std::span<Neighbor>(nb, 2));
+    work += 1 + r.node_visits;
+    if (r.count == 2) d[m++] = std::sqrt(static_cast<double>(nb[1].squared_distance));
+  }
+  if (m == 0) return 0.0;
+  for (std::uint32_t i = 1; i < m; ++i) {  // insertion sort: m <= 256, deterministic
+    const double v = d[i];
+    std::uint32_t j = i;
+    for (; j > 0 && d[j - 1] > v; --j) d[j] = d[j - 1];
+    d[j] = v;
+  }
+  return d[m / 2];
+}
+
+double conflict_radius_for(double configured, double spacing, double ratio) {
+  const double scaled = ratio * spacing;
+  return scaled > configured ? scaled : configured;
+}
 
 void StartupSearch::configure(const StartupSearchParams& params, const IcpParams& final_icp,
                               double gnss_sigma_inflation) {
@@ -290,6 +322,13 @@ void StartupSearch::start_job(const StartupFrame& f, LocalizerCounters& counters
                                                                                        : sp.radius;
   sp.radius = job_region_ < radius_cap ? job_region_ : radius_cap;
   sp.sensor_in_body = f.sensor_in_body;
+  if (params_.conflict_radius_per_spacing > 0.0) {
+    std::uint64_t spacing_work = 0;
+    const double spacing = map_point_spacing(f.map, params_.spacing_samples, spacing_work);
+    sp.conflict_radius = conflict_radius_for(sp.conflict_radius, spacing, params_.conflict_radius_per_spacing);
+    counters.global_search_work += spacing_work;
+    if (f.work != nullptr) f.work->add(static_cast<double>(spacing_work) * f.work->params().search_unit);
+  }
   job_heading_used_ = f.course_known;
   if (f.course_known) {
     sp.use_yaw_prior = true;

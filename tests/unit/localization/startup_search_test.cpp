@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <memory>
 #include <vector>
 
@@ -44,6 +45,37 @@ struct CornerScene {
     return f;
   }
 };
+
+// The map's point spacing is measured, not assumed: the corner map's walls are sampled 0.5 m apart
+// (their shared edges hold duplicates, a few percent of the samples: the median ignores them), and
+// the same walls sampled every 1 m measure twice that.
+TEST(StartupSearch, MapPointSpacingIsTheMedianNearestNeighbourDistance) {
+  const testing::CornerMap corner;
+  std::uint64_t work = 0;
+  EXPECT_NEAR(map_point_spacing(corner.target(), 64, work), 0.5, 1e-6);
+  EXPECT_GT(work, 64u);
+
+  std::vector<Vec3f> sparse;
+  for (const Vec3f& p : corner.points) {
+    if (std::fmod(p.x(), 1.0f) == 0.0f && std::fmod(p.y(), 1.0f) == 0.0f && std::fmod(p.z(), 1.0f) == 0.0f) {
+      sparse.push_back(p);
+    }
+  }
+  auto tree = std::make_unique<KdTreeStorage<Vec3f, 4096>>();
+  tree->build(sparse);
+  const IcpTarget target{sparse, {}, &tree->tree, nullptr, nullptr};
+  EXPECT_NEAR(map_point_spacing(target, 64, work), 1.0, 1e-6);
+
+  const IcpTarget empty{};
+  EXPECT_EQ(map_point_spacing(empty, 64, work), 0.0);
+}
+
+// The ray-conflict radius follows a sparse map's spacing and never drops below the configured one.
+TEST(StartupSearch, ConflictRadiusGrowsWithTheMapSpacing) {
+  EXPECT_DOUBLE_EQ(conflict_radius_for(0.25, 0.2, 0.45), 0.25);   // a dense map: the configured radius
+  EXPECT_DOUBLE_EQ(conflict_radius_for(0.25, 0.8, 0.45), 0.36);   // a sparse one: 0.45 x its spacing
+  EXPECT_DOUBLE_EQ(conflict_radius_for(0.25, 0.8, 0.0), 0.25);    // rule off
+}
 
 // A canyon fix can be further off than the region's floor: a search that leaves nothing standing
 // makes the next one look wider (up to startup.max_region), and a new track starts at the floor.

@@ -98,6 +98,9 @@ struct StartupSearchParams {
   // [0-0.5] a solution's final-ICP horizontal constraint at least this (0: off; off on EMBEDDED)
   double min_horizontal_constraint = config::kEmbeddedProfile ? 0.0 : 0.04;
   double max_ambiguity = 0.85;        // [0-1] runner-up / winner tight fitness above: ambiguous
+  // [ratio] ray-conflict radius at least this x the map's measured point spacing (0: the fixed radius; TUNING.md)
+  double conflict_radius_per_spacing = 0.45;
+  std::uint32_t spacing_samples = 64; // [points] map points whose nearest-neighbour distance gives the spacing
   std::uint32_t retry_frames = 2;     // [frames] between two searches (bounded cost)
   std::uint32_t work_per_period = 800000;    // [work units/period] search slice ceiling (0: all at once)
   std::uint32_t min_work_per_period = 30000;  // [work units/period] search slice floor, budget or not

@@ -68,6 +68,15 @@ struct StartupOutcome {
   StartupSearchReport report{};
 };
 
+// [m] the median distance from `samples` map points (evenly spread over the map's order) to their
+// nearest other map point: the map's actual point spacing, which its capacity sets (a map thinned
+// to fit holds fewer, farther-apart points). 0 for an empty map; `work` counts the tree's node visits.
+double map_point_spacing(const IcpTarget& map, std::uint32_t samples, std::uint64_t& work);
+
+// The pose search's ray-conflict radius on a map of this spacing: at least the configured one, and
+// ratio x the spacing (a ray through a sparse wall passes between its points; 0: off).
+double conflict_radius_for(double configured, double spacing, double ratio);
+
 class StartupSearch {
  public:
   // final_icp: the tracking ICP, which refines a finished search's pick; gnss_sigma_inflation: the
