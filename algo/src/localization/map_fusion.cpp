@@ -262,11 +262,13 @@ void MapFusion::stage_candidate(const Mat4d& world_T_sensor, std::span<const Vec
   }
   candidate_.clear();
   const auto voxel = static_cast<float>(params_.voxel_size);
-  VoxelDownsampleResult ds = downsample_.run(staging_.span(), voxel, candidate_);
   // More voxels than the candidate holds: the output would be cut in scan order (whole sectors
-  // lost); the cloud is downsampled again with the voxel doubled instead (params).
-  for (std::uint32_t k = 0; k < params_.max_coarsen_steps && ds.output_overflow > 0; ++k) {
-    ds = downsample_.run(staging_.span(), voxel * static_cast<float>(2u << k), candidate_);
+  // lost); the cloud is downsampled again with the voxel doubled instead (params). A pass that
+  // will be read again ends as soon as it overflows: only that it does counts.
+  const std::uint32_t steps = params_.max_coarsen_steps;
+  VoxelDownsampleResult ds = downsample_.run(staging_.span(), voxel, candidate_, SIZE_MAX, steps > 0);
+  for (std::uint32_t k = 0; k < steps && ds.output_overflow > 0; ++k) {
+    ds = downsample_.run(staging_.span(), voxel * static_cast<float>(2u << k), candidate_, SIZE_MAX, k + 1 < steps);
     ++r.coarsened;
   }
   if (r.coarsened > 0) ++counters_.clouds_coarsened;

@@ -75,15 +75,18 @@ SourceCells::Mask SourceCells::bits(const std::int32_t key[3]) const {
 }
 
 // The 27 hashes come from 9 per-axis products (spatial_hash is xor-separable); most cells around
-// a point were never added, and the seen bitmap turns those away before any probe.
+// a point were never added, and the seen bitmap turns those away before any probe. The answer
+// does not depend on the order the cells are asked in: p's own cell and its row come first (offset
+// 0, then -1, +1 per axis), where a point on another source's surface usually finds one at once.
 bool SourceCells::any_around(const Vec3f& p, double cell, std::int32_t level, Mask allowed) const {
   std::int32_t key[3];
   if (!cell_key(p, cell, level, key)) return false;
+  static constexpr std::int32_t kOffsets[3] = {0, -1, 1};
   std::uint32_t hx[3], hy[3], hz[3];
   for (int d = 0; d < 3; ++d) {
-    hx[d] = spatial_hash_axis(0, key[0] + d - 1);
-    hy[d] = spatial_hash_axis(1, key[1] + d - 1);
-    hz[d] = spatial_hash_axis(2, key[2] + 4 * (d - 1));  // z carries the level in its low two bits
+    hx[d] = spatial_hash_axis(0, key[0] + kOffsets[d]);
+    hy[d] = spatial_hash_axis(1, key[1] + kOffsets[d]);
+    hz[d] = spatial_hash_axis(2, key[2] + 4 * kOffsets[d]);  // z carries the level in its low two bits
   }
   for (int dx = 0; dx < 3; ++dx)
     for (int dy = 0; dy < 3; ++dy) {
@@ -91,7 +94,7 @@ bool SourceCells::any_around(const Vec3f& p, double cell, std::int32_t level, Ma
       for (int dz = 0; dz < 3; ++dz) {
         const std::uint32_t hash = hxy ^ hz[dz];
         if (!seen(hash)) continue;
-        const std::int32_t k[3] = {key[0] + dx - 1, key[1] + dy - 1, key[2] + 4 * (dz - 1)};
+        const std::int32_t k[3] = {key[0] + kOffsets[dx], key[1] + kOffsets[dy], key[2] + 4 * kOffsets[dz]};
         const std::size_t slot = probe(hash, k);
         if (slot < kSlots && (cells_[slot].bits & allowed) != 0) return true;
       }

@@ -18,6 +18,12 @@ constexpr std::uint32_t kGridLookupsPerUnit = 2;
 constexpr std::uint64_t kGridBuildPerUnit = 2;
 constexpr std::uint64_t kRoadHeightPointsPerUnit = 4;
 constexpr std::uint64_t kHypothesisUnits = 2;  // a hypothesis's own set-up and ranking
+// [work units] of the best hypothesis' coarse ICP run in the power-up scoring slice whatever the
+// budget (provisional_scored); the rest takes the budget's slices. ~17 M instructions: the host
+// profile's 256-point ICP finishes inside it on the 12 recordings, the EMBEDDED profile's on all
+// 1,024 search points (~380k units, 42 M) would put frame 0 over 100 M beside the first map and
+// its clouds (algo/TUNING.md, "The first acquisition within the budget").
+constexpr std::uint64_t kPowerUpCoarseWork = 150000;
 
 // The lattice form of scoring (proximity_grid.hpp cell_xy / near_cell): hypotheses a whole number
 // of grid cells apart put a score point into its cell at the search's centre shifted by whole
@@ -299,9 +305,12 @@ bool PoseSearch::step(const IcpTarget& map, PoseSearchScratch& scratch, std::uin
   }
   if (score_whole && phase_ == Phase::kScore) score_hypotheses(map, ~std::uint64_t{0}, scratch);
   while (score_whole && phase_ == Phase::kClimb) climb_candidate(map, scratch.climb);
-  // At power-up the output until a refined pose exists: the best hypothesis' coarse ICP.
-  while (score_whole && params_.provisional_scored && phase_ == Phase::kRefine && candidate_ == 0 && !refining_fine_) {
-    refine_candidate(map, ~std::uint64_t{0});
+  // At power-up the output until a refined pose exists: the best hypothesis' coarse ICP, in this
+  // slice up to kPowerUpCoarseWork units whatever the budget; the rest in the budget's slices.
+  const std::uint64_t coarse_stop = work_ + kPowerUpCoarseWork;
+  while (score_whole && params_.provisional_scored && phase_ == Phase::kRefine && candidate_ == 0 && !refining_fine_ &&
+         work_ < coarse_stop) {
+    refine_candidate(map, coarse_stop);
   }
   while (phase_ != Phase::kDone && work_ < stop) {
     switch (phase_) {

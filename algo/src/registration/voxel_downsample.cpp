@@ -111,6 +111,14 @@ class VoxelTable {
     return acc;
   }
 
+  bool full() const { return num_voxels_ == max_voxels_; }
+
+  // The slots emptied for the next call, no centroid written (a pass stopped when full).
+  void clear() {
+    for (std::size_t v = 0; v < num_voxels_; ++v) slots_[accumulators_[v].slot] = VoxelHashSlot{};
+    num_voxels_ = 0;
+  }
+
   // Centroids into out, and the slots emptied for the next call.
   void write_centroids(BoundedVector<Vec3f>& out) {
     for (std::size_t v = 0; v < num_voxels_; ++v) {
@@ -130,9 +138,10 @@ class VoxelTable {
   std::size_t num_voxels_ = 0;
 };
 
-// Every finite point into the accumulator of its voxel (range overflows counted in r).
-void accumulate_points(std::span<const Vec3f> points, const EvenSelection& selection, const double origin[3],
-                       double voxel, VoxelTable& table, VoxelDownsampleResult& r) {
+// Every finite point into the accumulator of its voxel (range overflows counted in r);
+// stop_when_full: ends at the first point whose voxel finds the output full (false returned).
+bool accumulate_points(std::span<const Vec3f> points, const EvenSelection& selection, const double origin[3],
+                       double voxel, bool stop_when_full, VoxelTable& table, VoxelDownsampleResult& r) {
   VoxelAccumulator* last = nullptr;  // voxel of the previous accepted point
   VoxelIndex last_index;
   for (std::size_t i = 0; i < points.size(); ++i) {
@@ -145,11 +154,15 @@ void accumulate_points(std::span<const Vec3f> points, const EvenSelection& selec
     }
     // Consecutive returns of a scan usually fall in the same voxel: skip the table lookup.
     VoxelAccumulator* acc = last != nullptr && index == last_index ? last : table.find_or_add(index, r);
-    if (acc == nullptr) continue;
+    if (acc == nullptr) {
+      if (stop_when_full && r.output_overflow > 0) return false;
+      continue;
+    }
     add_point(*acc, p);
     last = acc;
     last_index = index;
   }
+  return true;
 }
 
 }  // namespace
@@ -157,7 +170,8 @@ void accumulate_points(std::span<const Vec3f> points, const EvenSelection& selec
 VoxelDownsampleResult voxel_downsample(std::span<const Vec3f> points, float voxel_size,
                                        std::span<VoxelHashSlot> slots,
                                        std::span<VoxelAccumulator> accumulators,
-                                       BoundedVector<Vec3f>& out, std::size_t max_points) {
+                                       BoundedVector<Vec3f>& out, std::size_t max_points,
+                                       bool stop_when_full) {
   VoxelDownsampleResult r;
   out.clear();
   r.input_points = static_cast<std::uint32_t>(points.size());
@@ -185,7 +199,11 @@ VoxelDownsampleResult voxel_downsample(std::span<const Vec3f> points, float voxe
 
   // Pass 2: accumulate per voxel; then centroids, leaving the hash table empty for the next call.
   VoxelTable table(slots, accumulators, std::min(out.capacity(), accumulators.size()));
-  accumulate_points(points, selection, origin, voxel, table, r);
+  if (!accumulate_points(points, selection, origin, voxel, stop_when_full, table, r)) {
+    table.clear();  // out stays empty: the caller reads the cloud again coarser
+    r.status = VoxelStatus::kStoppedFull;
+    return r;
+  }
   table.write_centroids(out);
   r.output_points = static_cast<std::uint32_t>(out.size());
   const bool dropped = r.output_overflow + r.hash_overflow + r.range_overflow > 0;

@@ -109,6 +109,22 @@ TEST(VoxelDownsample, OutputOverflowCounted) {
   for (const auto& s : storage.slots) ASSERT_EQ(s.voxel_plus_one, 0u);
 }
 
+TEST(VoxelDownsample, StopWhenFullEndsAtTheOverflowAndLeavesTheTableEmpty) {
+  const auto pts = random_cloud(20000, 4);
+  static FixedVector<Vec3f, 100> small;
+  const VoxelDownsampleResult r = storage.run(pts, 0.3f, small, SIZE_MAX, true);
+  EXPECT_EQ(r.status, VoxelStatus::kStoppedFull);
+  EXPECT_EQ(r.output_overflow, 1u);
+  EXPECT_TRUE(small.empty());
+  for (const auto& s : storage.slots) ASSERT_EQ(s.voxel_plus_one, 0u);
+  // A cloud that fits is unaffected: the same centroids as without the flag.
+  const VoxelDownsampleResult fits = storage.run(pts, 0.7f, out, SIZE_MAX, true);
+  EXPECT_EQ(fits.status, VoxelStatus::kOk);
+  const auto want = brute_centroids(pts, 0.7f);
+  ASSERT_EQ(out.size(), want.size());
+  for (std::size_t i = 0; i < want.size(); ++i) EXPECT_EQ(out[i], want[i]);
+}
+
 TEST(VoxelDownsample, HashOverflowCountedWithTinyTable) {
   const auto pts = random_cloud(5000, 5);
   static VoxelHashSlot slots[64];

@@ -38,6 +38,7 @@ enum class VoxelStatus : std::uint8_t {
   kInvalidVoxelSize,   // voxel_size not finite or <= 0
   kInvalidStorage,     // slot count not a power of two, or no accumulator storage
   kTruncated,          // output, hash or index range overflowed: points dropped (see counters)
+  kStoppedFull,        // stop_when_full: the output filled up; out is empty, output_overflow is 1
 };
 
 struct VoxelDownsampleResult {
@@ -55,10 +56,13 @@ struct VoxelDownsampleResult {
 // out is cleared first; its capacity bounds the number of voxels. accumulators needs
 // out.capacity() entries (fewer -> that many voxels at most). A cloud of more than max_points
 // points is downsampled from max_points of them evenly spread over it (the rest counted in thinned).
+// stop_when_full: a caller that reads an overflowing cloud again coarser needs only to know that
+// it overflows; the call ends at the first point whose voxel finds the output full (kStoppedFull).
 VoxelDownsampleResult voxel_downsample(std::span<const Vec3f> points, float voxel_size,
                                        std::span<VoxelHashSlot> slots,
                                        std::span<VoxelAccumulator> accumulators,
-                                       BoundedVector<Vec3f>& out, std::size_t max_points = SIZE_MAX);
+                                       BoundedVector<Vec3f>& out, std::size_t max_points = SIZE_MAX,
+                                       bool stop_when_full = false);
 
 // Hash table and accumulators sized in the type. Large: declare it static.
 template <std::size_t Slots = config::kVoxelHashSlots,
@@ -69,9 +73,11 @@ struct VoxelDownsampleStorage {
   VoxelAccumulator accumulators[MaxVoxels];
 
   VoxelDownsampleResult run(std::span<const Vec3f> points, float voxel_size,
-                            BoundedVector<Vec3f>& out, std::size_t max_points = SIZE_MAX) {
+                            BoundedVector<Vec3f>& out, std::size_t max_points = SIZE_MAX,
+                            bool stop_when_full = false) {
     return voxel_downsample(points, voxel_size, std::span<VoxelHashSlot>(slots, Slots),
-                            std::span<VoxelAccumulator>(accumulators, MaxVoxels), out, max_points);
+                            std::span<VoxelAccumulator>(accumulators, MaxVoxels), out, max_points,
+                            stop_when_full);
   }
 };
 
