@@ -12,7 +12,7 @@ using Mat4x4 = Eigen::Matrix<double, 4, 4>;
 
 EkfVector EkfState::to_vector() const {
   EkfVector x;
-  x << pos_x, pos_y, pos_z, yaw, speed, yaw_rate, yaw_rate_bias, wheel_scale;
+  x << pos_x, pos_y, pos_z, yaw, speed, yaw_rate, yaw_rate_bias, wheel_scale, gyro_bias;
   return x;
 }
 
@@ -26,6 +26,7 @@ EkfState EkfState::from_vector(const EkfVector& x) {
   s.yaw_rate = x(idx::kYawRate);
   s.yaw_rate_bias = x(idx::kYawRateBias);
   s.wheel_scale = x(idx::kWheelScale);
+  s.gyro_bias = x(idx::kGyroBias);
   return s;
 }
 
@@ -106,6 +107,37 @@ EkfFuseStatus Ekf::on_vehicle_signals(double t, double wheel_speed, double yaw_r
   e.z[1] = yaw_rate;
   e.R[0][0] = params_.noise.wheel_speed * params_.noise.wheel_speed;
   e.R[1][1] = params_.noise.gyro * params_.noise.gyro;
+  return submit(e);
+}
+
+EkfFuseStatus Ekf::on_wheel_speed(double t, double wheel_speed) {
+  Event e;
+  e.t = t;
+  e.type = EkfEventType::kWheelSpeed;
+  e.z[0] = wheel_speed;
+  e.R[0][0] = params_.noise.wheel_speed * params_.noise.wheel_speed;
+  return submit(e);
+}
+
+EkfFuseStatus Ekf::on_gyro(double t, double rate, double span) {
+  if (!(span > 0.0)) {
+    ++counters_.invalid_inputs;
+    return EkfFuseStatus::kInvalidInput;
+  }
+  Event e;
+  e.t = t;
+  e.type = EkfEventType::kGyro;
+  e.z[0] = rate;
+  const double n = params_.noise.gyro_noise_density;
+  e.R[0][0] = n * n / span;  // white rate noise averaged over the span
+  return submit(e);
+}
+
+EkfFuseStatus Ekf::reset_gyro_bias(double t, double sigma) {
+  Event e;
+  e.t = t;
+  e.type = EkfEventType::kGyroBiasReset;
+  e.R[0][0] = sigma * sigma;
   return submit(e);
 }
 
@@ -243,10 +275,13 @@ EkfFuseStatus Ekf::submit(const Event& e) {
     if (e.type == EkfEventType::kGnss) ++counters_.gnss_fused;
     if (e.type == EkfEventType::kRegistration) ++counters_.registration_fused;
     if (e.type == EkfEventType::kOdometry) ++counters_.odometry_fused;
-    if (e.type == EkfEventType::kVehicleSignals) ++counters_.signals_fused;
+    if (e.type == EkfEventType::kVehicleSignals || e.type == EkfEventType::kWheelSpeed) ++counters_.signals_fused;
+    if (e.type == EkfEventType::kGyro) ++counters_.gyro_fused;
+    if (e.type == EkfEventType::kGyroBiasReset) ++counters_.gyro_bias_resets;
   } else if (status == EkfFuseStatus::kRejectedGate) {
     if (e.type == EkfEventType::kGnss) ++counters_.gnss_rejected;
     if (e.type == EkfEventType::kRegistration) ++counters_.registration_rejected;
+    if (e.type == EkfEventType::kGyro) ++counters_.gyro_rejected;
   }
   return status;
 }
@@ -289,6 +324,7 @@ void Ekf::propagate(double t) {
     P_(idx::kYawRate, idx::kYawRate) += q.yaw_accel * q.yaw_accel * h;
     P_(idx::kYawRateBias, idx::kYawRateBias) += q.yaw_rate_bias * q.yaw_rate_bias * h;
     P_(idx::kWheelScale, idx::kWheelScale) += q.wheel_scale * q.wheel_scale * h;
+    P_(idx::kGyroBias, idx::kGyroBias) += q.gyro_bias_walk * q.gyro_bias_walk * h;
     P_ = 0.5 * (P_ + P_.transpose());
   }
   time_ = t;
@@ -329,6 +365,10 @@ EkfFuseStatus Ekf::apply(const Event& e) {
   switch (e.type) {
     case EkfEventType::kFrame:
       return EkfFuseStatus::kFused;
+    case EkfEventType::kWheelSpeed:
+    case EkfEventType::kGyro:
+    case EkfEventType::kGyroBiasReset:
+      return apply_scalar(e, count);
     case EkfEventType::kVehicleSignals: {
       Eigen::Matrix<double, 2, 1> y;
       y << e.z[0] - x_(idx::kWheelScale) * x_(idx::kSpeed),
@@ -395,6 +435,38 @@ EkfFuseStatus Ekf::apply(const Event& e) {
     }
   }
   return EkfFuseStatus::kInvalidInput;
+}
+
+// The one-dimensional events, already propagated to e.t: the wheel speed alone, the gyro z, the
+// gyro bias variance reset.
+EkfFuseStatus Ekf::apply_scalar(const Event& e, bool count) {
+  Eigen::Matrix<double, 1, 1> y;
+  Eigen::Matrix<double, 1, kEkfStateSize> H = Eigen::Matrix<double, 1, kEkfStateSize>::Zero();
+  Eigen::Matrix<double, 1, 1> R;
+  R(0, 0) = e.R[0][0];
+  if (e.type == EkfEventType::kGyroBiasReset) {
+    P_.row(idx::kGyroBias).setZero();
+    P_.col(idx::kGyroBias).setZero();
+    P_(idx::kGyroBias, idx::kGyroBias) = e.R[0][0];
+    if (count) ++counters_.gyro_bias_resets;
+    return EkfFuseStatus::kFused;
+  }
+  if (e.type == EkfEventType::kWheelSpeed) {
+    y(0) = e.z[0] - x_(idx::kWheelScale) * x_(idx::kSpeed);
+    H(0, idx::kSpeed) = x_(idx::kWheelScale);
+    H(0, idx::kWheelScale) = x_(idx::kSpeed);
+    const EkfFuseStatus s = fuse<1>(y, H, R, 0.0);
+    if (count && s == EkfFuseStatus::kFused) ++counters_.signals_fused;
+    return s;
+  }
+  y(0) = e.z[0] - (x_(idx::kYawRate) + x_(idx::kGyroBias));
+  H(0, idx::kYawRate) = 1.0;
+  H(0, idx::kGyroBias) = 1.0;
+  const double gate = params_.gates.gyro_gate_enabled ? params_.gates.gyro_nis_threshold : 0.0;
+  const EkfFuseStatus s = fuse<1>(y, H, R, gate);
+  if (count && s == EkfFuseStatus::kFused) ++counters_.gyro_fused;
+  if (count && s == EkfFuseStatus::kRejectedGate) ++counters_.gyro_rejected;
+  return s;
 }
 
 void Ekf::take_snapshot(std::size_t log_pos) {

@@ -17,7 +17,7 @@ namespace {
 namespace idx = ekf_index;
 
 // Truth simulator: the filter's own process model (CTRV + random walks) with sampled noise, so a
-// consistent filter must give NEES ~ chi-square(8).
+// consistent filter must give NEES ~ chi-square(9).
 struct Truth {
   EkfVector x;
   void step(double h, const EkfNoise& q, std::mt19937_64& rng) {
@@ -32,12 +32,13 @@ struct Truth {
     x(idx::kYawRate) += q.yaw_accel * std::sqrt(h) * n(rng);
     x(idx::kYawRateBias) += q.yaw_rate_bias * std::sqrt(h) * n(rng);
     x(idx::kWheelScale) += q.wheel_scale * std::sqrt(h) * n(rng);
+    x(idx::kGyroBias) += q.gyro_bias_walk * std::sqrt(h) * n(rng);
   }
 };
 
 EkfCovariance initial_covariance() {
   EkfVector sd;
-  sd << 1.0, 1.0, 0.5, 0.05, 0.5, 0.02, 0.005, 0.02;
+  sd << 1.0, 1.0, 0.5, 0.05, 0.5, 0.02, 0.005, 0.02, 0.01;
   return sd.cwiseProduct(sd).asDiagonal();
 }
 
@@ -66,7 +67,9 @@ double chi2_quantile(double dof, double z) {
   return dof * c * c * c;
 }
 
-TEST(Ekf, NeesWithinChiSquareBandOverMonteCarloRuns) {
+// Monte-Carlo NEES over 40 runs; with_gyro: the IMU gyro z (mean of 10 ms, its own noise) is fused
+// beside the vehicle signals, so the gyro bias state is observed too.
+void check_nees(bool with_gyro) {
   constexpr int kRuns = 40;
   constexpr int kFrames = 150;  // 15 s at 10 Hz
   constexpr int kSignalsPerFrame = 10;
@@ -94,6 +97,11 @@ TEST(Ekf, NeesWithinChiSquareBandOverMonteCarloRuns) {
         const double wheel = truth.x(idx::kWheelScale) * truth.x(idx::kSpeed) + q.wheel_speed * n(rng);
         const double gyro = truth.x(idx::kYawRate) + truth.x(idx::kYawRateBias) + q.gyro * n(rng);
         filter->on_vehicle_signals(t, wheel, gyro);
+        if (with_gyro) {
+          const double imu = truth.x(idx::kYawRate) + truth.x(idx::kGyroBias) +
+                             q.gyro_noise_density / std::sqrt(0.01) * n(rng);
+          filter->on_gyro(t, imu, 0.01);
+        }
       }
       filter->predict_to(t);
       if (frame % 10 == 5) {
@@ -126,14 +134,18 @@ TEST(Ekf, NeesWithinChiSquareBandOverMonteCarloRuns) {
     if (avg >= lo && avg <= hi) ++inside;
     else std::printf("  frame %d: averaged NEES %.2f outside\n", frame, avg);
   }
-  std::printf("averaged NEES: mean %.3f (expected 8), band [%.2f, %.2f], %d/%d frames inside\n",
+  std::printf("averaged NEES: mean %.3f (expected 9), band [%.2f, %.2f], %d/%d frames inside\n",
               mean, lo, hi, inside, kFrames);
   // Frames of one run are correlated, so excursions come in clusters; a consistent filter keeps
   // most frames and the grand mean inside (an over/under-confident one drifts out entirely).
   EXPECT_GE(inside, static_cast<int>(0.8 * kFrames));
-  EXPECT_GT(mean, 7.5);
-  EXPECT_LT(mean, 8.5);
+  EXPECT_GT(mean, kEkfStateSize - 0.5);
+  EXPECT_LT(mean, kEkfStateSize + 0.5);
 }
+
+TEST(Ekf, NeesWithinChiSquareBandOverMonteCarloRuns) { check_nees(false); }
+
+TEST(Ekf, NeesWithinChiSquareBandWithTheGyro) { check_nees(true); }
 
 // A filter that has converged on registrations, driving straight at 10 m/s.
 std::unique_ptr<Ekf> converged_filter(const EkfParams& params) {

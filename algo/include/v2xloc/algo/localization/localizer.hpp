@@ -20,6 +20,7 @@
 #include "v2xloc/algo/core/geodesy.hpp"
 #include "v2xloc/algo/localization/ekf.hpp"
 #include "v2xloc/algo/localization/frame_output.hpp"
+#include "v2xloc/algo/localization/imu_intake.hpp"
 #include "v2xloc/algo/localization/gnss_course.hpp"
 #include "v2xloc/algo/localization/localizer_params.hpp"
 #include "v2xloc/algo/localization/localizer_types.hpp"
@@ -104,6 +105,10 @@ class Localizer {
   void fill_output(double t);
   void push_backfill();
 
+  void note_input_time(double t) {
+    if (!have_input_t_ || t > latest_input_t_) latest_input_t_ = t;
+    have_input_t_ = true;
+  }
   void report_registration(const RegistrationResult& result);
   void lose_track();
   std::span<std::uint32_t> icp_hints() { return {icp_hints_, config::kMaxDownsampledPoints}; }
@@ -123,6 +128,9 @@ class Localizer {
   GnssFix gnss_{};
   GnssCourse course_{};
   Pose3d odom_T_body_ = Pose3d::Identity();  // this frame's odometry pose
+  bool have_input_t_ = false;                // latest stamp of the vehicle, GNSS and scan inputs
+  double latest_input_t_ = 0.0;              // (the IMU's time-jump check)
+  ImuIntake imu_{};
 
   // The stages.
   ScanPreparation scan_{};
