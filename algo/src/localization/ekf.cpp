@@ -85,6 +85,7 @@ void Ekf::initialize(double t, const EkfState& state, const EkfCovariance& covar
   x_(idx::kYaw) = det::wrap_pi(x_(idx::kYaw));
   P_ = 0.5 * (covariance + covariance.transpose());
   time_ = t;
+  gyro_chain_ = {};
   initialized_ = true;
   log_size_ = 0;
   snap_first_ = 0;
@@ -128,6 +129,7 @@ EkfFuseStatus Ekf::on_gyro(double t, double rate, double span) {
   e.t = t;
   e.type = EkfEventType::kGyro;
   e.z[0] = rate;
+  e.z[1] = span;
   const double n = params_.noise.gyro_noise_density;
   e.R[0][0] = n * n / span;  // white rate noise averaged over the span
   return submit(e);
@@ -251,6 +253,7 @@ EkfFuseStatus Ekf::submit(const Event& e) {
   const Snapshot& from = snapshots_[(snap_first_ + base) % config::kEkfHistoryLength];
   x_ = from.x;
   P_ = from.P;
+  gyro_chain_ = from.gyro;
   time_ = from.t;
   ++counters_.late_events;
   EkfFuseStatus status = EkfFuseStatus::kFused;
@@ -265,6 +268,7 @@ EkfFuseStatus Ekf::submit(const Event& e) {
       if (sn.log_pos == j + 1) {
         sn.x = x_;
         sn.P = P_;
+        sn.gyro = gyro_chain_;
         ++next_snap;
       }
     }
@@ -305,6 +309,7 @@ void Ekf::propagate(double t) {
     x_(idx::kPosX) += v * h * c;
     x_(idx::kPosY) += v * h * s;
     x_(idx::kYaw) = det::wrap_pi(x_(idx::kYaw) + w * h);
+    gyro_chain_.integrated += w * h;
 
     EkfCovariance F = EkfCovariance::Identity();
     F(idx::kPosX, idx::kYaw) = -v * h * s;
@@ -466,6 +471,26 @@ EkfFuseStatus Ekf::apply_scalar(const Event& e, bool count) {
   const EkfFuseStatus s = fuse<1>(y, H, R, gate);
   if (count && s == EkfFuseStatus::kFused) ++counters_.gyro_fused;
   if (count && s == EkfFuseStatus::kRejectedGate) ++counters_.gyro_rejected;
+  const double span = e.z[1];
+  if (s != EkfFuseStatus::kFused) {
+    gyro_chain_.linked = false;
+    return s;
+  }
+  // The span continues the last one (1 us: the intake's stamps are differences of the same doubles).
+  if (gyro_chain_.linked && std::fabs((e.t - span) - gyro_chain_.t) <= 1e-6) {
+    const double gyro_angle = (e.z[0] - x_(idx::kGyroBias)) * span;
+    x_(idx::kYaw) = det::wrap_pi(x_(idx::kYaw) + (gyro_angle - gyro_chain_.integrated));
+    // Its error: the held rate's share leaves it (-span dw), the bias's enters (-span db), and the
+    // gyro's white noise over the span (its angle random walk, N^2 span).
+    EkfCovariance J = EkfCovariance::Identity();
+    J(idx::kYaw, idx::kYawRate) = -span;
+    J(idx::kYaw, idx::kGyroBias) = -span;
+    const EkfCovariance JP = J.lazyProduct(P_);
+    P_ = JP.lazyProduct(J.transpose());
+    P_(idx::kYaw, idx::kYaw) += e.R[0][0] * span * span;
+    P_ = 0.5 * (P_ + P_.transpose());
+  }
+  gyro_chain_ = {true, e.t, 0.0};
   return s;
 }
 
@@ -479,6 +504,7 @@ void Ekf::take_snapshot(std::size_t log_pos) {
   s.log_pos = log_pos;
   s.x = x_;
   s.P = P_;
+  s.gyro = gyro_chain_;
   ++snap_count_;
 }
 

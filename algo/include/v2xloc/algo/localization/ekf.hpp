@@ -246,11 +246,21 @@ class Ekf {
     double z[4] = {0.0, 0.0, 0.0, 0.0};
     double R[4][4] = {};
   };
+  // The yaw the prediction integrated since the last fused gyro measurement: at the next one that
+  // continues it, the yaw takes the gyro's angle over the span instead (mean rate - bias, times the
+  // span): the held yaw-rate state lags a turning car by half a step (a zero-order hold), the
+  // gyro's average does not. Part of the snapshots, so replay stays a function of the log.
+  struct GyroChain {
+    bool linked = false;      // t is the end of the last fused gyro span
+    double t = 0.0;           // [s]
+    double integrated = 0.0;  // [rad] yaw integrated by the prediction since t
+  };
   struct Snapshot {
     double t = 0.0;
     std::size_t log_pos = 0;  // first log event NOT reflected in this snapshot
     EkfVector x;
     EkfCovariance P;
+    GyroChain gyro;
   };
 
   EkfFuseStatus submit(const Event& e);
@@ -271,6 +281,7 @@ class Ekf {
   EkfVector x_ = EkfVector::Zero();
   EkfCovariance P_ = EkfCovariance::Zero();
   EkfCounters counters_;
+  GyroChain gyro_chain_{};
   bool replaying_ = false;
 
   Event log_[config::kEkfEventLogCapacity];
