@@ -72,6 +72,28 @@ void ImuIntake::watch_axes(const ImuInput& in, LocalizerCounters& counters) {
   }
 }
 
+bool ImuIntake::mean_rate(double t, double window, double& rate) const {
+  const std::span<const GyroSample> r = recent();
+  if (!(window > 0.0) || r.empty() || t - r.back().t > params_.max_gap) return false;
+  double sum = 0.0;
+  std::uint32_t n = 0;
+  for (std::size_t i = r.size(); i > 0 && r[i - 1].t > t - window; --i) {
+    if (r[i - 1].t > t) continue;
+    sum += r[i - 1].rate;
+    ++n;
+  }
+  if (n < 2) return false;
+  rate = sum / n;
+  return true;
+}
+
+bool ImuIntake::rate_ahead(double t, double window, double trend_span, double ahead, double& rate) const {
+  double now = 0.0, before = 0.0;
+  if (!(trend_span > 0.0) || !mean_rate(t, window, now) || !mean_rate(t - trend_span, window, before)) return false;
+  rate = now + (now - before) / trend_span * (ahead + 0.5 * window);
+  return true;
+}
+
 void ImuIntake::remember(double t, double rate) {
   if (recent_count_ == 0) recent_first_ = 0;
   if (recent_first_ + recent_count_ == 2 * kImuRecentSamples) {  // slide the window back to the start

@@ -94,7 +94,7 @@ const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
     note_input_time(in.t);
     probe_(LocalizerStage::kScanPrep);
     // Priced per pass: a sweep over the ingest capacity is read again coarser.
-    const std::uint32_t passes = scan_.prepare(in, vehicle_, counters_.scan_points_dropped, counters_.scans_coarsened);
+    const std::uint32_t passes = scan_.prepare(in, deskew_motion(in.t), counters_.scan_points_dropped, counters_.scans_coarsened);
     work_.add(params_.work.scan * passes);
     if (params_.use_stereo && !in.stereo.disparity.empty()) scan_.prepare_stereo(in.stereo);
     probe_(LocalizerStage::kOdometry);
@@ -129,6 +129,23 @@ const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
   ++frame_;
   probe_(LocalizerStage::kIdle);
   return output_;
+}
+
+// The sweep's motion: the wheel speed, and the gyro's yaw rate when its samples reach the stamp
+// (imu_intake.hpp, rate_ahead: the samples before the stamp carried along their trend to the
+// sweep's middle, less the filter's bias), else the latest CAN yaw rate, half a sweep and one
+// sample's noise away from the rate the sweep turns at. The bias is the filter's, a slow state: the
+// deskew->registration->filter loop TUNING.md warns of stays open at the rate.
+VehicleMotion Localizer::deskew_motion(double t) {
+  VehicleMotion motion = vehicle_;
+  double rate = 0.0;
+  const ImuParams& p = params_.filter.imu;
+  if (motion.valid && filter_.initialized() &&
+      imu_.rate_ahead(t, p.deskew_window, p.deskew_trend, 0.5 * params_.scan.frame_period, rate)) {
+    motion.yaw_rate = rate - filter_.gyro_bias();
+    ++counters_.imu_deskews;
+  }
+  return motion;
 }
 
 // KISS-ICP-style odometry on the deskewed scan, predicted from the vehicle signals over the

@@ -130,6 +130,10 @@ struct DriveOutcome {
   double gyro_bias_error_at_blind_start = 0.0;  // [rad/s]
   double can_bias_error_at_blind_start = 0.0;   // [rad/s]
   int frames = 0, poses = 0;            // frames, and frames with a finite filter pose
+  // The deskew's yaw rate against the true mean rate over the sweep after the stamp (RMS, rad/s):
+  // the gyro's (filter.imu.deskew_window, less the bias) and the latest CAN sample's.
+  double deskew_rate_error_gyro = 0.0, deskew_rate_error_can = 0.0;
+  int deskew_frames = 0;
   LocalizerCounters counters{};
   EkfCounters ekf{};
 };
@@ -178,6 +182,7 @@ DriveOutcome drive(const Drive& d, const PoseFilterParams& base) {
   Vec3d p(50.0, -20.0, 0.0);
   double yaw = 0.4, t = 10.0, can_bias = d.can_bias, stuck = 0.0, start_yaw_error = 0.0;
   Vec3d start_pos_error = Vec3d::Zero();
+  double last_can = 0.0;
   const int steps = static_cast<int>(d.duration / kImuPeriod);
   Mat4d start = Mat4d::Identity();
   start.topLeftCorner<3, 3>() = rot_z(yaw);
@@ -210,7 +215,8 @@ DriveOutcome drive(const Drive& d, const PoseFilterParams& base) {
     }
     if (k % 2 == 0) {
       can_bias += d.can_walk * std::sqrt(2 * kImuPeriod) * n(rng);
-      filter->on_vehicle(t, d.speed + 0.05 * n(rng), w_now + can_bias + d.can_sigma * n(rng), out.counters);
+      last_can = w_now + can_bias + d.can_sigma * n(rng);
+      filter->on_vehicle(t, d.speed + 0.05 * n(rng), last_can, out.counters);
     }
     if (k % 20 != 0) continue;
     filter->predict_to(t);
@@ -225,6 +231,15 @@ DriveOutcome drive(const Drive& d, const PoseFilterParams& base) {
       filter->fuse(reg, out.counters);
     }
     ++out.frames;
+    double gyro_rate = 0.0;
+    if (s > 5.0 && intake.rate_ahead(t, params.imu.deskew_window, params.imu.deskew_trend, 0.05, gyro_rate)) {
+      double sweep_rate = 0.0;  // the truth's mean over the 0.1 s sweep
+      for (int j = 0; j < 10; ++j) sweep_rate += 0.1 * yaw_rate_at(s + 0.005 + 0.01 * j);
+      const double eg = gyro_rate - filter->gyro_bias() - sweep_rate, ec = last_can - sweep_rate;
+      out.deskew_rate_error_gyro += eg * eg;
+      out.deskew_rate_error_can += ec * ec;
+      ++out.deskew_frames;
+    }
     const EkfState e = filter->ekf().state();
     const double yaw_error = std::fabs(det::wrap_pi(e.yaw - yaw));
     if (filter->initialized() && std::isfinite(e.pos_x) && std::isfinite(e.yaw)) ++out.poses;
@@ -247,6 +262,10 @@ DriveOutcome drive(const Drive& d, const PoseFilterParams& base) {
     out.final_gyro_bias_error = e.gyro_bias - bias_now;
   }
   out.ekf = filter->ekf().counters();
+  if (out.deskew_frames > 0) {
+    out.deskew_rate_error_gyro = std::sqrt(out.deskew_rate_error_gyro / out.deskew_frames);
+    out.deskew_rate_error_can = std::sqrt(out.deskew_rate_error_can / out.deskew_frames);
+  }
   return out;
 }
 
@@ -260,6 +279,17 @@ TEST(ImuFilter, GyroBiasConvergesOnACurve) {
   EXPECT_GT(o.ekf.gyro_fused, 3900u);                   // 100 Hz for 40 s
   EXPECT_LE(o.ekf.gyro_rejected, 4u);                   // 99.9 % gate
   EXPECT_EQ(o.counters.imu_bias_resets, 0u);
+}
+
+// The deskew's yaw rate: the gyro's mean over the last 20 ms before the stamp carried along its
+// trend to the sweep's middle, less the filter's bias, against the latest CAN sample, both compared
+// with the true mean rate over the sweep (which starts at the stamp).
+TEST(ImuFilter, DeskewYawRateFromTheGyro) {
+  const DriveOutcome o = drive(Drive{}, PoseFilterParams{});
+  std::printf("deskew yaw rate, RMS error over the sweep: gyro %.2e rad/s, CAN %.2e rad/s (%d frames)\n",
+              o.deskew_rate_error_gyro, o.deskew_rate_error_can, o.deskew_frames);
+  EXPECT_GT(o.deskew_frames, 300);
+  EXPECT_LT(o.deskew_rate_error_gyro, o.deskew_rate_error_can);
 }
 
 // Without IMU samples the gyro bias's variance only grows and never couples into the other

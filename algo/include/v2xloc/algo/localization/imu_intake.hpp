@@ -40,6 +40,13 @@ class ImuIntake {
   GyroMeasurement push(const ImuInput& in, bool has_input, double latest_input_t, LocalizerCounters& counters);
   // A usable gyro sample arrived within max_gap before t.
   bool live(double t) const { return have_live_ && t - last_live_t_ <= params_.max_gap; }
+  // Mean raw gyro z [rad/s] of the samples in (t - window, t], if at least two and the newest within
+  // max_gap of t (the deskew's yaw rate); false otherwise.
+  bool mean_rate(double t, double window, double& rate) const;
+  // Raw gyro z [rad/s] extrapolated to `ahead` seconds after t along its trend: the mean over
+  // (t - window, t] plus the change from the same mean trend_span earlier, per second, times
+  // ahead + window / 2 (the mean's own age). False when either mean is missing.
+  bool rate_ahead(double t, double window, double trend_span, double ahead, double& rate) const;
   // The accepted gyro z samples, oldest first, at most kImuRecentSamples, contiguous in time (a
   // dropout or a stuck axis clears them).
   std::span<const GyroSample> recent() const { return {recent_ + recent_first_, recent_count_}; }

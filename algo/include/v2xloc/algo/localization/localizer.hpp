@@ -97,6 +97,7 @@ class Localizer {
 
  private:
   // The stages of on_ego_scan, in order.
+  VehicleMotion deskew_motion(double t);
   void run_odometry(const EgoScanInput& in);
   void register_frame(double t, const Mat4d& body_T_lidar);
   RegistrationResult track(double t, const Mat4d& body_T_lidar);

@@ -182,6 +182,11 @@ struct ImuParams {
   // [s] time constant of the running mean of (gyro - CAN yaw rate - their bias difference) ...
   double consistency_window = 1.0;
   double consistency_limit = 0.005;   // [rad/s] ... beyond which the gyro bias stepped: variance reset (TUNING.md)
+  // [s] the sweep's deskew turns at the gyro's mean over this much before the frame stamp, carried
+  // along its trend to the sweep's middle, less the filter's bias, instead of the latest CAN yaw
+  // rate (0: the CAN yaw rate; TUNING.md) ...
+  double deskew_window = 0.02;
+  double deskew_trend = 0.08;         // [s] ... the trend: the change from the same mean this much earlier
   // [switch] fuse the CAN yaw rate beside the gyro (off: the wheel speed alone while the gyro is live; TUNING.md)
   bool can_yaw_rate_with_gyro = true;
 };

@@ -139,6 +139,7 @@ struct LocalizerCounters {
   std::uint32_t imu_gyro_rejected = 0;         // gyro measurements the filter's NIS gate refused
   std::uint32_t imu_inconsistent = 0;          // gyro against the CAN yaw rate: a bias step detected
   std::uint32_t imu_bias_resets = 0;           // gyro bias variance restarts (rejections or inconsistency)
+  std::uint32_t imu_deskews = 0;               // sweeps deskewed at the gyro's yaw rate (filter.imu.deskew_window)
   std::uint32_t scan_points_dropped = 0;       // non-finite, out of range or over capacity
   std::uint32_t scans_coarsened = 0;           // sweeps over the ingest capacity, read again with a coarser voxel
   std::uint32_t odometry_failures = 0;
