@@ -1,11 +1,12 @@
 // The localizer: one ego frame through every stage (paper Fig. 1), each stage a component with
 // its own state (KISS-ICP's RegisterFrame over stage objects, PX4 EKF2's one owner of the filter):
-//   ScanPreparation     range filter, deskew (wheel speed + yaw rate), registration scan, stereo
+//   ImuIntake           IMU samples checked, counted, gyro z averaged for the filter and the deskew
+//   ScanPreparation     range filter, deskew (wheel speed + gyro or CAN yaw rate), registration scan, stereo
 //   LidarOdometry       relative motion, predicted from the same signals
 //   ReferenceMap        infra/agent clouds fused (map_fusion) -> target: points, k-d tree, normals
 //   TrackingRegistration ICP from the filter's prediction, basin audit, stereo ICP
 //   StartupSearch       GNSS-seeded exhaustive search, confirmation by a second search
-//   PoseFilter          validity gates -> EKF (wheel speed / yaw rate, GNSS, odometry, registrations)
+//   PoseFilter          validity gates -> EKF (wheel speed / yaw rate, gyro, GNSS, odometry, registrations)
 //   FrameOutput         the filter's pose, or before its start the GNSS fix on the road surface
 // Lost track (GNSS divergence, basin audit) -> start-up search again.
 // Inputs arrive through on_*() calls in time order per source; the caller decides the event
