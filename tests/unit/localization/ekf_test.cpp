@@ -217,11 +217,11 @@ TEST(Ekf, NisGateRejectsThirtyMetreOutliersAcceptsNormalFixes) {
 
 // Feeds a fixed scenario; the registration at t_reg is delivered `delay_frames` frames late.
 EkfVector run_with_delay(int delay_frames, EkfCounters* counters = nullptr,
-                         EkfFuseStatus* late_status = nullptr) {
+                         EkfFuseStatus* late_status = nullptr, bool with_gyro = false) {
   static Ekf filter;  // large object: static storage, as on the ECU
   filter = Ekf(EkfParams{});
   filter.initialize(0.0, initial_state(), initial_covariance());
-  std::mt19937_64 rng(99);
+  std::mt19937_64 rng(99), gyro_rng(98);
   std::normal_distribution<double> n(0.0, 1.0);
   double t = 0.0;
   const double t_reg = 1.05;  // between frames 10 and 11
@@ -235,6 +235,7 @@ EkfVector run_with_delay(int delay_frames, EkfCounters* counters = nullptr,
     for (int s = 0; s < 10; ++s) {
       t += 0.01;
       filter.on_vehicle_signals(t, 8.0 + 0.05 * n(rng), 0.05 + 0.005 * n(rng));
+      if (with_gyro) filter.on_gyro(t, 0.06 + 1e-3 * n(gyro_rng), 0.01);
       if (delay_frames == 0 && std::abs(t - t_reg) < 1e-9) {
         filter.on_registration(t_reg, Pose3d(reg_pose), reg_cov);
       }
@@ -265,6 +266,20 @@ TEST(Ekf, DelayedRegistrationEqualsOnTimeFusion) {
   EXPECT_LE(diff, 1e-9);
   // Fusing the registration at all changed the estimate (the test would be empty otherwise).
   const EkfVector none = run_with_delay(1000);
+  EXPECT_GT((none - on_time).head<2>().norm(), 0.05);
+}
+
+// The same with the gyro: the replay also restores the gyro's angle chain from the snapshot.
+TEST(Ekf, DelayedRegistrationWithTheGyroEqualsOnTimeFusion) {
+  EkfCounters c_late;
+  EkfFuseStatus st = EkfFuseStatus::kInvalidInput;
+  const EkfVector on_time = run_with_delay(0, nullptr, nullptr, true);
+  const EkfVector late = run_with_delay(5, &c_late, &st, true);
+  EXPECT_EQ(st, EkfFuseStatus::kFused);
+  EXPECT_EQ(c_late.late_events, 1u);
+  EXPECT_GT(c_late.gyro_fused, 250u);
+  EXPECT_LE((on_time - late).cwiseAbs().maxCoeff(), 1e-9);
+  const EkfVector none = run_with_delay(1000, nullptr, nullptr, true);
   EXPECT_GT((none - on_time).head<2>().norm(), 0.05);
 }
 
