@@ -26,7 +26,8 @@ void PoseFilter::configure(const PoseFilterParams& params, bool use_vehicle_sign
   nis_rejections_shadow_ = 0;
   gnss_divergent_fixes_ = 0;
   have_gyro_ = false;
-  last_gyro_t_ = last_gyro_rate_ = 0.0;
+  last_gyro_t_ = 0.0;
+  can_next_ = 0;
   gyro_rejections_ = 0;
   can_gyro_running_ = false;
 }
@@ -44,9 +45,9 @@ bool PoseFilter::can_track() const {
 
 void PoseFilter::on_vehicle(double t, double wheel_speed, double yaw_rate, LocalizerCounters& counters) {
   if (!use_vehicle_signals_ || !ekf_.initialized()) return;
-  const bool gyro = gyro_live(t);
-  if (gyro) watch_gyro_against_can(t, yaw_rate, counters);
-  if (gyro && !params_.imu.can_yaw_rate_with_gyro) {
+  can_[can_next_ % kCanRing] = {t, yaw_rate};  // the gyro's comparison, whichever arrives first
+  ++can_next_;
+  if (gyro_live(t) && !params_.imu.can_yaw_rate_with_gyro) {
     ekf_.on_wheel_speed(t, wheel_speed);
     if (params_.shadow_ungated_filter) shadow_.on_wheel_speed(t, wheel_speed);
     return;
@@ -62,8 +63,8 @@ void PoseFilter::on_gyro(double t, double rate, double span, LocalizerCounters& 
   if (s == EkfFuseStatus::kFused) {
     have_gyro_ = true;
     last_gyro_t_ = t;
-    last_gyro_rate_ = rate;
     gyro_rejections_ = 0;
+    watch_gyro_against_can(t, rate, span, counters);
     return;
   }
   if (s != EkfFuseStatus::kRejectedGate) return;
@@ -73,12 +74,21 @@ void PoseFilter::on_gyro(double t, double rate, double span, LocalizerCounters& 
 }
 
 // Both sensors see the same body yaw rate: their difference is the bias difference the filter
-// holds, plus the CAN signal's noise. A running mean (time constant consistency_window) beyond
-// consistency_limit after a full window means the gyro's bias stepped faster than its random walk
-// lets the filter follow (the gyro, far less noisy, would drag the yaw rate along otherwise).
-void PoseFilter::watch_gyro_against_can(double t, double can_yaw_rate, LocalizerCounters& counters) {
+// holds, plus the CAN signal's noise. The gyro's mean over its span is compared with the latest CAN
+// sample inside that span (kept in a ring: the firmware hands a period's IMU samples on after its
+// CAN frames). A running mean (time constant consistency_window) beyond consistency_limit after a
+// full window means the gyro's bias stepped faster than its random walk lets the filter follow (the
+// gyro, far less noisy, would drag the yaw rate along otherwise).
+void PoseFilter::watch_gyro_against_can(double t, double rate, double span, LocalizerCounters& counters) {
+  const std::size_t n = can_next_ < kCanRing ? can_next_ : kCanRing;
+  const CanSample* match = nullptr;
+  for (std::size_t k = 1; k <= n && match == nullptr; ++k) {
+    const CanSample& c = can_[(can_next_ - k) % kCanRing];
+    if (c.t <= t && c.t > t - span) match = &c;
+  }
+  if (match == nullptr) return;
   const EkfState s = ekf_.state();
-  const double d = last_gyro_rate_ - can_yaw_rate - (s.gyro_bias - s.yaw_rate_bias);
+  const double d = rate - match->yaw_rate - (s.gyro_bias - s.yaw_rate_bias);
   if (!can_gyro_running_ || !(t > can_gyro_t_) || t - can_gyro_t_ > params_.imu.max_gap) {
     can_gyro_running_ = true;
     can_gyro_mean_ = d;
