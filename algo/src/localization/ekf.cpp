@@ -12,7 +12,7 @@ using Mat4x4 = Eigen::Matrix<double, 4, 4>;
 
 EkfVector EkfState::to_vector() const {
   EkfVector x;
-  x << pos_x, pos_y, pos_z, yaw, speed, yaw_rate, yaw_rate_bias, wheel_scale;
+  x << pos_x, pos_y, pos_z, yaw, speed, yaw_rate, yaw_rate_bias, wheel_scale, gyro_bias;
   return x;
 }
 
@@ -26,6 +26,7 @@ EkfState EkfState::from_vector(const EkfVector& x) {
   s.yaw_rate = x(idx::kYawRate);
   s.yaw_rate_bias = x(idx::kYawRateBias);
   s.wheel_scale = x(idx::kWheelScale);
+  s.gyro_bias = x(idx::kGyroBias);
   return s;
 }
 
@@ -84,6 +85,7 @@ void Ekf::initialize(double t, const EkfState& state, const EkfCovariance& covar
   x_(idx::kYaw) = det::wrap_pi(x_(idx::kYaw));
   P_ = 0.5 * (covariance + covariance.transpose());
   time_ = t;
+  gyro_chain_ = {};
   initialized_ = true;
   log_size_ = 0;
   snap_first_ = 0;
@@ -106,6 +108,38 @@ EkfFuseStatus Ekf::on_vehicle_signals(double t, double wheel_speed, double yaw_r
   e.z[1] = yaw_rate;
   e.R[0][0] = params_.noise.wheel_speed * params_.noise.wheel_speed;
   e.R[1][1] = params_.noise.gyro * params_.noise.gyro;
+  return submit(e);
+}
+
+EkfFuseStatus Ekf::on_wheel_speed(double t, double wheel_speed) {
+  Event e;
+  e.t = t;
+  e.type = EkfEventType::kWheelSpeed;
+  e.z[0] = wheel_speed;
+  e.R[0][0] = params_.noise.wheel_speed * params_.noise.wheel_speed;
+  return submit(e);
+}
+
+EkfFuseStatus Ekf::on_gyro(double t, double rate, double span) {
+  if (!(span > 0.0)) {
+    ++counters_.invalid_inputs;
+    return EkfFuseStatus::kInvalidInput;
+  }
+  Event e;
+  e.t = t;
+  e.type = EkfEventType::kGyro;
+  e.z[0] = rate;
+  e.z[1] = span;
+  const double n = params_.noise.gyro_noise_density;
+  e.R[0][0] = n * n / span;  // white rate noise averaged over the span
+  return submit(e);
+}
+
+EkfFuseStatus Ekf::reset_gyro_bias(double t, double sigma) {
+  Event e;
+  e.t = t;
+  e.type = EkfEventType::kGyroBiasReset;
+  e.R[0][0] = sigma * sigma;
   return submit(e);
 }
 
@@ -219,6 +253,7 @@ EkfFuseStatus Ekf::submit(const Event& e) {
   const Snapshot& from = snapshots_[(snap_first_ + base) % config::kEkfHistoryLength];
   x_ = from.x;
   P_ = from.P;
+  gyro_chain_ = from.gyro;
   time_ = from.t;
   ++counters_.late_events;
   EkfFuseStatus status = EkfFuseStatus::kFused;
@@ -233,6 +268,7 @@ EkfFuseStatus Ekf::submit(const Event& e) {
       if (sn.log_pos == j + 1) {
         sn.x = x_;
         sn.P = P_;
+        sn.gyro = gyro_chain_;
         ++next_snap;
       }
     }
@@ -243,10 +279,13 @@ EkfFuseStatus Ekf::submit(const Event& e) {
     if (e.type == EkfEventType::kGnss) ++counters_.gnss_fused;
     if (e.type == EkfEventType::kRegistration) ++counters_.registration_fused;
     if (e.type == EkfEventType::kOdometry) ++counters_.odometry_fused;
-    if (e.type == EkfEventType::kVehicleSignals) ++counters_.signals_fused;
+    if (e.type == EkfEventType::kVehicleSignals || e.type == EkfEventType::kWheelSpeed) ++counters_.signals_fused;
+    if (e.type == EkfEventType::kGyro) ++counters_.gyro_fused;
+    if (e.type == EkfEventType::kGyroBiasReset) ++counters_.gyro_bias_resets;
   } else if (status == EkfFuseStatus::kRejectedGate) {
     if (e.type == EkfEventType::kGnss) ++counters_.gnss_rejected;
     if (e.type == EkfEventType::kRegistration) ++counters_.registration_rejected;
+    if (e.type == EkfEventType::kGyro) ++counters_.gyro_rejected;
   }
   return status;
 }
@@ -270,6 +309,7 @@ void Ekf::propagate(double t) {
     x_(idx::kPosX) += v * h * c;
     x_(idx::kPosY) += v * h * s;
     x_(idx::kYaw) = det::wrap_pi(x_(idx::kYaw) + w * h);
+    gyro_chain_.integrated += w * h;
 
     EkfCovariance F = EkfCovariance::Identity();
     F(idx::kPosX, idx::kYaw) = -v * h * s;
@@ -289,6 +329,7 @@ void Ekf::propagate(double t) {
     P_(idx::kYawRate, idx::kYawRate) += q.yaw_accel * q.yaw_accel * h;
     P_(idx::kYawRateBias, idx::kYawRateBias) += q.yaw_rate_bias * q.yaw_rate_bias * h;
     P_(idx::kWheelScale, idx::kWheelScale) += q.wheel_scale * q.wheel_scale * h;
+    P_(idx::kGyroBias, idx::kGyroBias) += q.gyro_bias_walk * q.gyro_bias_walk * h;
     P_ = 0.5 * (P_ + P_.transpose());
   }
   time_ = t;
@@ -329,6 +370,10 @@ EkfFuseStatus Ekf::apply(const Event& e) {
   switch (e.type) {
     case EkfEventType::kFrame:
       return EkfFuseStatus::kFused;
+    case EkfEventType::kWheelSpeed:
+    case EkfEventType::kGyro:
+    case EkfEventType::kGyroBiasReset:
+      return apply_scalar(e, count);
     case EkfEventType::kVehicleSignals: {
       Eigen::Matrix<double, 2, 1> y;
       y << e.z[0] - x_(idx::kWheelScale) * x_(idx::kSpeed),
@@ -397,6 +442,58 @@ EkfFuseStatus Ekf::apply(const Event& e) {
   return EkfFuseStatus::kInvalidInput;
 }
 
+// The one-dimensional events, already propagated to e.t: the wheel speed alone, the gyro z, the
+// gyro bias variance reset.
+EkfFuseStatus Ekf::apply_scalar(const Event& e, bool count) {
+  Eigen::Matrix<double, 1, 1> y;
+  Eigen::Matrix<double, 1, kEkfStateSize> H = Eigen::Matrix<double, 1, kEkfStateSize>::Zero();
+  Eigen::Matrix<double, 1, 1> R;
+  R(0, 0) = e.R[0][0];
+  if (e.type == EkfEventType::kGyroBiasReset) {
+    P_.row(idx::kGyroBias).setZero();
+    P_.col(idx::kGyroBias).setZero();
+    P_(idx::kGyroBias, idx::kGyroBias) = e.R[0][0];
+    if (count) ++counters_.gyro_bias_resets;
+    return EkfFuseStatus::kFused;
+  }
+  if (e.type == EkfEventType::kWheelSpeed) {
+    y(0) = e.z[0] - x_(idx::kWheelScale) * x_(idx::kSpeed);
+    H(0, idx::kSpeed) = x_(idx::kWheelScale);
+    H(0, idx::kWheelScale) = x_(idx::kSpeed);
+    const EkfFuseStatus s = fuse<1>(y, H, R, 0.0);
+    if (count && s == EkfFuseStatus::kFused) ++counters_.signals_fused;
+    return s;
+  }
+  y(0) = e.z[0] - (x_(idx::kYawRate) + x_(idx::kGyroBias));
+  H(0, idx::kYawRate) = 1.0;
+  H(0, idx::kGyroBias) = 1.0;
+  const double gate = params_.gates.gyro_gate_enabled ? params_.gates.gyro_nis_threshold : 0.0;
+  const EkfFuseStatus s = fuse<1>(y, H, R, gate);
+  if (count && s == EkfFuseStatus::kFused) ++counters_.gyro_fused;
+  if (count && s == EkfFuseStatus::kRejectedGate) ++counters_.gyro_rejected;
+  const double span = e.z[1];
+  if (s != EkfFuseStatus::kFused) {
+    gyro_chain_.linked = false;
+    return s;
+  }
+  // The span continues the last one (1 us: the intake's stamps are differences of the same doubles).
+  if (gyro_chain_.linked && std::fabs((e.t - span) - gyro_chain_.t) <= 1e-6) {
+    const double gyro_angle = (e.z[0] - x_(idx::kGyroBias)) * span;
+    x_(idx::kYaw) = det::wrap_pi(x_(idx::kYaw) + (gyro_angle - gyro_chain_.integrated));
+    // Its error: the held rate's share leaves it (-span dw), the bias's enters (-span db), and the
+    // gyro's white noise over the span (its angle random walk, N^2 span).
+    EkfCovariance J = EkfCovariance::Identity();
+    J(idx::kYaw, idx::kYawRate) = -span;
+    J(idx::kYaw, idx::kGyroBias) = -span;
+    const EkfCovariance JP = J.lazyProduct(P_);
+    P_ = JP.lazyProduct(J.transpose());
+    P_(idx::kYaw, idx::kYaw) += e.R[0][0] * span * span;
+    P_ = 0.5 * (P_ + P_.transpose());
+  }
+  gyro_chain_ = {true, e.t, 0.0};
+  return s;
+}
+
 void Ekf::take_snapshot(std::size_t log_pos) {
   if (snap_count_ == config::kEkfHistoryLength) {
     drop_oldest_snapshot();
@@ -407,6 +504,7 @@ void Ekf::take_snapshot(std::size_t log_pos) {
   s.log_pos = log_pos;
   s.x = x_;
   s.P = P_;
+  s.gyro = gyro_chain_;
   ++snap_count_;
 }
 

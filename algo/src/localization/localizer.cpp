@@ -22,6 +22,9 @@ void Localizer::configure(const LocalizerParams& params, const GeodeticOrigin& o
   gnss_ = {};
   course_.configure(params.course);
   odom_T_body_ = Pose3d::Identity();
+  have_input_t_ = false;
+  latest_input_t_ = 0.0;
+  imu_.configure(params.filter.imu);
   scan_.configure(params.scan, params.use_vehicle_signals);
   odometry_.configure(params.odometry);
   odometry_.reset();
@@ -40,14 +43,15 @@ void Localizer::on_vehicle(const VehicleInput& in) {
   vehicle_.valid = true;
   vehicle_.speed = in.wheel_speed;
   vehicle_.yaw_rate = in.yaw_rate;
-  filter_.on_vehicle(in.t, in.wheel_speed, in.yaw_rate);
+  note_input_time(in.t);
+  filter_.on_vehicle(in.t, in.wheel_speed, in.yaw_rate, counters_);
 }
 
+// Checked and averaged by the intake (imu_intake.hpp); each ~10 ms mean gyro z goes to the filter.
 void Localizer::on_imu(const ImuInput& in) {
   ++counters_.imu_received;
-  bool finite = std::isfinite(in.t);
-  for (int i = 0; i < 3; ++i) finite = finite && std::isfinite(in.gyro[i]) && std::isfinite(in.accel[i]);
-  if (!finite || in.saturated) ++counters_.imu_invalid;
+  const GyroMeasurement g = imu_.push(in, have_input_t_, latest_input_t_, counters_);
+  if (g.ready) filter_.on_gyro(g.t, g.rate, g.span, counters_);
 }
 
 void Localizer::on_gnss(const GnssInput& in) {
@@ -57,6 +61,7 @@ void Localizer::on_gnss(const GnssInput& in) {
     ++counters_.gnss_invalid;
     return;
   }
+  note_input_time(in.t);
   gnss_.valid = true;
   gnss_.enu = geodetic_to_enu(origin_, GeodeticPoint{in.lat_deg, in.lon_deg, in.alt_m});
   gnss_.sigma = in.h_acc;
@@ -86,9 +91,10 @@ const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
   output_.t = in.t;
   ++counters_.frames;
   if (std::isfinite(in.t) && (!have_frame_ || in.t > last_frame_t_)) {
+    note_input_time(in.t);
     probe_(LocalizerStage::kScanPrep);
     // Priced per pass: a sweep over the ingest capacity is read again coarser.
-    const std::uint32_t passes = scan_.prepare(in, vehicle_, counters_.scan_points_dropped, counters_.scans_coarsened);
+    const std::uint32_t passes = scan_.prepare(in, deskew_motion(in.t), counters_.scan_points_dropped, counters_.scans_coarsened);
     work_.add(params_.work.scan * passes);
     if (params_.use_stereo && !in.stereo.disparity.empty()) scan_.prepare_stereo(in.stereo);
     probe_(LocalizerStage::kOdometry);
@@ -123,6 +129,23 @@ const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
   ++frame_;
   probe_(LocalizerStage::kIdle);
   return output_;
+}
+
+// The sweep's motion: the wheel speed, and the gyro's yaw rate when its samples reach the stamp
+// (imu_intake.hpp, rate_ahead: the samples before the stamp carried along their trend to the
+// sweep's middle, less the filter's bias), else the latest CAN yaw rate, half a sweep and one
+// sample's noise away from the rate the sweep turns at. The bias is the filter's, a slow state: the
+// deskew->registration->filter loop TUNING.md warns of stays open at the rate.
+VehicleMotion Localizer::deskew_motion(double t) {
+  VehicleMotion motion = vehicle_;
+  double rate = 0.0;
+  const ImuParams& p = params_.filter.imu;
+  if (motion.valid && filter_.initialized() &&
+      imu_.rate_ahead(t, p.deskew_window, p.deskew_trend, 0.5 * params_.scan.frame_period, rate)) {
+    motion.yaw_rate = rate - filter_.gyro_bias();
+    ++counters_.imu_deskews;
+  }
+  return motion;
 }
 
 // KISS-ICP-style odometry on the deskewed scan, predicted from the vehicle signals over the

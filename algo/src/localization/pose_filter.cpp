@@ -25,6 +25,11 @@ void PoseFilter::configure(const PoseFilterParams& params, bool use_vehicle_sign
   nis_rejections_ = 0;
   nis_rejections_shadow_ = 0;
   gnss_divergent_fixes_ = 0;
+  have_gyro_ = false;
+  last_gyro_t_ = 0.0;
+  can_next_ = 0;
+  gyro_rejections_ = 0;
+  can_gyro_running_ = false;
 }
 
 double PoseFilter::sigma_xy() const {
@@ -38,10 +43,74 @@ bool PoseFilter::can_track() const {
          failed_frames_ <= params_.max_failed_frames;
 }
 
-void PoseFilter::on_vehicle(double t, double wheel_speed, double yaw_rate) {
+void PoseFilter::on_vehicle(double t, double wheel_speed, double yaw_rate, LocalizerCounters& counters) {
   if (!use_vehicle_signals_ || !ekf_.initialized()) return;
+  can_[can_next_ % kCanRing] = {t, yaw_rate};  // the gyro's comparison, whichever arrives first
+  ++can_next_;
+  if (gyro_live(t) && !params_.imu.can_yaw_rate_with_gyro) {
+    ekf_.on_wheel_speed(t, wheel_speed);
+    if (params_.shadow_ungated_filter) shadow_.on_wheel_speed(t, wheel_speed);
+    return;
+  }
   ekf_.on_vehicle_signals(t, wheel_speed, yaw_rate);
   if (params_.shadow_ungated_filter) shadow_.on_vehicle_signals(t, wheel_speed, yaw_rate);
+}
+
+void PoseFilter::on_gyro(double t, double rate, double span, LocalizerCounters& counters) {
+  if (!ekf_.initialized()) return;
+  if (params_.shadow_ungated_filter && shadow_.initialized()) shadow_.on_gyro(t, rate, span);
+  const EkfFuseStatus s = ekf_.on_gyro(t, rate, span);
+  if (s == EkfFuseStatus::kFused) {
+    have_gyro_ = true;
+    last_gyro_t_ = t;
+    gyro_rejections_ = 0;
+    watch_gyro_against_can(t, rate, span, counters);
+    return;
+  }
+  if (s != EkfFuseStatus::kRejectedGate) return;
+  ++counters.imu_gyro_rejected;
+  if (++gyro_rejections_ < params_.imu.reset_after_rejections) return;
+  reset_gyro_bias(t, counters);
+}
+
+// Both sensors see the same body yaw rate: their difference is the bias difference the filter
+// holds, plus the CAN signal's noise. The gyro's mean over its span is compared with the latest CAN
+// sample inside that span (kept in a ring: the firmware hands a period's IMU samples on after its
+// CAN frames). A running mean (time constant consistency_window) beyond consistency_limit after a
+// full window means the gyro's bias stepped faster than its random walk lets the filter follow (the
+// gyro, far less noisy, would drag the yaw rate along otherwise).
+void PoseFilter::watch_gyro_against_can(double t, double rate, double span, LocalizerCounters& counters) {
+  const std::size_t n = can_next_ < kCanRing ? can_next_ : kCanRing;
+  const CanSample* match = nullptr;
+  for (std::size_t k = 1; k <= n && match == nullptr; ++k) {
+    const CanSample& c = can_[(can_next_ - k) % kCanRing];
+    if (c.t <= t && c.t > t - span) match = &c;
+  }
+  if (match == nullptr) return;
+  const EkfState s = ekf_.state();
+  const double d = rate - match->yaw_rate - (s.gyro_bias - s.yaw_rate_bias);
+  if (!can_gyro_running_ || !(t > can_gyro_t_) || t - can_gyro_t_ > params_.imu.max_gap) {
+    can_gyro_running_ = true;
+    can_gyro_mean_ = d;
+    can_gyro_t_ = can_gyro_since_ = t;
+    return;
+  }
+  double a = (t - can_gyro_t_) / params_.imu.consistency_window;
+  if (a > 1.0) a = 1.0;
+  can_gyro_mean_ += a * (d - can_gyro_mean_);
+  can_gyro_t_ = t;
+  if (t - can_gyro_since_ < params_.imu.consistency_window) return;
+  if (std::fabs(can_gyro_mean_) <= params_.imu.consistency_limit) return;
+  ++counters.imu_inconsistent;
+  reset_gyro_bias(t, counters);
+}
+
+void PoseFilter::reset_gyro_bias(double t, LocalizerCounters& counters) {
+  ekf_.reset_gyro_bias(t, params_.imu.bias_reset_sigma);
+  if (params_.shadow_ungated_filter && shadow_.initialized()) shadow_.reset_gyro_bias(t, params_.imu.bias_reset_sigma);
+  ++counters.imu_bias_resets;
+  gyro_rejections_ = 0;
+  can_gyro_running_ = false;
 }
 
 GnssFusion PoseFilter::on_gnss(double t, const Vec3d& enu, double h_acc, double v_acc) {
@@ -88,6 +157,8 @@ void PoseFilter::lose_track() {
   nis_rejections_ = 0;
   nis_rejections_shadow_ = 0;
   gnss_divergent_fixes_ = 0;
+  gyro_rejections_ = 0;
+  can_gyro_running_ = false;
 }
 
 void PoseFilter::restart(Ekf& ekf, double t, const Mat4d& pose, const VehicleMotion& vehicle) const {
@@ -101,6 +172,10 @@ void PoseFilter::restart(Ekf& ekf, double t, const Mat4d& pose, const VehicleMot
   EkfCovariance P = EkfCovariance::Zero();
   const double* sigmas = params_.restart_sigmas;
   for (int i = 0; i < kEkfStateSize; ++i) P(i, i) = sigmas[i] * sigmas[i];
+  if (ekf.counters().gyro_fused > 0) {  // the gyro's bias outlives a restart (reset() keeps the last state)
+    s.gyro_bias = ekf.state_vector()(ekf_index::kGyroBias);
+    P(ekf_index::kGyroBias, ekf_index::kGyroBias) = ekf.covariance()(ekf_index::kGyroBias, ekf_index::kGyroBias);
+  }
   ekf.initialize(t, s, P);
   ekf.predict_to(t);
 }

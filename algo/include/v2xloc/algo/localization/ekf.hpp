@@ -2,26 +2,43 @@
 // documented layout and index table, fixed-size matrices, Joseph-form updates, innovation gates
 // with counters, a bounded history for delayed measurements).
 //
-// State (kEkfStateSize = 8, units in brackets), local ENU frame (x east, y north, z up):
-//   0..2  position of the vehicle reference point   [m]
-//   3     yaw, heading of the body x axis from east  [rad], wrapped to (-pi, pi]
-//   4     forward speed along body x                  [m/s]
-//   5     yaw rate                                    [rad/s]
-//   6     yaw-rate sensor bias (measured = true + b)  [rad/s]
-//   7     wheel-speed scale (measured = k * true)     [-]
-// Process model: constant turn rate and velocity on the ground plane (Schubert et al. 2008,
-// CTRV), midpoint-yaw integration; z, speed, yaw rate, bias and scale are random walks.
+// State (kEkfStateSize = 9), local ENU frame (x east, y north, z up), with the process noise that
+// drives each state (EkfNoise, continuous densities; PX4 EKF2 lists its states and their process
+// noise parameters the same way):
 //
-// Design choice: the vehicle's wheel speed and yaw rate are fused as measurements of the speed
-// and yaw-rate states (z = k v, z = w + b) at their own rate, and prediction integrates those
-// states. Compared with feeding them as control inputs this (a) makes wheel scale and gyro bias
+// | # | state                                    | unit  | process noise (EkfNoise)                  |
+// |---|------------------------------------------|-------|-------------------------------------------|
+// | 0 | position x of the vehicle reference point| m     | lateral [m/sqrt(s)] (slip, model error)   |
+// | 1 | position y                               | m     | lateral                                   |
+// | 2 | position z                               | m     | vertical [m/sqrt(s)] (road grade)         |
+// | 3 | yaw, body x from east, wrapped (-pi, pi] | rad   | none: integrates the yaw rate             |
+// | 4 | forward speed along body x               | m/s   | accel [m/s^2/sqrt(Hz)]                    |
+// | 5 | yaw rate                                 | rad/s | yaw_accel [rad/s^2/sqrt(Hz)]              |
+// | 6 | CAN yaw-rate sensor bias (z = w + b)     | rad/s | yaw_rate_bias [rad/s/sqrt(s)]             |
+// | 7 | wheel-speed scale (z = k v)              | -     | wheel_scale [1/sqrt(s)]                   |
+// | 8 | IMU gyro z bias (z = w + b_g)            | rad/s | gyro_bias_walk [rad/s/sqrt(s)] (sensor's) |
+//
+// Measurements: CAN wheel speed (z = k v) and yaw rate (z = w + b), the IMU gyro z (z = w + b_g,
+// noise from the sensor's angle random walk gyro_noise_density: sigma^2 = N^2 / span for the mean
+// rate over span seconds), GNSS position, registration pose (x, y, z, yaw), LiDAR odometry rates.
+// Process model: constant turn rate and velocity on the ground plane (Schubert et al. 2008,
+// CTRV), midpoint-yaw integration; z, speed, yaw rate, biases and scale are random walks.
+// Without gyro measurements state 8 has no cross-covariance and never touches the others: the
+// filter's arithmetic on states 0-7 is the 8-state filter's, bit for bit (state 8 is last, so it
+// only appends exact zero terms to each sum).
+//
+// Design choice: the vehicle's wheel speed and yaw rate, and the IMU's gyro z, are fused as
+// measurements of the speed and yaw-rate states (z = k v, z = w + b, z = w + b_g) at their own
+// rate, and prediction integrates those states (the gyro, fused every ~10 ms with a noise far below
+// the CAN signal's, is what the yaw-rate state follows, so the yaw is the integrated gyro).
+// Compared with feeding them as control inputs this (a) makes wheel scale and gyro biases
 // observable from every absolute fix, (b) lets LiDAR odometry enter the same way, and (c) turns
 // history replay into a pure function of the time-ordered event log, with no separate input
 // buffer. Signal noise enters through R, the smoothing bandwidth through the random-walk q's.
 // LiDAR odometry's relative pose between two frames (dt apart) is fused as the mean body speed
 // and yaw rate over that interval (z = [|dp_x| / dt, dyaw / dt], an unbiased rate sensor): a
 // proper relative-pose update needs stochastic cloning (Roumeliotis & Burdick 2002), which a
-// fixed 8-state filter avoids at the cost of treating the odometry as a rate measurement.
+// fixed-size filter avoids at the cost of treating the odometry as a rate measurement.
 //
 // Out-of-sequence measurements: every event (measurement or predict_to() frame marker) is kept in a
 // time-ordered log (config::kEkfEventLogCapacity); after each frame marker a snapshot of
@@ -30,7 +47,7 @@
 // replays the log: the result is bit-identical to on-time fusion of the same event sequence.
 // Events older than the oldest snapshot are rejected (counted as too_late).
 //
-// Size: ~110 kB (event log 512 x 176 B + 32 snapshots x 592 B); static storage, not the stack.
+// Size: ~114 kB (event log 512 x 176 B + 32 snapshots x 736 B); static storage, not the stack.
 #pragma once
 
 #include <cstddef>
@@ -42,7 +59,7 @@
 
 namespace v2xloc {
 
-inline constexpr int kEkfStateSize = 8;
+inline constexpr int kEkfStateSize = 9;
 
 // Index table of the state vector (EKF2's StateSample indices).
 namespace ekf_index {
@@ -54,6 +71,7 @@ inline constexpr int kSpeed = 4;
 inline constexpr int kYawRate = 5;
 inline constexpr int kYawRateBias = 6;
 inline constexpr int kWheelScale = 7;
+inline constexpr int kGyroBias = 8;
 }  // namespace ekf_index
 
 using EkfVector = Eigen::Matrix<double, kEkfStateSize, 1>;
@@ -69,6 +87,7 @@ struct EkfState {
   double yaw_rate = 0.0;       // [rad/s]
   double yaw_rate_bias = 0.0;  // [rad/s]
   double wheel_scale = 1.0;    // [-]
+  double gyro_bias = 0.0;      // [rad/s] IMU gyro z
 
   EkfVector to_vector() const;
   static EkfState from_vector(const EkfVector& x);
@@ -83,11 +102,17 @@ struct EkfNoise {
   double yaw_accel = 0.3;         // yaw-rate random walk [rad/s^2/sqrt(Hz)]
   double vertical = 0.05;         // z random walk [m/sqrt(s)] (road grade)
   double lateral = 0.02;          // position diffusion [m/sqrt(s)] (slip, model error)
-  double yaw_rate_bias = 1e-4;    // gyro bias walk [rad/s/sqrt(s)]
+  double yaw_rate_bias = 1e-4;    // CAN yaw-rate sensor bias walk [rad/s/sqrt(s)]
   double wheel_scale = 1e-4;      // scale walk [1/sqrt(s)] (tyre pressure / wear)
+  // IMU gyro z, automotive MEMS class (ST ASM330LHH datasheet DocID031239: rate noise density
+  // 5 mdps/sqrt(Hz) = 8.7e-5 rad/s/sqrt(Hz), i.e. 0.3 deg/sqrt(h) angle random walk; bias
+  // instability of the class 3-4 deg/h ~ 2e-5 rad/s, walked in ~1 s of correlation and over
+  // temperature: 2e-5 rad/s/sqrt(s) keeps the bias state following a warming part).
+  double gyro_noise_density = 8.7e-5;  // angle random walk [rad/s/sqrt(Hz)]
+  double gyro_bias_walk = 2e-5;        // bias random walk [rad/s/sqrt(s)]
   // Measurement noise (1 sigma).
   double wheel_speed = 0.05;      // [m/s], incl. quantisation
-  double gyro = 0.005;            // [rad/s]
+  double gyro = 0.005;            // [rad/s] CAN yaw rate
   double odometry_speed = 0.05;   // [m/s], LiDAR odometry mean speed over a frame
   double odometry_yaw_rate = 0.005;  // [rad/s]
 };
@@ -103,9 +128,13 @@ struct EkfGateParams {
   // LiDAR odometry rates (2 DoF: 13.82) against the wheel speed / gyro the filter already has: a
   // scan match that slipped (e.g. under-rotated at a turn's onset) must not drag the yaw rate.
   double odometry_nis_threshold = 13.82;
+  // IMU gyro z (1 DoF: 10.83) against the yaw rate the CAN signal, odometry and registrations hold:
+  // a bias step or a stuck axis is rejected instead of turning the yaw.
+  double gyro_nis_threshold = 10.83;
   bool gnss_gate_enabled = true;
   bool registration_gate_enabled = true;
   bool odometry_gate_enabled = true;
+  bool gyro_gate_enabled = true;
 };
 
 struct EkfParams {
@@ -132,6 +161,9 @@ enum class EkfEventType : std::uint8_t {
   kGnss,
   kRegistration,
   kOdometry,
+  kWheelSpeed,     // wheel speed alone (the IMU gyro stands in for the CAN yaw rate)
+  kGyro,           // IMU gyro z, mean over a span
+  kGyroBiasReset,  // the gyro bias variance restarts (persistent gyro rejections)
 };
 
 enum class EkfFuseStatus : std::uint8_t {
@@ -151,7 +183,10 @@ struct EkfCounters {
   std::uint64_t registration_rejected = 0;
   std::uint64_t odometry_fused = 0;
   std::uint64_t odometry_rejected = 0;
-  std::uint64_t signals_fused = 0;
+  std::uint64_t signals_fused = 0;      // vehicle signals, with or without their yaw rate
+  std::uint64_t gyro_fused = 0;
+  std::uint64_t gyro_rejected = 0;      // NIS gate
+  std::uint64_t gyro_bias_resets = 0;
   std::uint64_t late_events = 0;        // fused through rollback + replay
   std::uint64_t too_late = 0;           // rejected: older than the history
   std::uint64_t invalid_inputs = 0;
@@ -175,11 +210,19 @@ class Ekf {
   // Starts (or restarts) the filter at time t [s]; clears the history.
   void initialize(double t, const EkfState& state, const EkfCovariance& covariance);
   bool initialized() const { return initialized_; }
-  // Back to uninitialized (the localizer lost track); the history is dropped, counters are kept.
+  // Back to uninitialized (the localizer lost track); the history is dropped, counters are kept,
+  // and the last state and covariance stay readable (a restart carries the gyro bias over).
   void reset();
 
   // Measurements, each at its own time stamp t [s]; t older than the filter time -> rollback.
   EkfFuseStatus on_vehicle_signals(double t, double wheel_speed, double yaw_rate);
+  // The wheel speed alone (the CAN yaw rate is left out while the IMU gyro drives the yaw).
+  EkfFuseStatus on_wheel_speed(double t, double wheel_speed);
+  // IMU gyro z: mean rate [rad/s] over the span [s] ending at t (noise gyro_noise_density^2 / span).
+  EkfFuseStatus on_gyro(double t, double rate, double span);
+  // The gyro bias variance restarts at sigma^2 [rad/s] with no cross-covariance (its value stays):
+  // the next gyro measurements re-estimate it (a bias step the NIS gate kept rejecting).
+  EkfFuseStatus reset_gyro_bias(double t, double sigma);
   // GNSS position in local ENU [m] with 1-sigma horizontal / vertical accuracy [m].
   EkfFuseStatus on_gnss(double t, const Vec3d& enu, double sigma_horizontal, double sigma_vertical);
   // Registration pose world_T_body; covariance of (x, y, z, yaw) (see registration_covariance).
@@ -203,15 +246,26 @@ class Ekf {
     double z[4] = {0.0, 0.0, 0.0, 0.0};
     double R[4][4] = {};
   };
+  // The yaw the prediction integrated since the last fused gyro measurement: at the next one that
+  // continues it, the yaw takes the gyro's angle over the span instead (mean rate - bias, times the
+  // span): the held yaw-rate state lags a turning car by half a step (a zero-order hold), the
+  // gyro's average does not. Part of the snapshots, so replay stays a function of the log.
+  struct GyroChain {
+    bool linked = false;      // t is the end of the last fused gyro span
+    double t = 0.0;           // [s]
+    double integrated = 0.0;  // [rad] yaw integrated by the prediction since t
+  };
   struct Snapshot {
     double t = 0.0;
     std::size_t log_pos = 0;  // first log event NOT reflected in this snapshot
     EkfVector x;
     EkfCovariance P;
+    GyroChain gyro;
   };
 
   EkfFuseStatus submit(const Event& e);
   EkfFuseStatus apply(const Event& e);  // predict to e.t, then fuse e
+  EkfFuseStatus apply_scalar(const Event& e, bool count);
   void propagate(double t);
   template <int M>
   EkfFuseStatus fuse(const Eigen::Matrix<double, M, 1>& innovation,
@@ -227,6 +281,7 @@ class Ekf {
   EkfVector x_ = EkfVector::Zero();
   EkfCovariance P_ = EkfCovariance::Zero();
   EkfCounters counters_;
+  GyroChain gyro_chain_{};
   bool replaying_ = false;
 
   Event log_[config::kEkfEventLogCapacity];

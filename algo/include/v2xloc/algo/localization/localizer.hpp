@@ -1,11 +1,12 @@
 // The localizer: one ego frame through every stage (paper Fig. 1), each stage a component with
 // its own state (KISS-ICP's RegisterFrame over stage objects, PX4 EKF2's one owner of the filter):
-//   ScanPreparation     range filter, deskew (wheel speed + yaw rate), registration scan, stereo
+//   ImuIntake           IMU samples checked, counted, gyro z averaged for the filter and the deskew
+//   ScanPreparation     range filter, deskew (wheel speed + gyro or CAN yaw rate), registration scan, stereo
 //   LidarOdometry       relative motion, predicted from the same signals
 //   ReferenceMap        infra/agent clouds fused (map_fusion) -> target: points, k-d tree, normals
 //   TrackingRegistration ICP from the filter's prediction, basin audit, stereo ICP
 //   StartupSearch       GNSS-seeded exhaustive search, confirmation by a second search
-//   PoseFilter          validity gates -> EKF (wheel speed / yaw rate, GNSS, odometry, registrations)
+//   PoseFilter          validity gates -> EKF (wheel speed / yaw rate, gyro, GNSS, odometry, registrations)
 //   FrameOutput         the filter's pose, or before its start the GNSS fix on the road surface
 // Lost track (GNSS divergence, basin audit) -> start-up search again.
 // Inputs arrive through on_*() calls in time order per source; the caller decides the event
@@ -20,6 +21,7 @@
 #include "v2xloc/algo/core/geodesy.hpp"
 #include "v2xloc/algo/localization/ekf.hpp"
 #include "v2xloc/algo/localization/frame_output.hpp"
+#include "v2xloc/algo/localization/imu_intake.hpp"
 #include "v2xloc/algo/localization/gnss_course.hpp"
 #include "v2xloc/algo/localization/localizer_params.hpp"
 #include "v2xloc/algo/localization/localizer_types.hpp"
@@ -96,6 +98,7 @@ class Localizer {
 
  private:
   // The stages of on_ego_scan, in order.
+  VehicleMotion deskew_motion(double t);
   void run_odometry(const EgoScanInput& in);
   void register_frame(double t, const Mat4d& body_T_lidar);
   RegistrationResult track(double t, const Mat4d& body_T_lidar);
@@ -104,6 +107,10 @@ class Localizer {
   void fill_output(double t);
   void push_backfill();
 
+  void note_input_time(double t) {
+    if (!have_input_t_ || t > latest_input_t_) latest_input_t_ = t;
+    have_input_t_ = true;
+  }
   void report_registration(const RegistrationResult& result);
   void lose_track();
   std::span<std::uint32_t> icp_hints() { return {icp_hints_, config::kMaxDownsampledPoints}; }
@@ -123,6 +130,9 @@ class Localizer {
   GnssFix gnss_{};
   GnssCourse course_{};
   Pose3d odom_T_body_ = Pose3d::Identity();  // this frame's odometry pose
+  bool have_input_t_ = false;                // latest stamp of the vehicle, GNSS and scan inputs
+  double latest_input_t_ = 0.0;              // (the IMU's time-jump check)
+  ImuIntake imu_{};
 
   // The stages.
   ScanPreparation scan_{};

@@ -172,6 +172,31 @@ struct GnssCourseParams {
   double max_age = 1.0;               // [s] a course older than this is not used
 };
 
+// The IMU's samples on their way into the filter (imu_intake.hpp, PoseFilter::on_gyro); the
+// sensor's own figures (angle random walk, bias random walk) are filter.ekf.noise's gyro_*.
+struct ImuParams {
+  double fuse_period = 0.01;          // [s] gyro z samples averaged into one filter measurement (PX4 EKF2's 10 ms)
+  double max_gap = 0.05;              // [s] a longer silence is a dropout: the stream restarts, the CAN yaw rate takes over
+  double max_lead = 0.5;              // [s] a sample this far ahead of the latest other input is a time jump: refused
+  // [s] the gyro stands in for the CAN yaw rate this long after its last fused measurement (the
+  // firmware hands a period's IMU samples on after that period's CAN frames: 0.1 s late at most)
+  double live_window = 0.25;
+  // [samples] identical values in a row on an axis: stuck (a live MEMS axis's noise spans many LSBs)
+  std::uint32_t stuck_samples = 50;
+  std::uint32_t reset_after_rejections = 20;  // [measurements] gyro NIS rejections in a row -> bias variance reset
+  double bias_reset_sigma = 0.02;     // [rad/s] gyro bias sigma after that reset (a ~1 deg/s step)
+  // [s] time constant of the running mean of (gyro - CAN yaw rate - their bias difference) ...
+  double consistency_window = 1.0;
+  double consistency_limit = 0.005;   // [rad/s] ... beyond which the gyro bias stepped: variance reset (TUNING.md)
+  // [s] the sweep's deskew turns at the gyro's mean over this much before the frame stamp, carried
+  // along its trend to the sweep's middle, less the filter's bias, instead of the latest CAN yaw
+  // rate (0: the CAN yaw rate; TUNING.md) ...
+  double deskew_window = 0.02;
+  double deskew_trend = 0.08;         // [s] ... the trend: the change from the same mean this much earlier
+  // [switch] fuse the CAN yaw rate beside the gyro (off: the wheel speed alone while the gyro is live; TUNING.md)
+  bool can_yaw_rate_with_gyro = true;
+};
+
 // PoseFilter (pose_filter.hpp); also given LocalizerParams::use_vehicle_signals.
 struct PoseFilterParams {
   GateMode gate_mode = GateMode::kFixedLag;  // which validity gate feeds the EKF
@@ -179,8 +204,10 @@ struct PoseFilterParams {
   EkfParams ekf{};                           // filter noise and NIS gates (ekf.hpp)
   RegistrationCovarianceParams registration_covariance{};  // ICP information -> pose covariance
   std::uint32_t reset_after_rejections = 3;  // [registrations] NIS-rejected in a row -> restart
-  // [m, m, m, rad, m/s, rad/s, rad/s, -] 1-sigma of each state (ekf_index order) at a (re)start.
-  double restart_sigmas[kEkfStateSize] = {0.1, 0.1, 0.1, 0.01, 0.5, 0.05, 0.005, 0.02};
+  // [m, m, m, rad, m/s, rad/s, rad/s, -, rad/s] 1-sigma of each state (ekf_index order) at a (re)start;
+  // the gyro bias's (0.01 rad/s: the MEMS class's turn-on zero-rate offset) when no earlier estimate exists.
+  double restart_sigmas[kEkfStateSize] = {0.1, 0.1, 0.1, 0.01, 0.5, 0.05, 0.005, 0.02, 0.01};
+  ImuParams imu{};                           // the IMU's intake and its use (above)
   double tracking_max_sigma_xy = 0.5;        // [m] EKF position sigma above which the start-up search runs
   std::uint32_t max_failed_frames = 10;      // [frames] consecutive unfused registrations -> start-up search
   double gnss_divergence_distance = 30.0;    // [m] lost track: fix farther than max(this, sigmas * h_acc)

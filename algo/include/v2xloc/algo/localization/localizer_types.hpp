@@ -131,7 +131,15 @@ struct LocalizerCounters {
   std::uint32_t gnss_received = 0;
   std::uint32_t gnss_invalid = 0;
   std::uint32_t imu_received = 0;
-  std::uint32_t imu_invalid = 0;               // non-finite, saturated or out of time order
+  std::uint32_t imu_invalid = 0;               // refused: non-finite or saturated
+  std::uint32_t imu_out_of_order = 0;          // refused: not after the previous sample
+  std::uint32_t imu_time_jumps = 0;            // refused: ahead of the other inputs by more than filter.imu.max_lead
+  std::uint32_t imu_gaps = 0;                  // dropouts: silences longer than filter.imu.max_gap
+  std::uint32_t imu_stuck_axes = 0;            // stuck episodes, any of the six axes (gyro z's are not fused)
+  std::uint32_t imu_gyro_rejected = 0;         // gyro measurements the filter's NIS gate refused
+  std::uint32_t imu_inconsistent = 0;          // gyro against the CAN yaw rate: a bias step detected
+  std::uint32_t imu_bias_resets = 0;           // gyro bias variance restarts (rejections or inconsistency)
+  std::uint32_t imu_deskews = 0;               // sweeps deskewed at the gyro's yaw rate (filter.imu.deskew_window)
   std::uint32_t scan_points_dropped = 0;       // non-finite, out of range or over capacity
   std::uint32_t scans_coarsened = 0;           // sweeps over the ingest capacity, read again with a coarser voxel
   std::uint32_t odometry_failures = 0;

@@ -55,7 +55,16 @@ class PoseFilter {
   // A start-up solution (re)starts the filter: it is not running or has stopped fusing.
   bool needs_start() const { return !ekf_.initialized() || failed_frames_ > params_.max_failed_frames; }
 
-  void on_vehicle(double t, double wheel_speed, double yaw_rate);
+  // The CAN yaw rate is left out while the gyro is live unless filter.imu.can_yaw_rate_with_gyro;
+  // while it is live the two are compared (a gyro bias step restarts the bias's variance).
+  void on_vehicle(double t, double wheel_speed, double yaw_rate, LocalizerCounters& counters);
+  // IMU gyro z, mean rate over span ending at t (imu_intake.hpp); filter.imu.reset_after_rejections
+  // NIS rejections in a row restart the gyro bias's variance.
+  void on_gyro(double t, double rate, double span, LocalizerCounters& counters);
+  // A gyro measurement was fused within filter.imu.live_window before t (the CAN yaw rate's stand-in).
+  bool gyro_live(double t) const { return have_gyro_ && t - last_gyro_t_ <= params_.imu.live_window; }
+  // The gyro z bias estimate [rad/s] (0 before the filter runs).
+  double gyro_bias() const { return ekf_.initialized() ? ekf_.state().gyro_bias : 0.0; }
   // kDiverged: gnss_divergence_fixes fixes in a row far from the filter (the caller loses track).
   GnssFusion on_gnss(double t, const Vec3d& enu, double h_acc, double v_acc);
   void on_odometry(double t, double dt, const Mat4d& body_delta);
@@ -99,6 +108,8 @@ class PoseFilter {
   // EKF update; NIS-rejected reset_after_rejections times in a row -> restart at the registration.
   bool fuse_into(Which which, const Pending& reg, const Now& now, LocalizerCounters& counters);
   void restart(Ekf& ekf, double t, const Mat4d& pose, const VehicleMotion& vehicle) const;
+  void watch_gyro_against_can(double t, double rate, double span, LocalizerCounters& counters);
+  void reset_gyro_bias(double t, LocalizerCounters& counters);
 
   PoseFilterParams params_{};
   bool use_vehicle_signals_ = true;
@@ -113,6 +124,22 @@ class PoseFilter {
   std::uint32_t nis_rejections_ = 0;          // consecutive NIS rejections (main filter)
   std::uint32_t nis_rejections_shadow_ = 0;
   std::uint32_t gnss_divergent_fixes_ = 0;
+  // The gyro (main filter): last fused measurement, NIS rejections in a row, the recent CAN yaw
+  // rates, and the running mean of the gyro's disagreement with them.
+  bool have_gyro_ = false;
+  double last_gyro_t_ = 0.0;
+  struct CanSample {
+    double t = 0.0;
+    double yaw_rate = 0.0;
+  };
+  static constexpr std::size_t kCanRing = 16;  // 160 ms of CAN at 100 Hz: a period and its margin
+  CanSample can_[kCanRing];
+  std::size_t can_next_ = 0;
+  std::uint32_t gyro_rejections_ = 0;
+  double can_gyro_mean_ = 0.0;
+  double can_gyro_t_ = 0.0;
+  double can_gyro_since_ = 0.0;  // start of the running mean (it decides after one window)
+  bool can_gyro_running_ = false;
 };
 
 }  // namespace v2xloc
