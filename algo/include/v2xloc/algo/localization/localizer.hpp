@@ -98,9 +98,9 @@ class Localizer {
   // The stages of on_ego_scan, in order.
   void run_odometry(const EgoScanInput& in);
   void register_frame(double t, const Mat4d& body_T_lidar);
-  RegistrationResult track(double t, const Mat4d& body_T_lidar);
+  RegistrationResult track(double t, const Mat4d& body_T_lidar, bool& withheld);
   StartupOutcome search(double t, const Mat4d& body_T_lidar);
-  void fuse(double t, const RegistrationResult& result, bool attempted_ok);
+  void fuse(double t, const RegistrationResult& result, bool attempted_ok, bool withheld);
   void fill_output(double t);
   void push_backfill();
 
