@@ -7,16 +7,12 @@
 #include "v2xloc/algo/registration/pose_search.hpp"
 
 namespace v2xloc {
-namespace {
 
-// Another basin: apart by the search's distinct distance or heading.
 bool distinct_basin(const Mat4d& a, const Mat4d& b, const PoseSearchParams& sp) {
   const Mat4d d = se3_inverse(a) * b;
   return std::sqrt(d(0, 3) * d(0, 3) + d(1, 3) * d(1, 3)) >= sp.distinct_distance ||
          std::abs(det::wrap_pi(yaw_of(d.topLeftCorner<3, 3>()))) >= sp.distinct_yaw;
 }
-
-}  // namespace
 
 void BasinAudit::configure(const BasinAuditParams& params, const PoseSearchParams& search, const IcpParams& icp) {
   params_ = params;

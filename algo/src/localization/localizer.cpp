@@ -189,9 +189,10 @@ void Localizer::register_frame(double t, const Mat4d& body_T_lidar) {
   scan_.downsample_for_registration(body_T_lidar);
   RegistrationResult result;
   bool attempted_ok = true;
+  bool withheld = false;
   if (filter_.can_track()) {
     output_.mode = LocalizationMode::kTracking;
-    result = track(t, body_T_lidar);
+    result = track(t, body_T_lidar, withheld);
   } else {
     output_.mode = LocalizationMode::kGlobalSearch;
     const StartupOutcome s = search(t, body_T_lidar);
@@ -201,15 +202,17 @@ void Localizer::register_frame(double t, const Mat4d& body_T_lidar) {
     }
     result = s.registration;
     attempted_ok = s.status != StartupStatus::kRejected;
+    withheld = tracking_.rival().contested();  // a start contested by a rival basin
     if (!attempted_ok) filter_.count_failed_frame();
   }
   probe_(LocalizerStage::kFusion);
   report_registration(result);
   if (attempted_ok && result.ok()) ++counters_.registrations_ok;
-  fuse(t, result, attempted_ok);
+  fuse(t, result, attempted_ok, withheld);
 }
 
-RegistrationResult Localizer::track(double t, const Mat4d& body_T_lidar) {
+// withheld: the track's rival basin is not decided (rival_basin.hpp).
+RegistrationResult Localizer::track(double t, const Mat4d& body_T_lidar, bool& withheld) {
   probe_(LocalizerStage::kTracking);
   const TrackingFrame frame{filter_.pose(),       scan_.registration_scan(), scan_.tracking_scan(),
                             scan_.search_scan(),  scan_.stereo_cloud(),
@@ -221,6 +224,7 @@ RegistrationResult Localizer::track(double t, const Mat4d& body_T_lidar) {
   const TrackingOutcome o = tracking_.step(frame, search_scratch_, counters_);
   tracking_forecast_ = work_.spent() - before;  // the next period's rebuild decision expects as much
   output_.basin_audited = o.audit.audited;
+  withheld = o.contested;
   if (o.audit.switch_basin) {
     lose_track();
     startup_.nominate(frame_, o.audit.candidate, odom_T_body_);  // a search must confirm it
@@ -230,7 +234,7 @@ RegistrationResult Localizer::track(double t, const Mat4d& body_T_lidar) {
     output_.stereo_pose = Pose3d(o.stereo.transform);
     output_.stereo_fitness = o.stereo.fitness;
     output_.stereo_points = static_cast<std::uint32_t>(scan_.stereo_cloud().size());
-    if (filter_.fuse_stereo(t, o.stereo, scan_.stereo_mean_sigma())) {
+    if (!o.contested && filter_.fuse_stereo(t, o.stereo, scan_.stereo_mean_sigma())) {
       output_.stereo_fused = true;
       ++counters_.stereo_fused;
     }
@@ -255,8 +259,15 @@ StartupOutcome Localizer::search(double t, const Mat4d& body_T_lidar) {
   frame.probe = probe_;
   if (params_.work.enabled) frame.work = &work_;
   const StartupOutcome s = startup_.step(frame, search_scratch_, counters_);
-  if (s.status == StartupStatus::kStartFilter) filter_.start(t, Pose3d(s.registration.transform), vehicle_);
   const StartupSearchReport& r = s.report;
+  if (r.searched) {  // the hypotheses a new track may have to beat (rival_basin.hpp)
+    tracking_.rival().note(r.best_pose, r.best_tight, frame_, odom_T_body_);
+    tracking_.rival().note(r.runner_up_pose, r.runner_up_tight, frame_, odom_T_body_);
+  }
+  if (s.status == StartupStatus::kStartFilter) {
+    filter_.start(t, Pose3d(s.registration.transform), vehicle_);
+    tracking_.rival().on_start(Pose3d(s.registration.transform), frame_, odom_T_body_);
+  }
   if (r.searched) {
     output_.searched = true;
     output_.search_heading_used = r.heading_used;
@@ -278,12 +289,13 @@ void Localizer::report_registration(const RegistrationResult& result) {
   output_.inlier_rmse = result.inlier_rmse;
 }
 
-void Localizer::fuse(double t, const RegistrationResult& result, bool attempted_ok) {
+void Localizer::fuse(double t, const RegistrationResult& result, bool attempted_ok, bool withheld) {
   FrameRegistration reg;
   reg.frame = frame_;
   reg.t = t;
   reg.result = result;
   reg.attempted_ok = attempted_ok;
+  reg.withheld = withheld;
   reg.odom_T_body = odom_T_body_;
   reg.vehicle = vehicle_;
   const RegistrationFusion f = filter_.fuse(reg, counters_);

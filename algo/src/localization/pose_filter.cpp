@@ -189,6 +189,7 @@ RegistrationFusion PoseFilter::fuse(const FrameRegistration& in, LocalizerCounte
   reg.pose = result.transform;
   reg.odom = in.odom_T_body.matrix();
   reg.ok = in.attempted_ok && result.ok();
+  reg.withheld = in.withheld;
   if (reg.ok) {
     reg.covariance = registration_covariance(result.information, result.inlier_rmse,
                                              Pose3d(result.transform), params_.registration_covariance);
@@ -214,13 +215,13 @@ bool PoseFilter::fuse_gate_decision(const Pending& reg, const GateSample& sample
                                     RegistrationFusion& out, LocalizerCounters& counters) {
   switch (params_.gate_mode) {
     case GateMode::kOff:
-      return reg.ok && fuse_into(Which::kMain, reg, now, counters);
+      return reg.ok && !reg.withheld && fuse_into(Which::kMain, reg, now, counters);
     case GateMode::kCausal: {
       const GateDecision d = causal_gate_.push(sample);
       out.gate_decided = d.available;
       out.gate_decided_frame = static_cast<std::uint32_t>(d.frame);
-      out.gate_decided_valid = d.valid;
-      return d.valid && reg.ok && fuse_into(Which::kMain, reg, now, counters);
+      out.gate_decided_valid = d.valid && !reg.withheld;
+      return out.gate_decided_valid && reg.ok && fuse_into(Which::kMain, reg, now, counters);
     }
     case GateMode::kFixedLag: {
       // The gate counts its own pushes (frames without a registration attempt are not pushed);
@@ -234,8 +235,8 @@ bool PoseFilter::fuse_gate_decision(const Pending& reg, const GateSample& sample
       if (late.gate_index != d.frame) return false;
       out.gate_decided = true;
       out.gate_decided_frame = late.frame;
-      out.gate_decided_valid = d.valid;
-      return d.valid && late.ok && fuse_into(Which::kMain, late, now, counters);
+      out.gate_decided_valid = d.valid && !late.withheld;
+      return out.gate_decided_valid && late.ok && fuse_into(Which::kMain, late, now, counters);
     }
   }
   return false;

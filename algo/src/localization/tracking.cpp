@@ -8,6 +8,7 @@ void TrackingRegistration::configure(const TrackingParams& params, const BasinAu
                                      const PoseSearchParams& search) {
   params_ = params;
   audit_.configure(audit, search, params.icp);
+  rival_.configure(params.rival, search, params.icp);
 }
 
 TrackingOutcome TrackingRegistration::step(const TrackingFrame& f, PoseSearchScratch& scratch, LocalizerCounters& counters) {
@@ -33,6 +34,7 @@ TrackingOutcome TrackingRegistration::step(const TrackingFrame& f, PoseSearchScr
     audit.work_cap = audit_cap;
     audit.room_to_start = room_to_start;
     out.audit = audit_.step(audit, scratch, counters);
+    if (!out.audit.switch_basin) check_rival(f, out, counters);
     if (out.audit.switch_basin) result.status = RegistrationStatus::kDidNotConverge;
   }
   if (result.ok() && f.stereo_cloud.size() >= params_.stereo_min_points) {
@@ -40,7 +42,22 @@ TrackingOutcome TrackingRegistration::step(const TrackingFrame& f, PoseSearchScr
     out.stereo_attempted = true;
     out.stereo = icp(f.stereo_cloud, f.map, f.predicted.matrix(), params_.stereo_icp);
   }
+  out.contested = rival_.contested();
   return out;
+}
+
+// A contested track: the rival is refined and judged on this frame's scan (priced as tracking).
+void TrackingRegistration::check_rival(const TrackingFrame& f, TrackingOutcome& out, LocalizerCounters& counters) {
+  if (!rival_.contested()) return;
+  const RivalFrame rf{Pose3d(out.registration.transform), f.scan, f.tracking_scan, f.map, f.icp_hints, f.frame, f.odom_T_body};
+  const RivalOutcome r = rival_.check(rf);
+  counters.tracking_queries += r.queries;
+  if (f.work != nullptr) f.work->add(static_cast<double>(r.queries) * f.work->params().tracking_query);
+  if (r.switch_basin) {
+    ++counters.basin_switches;
+    out.audit.switch_basin = true;
+    out.audit.candidate = r.candidate;
+  }
 }
 
 }  // namespace v2xloc

@@ -42,6 +42,9 @@ struct AuditOutcome {
   Pose3d candidate = Pose3d::Identity();  // ... and this is the better one (world_T_body)
 };
 
+// Another basin: a and b (world_T_body) apart by the search's distinct distance or heading.
+bool distinct_basin(const Mat4d& a, const Mat4d& b, const PoseSearchParams& search);
+
 class BasinAudit {
  public:
   // search: the start-up search's pose search (lattice, scoring, ICPs; radius and candidates are

@@ -101,9 +101,9 @@ class Localizer {
   VehicleMotion deskew_motion(double t);
   void run_odometry(const EgoScanInput& in);
   void register_frame(double t, const Mat4d& body_T_lidar);
-  RegistrationResult track(double t, const Mat4d& body_T_lidar);
+  RegistrationResult track(double t, const Mat4d& body_T_lidar, bool& withheld);
   StartupOutcome search(double t, const Mat4d& body_T_lidar);
-  void fuse(double t, const RegistrationResult& result, bool attempted_ok);
+  void fuse(double t, const RegistrationResult& result, bool attempted_ok, bool withheld);
   void fill_output(double t);
   void push_backfill();
 

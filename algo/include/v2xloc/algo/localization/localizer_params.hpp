@@ -66,10 +66,20 @@ struct ReferenceMapParams {
 };
 
 // TrackingRegistration (tracking.hpp).
+// RivalBasin (rival_basin.hpp): a new track whose start-up searches saw another basin nearly as
+// good is contested (its registrations neither fused nor valid) until the full scan decides.
+struct RivalBasinParams {
+  double contest_ratio = 0.6;    // [ratio] a distinct hypothesis' search tight fitness over the started basin's: contested
+  double resolve_ratio = 1.3;    // [ratio] tracked full-scan tight fitness over the rival's: the track stands
+  double switch_ratio = 1.15;    // [ratio] the rival's over the tracked: a basin switch (a search confirms it)
+  std::uint32_t max_age_frames = 50;  // [frames] older start-up hypotheses are forgotten (odometry drift)
+};
+
 struct TrackingParams {
   IcpParams icp = default_icp();      // tracking ICP: point-to-plane from the EKF prediction
   std::uint32_t stereo_min_points = 200;  // [points] fewer after downsampling: not registered
   IcpParams stereo_icp = default_icp();   // stereo ICP from the same prediction
+  RivalBasinParams rival{};               // a contested start (TUNING.md, "Rival basin")
 
   static IcpParams default_icp() {
     IcpParams p;

@@ -25,6 +25,7 @@ struct FrameRegistration {
   double t = 0.0;                   // [s] frame time
   RegistrationResult result{};
   bool attempted_ok = false;        // false: reported, but neither gated nor fused
+  bool withheld = false;            // gated (shapes the envelopes) but neither valid nor fused
   Pose3d odom_T_body = Pose3d::Identity();  // this frame's odometry (carries late restarts)
   VehicleMotion vehicle{};          // speed and yaw rate for a restart
 };
@@ -93,6 +94,7 @@ class PoseFilter {
     Mat4d odom = Mat4d::Identity();  // odometry pose at that frame: carries a late restart to now
     PoseCovariance covariance = PoseCovariance::Identity();
     bool ok = false;
+    bool withheld = false;  // FrameRegistration::withheld
   };
   static constexpr std::size_t kPendingCapacity = config::kGateMaxWindow;
   struct Now {                     // where a restart lands: this frame

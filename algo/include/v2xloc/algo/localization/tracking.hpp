@@ -1,7 +1,7 @@
 // Tracking: the registration scan to the map by ICP from the filter's prediction, the periodic
-// basin audit (basin_audit.hpp) and, with the LiDAR + stereo configuration, the stereo cloud by
-// ICP from the same prediction. It registers only; the caller fuses (pose_filter.hpp) and acts
-// on an audit's basin switch. One entry point per tracked frame (step).
+// basin audit (basin_audit.hpp), a new track's contest with a rival basin (rival_basin.hpp) and, with the LiDAR + stereo configuration, the stereo cloud by
+// ICP from the same prediction. It registers only; the caller fuses (pose_filter.hpp), withholds
+// a contested track's registrations and acts on a basin switch (audit or rival). One entry point per tracked frame (step).
 #pragma once
 
 #include <cstdint>
@@ -9,6 +9,7 @@
 
 #include "v2xloc/algo/localization/basin_audit.hpp"
 #include "v2xloc/algo/localization/period_work.hpp"
+#include "v2xloc/algo/localization/rival_basin.hpp"
 #include "v2xloc/algo/localization/localizer_params.hpp"
 #include "v2xloc/algo/localization/localizer_types.hpp"
 #include "v2xloc/algo/localization/stage_probe.hpp"
@@ -35,7 +36,8 @@ struct TrackingFrame {
 
 struct TrackingOutcome {
   RegistrationResult registration{};  // not ok: failed, too rough, or a wrong basin (audit)
-  AuditOutcome audit{};
+  AuditOutcome audit{};               // switch_basin also when the rival basin won (rival_basin.hpp)
+  bool contested = false;             // the track's rival basin is not decided yet: withhold
   bool stereo_attempted = false;
   RegistrationResult stereo{};
 };
@@ -46,11 +48,19 @@ class TrackingRegistration {
   void configure(const TrackingParams& params, const BasinAuditParams& audit, const PoseSearchParams& search);
   // scratch: the basin audit's pose search scratch (pose_search.hpp).
   TrackingOutcome step(const TrackingFrame& frame, PoseSearchScratch& scratch, LocalizerCounters& counters);
-  void on_track_lost() { audit_.cancel(); }
+  void on_track_lost() {
+    audit_.cancel();
+    rival_.reset();
+  }
+  // The start-up search's hypotheses and the filter's start (rival_basin.hpp).
+  RivalBasin& rival() { return rival_; }
 
  private:
+  void check_rival(const TrackingFrame& f, TrackingOutcome& out, LocalizerCounters& counters);
+
   TrackingParams params_{};
   BasinAudit audit_{};
+  RivalBasin rival_{};
 };
 
 }  // namespace v2xloc

@@ -1,0 +1,85 @@
+#include "v2xloc/algo/localization/rival_basin.hpp"
+
+#include "v2xloc/algo/core/rigid_motion.hpp"
+#include "v2xloc/algo/localization/basin_audit.hpp"
+
+namespace v2xloc {
+
+void RivalBasin::configure(const RivalBasinParams& params, const PoseSearchParams& search, const IcpParams& icp) {
+  params_ = params;
+  search_ = search;
+  icp_ = icp;
+  reset();
+}
+
+void RivalBasin::reset() {
+  note_count_ = 0;
+  contested_ = false;
+}
+
+void RivalBasin::note(const Pose3d& pose, double tight, std::uint32_t frame, const Pose3d& odom_T_body) {
+  if (!(tight > 0.0) || !pose.matrix().allFinite()) return;
+  std::size_t slot = note_count_;
+  if (note_count_ == kNotes) {  // full: the weakest note makes room for a stronger one
+    slot = 0;
+    for (std::size_t i = 1; i < kNotes; ++i) {
+      if (notes_[i].tight < notes_[slot].tight) slot = i;
+    }
+    if (!(tight > notes_[slot].tight)) return;
+  } else {
+    ++note_count_;
+  }
+  notes_[slot] = Note{pose.matrix(), odom_T_body.matrix(), tight, frame};
+}
+
+void RivalBasin::on_start(const Pose3d& pose, std::uint32_t frame, const Pose3d& odom_T_body) {
+  contested_ = false;
+  double same = 0.0, any = 0.0, rival_tight = 0.0;
+  for (std::size_t i = 0; i < note_count_; ++i) {
+    const Note& n = notes_[i];
+    if (frame - n.frame > params_.max_age_frames) continue;
+    const Mat4d carried = n.pose * se3_inverse(n.odom) * odom_T_body.matrix();
+    if (n.tight > any) any = n.tight;
+    if (!distinct_basin(pose.matrix(), carried, search_)) {
+      if (n.tight > same) same = n.tight;
+    } else if (n.tight > rival_tight) {
+      rival_tight = n.tight;
+      rival_ = carried;
+    }
+  }
+  note_count_ = 0;
+  const double reference = same > 0.0 ? same : any;
+  if (!(rival_tight > 0.0) || rival_tight < params_.contest_ratio * reference) return;
+  rival_odom_ = odom_T_body.matrix();
+  contested_ = true;
+}
+
+RivalOutcome RivalBasin::check(const RivalFrame& f) {
+  RivalOutcome out;
+  if (!contested_) return out;
+  out.checked = true;
+  const Mat4d carried = rival_ * se3_inverse(rival_odom_) * f.odom_T_body.matrix();
+  const std::span<const Vec3f> scan = f.tracking_scan.empty() ? f.scan : f.tracking_scan;
+  const RegistrationResult r = icp(scan, f.map, carried, icp_, f.icp_hints);
+  out.queries = (static_cast<std::uint64_t>(r.iterations) + 1) * scan.size();
+  // A rival the scan no longer holds, or one that slid into the tracked basin, contests nothing.
+  if (!r.ok() || !distinct_basin(f.tracked.matrix(), r.transform, search_)) {
+    contested_ = false;
+    return out;
+  }
+  rival_ = r.transform;
+  rival_odom_ = f.odom_T_body.matrix();
+  const double select = search_.select_distance;
+  const double tracked_full = evaluate_registration(f.scan, f.map, f.tracked.matrix(), select).fitness;
+  const double rival_full = evaluate_registration(f.scan, f.map, r.transform, select).fitness;
+  if (rival_full > params_.switch_ratio * tracked_full) {
+    contested_ = false;
+    out.switch_basin = true;
+    out.candidate = Pose3d(r.transform);
+  } else if (tracked_full > params_.resolve_ratio * rival_full) {
+    contested_ = false;
+  }
+  return out;
+}
+
+}  // namespace v2xloc
