@@ -104,11 +104,11 @@ struct EkfNoise {
   double lateral = 0.02;          // position diffusion [m/sqrt(s)] (slip, model error)
   double yaw_rate_bias = 1e-4;    // CAN yaw-rate sensor bias walk [rad/s/sqrt(s)]
   double wheel_scale = 1e-4;      // scale walk [1/sqrt(s)] (tyre pressure / wear)
-  // IMU gyro z, automotive MEMS class (ST ASM330LHH datasheet DocID031239: rate noise density
-  // 5 mdps/sqrt(Hz) = 8.7e-5 rad/s/sqrt(Hz), i.e. 0.3 deg/sqrt(h) angle random walk; bias
-  // instability of the class 3-4 deg/h ~ 2e-5 rad/s, walked in ~1 s of correlation and over
-  // temperature: 2e-5 rad/s/sqrt(s) keeps the bias state following a warming part).
-  double gyro_noise_density = 8.7e-5;  // angle random walk [rad/s/sqrt(Hz)]
+  // IMU gyro z, automotive MEMS class (Bosch BMI088 data sheet BST-BMI088-DS001: rate noise density
+  // 0.014 deg/s/sqrt(Hz) = 2.44e-4 rad/s/sqrt(Hz), the part the simulator models, host_sim/README.md;
+  // an ST ASM330LHH-class part, 5 mdps/sqrt(Hz), would set 8.7e-5). Bias walk above the class's
+  // 2-4 deg/h instability so the bias state follows a warming part (0.015 deg/s/K).
+  double gyro_noise_density = 2.44e-4;  // angle random walk [rad/s/sqrt(Hz)]
   double gyro_bias_walk = 2e-5;        // bias random walk [rad/s/sqrt(s)]
   // Measurement noise (1 sigma).
   double wheel_speed = 0.05;      // [m/s], incl. quantisation
