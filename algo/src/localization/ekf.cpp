@@ -130,8 +130,11 @@ EkfFuseStatus Ekf::on_gyro(double t, double rate, double span) {
   e.type = EkfEventType::kGyro;
   e.z[0] = rate;
   e.z[1] = span;
+  // White rate noise averaged over the span, and the sensitivity error: a share of the rate itself,
+  // constant over a turn, that no state absorbs.
   const double n = params_.noise.gyro_noise_density;
-  e.R[0][0] = n * n / span;  // white rate noise averaged over the span
+  const double k = params_.noise.gyro_scale_error * rate;
+  e.R[0][0] = n * n / span + k * k;
   return submit(e);
 }
 
@@ -481,7 +484,7 @@ EkfFuseStatus Ekf::apply_scalar(const Event& e, bool count) {
     const double gyro_angle = (e.z[0] - x_(idx::kGyroBias)) * span;
     x_(idx::kYaw) = det::wrap_pi(x_(idx::kYaw) + (gyro_angle - gyro_chain_.integrated));
     // Its error: the held rate's share leaves it (-span dw), the bias's enters (-span db), and the
-    // gyro's white noise over the span (its angle random walk, N^2 span).
+    // gyro mean's own error over the span (R span^2: white noise, sensitivity error).
     EkfCovariance J = EkfCovariance::Identity();
     J(idx::kYaw, idx::kYawRate) = -span;
     J(idx::kYaw, idx::kGyroBias) = -span;

@@ -110,6 +110,7 @@ struct EkfNoise {
   // 2-4 deg/h instability so the bias state follows a warming part (0.015 deg/s/K).
   double gyro_noise_density = 2.44e-4;  // angle random walk [rad/s/sqrt(Hz)]
   double gyro_bias_walk = 2e-5;        // bias random walk [rad/s/sqrt(s)]
+  double gyro_scale_error = 0.005;     // sensitivity error, 1 sigma [-] (the class's, host_sim/README.md)
   // Measurement noise (1 sigma).
   double wheel_speed = 0.05;      // [m/s], incl. quantisation
   double gyro = 0.005;            // [rad/s] CAN yaw rate
