@@ -23,10 +23,10 @@ cmake --preset host >/dev/null
 cmake --build --preset host -j "$(nproc)" --target v2xloc-sim v2xloc-eval v2xloc-firmware v2xloc-replay v2xloc-dataset
 
 # One recording: written to DIR.partial and renamed when complete, so an interrupted run never
-# leaves a folder that looks reusable.
+# leaves a folder that looks reusable. Without the IMU stream, as the README's table was measured.
 generate_one() {
   local sim=$1 perm=$2 dir="$REC/sim$1_$2"
-  local args=(--scenario "$sim" --perm "$perm" --out "$dir.partial")
+  local args=(--scenario "$sim" --perm "$perm" --out "$dir.partial" --no-imu)
   [ -n "${V2XLOC_DURATION:-}" ] && args+=(--duration "$V2XLOC_DURATION")
   [ "${V2XLOC_STEREO:-0}" = 1 ] || args+=(--no-stereo)
   rm -rf "$dir.partial"
