@@ -3,16 +3,13 @@
 namespace v2xloc::firmware {
 
 std::uint64_t imu_digest_step(std::uint64_t h, const ImuInput& s) {
-  const auto fnv1a = [](std::uint64_t d, const void* data, std::size_t n) {
-    const auto* b = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < n; ++i) d = (d ^ b[i]) * 0x100000001b3ull;
-    return d;
-  };
-  h = fnv1a(h, &s.t, sizeof s.t);
-  h = fnv1a(h, s.gyro, sizeof s.gyro);
-  h = fnv1a(h, s.accel, sizeof s.accel);
+  Fnv1a64 f{h};
+  f.bytes(&s.t, sizeof s.t);
+  f.bytes(s.gyro, sizeof s.gyro);
+  f.bytes(s.accel, sizeof s.accel);
   const unsigned char saturated = s.saturated ? 1 : 0;
-  return fnv1a(h, &saturated, 1);
+  f.bytes(&saturated, 1);
+  return f.h;
 }
 
 PeriodDriver::PeriodDriver(InputDecoder& decoder, LocalizerPort& localizer) : decoder_(decoder), localizer_(localizer) {

@@ -19,6 +19,7 @@
 
 #include <cstdint>
 
+#include "firmware/protocol/fnv1a.hpp"
 #include "firmware/wire/diagnostic_frames.hpp"
 #include "firmware/wire/input_decoder.hpp"
 #include "firmware/wire/localizer_port.hpp"
@@ -28,7 +29,7 @@ namespace v2xloc::firmware {
 
 // FNV-1a over an IMU sample's bits (t, gyro, accel, saturated), chained from kImuDigestStart: two
 // runs that handed the localizer the same samples in the same order have the same digest.
-inline constexpr std::uint64_t kImuDigestStart = 0xcbf29ce484222325ull;
+inline constexpr std::uint64_t kImuDigestStart = kFnv1aOffsetBasis;
 std::uint64_t imu_digest_step(std::uint64_t digest, const ImuInput& sample);
 
 // Map fusion's answers to the shares the driver handed it, and the periods without a scan.

@@ -44,7 +44,7 @@ void Localizer::on_vehicle(const VehicleInput& in) {
   vehicle_.speed = in.wheel_speed;
   vehicle_.yaw_rate = in.yaw_rate;
   note_input_time(in.t);
-  filter_.on_vehicle(in.t, in.wheel_speed, in.yaw_rate, counters_);
+  filter_.on_vehicle(in.t, in.wheel_speed, in.yaw_rate);
 }
 
 // Checked and averaged by the intake (imu_intake.hpp); each ~10 ms mean gyro z goes to the filter.

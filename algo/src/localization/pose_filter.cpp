@@ -43,7 +43,7 @@ bool PoseFilter::can_track() const {
          failed_frames_ <= params_.max_failed_frames;
 }
 
-void PoseFilter::on_vehicle(double t, double wheel_speed, double yaw_rate, LocalizerCounters& counters) {
+void PoseFilter::on_vehicle(double t, double wheel_speed, double yaw_rate) {
   if (!use_vehicle_signals_ || !ekf_.initialized()) return;
   can_[can_next_ % kCanRing] = {t, yaw_rate};  // the gyro's comparison, whichever arrives first
   ++can_next_;
@@ -262,7 +262,7 @@ bool PoseFilter::fuse_into(Which which, const Pending& reg, const Now& now, Loca
   // A fixed-lag registration is w/2 frames old: restart at the current frame with its pose
   // carried forward by the odometry (restarting at its own time stamp would leave the output
   // behind by the distance driven since, ~3 m at 6 m/s).
-  restart(ekf, now.t, reg.pose * se3_inverse(reg.odom) * now.odom_T_body, now.vehicle);
+  restart(ekf, now.t, carried_by_odometry(reg.pose, reg.odom, now.odom_T_body), now.vehicle);
   return true;
 }
 

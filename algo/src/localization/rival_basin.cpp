@@ -38,7 +38,7 @@ void RivalBasin::on_start(const Pose3d& pose, std::uint32_t frame, const Pose3d&
   for (std::size_t i = 0; i < note_count_; ++i) {
     const Note& n = notes_[i];
     if (frame - n.frame > params_.max_age_frames) continue;
-    const Mat4d carried = n.pose * se3_inverse(n.odom) * odom_T_body.matrix();
+    const Mat4d carried = carried_by_odometry(n.pose, n.odom, odom_T_body.matrix());
     if (n.tight > any) any = n.tight;
     if (!distinct_basin(pose.matrix(), carried, search_)) {
       if (n.tight > same) same = n.tight;
@@ -58,7 +58,7 @@ RivalOutcome RivalBasin::check(const RivalFrame& f) {
   RivalOutcome out;
   if (!contested_) return out;
   out.checked = true;
-  const Mat4d carried = rival_ * se3_inverse(rival_odom_) * f.odom_T_body.matrix();
+  const Mat4d carried = carried_by_odometry(rival_, rival_odom_, f.odom_T_body.matrix());
   const std::span<const Vec3f> scan = f.tracking_scan.empty() ? f.scan : f.tracking_scan;
   const RegistrationResult r = icp(scan, f.map, carried, icp_, f.icp_hints);
   out.queries = (static_cast<std::uint64_t>(r.iterations) + 1) * scan.size();

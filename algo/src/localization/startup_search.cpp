@@ -1,5 +1,6 @@
 #include "v2xloc/algo/localization/startup_search.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "v2xloc/algo/core/det_math.hpp"
@@ -34,12 +35,7 @@ double map_point_spacing(const IcpTarget& map, std::uint32_t samples, std::uint6
     if (r.count == 2) d[m++] = std::sqrt(static_cast<double>(nb[1].squared_distance));
   }
   if (m == 0) return 0.0;
-  for (std::uint32_t i = 1; i < m; ++i) {  // insertion sort: m <= 256, deterministic
-    const double v = d[i];
-    std::uint32_t j = i;
-    for (; j > 0 && d[j - 1] > v; --j) d[j] = d[j - 1];
-    d[j] = v;
-  }
+  std::nth_element(d, d + m / 2, d + m);  // the median's value is the same whatever the algorithm
   return d[m / 2];
 }
 
@@ -103,10 +99,10 @@ bool StartupSearch::candidate_pose(std::uint32_t frame, const Pose3d& odom_T_bod
     // The running search's best pose so far, carried from the frame it started at; from a widened
     // search only inside the normal region (beyond it nothing but the scan match vouches for it).
     if (horizontal_distance(provisional_, job_fix_) > job_floor_region_) return false;
-    pose = Pose3d(provisional_ * se3_inverse(job_odom_) * odom_T_body.matrix());
+    pose = Pose3d(carried_by_odometry(provisional_, job_odom_, odom_T_body.matrix()));
     return true;
   }
-  pose = Pose3d(candidate_.pose * se3_inverse(candidate_.odom) * odom_T_body.matrix());
+  pose = Pose3d(carried_by_odometry(candidate_.pose, candidate_.odom, odom_T_body.matrix()));
   return true;
 }
 

@@ -111,8 +111,6 @@ class VoxelTable {
     return acc;
   }
 
-  bool full() const { return num_voxels_ == max_voxels_; }
-
   // The slots emptied for the next call, no centroid written (a pass stopped when full).
   void clear() {
     for (std::size_t v = 0; v < num_voxels_; ++v) slots_[accumulators_[v].slot] = VoxelHashSlot{};

@@ -223,7 +223,7 @@ DriveOutcome drive(const Drive& d, const PoseFilterParams& base) {
     if (k % 2 == 0) {
       can_bias += d.can_walk * std::sqrt(2 * kImuPeriod) * n(rng);
       last_can = w_now + can_bias + d.can_sigma * n(rng);
-      filter->on_vehicle(t, d.speed + 0.05 * n(rng), last_can, out.counters);
+      filter->on_vehicle(t, d.speed + 0.05 * n(rng), last_can);
     }
     if (k % 20 != 0) continue;
     for (const ImuInput& in : pending) {
@@ -323,7 +323,7 @@ TEST(ImuFilter, WithoutImuSamplesTheGyroBiasTouchesNothing) {
     f->start(0.0, Pose3d::Identity(), VehicleMotion{true, 8.0, 0.1});
     for (int k = 1; k <= 1500; ++k) {
       const double t = 0.01 * k;
-      f->on_vehicle(t, 8.0 + 0.05 * n(rng), 0.1 + 0.003 * n(rng), c);
+      f->on_vehicle(t, 8.0 + 0.05 * n(rng), 0.1 + 0.003 * n(rng));
       if (k % 10 != 0) continue;
       f->predict_to(t);
       FrameRegistration reg;

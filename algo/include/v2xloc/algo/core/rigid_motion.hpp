@@ -21,6 +21,11 @@ Mat4d se3_exp(const Vec6d& xi);
 Vec6d se3_log(const Mat4d& T);
 // Rigid inverse (R^T, -R^T t).
 Mat4d se3_inverse(const Mat4d& T);
+// A pose known at an earlier frame, carried to now by the odometry driven since (odom_then, odom_now:
+// the odometry poses of the two frames).
+inline Mat4d carried_by_odometry(const Mat4d& pose, const Mat4d& odom_then, const Mat4d& odom_now) {
+  return pose * se3_inverse(odom_then) * odom_now;
+}
 // ZYX yaw of a rotation: atan2(R10, R00).
 double yaw_of(const Mat3d& R);
 // Rotation about +z.

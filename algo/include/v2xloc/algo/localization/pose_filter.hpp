@@ -58,7 +58,7 @@ class PoseFilter {
 
   // The CAN yaw rate is left out while the gyro is live unless filter.imu.can_yaw_rate_with_gyro;
   // while it is live the two are compared (a gyro bias step restarts the bias's variance).
-  void on_vehicle(double t, double wheel_speed, double yaw_rate, LocalizerCounters& counters);
+  void on_vehicle(double t, double wheel_speed, double yaw_rate);
   // IMU gyro z, mean rate over span ending at t (imu_intake.hpp); filter.imu.reset_after_rejections
   // NIS rejections in a row restart the gyro bias's variance.
   void on_gyro(double t, double rate, double span, LocalizerCounters& counters);
