@@ -3,10 +3,11 @@
 
 Each scenario replays recordings through `v2xloc-firmware` (`v2xloc-eval REC --firmware FW --faults
 SPEC --json --trace DIR`) twice: from the folder of recordings with an IMU stream and from the same
-recordings without one (identical but for imu_reports.txt). Prints one Markdown table: live Fused,
-Fused (valid) and the maximum error (metres, unaligned, every frame after the first map), the poses
-published against the recording's frames (a pose every frame: all of them, none held), and the
-scenario's own figure from the per-frame trace against the truth.
+recordings without one (identical but for imu_reports.txt). Prints one Markdown table: live Fused
+and Fused (valid) (metres, unaligned, every frame after the first map), the largest error once the
+filter has started (the start-up frames output the GNSS fix), the poses published against the
+recording's frames (a pose every frame: all of them, none held), and the scenario's own figure from
+the per-frame trace against the truth.
 
   tools/eval/imu_scenarios.py --imu out/recordings_imu --no-imu out/recordings
   tools/eval/imu_scenarios.py --imu A --no-imu B --eval build/host/bin/v2xloc-eval \\
@@ -106,8 +107,11 @@ def run(ev, fw, rec, spec, work):
     traces = [n for n in os.listdir(trace_dir) if n.endswith("_trace.txt")]
     rows = trace_rows(os.path.join(trace_dir, traces[0]))
     held = counters(p.stderr).get("ego_frames_held", 0)
+    started = [k for k, r in enumerate(rows) if r["initialized"]]
+    tracked = [r["err_fused_3d"] for r in rows[started[0]:]] if started else []
     return {"spec": spec, "fused": row["unaligned"]["fused"], "valid": row["unaligned"]["fused_valid"],
-            "max": row["fused_max"], "poses": len(rows), "frames": frame_count, "held": held, "trace": rows}
+            "max": max(tracked) if tracked else None, "poses": len(rows), "frames": frame_count, "held": held,
+            "trace": rows}
 
 
 def fmt(v):
@@ -118,10 +122,14 @@ def pair(a, b, key):
     return f"{fmt(a.get(key))} / {fmt(b.get(key)) if b else '-'}"
 
 
-def poses(r):
-    if "error" in r:
-        return "failed"
-    return f"{r['poses']}/{r['frames']}" + (f", {r['held']} held" if r["held"] else "")
+def poses(a, b):
+    def one(r):
+        if r is None:
+            return "-"
+        if "error" in r:
+            return "failed"
+        return str(r["poses"]) + (f" ({r['held']} held)" if r["held"] else "")
+    return f"{one(a)} / {one(b)} of {a.get('frames', b.get('frames') if b else '?')}"
 
 
 def figure_of(r, figure, base):
@@ -141,13 +149,16 @@ def main():
     ap.add_argument("--firmware", default="build/host/bin/v2xloc-firmware")
     ap.add_argument("--jobs", type=int, default=2, help="replays run at once")
     ap.add_argument("--json", help="write every run (without the traces) here")
+    ap.add_argument("--only", help="the scenarios whose label contains this text (and 'none')")
     args = ap.parse_args()
     for folder in (args.imu, args.no_imu):
         if not os.path.isdir(folder):
             sys.exit(f"imu_scenarios: no folder {folder}")
     fw = os.path.abspath(args.firmware)
     jobs = []  # (scenario index, recording name, with IMU)
-    for k, (_, spec, recs, _) in enumerate(SCENARIOS):
+    for k, (label, spec, recs, _) in enumerate(SCENARIOS):
+        if args.only and k > 0 and args.only not in label:
+            continue
         for name in recs:
             jobs.append((k, name, True))
             if not spec.startswith("imu-"):  # without an IMU an IMU fault has nothing to act on
@@ -157,7 +168,7 @@ def main():
         futures = {j: pool.submit(run, args.eval, fw, os.path.join(args.imu if j[2] else args.no_imu, j[1]),
                                   SCENARIOS[j[0]][1], work) for j in jobs}
         results = {j: f.result() for j, f in futures.items()}
-    print_table(results)
+    print_table(results, {k for k, _, _ in jobs})
     if args.json:
         with open(args.json, "w") as f:
             json.dump([{"scenario": SCENARIOS[k][0], "recording": n, "imu": i,
@@ -166,12 +177,14 @@ def main():
     return 1 if failed else 0
 
 
-def print_table(results):
+def print_table(results, scenarios):
     print("Through the firmware; metres, unaligned, with the IMU / without it "
           "(an IMU fault row: the recording without an IMU is the 'none' row)\n")
-    print("| scenario | recording | live Fused | Fused (valid) | max | poses | figure (IMU) | figure (no IMU) |")
+    print("| scenario | recording | live Fused | Fused (valid) | max (started) | poses | figure (IMU) | figure (no IMU) |")
     print("|---|---|---|---|---|---|---|---|")
     for k, (label, spec, recs, figure) in enumerate(SCENARIOS):
+        if k not in scenarios:
+            continue
         for name in recs:
             a = results[(k, name, True)]
             b = results.get((k, name, False)) or results.get((0, name, False))
@@ -179,7 +192,7 @@ def print_table(results):
             fig_a = figure_of(a, figure, base_a)
             fig_b = figure_of(b, figure, None) if (k, name, False) in results else "-"
             print(f"| {label} | {name} | {pair(a, b, 'fused')} | {pair(a, b, 'valid')} | {pair(a, b, 'max')} | "
-                  f"{poses(a)} / {poses(b) if b else '-'} | {fig_a} | {fig_b} |", flush=True)
+                  f"{poses(a, b)} | {fig_a} | {fig_b} |", flush=True)
 
 
 if __name__ == "__main__":
