@@ -4,20 +4,17 @@
 // frame and truth; a LiDAR sending scans without points gets a pose every frame, with neither
 // registration nor odometry in the spell.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
-#include <cstdlib>
-#include <filesystem>
 #include <string>
 
 #include "host_sim/replay/replay_session.hpp"
+#include "tests/integration/e2e/generated_recording.hpp"
 #include "tools/eval/firmware_run.hpp"
 
 namespace v2xloc::sim::replay {
 namespace {
 
-namespace fs = std::filesystem;
-const std::string kBin = std::string(V2XLOC_BINARY_DIR) + "/bin/";
+const std::string kBin = test::kBinDir;
 constexpr int kFrames = 20;
 constexpr int kFirstBlind = 10, kBlind = 5;  // lidar-blind=0.5,lidar-blind-at=1: frames 10..14
 const char* const kSpell = "lidar-blind=0.5,lidar-blind-at=1";
@@ -25,21 +22,13 @@ const char* const kSpell = "lidar-blind=0.5,lidar-blind-at=1";
 class LidarBlindE2e : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new std::string((fs::temp_directory_path() / ("v2xloc_blind_e2e_" + std::to_string(getpid()))).string());
-    fs::create_directories(*dir_);
-    const std::string cmd = kBin + "v2xloc-sim generate --scenario 3 --perm 2_infra --quick --no-stereo --out " +
-                            *dir_ + "/rec > " + *dir_ + "/gen.log 2>&1";
-    generated_ = std::system(cmd.c_str()) == 0;
+    recording_ = new test::GeneratedRecording("v2xloc_blind_e2e", "--scenario 3 --perm 2_infra --quick --no-stereo");
   }
-  static void TearDownTestSuite() {
-    std::error_code ec;
-    fs::remove_all(*dir_, ec);
-    delete dir_;
-  }
+  static void TearDownTestSuite() { delete recording_; }
   void SetUp() override {
-    ASSERT_TRUE(generated_) << "v2xloc-sim generate failed, see " << *dir_ << "/gen.log";
+    ASSERT_TRUE(recording_->ok()) << "v2xloc-sim generate failed, see " << recording_->log();
     std::string error;
-    ASSERT_TRUE(reader_.open(*dir_ + "/rec", error)) << error;
+    ASSERT_TRUE(reader_.open(recording_->path(), error)) << error;
     ASSERT_GE(reader_.frame_count(), kFrames);
   }
   void replay(const std::string& faults, ReplayResult& result) {
@@ -54,12 +43,10 @@ class LidarBlindE2e : public ::testing::Test {
     EXPECT_EQ(result.stream_stats.faults.ego_scans_blinded, static_cast<std::uint64_t>(kBlind));
   }
 
-  static std::string* dir_;
-  static bool generated_;
+  static test::GeneratedRecording* recording_;
   RecordingReader reader_;
 };
-std::string* LidarBlindE2e::dir_ = nullptr;
-bool LidarBlindE2e::generated_ = false;
+test::GeneratedRecording* LidarBlindE2e::recording_ = nullptr;
 
 TEST_F(LidarBlindE2e, ASilentLidarClosesNoPeriodAndTheLaterFramesKeepTheirOwnTruth) {
   ReplayResult result;
