@@ -146,11 +146,11 @@ void print_counters(const FirmwareApp& app) {
               (unsigned long long)p.map_paced);
   const LocalizerCounters& l = g_localizer.counters();
   std::printf("v2xloc-firmware: localizer searches %u (accepted %u confirmed %u inconsistent %u unconstrained %u dropped %u final_icp_paused %u) basin_audits %u"
-              " switches %u track_losses %u filter_resets %u registrations %u (ok %u fused %u gate_rejected %u)"
-              " map_rebuilds %u map_clouds_paced %u\n",
+              " switches %u track_losses %u filter_resets %u reacquisitions_refused %u registrations %u (ok %u fused %u"
+              " gate_rejected %u) map_rebuilds %u map_clouds_paced %u\n",
               l.global_searches, l.global_accepted, l.global_confirmed, l.global_inconsistent, l.global_unconstrained,
               l.global_searches_dropped, l.global_final_icp_paused,
-              l.basin_audits, l.basin_switches, l.track_losses, l.filter_resets, l.tracking_registrations,
+              l.basin_audits, l.basin_switches, l.track_losses, l.filter_resets, l.reacquisitions_refused, l.tracking_registrations,
               l.registrations_ok, l.registrations_fused, l.registrations_gate_rejected, l.map_rebuilds, l.map_clouds_paced);
   std::printf("v2xloc-firmware: reassembly fragments %llu frames %llu duplicates %llu stale %llu timed_out %llu evicted %llu"
               " bad_crc %llu truncated %llu malformed %llu over_capacity %llu points_thinned %llu\n",

@@ -259,15 +259,22 @@ StartupOutcome Localizer::search(double t, const Mat4d& body_T_lidar) {
   frame.icp_hints = icp_hints();
   frame.probe = probe_;
   if (params_.work.enabled) frame.work = &work_;
-  const StartupOutcome s = startup_.step(frame, search_scratch_, counters_);
+  StartupOutcome s = startup_.step(frame, search_scratch_, counters_);
   const StartupSearchReport& r = s.report;
   if (r.searched) {  // the hypotheses a new track may have to beat (rival_basin.hpp)
     tracking_.rival().note(r.best_pose, r.best_tight, frame_, odom_T_body_);
     tracking_.rival().note(r.runner_up_pose, r.runner_up_tight, frame_, odom_T_body_);
   }
   if (s.status == StartupStatus::kStartFilter) {
-    filter_.start(t, Pose3d(s.registration.transform), vehicle_);
-    tracking_.rival().on_start(Pose3d(s.registration.transform), frame_, odom_T_body_);
+    const Pose3d start(s.registration.transform);
+    if (filter_.accepts_restart_at(start)) {
+      filter_.start(t, start, vehicle_);
+      tracking_.rival().on_start(start, frame_, odom_T_body_);
+    } else {  // a look-alike outside the running filter's belief: reported, neither fused nor valid
+      ++counters_.reacquisitions_refused;
+      s.status = StartupStatus::kRejected;
+      startup_.on_track_lost();  // the search starts over; the filter carries on
+    }
   }
   if (r.searched) {
     output_.searched = true;

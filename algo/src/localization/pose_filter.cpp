@@ -3,6 +3,7 @@
 #include <cmath>
 #include <memory>
 
+#include "v2xloc/algo/core/det_math.hpp"
 #include "v2xloc/algo/core/rigid_motion.hpp"
 
 namespace v2xloc {
@@ -148,6 +149,19 @@ void PoseFilter::start(double t, const Pose3d& pose, const VehicleMotion& vehicl
   restart(ekf_, t, pose.matrix(), vehicle);
   if (params_.shadow_ungated_filter) restart(shadow_, t, pose.matrix(), vehicle);
   failed_frames_ = 0;
+}
+
+bool PoseFilter::accepts_restart_at(const Pose3d& pose) const {
+  if (!ekf_.initialized()) return true;
+  const EkfState s = ekf_.state();
+  const EkfCovariance& P = ekf_.covariance();
+  const double k = params_.reacquire_gate_sigmas;
+  const double dx = pose.translation().x() - s.pos_x;
+  const double dy = pose.translation().y() - s.pos_y;
+  const double reach = k * sigma_xy() + params_.reacquire_margin;
+  const double yaw_reach = k * std::sqrt(P(ekf_index::kYaw, ekf_index::kYaw)) + params_.reacquire_yaw_margin;
+  const double dyaw = det::wrap_pi(yaw_of(pose.rotation()) - s.yaw);
+  return dx * dx + dy * dy <= reach * reach && std::fabs(dyaw) <= yaw_reach;
 }
 
 void PoseFilter::lose_track() {

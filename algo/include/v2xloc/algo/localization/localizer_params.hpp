@@ -221,6 +221,15 @@ struct PoseFilterParams {
   ImuParams imu{};                           // the IMU's intake and its use (above)
   double tracking_max_sigma_xy = 0.5;        // [m] EKF position sigma above which the start-up search runs
   std::uint32_t max_failed_frames = 10;      // [frames] consecutive unfused registrations -> start-up search
+  // A search answer that would restart a filter still running (started by max_failed_frames, the
+  // EKF initialized) must lie inside the filter's belief: position within reacquire_gate_sigmas of
+  // its horizontal sigma plus reacquire_margin, yaw within as many yaw sigmas plus
+  // reacquire_yaw_margin. A look-alike elsewhere in the map (a stale GNSS prior, a symmetric
+  // intersection) is refused and counted; a filter that is itself wrong is reset by the GNSS
+  // divergence monitor or the basin audit, and its cold start is not gated.
+  double reacquire_gate_sigmas = 4.0;        // [sigma]
+  double reacquire_margin = 1.0;             // [m]
+  double reacquire_yaw_margin = 0.1;         // [rad] (5.7 deg)
   double gnss_divergence_distance = 30.0;    // [m] lost track: fix farther than max(this, sigmas * h_acc)
   double gnss_divergence_sigmas = 6.0;       // [sigma] ... in reported h_acc
   std::uint32_t gnss_divergence_fixes = 10;  // [fixes] in a row -> restart globally (2 s at 5 Hz)

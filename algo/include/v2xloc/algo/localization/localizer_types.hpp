@@ -145,6 +145,7 @@ struct LocalizerCounters {
   std::uint32_t odometry_failures = 0;
   std::uint32_t pending_overflow = 0;          // fixed-lag registrations that found no slot
   std::uint32_t filter_resets = 0;             // filter restarted at a registration
+  std::uint32_t reacquisitions_refused = 0;    // search answers outside the running filter's belief
   std::uint32_t global_confirmed = 0;          // global solutions confirmed by a second search
   std::uint32_t global_inconsistent = 0;       // second search disagreed: candidate replaced
   std::uint32_t global_final_icp_paused = 0;   // periods a search's final ICP ran out of room in (it resumes)

@@ -77,6 +77,9 @@ class PoseFilter {
 
   // Starts both filters at a confirmed start-up pose.
   void start(double t, const Pose3d& pose, const VehicleMotion& vehicle);
+  // A start-up pose may restart the filter: it is not running, or the pose lies inside its belief
+  // (PoseFilterParams::reacquire_*).
+  bool accepts_restart_at(const Pose3d& pose) const;
   // Tracking is lost (GNSS divergence or basin audit): everything starts over.
   void lose_track();
   // A frame that produced no registration to gate counts towards max_failed_frames.
