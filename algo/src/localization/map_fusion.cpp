@@ -274,9 +274,21 @@ void MapFusion::stage_candidate(const Mat4d& world_T_sensor, std::span<const Vec
     ds = downsample_.run(staging_.span(), voxel_at(step), candidate_, SIZE_MAX, step < steps);
   }
   r.coarsened = step;
+  staged_voxels_ = ds.output_points;
   if (r.coarsened > 0) ++counters_.clouds_coarsened;
   r.capacity_dropped += ds.output_overflow + ds.hash_overflow + ds.range_overflow;
   counters_.non_finite_dropped += r.non_finite_dropped;
+}
+
+// The finest step, at most the stored cloud's, at which its voxels, x 2 per step finer, fit.
+std::uint32_t MapFusion::first_coarsen_step(std::size_t slot) const {
+  std::uint32_t step = std::min(coarsen_step_[slot], params_.max_coarsen_steps);
+  double finer = 2.0 * static_cast<double>(coarsen_voxels_[slot]);
+  while (step > 0 && finer <= static_cast<double>(candidate_.capacity())) {
+    --step;
+    finer *= 2.0;
+  }
+  return step;
 }
 
 bool MapFusion::passes_consistency(std::size_t own_slot, bool trusted, MapInsertResult& r) {
@@ -407,7 +419,7 @@ MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
   const SurveyedBackground* background = trusted && params_.check_background ? this->background(source_id) : nullptr;
   if (background != nullptr && !passes_background(*background, world_T_sensor, points, r)) return r;
 
-  stage_candidate(world_T_sensor, points, known && coarsen_step_[slot] > 0 ? coarsen_step_[slot] - 1 : 0u, r);
+  stage_candidate(world_T_sensor, points, known ? first_coarsen_step(slot) : 0u, r);
   // The source's previous cloud is left out of the reference (a displaced slot is not its own).
   const std::size_t own_slot = known ? slot : config::kMaxMapSources;
   if (params_.check_consistency && !candidate_.empty() && !passes_consistency(own_slot, trusted, r)) {
@@ -425,6 +437,7 @@ MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
   if (displace) ++counters_.sources_evicted_slot;
   const std::uint32_t stored = store_candidate(slot, trusted, r);
   coarsen_step_[slot] = r.coarsened;
+  coarsen_voxels_[slot] = staged_voxels_;
   counters_.points_dropped_capacity += r.capacity_dropped;
   MapSourceInfo& info = sources_[slot];
   info.id = source_id;

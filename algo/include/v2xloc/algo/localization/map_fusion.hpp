@@ -312,11 +312,15 @@ class MapFusion {
   FixedVector<Vec3f, config::kMaxMapPoints> candidate_;
   // Per source slot: the coarsening step its stored cloud needed. A sensor's clouds of one scene
   // have nearly the same number of voxels (EMBEDDED: a 16k-point infrastructure cloud ~12.6k at
-  // 0.2 m, ~9.2k at 0.4 m, ~4.9k at 0.8 m for 8,192 places), so its next cloud is staged from one
-  // step finer than that: the finer passes, each read until it overflows, would only prove again
-  // that they do. A cloud that shrank by more than one step stays one step coarser than it could
-  // be (never on the 12 recordings: their outputs are bit for bit those of staging from step 0).
+  // 0.2 m, ~9.2k at 0.4 m, ~4.9k at 0.8 m for 8,192 places), so its next cloud is staged from the
+  // finest step at which the stored cloud's voxels, x 2 per step finer, would fit: the finer
+  // passes, each read until it overflows, would only prove again that they do. Not exact: a cloud
+  // that would just fit a step finer is staged a step coarser (on the 12 recordings one Sim 1
+  // cloud, 8,183 voxels at 0.4 m after 4,853 at 0.8 m).
   std::uint32_t coarsen_step_[config::kMaxMapSources] = {};
+  std::uint32_t coarsen_voxels_[config::kMaxMapSources] = {};  // and its voxels at that step
+  std::uint32_t staged_voxels_ = 0;                            // the last staged cloud's
+  std::uint32_t first_coarsen_step(std::size_t slot) const;    // from those two
   FixedVector<std::uint32_t, config::kMapConsistencyPoints> overlap_;  // sampled candidate indices
   VoxelDownsampleStorage<config::kMapFusionHashSlots, config::kMaxMapPoints> downsample_;
   SourceCells cells_;
