@@ -241,7 +241,7 @@ std::size_t MapFusion::claim_source_slot(bool trusted, double timestamp, bool& d
 }
 
 // Into the global frame (double math), non-finite points dropped, then downsampled.
-void MapFusion::stage_candidate(const Mat4d& world_T_sensor, std::span<const Vec3f> points,
+void MapFusion::stage_candidate(const Mat4d& world_T_sensor, std::span<const Vec3f> points, std::uint32_t first_step,
                                 MapInsertResult& r) {
   staging_.clear();
   const Mat3d R = world_T_sensor.topLeftCorner<3, 3>();
@@ -266,14 +266,29 @@ void MapFusion::stage_candidate(const Mat4d& world_T_sensor, std::span<const Vec
   // lost); the cloud is downsampled again with the voxel doubled instead (params). A pass that
   // will be read again ends as soon as it overflows: only that it does counts.
   const std::uint32_t steps = params_.max_coarsen_steps;
-  VoxelDownsampleResult ds = downsample_.run(staging_.span(), voxel, candidate_, SIZE_MAX, steps > 0);
-  for (std::uint32_t k = 0; k < steps && ds.output_overflow > 0; ++k) {
-    ds = downsample_.run(staging_.span(), voxel * static_cast<float>(2u << k), candidate_, SIZE_MAX, k + 1 < steps);
-    ++r.coarsened;
+  const auto voxel_at = [voxel](std::uint32_t step) { return step == 0 ? voxel : voxel * static_cast<float>(1u << step); };
+  std::uint32_t step = std::min(first_step, steps);
+  VoxelDownsampleResult ds = downsample_.run(staging_.span(), voxel_at(step), candidate_, SIZE_MAX, step < steps);
+  while (step < steps && ds.output_overflow > 0) {
+    ++step;
+    ds = downsample_.run(staging_.span(), voxel_at(step), candidate_, SIZE_MAX, step < steps);
   }
+  r.coarsened = step;
+  staged_voxels_ = ds.output_points;
   if (r.coarsened > 0) ++counters_.clouds_coarsened;
   r.capacity_dropped += ds.output_overflow + ds.hash_overflow + ds.range_overflow;
   counters_.non_finite_dropped += r.non_finite_dropped;
+}
+
+// The finest step, at most the stored cloud's, at which its voxels, x 2 per step finer, fit.
+std::uint32_t MapFusion::first_coarsen_step(std::size_t slot) const {
+  std::uint32_t step = std::min(coarsen_step_[slot], params_.max_coarsen_steps);
+  double finer = 2.0 * static_cast<double>(coarsen_voxels_[slot]);
+  while (step > 0 && finer <= static_cast<double>(candidate_.capacity())) {
+    --step;
+    finer *= 2.0;
+  }
+  return step;
 }
 
 bool MapFusion::passes_consistency(std::size_t own_slot, bool trusted, MapInsertResult& r) {
@@ -404,7 +419,7 @@ MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
   const SurveyedBackground* background = trusted && params_.check_background ? this->background(source_id) : nullptr;
   if (background != nullptr && !passes_background(*background, world_T_sensor, points, r)) return r;
 
-  stage_candidate(world_T_sensor, points, r);
+  stage_candidate(world_T_sensor, points, known ? first_coarsen_step(slot) : 0u, r);
   // The source's previous cloud is left out of the reference (a displaced slot is not its own).
   const std::size_t own_slot = known ? slot : config::kMaxMapSources;
   if (params_.check_consistency && !candidate_.empty() && !passes_consistency(own_slot, trusted, r)) {
@@ -421,6 +436,8 @@ MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
   if (known || displace) remove_source_points(slot);
   if (displace) ++counters_.sources_evicted_slot;
   const std::uint32_t stored = store_candidate(slot, trusted, r);
+  coarsen_step_[slot] = r.coarsened;
+  coarsen_voxels_[slot] = staged_voxels_;
   counters_.points_dropped_capacity += r.capacity_dropped;
   MapSourceInfo& info = sources_[slot];
   info.id = source_id;

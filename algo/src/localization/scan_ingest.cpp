@@ -1,5 +1,6 @@
 #include "v2xloc/algo/localization/scan_ingest.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "v2xloc/algo/core/det_math.hpp"
@@ -77,6 +78,17 @@ void ScanIngest::accumulate(std::span<const Vec3f> points, const float* times, c
   }
 }
 
+// The finest step at most the previous run's at which its voxels, x 81/64 per step finer, fit.
+std::uint32_t ScanIngest::first_step(const ScanIngestParams& params) const {
+  std::uint32_t step = std::min(last_step_, params.max_coarsen_steps);
+  double finer = static_cast<double>(last_count_) * (81.0 / 64.0);
+  while (step > 0 && finer <= static_cast<double>(kMaxVoxels)) {
+    --step;
+    finer *= 81.0 / 64.0;
+  }
+  return step;
+}
+
 ScanIngestResult ScanIngest::run(std::span<const Vec3f> points, std::span<const float> times,
                                  const Mat4d* delta_lidar, const ScanIngestParams& params) {
   ScanIngestResult r;
@@ -85,7 +97,10 @@ ScanIngestResult ScanIngest::run(std::span<const Vec3f> points, std::span<const 
   if (!(params.voxel > 0.0f) || !std::isfinite(params.voxel)) return r;
   const bool has_times = times.size() == points.size() && !points.empty();
   ScanIngestParams p = params;
-  for (std::uint32_t step = 0;; ++step) {
+  std::uint32_t step = first_step(params);
+  for (std::uint32_t k = 0; k < step; ++k) p.voxel *= 1.125f;  // the same roundings as step by step
+  r.coarsened = step;
+  for (;; ++step) {
     const bool last_try = step >= params.max_coarsen_steps;
     if (has_times) {
       accumulate<true>(points, times.data(), p, !last_try, r);
@@ -100,6 +115,8 @@ ScanIngestResult ScanIngest::run(std::span<const Vec3f> points, std::span<const 
     p.voxel *= 1.125f;
     ++r.coarsened;
   }
+  last_step_ = r.coarsened;
+  last_count_ = count_;
   r.voxel = p.voxel;
   for (std::size_t v = 0; v < count_; ++v) {
     const Accumulator& a = voxels_[v];

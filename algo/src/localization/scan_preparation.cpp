@@ -22,6 +22,7 @@ void ScanPreparation::configure(const ScanPreparationParams& params, bool use_ve
   use_vehicle_signals_ = use_vehicle_signals;
   have_vehicle_delta_ = false;
   stereo_down_.clear();
+  ingest_.forget_steps();
 }
 
 // The sweep read once (scan_ingest.hpp): finite returns within [min_range, max_range] merged

@@ -46,17 +46,18 @@ void finite_min_bound(std::span<const Vec3f> points, const EvenSelection& select
   }
 }
 
-// floor((p - origin) / voxel) per axis in double; false when an index does not fit int32.
+// floor((p - origin) / voxel) per axis in double; false when an index does not fit int32 (0 to
+// kMaxVoxelIndex). floor(q) is in that range exactly when 0 <= q < kMaxVoxelIndex + 1 (NaN fails),
+// and there truncation is the floor: no libm call.
 bool voxel_index_of(const Vec3f& p, const double origin[3], double voxel, VoxelIndex& index) {
-  double ref[3];
+  double q[3];
   bool in_range = true;
   V2XLOC_UNROLL_AXES for (int d = 0; d < 3; ++d) {
-    ref[d] = std::floor((static_cast<double>(p[d]) - origin[d]) / voxel);
-    in_range = in_range && ref[d] >= 0.0 && ref[d] <= kMaxVoxelIndex;
+    q[d] = (static_cast<double>(p[d]) - origin[d]) / voxel;
+    in_range = in_range && q[d] >= 0.0 && q[d] < kMaxVoxelIndex + 1.0;
   }
   if (!in_range) return false;
-  index = {static_cast<std::int32_t>(ref[0]), static_cast<std::int32_t>(ref[1]),
-           static_cast<std::int32_t>(ref[2])};
+  index = {static_cast<std::int32_t>(q[0]), static_cast<std::int32_t>(q[1]), static_cast<std::int32_t>(q[2])};
   return true;
 }
 

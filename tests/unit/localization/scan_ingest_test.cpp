@@ -105,12 +105,24 @@ TEST(ScanIngest, OverflowIsReadAgainWithACoarserVoxel) {
   }
   EXPECT_LT(lo, 4.25f + 2.0f * r.voxel);
   EXPECT_GT(hi, 4.25f + 0.5f * static_cast<float>(side - 1) - 2.0f * r.voxel);
-  // A scene that fits is read once, at the requested voxel.
+  // The same surface again starts where it fit (the finer reads are not repeated): same output.
+  const std::vector<Vec3f> first(g_ingest.points().begin(), g_ingest.points().end());
+  const ScanIngestResult again = g_ingest.run(pts, {}, nullptr, p);
+  EXPECT_EQ(again.coarsened, r.coarsened);
+  EXPECT_EQ(again.voxel, r.voxel);
+  EXPECT_TRUE(std::equal(first.begin(), first.end(), g_ingest.points().begin(), g_ingest.points().end()));
+  // A scene that fits is read at the requested voxel once the previous sweep's voxels say it
+  // may fit: the first sweep after the big one starts at the step the surface law allows.
   const std::vector<Vec3f> one = {Vec3f(10.1f, 0.1f, 0.1f)};
+  g_ingest.run(one, {}, nullptr, p);
   const ScanIngestResult small = g_ingest.run(one, {}, nullptr, p);
   EXPECT_EQ(small.coarsened, 0u);
   EXPECT_EQ(small.voxel, p.voxel);
   EXPECT_EQ(g_ingest.points()[0], one[0]);
+  // After forget_steps() the base voxel is read first.
+  g_ingest.run(pts, {}, nullptr, p);
+  g_ingest.forget_steps();
+  EXPECT_EQ(g_ingest.run(one, {}, nullptr, p).coarsened, 0u);
 }
 
 }  // namespace
