@@ -50,12 +50,12 @@ class CallTap final : public LocalizerInputTap {
   double last_imu_t = 0.0;
 };
 
-// In each period (ending at a scan) the IMU samples come after the CAN inputs and before the map
-// clouds and the scan: v/g* i* m* w? e.
+// In each period (ending at a scan) the CAN inputs and the IMU samples come first, merged by time
+// (period_driver.hpp), then the map clouds and the scan: (v|g|i)* m* w? e.
 bool periods_in_order(const std::string& calls) {
-  int phase = 0;  // 0 CAN, 1 IMU, 2 map, 3 work
+  int phase = 0;  // 0 CAN and IMU, 2 map, 3 work
   for (const char c : calls) {
-    const int p = c == 'v' || c == 'g' ? 0 : c == 'i' ? 1 : c == 'm' ? 2 : 3;
+    const int p = c == 'v' || c == 'g' || c == 'i' ? 0 : c == 'm' ? 2 : 3;
     if (c == 'e') {
       phase = 0;
       continue;
