@@ -8,6 +8,7 @@
 #include <random>
 #include <vector>
 
+#include "courtyard_search.hpp"
 #include "v2xloc/algo/core/det_math.hpp"
 #include "v2xloc/algo/core/rigid_motion.hpp"
 #include "v2xloc/algo/registration/normals.hpp"
@@ -76,18 +77,6 @@ std::vector<Vec3f> scan_of(const std::vector<Vec3f>& world, const Mat4d& pose) {
   return scan;
 }
 
-PoseSearchParams search_params() {
-  PoseSearchParams sp;
-  sp.radius = 4.0;
-  sp.step = 1.0;
-  sp.yaw_steps = 24;
-  sp.score_points = 128;
-  sp.icp.max_correspondence_distance = 1.0;
-  sp.fine_icp = sp.icp;
-  sp.fine_icp.max_correspondence_distance = 0.3;
-  return sp;
-}
-
 double horizontal(const Mat4d& a, const Vec3d& b) { return std::hypot(a(0, 3) - b.x(), a(1, 3) - b.y()); }
 
 // The courtyard matches itself turned by 180 degrees: both basins lie in the 4 m disc. With the
@@ -103,7 +92,7 @@ TEST(PoseSearchSelection, RefinedPoseOutsideTheRegionIsNoCandidate) {
   const Mat4d truth = pose_at(0.5, 0.0, 0.3);
   const std::vector<Vec3f> scan = scan_of(world, truth);
   const Vec3d centre(1.0, 0.5, 0.0);  // truth 0.7 m away, the mirror (-0.5, 0) 1.6 m
-  PoseSearchParams sp = search_params();
+  PoseSearchParams sp = testing::courtyard_search_params();
 
   static PoseSearch open;
   const PoseSearchResult& all = open.run(scan, map.icp, centre, sp, scratch());
@@ -149,7 +138,7 @@ TEST(PoseSearchSelection, WallCrossingPoseDoesNotSetTheFitnessMargin) {
   const std::vector<Vec3f> scan = scan_of(world, truth);
   const Mat4d given[2] = {alias, truth};
 
-  PoseSearchParams sp = search_params();
+  PoseSearchParams sp = testing::courtyard_search_params();
   sp.max_conflicts = 0.1;
   sp.sensor_in_body = Vec3d(0.0, 0.0, 1.0);
   const double alias_fit = evaluate_registration(scan, map.icp, alias, sp.fine_icp.max_correspondence_distance).fitness;
