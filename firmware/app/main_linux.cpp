@@ -130,9 +130,11 @@ void print_counters(const FirmwareApp& app) {
               (unsigned long long)v.signatures_malformed, (unsigned long long)s.signature_verifications,
               (unsigned long long)s.signatures_checked_on_arrival, (unsigned long long)d.wrong_channel,
               (unsigned long long)d.ego_time_rejected, (unsigned long long)p.ego_frames_held);
-  std::printf("v2xloc-firmware: can_repeated %llu can_counter_gaps %llu gnss_position_dropped %llu gnss_time_rejected %llu\n",
+  std::printf("v2xloc-firmware: can_repeated %llu can_counter_gaps %llu gnss_position_dropped %llu gnss_time_rejected %llu"
+              " inputs_released_early %llu\n",
               (unsigned long long)can.can_repeated, (unsigned long long)can.can_counter_gaps,
-              (unsigned long long)can.gnss_position_dropped, (unsigned long long)c.gnss_time_rejected);
+              (unsigned long long)can.gnss_position_dropped, (unsigned long long)c.gnss_time_rejected,
+              (unsigned long long)p.inputs_released_early);
   std::printf("v2xloc-firmware: map fusion of trusted shares: inconsistent %llu (infrastructure %llu) background_mismatch %llu"
               " (off_background_before_signature %llu) held_back %llu no_slot %llu stale %llu; paced (not needed, source's last recent) %llu on arrival (not hashed),"
               " %llu before and %llu after the signature check\n",

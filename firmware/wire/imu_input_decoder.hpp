@@ -85,6 +85,8 @@ class ImuInputDecoder {
   ImuReportKind decode(std::span<const std::uint8_t> report, std::int64_t rx_time_ns);
   // The oldest queued sample; false when none is waiting.
   bool take(ImuInput& sample);
+  // The oldest queued sample without taking it; null when none is waiting.
+  const ImuInput* peek() const { return count_ == 0 ? nullptr : &queue_[head_]; }
   std::size_t pending() const { return count_; }
 
   const ImuCounters& counters() const { return counters_; }

@@ -1,5 +1,7 @@
 #include "firmware/wire/period_driver.hpp"
 
+#include <limits>
+
 namespace v2xloc::firmware {
 
 std::uint64_t imu_digest_step(std::uint64_t h, const ImuInput& s) {
@@ -18,9 +20,27 @@ PeriodDriver::PeriodDriver(InputDecoder& decoder, LocalizerPort& localizer) : de
 
 DecodedCan PeriodDriver::on_can(const hal::CanFrame& frame, std::int64_t time_ns) {
   const DecodedCan decoded = decoder_.decode_can(frame, time_ns);
-  if (decoded.kind == CanInputKind::kVehicle) localizer_.on_vehicle(decoded.vehicle);
-  if (decoded.kind == CanInputKind::kGnssFix) localizer_.on_gnss(decoded.gnss);
+  PendingInput input;
+  if (decoded.kind == CanInputKind::kVehicle) {
+    input.kind = PendingInput::Kind::kVehicle;
+    input.vehicle = decoded.vehicle;
+    hold(input);
+  }
+  if (decoded.kind == CanInputKind::kGnssFix) {
+    input.kind = PendingInput::Kind::kGnss;
+    input.gnss = decoded.gnss;
+    hold(input);
+  }
   return decoded;
+}
+
+// A LiDAR that stops sending leaves the period open: past the capacity the held inputs go early.
+void PeriodDriver::hold(const PendingInput& input) {
+  if (pending_.full()) {
+    counters_.inputs_released_early += pending_.size();
+    release_inputs();
+  }
+  pending_.push(input);
 }
 
 DecodedCloud PeriodDriver::take_completed(std::int64_t local_time_ns) { return decoder_.decode_completed(local_time_ns); }
@@ -45,15 +65,27 @@ void PeriodDriver::count_insert(const MapInsertResult& result, bool is_agent) {
   }
 }
 
-// Every IMU sample received up to the period's close, oldest first (the decoder keeps them in
-// strictly increasing time).
-void PeriodDriver::release_imu() {
+// The queued IMU samples older than t, oldest first (the decoder keeps them in strictly
+// increasing time).
+void PeriodDriver::release_imu_before(double t) {
   ImuInput sample;
-  while (decoder_.imu().take(sample)) {
+  while (decoder_.imu().peek() != nullptr && decoder_.imu().peek()->t < t && decoder_.imu().take(sample)) {
     ++counters_.imu_handed;
     counters_.imu_digest = imu_digest_step(counters_.imu_digest, sample);
     localizer_.on_imu(sample);
   }
+}
+
+// The held CAN inputs in arrival order, each after the IMU samples older than it, then every
+// remaining sample received up to now.
+void PeriodDriver::release_inputs() {
+  for (; !pending_.empty(); pending_.pop()) {
+    const PendingInput& input = pending_.front();
+    release_imu_before(input.t());
+    if (input.kind == PendingInput::Kind::kVehicle) localizer_.on_vehicle(input.vehicle);
+    else localizer_.on_gnss(input.gnss);
+  }
+  release_imu_before(std::numeric_limits<double>::infinity());
 }
 
 // The period's share budget: the schedule's cap or the localizer's (one while tracking). Shares
@@ -69,7 +101,7 @@ void PeriodDriver::release_shares() {
 
 const PeriodOutput& PeriodDriver::close_period(const DecodedCloud& scan) {
   ++counters_.periods;
-  release_imu();
+  release_inputs();
   release_shares();
   // Trust work (hashing, ECDSA) counts against this period's budget; a refused scan ends the
   // period without a localizer frame, so its work is dropped with it.

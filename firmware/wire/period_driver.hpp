@@ -3,13 +3,15 @@
 // Callers own only their transport (where bytes come from, where the frames go).
 //
 // The period (the input order; firmware/wire/input_decoder.hpp):
-//   1. CAN frames as they arrive: decoded, a vehicle input or a closed GNSS fix to the localizer;
+//   1. CAN frames as they arrive: decoded, a vehicle input or a closed GNSS fix held in arrival
+//      order (PendingInputs), nothing reaches the localizer yet;
 //   2. HID IMU reports as they are read: decoded and queued (ImuInputDecoder), nothing reaches the
 //      localizer yet;
 //   3. clouds as they complete: a map share is admitted to the decoder's verification queue
 //      (signer, sender id, surveyed pose, replay) and nothing reaches the map yet;
-//   4. an ego scan (used or refused for its time stamp) closes the period: the queued IMU samples go
-//      to the localizer first (time order: every report received up to then), then the waiting shares are
+//   4. an ego scan (used or refused for its time stamp) closes the period: the held CAN inputs go to
+//      the localizer first in arrival order, each preceded by the queued IMU samples older than it
+//      (then the remaining samples), so the filter fuses gyro and wheel in sequence; then the waiting shares are
 //      released oldest first, up to shares_this_period(), each checked for freshness, need and
 //      surveyed background, then its signature, then handed to map fusion; the period's trust
 //      work goes into the localizer's budget; then the scan (or, refused, the last pose again);
@@ -23,6 +25,7 @@
 #include "firmware/wire/diagnostic_frames.hpp"
 #include "firmware/wire/input_decoder.hpp"
 #include "firmware/wire/localizer_port.hpp"
+#include "firmware/wire/pending_inputs.hpp"
 #include "firmware/wire/pose_frames.hpp"
 
 namespace v2xloc::firmware {
@@ -45,6 +48,7 @@ struct PeriodCounters {
   std::uint64_t map_stale = 0;           // not newer than the source's stored cloud
   std::uint64_t map_paced = 0;           // not fused: the source's stored cloud is recent (map.cloud_interval)
   std::uint64_t ego_frames_held = 0;     // ego scans refused for their time: last pose published again
+  std::uint64_t inputs_released_early = 0;  // CAN inputs handed before their period closed (held inputs full)
   std::uint64_t imu_handed = 0;          // IMU samples handed to the localizer
   std::uint64_t imu_digest = kImuDigestStart;  // imu_digest_step over those samples in order (runs compare it)
 };
@@ -67,7 +71,7 @@ class PeriodDriver {
   PeriodDriver(const PeriodDriver&) = delete;
   PeriodDriver& operator=(const PeriodDriver&) = delete;
 
-  // Step 1: one received CAN frame at disciplined time time_ns, decoded and applied.
+  // Step 1: one received CAN frame at disciplined time time_ns, decoded and held for the period.
   DecodedCan on_can(const hal::CanFrame& frame, std::int64_t time_ns);
   // Step 2: one HID IMU input report read at disciplined time time_ns (queued, not yet applied).
   ImuReportKind on_imu_report(std::span<const std::uint8_t> report, std::int64_t time_ns) {
@@ -91,7 +95,9 @@ class PeriodDriver {
   const LocalizerFrameOutput* latest() const { return has_output_ ? &latest_ : nullptr; }
 
  private:
-  void release_imu();
+  void release_inputs();
+  void release_imu_before(double t);
+  void hold(const PendingInput& input);
   void release_shares();
   void count_insert(const MapInsertResult& result, bool is_agent);
 
@@ -103,6 +109,7 @@ class PeriodDriver {
   bool has_output_ = false;
   PeriodOutput published_{};
   PeriodCounters counters_{};
+  PendingInputs pending_{};
 };
 
 }  // namespace v2xloc::firmware

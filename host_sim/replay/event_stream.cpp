@@ -337,7 +337,13 @@ void EventStream::deliver_due_shares(std::int64_t t_i, std::vector<WireEvent>& o
 
 bool EventStream::append_ego_scan(int i, std::int64_t t_i, std::vector<WireEvent>& out, std::string& error) {
   cloud_io::PointCloud scan;
-  if (!reader_->ego_scan(i, scan, error)) return false;
+  const bool blinded = faults_.lidar_blinded(static_cast<double>(t_i) * 1e-9);
+  if (blinded) {
+    ++stats_.faults.ego_scans_blinded;
+    if (!faults_.spec().lidar_blind_empty) return true;  // a silent LiDAR: no scan, no period
+  } else if (!reader_->ego_scan(i, scan, error)) {
+    return false;
+  }
   WireEvent ev;
   ev.kind = WireEvent::Kind::kEgoScan;
   ev.time_ns = t_i;

@@ -5,7 +5,8 @@
 //   emitted (log order); then every IMU HID report (recordings with one) received at or before t_i
 //   not yet emitted (receive order; the period driver queues them and hands them on when the
 //   period closes, so where they stand before the scan does not matter); then every map cloud
-//   (infra / agent) with stamp <= t_i not yet emitted (stamp order); then ego scan i.
+//   (infra / agent) with stamp <= t_i not yet emitted (stamp order); then ego scan i (none, or one
+//   without points, in a lidar-blind spell: fault_injection.hpp).
 // Events are wire bytes: CAN frames as hal::CanFrame, clouds as the UDP datagrams of the
 // point-cloud fragmenter (quantized exactly as sent). WireEventDecoder hands them to the firmware's
 // own InputDecoder and period driver, so the offline path sees the firmware's bits.

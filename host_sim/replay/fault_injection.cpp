@@ -10,7 +10,7 @@ namespace v2xloc::sim::replay {
 bool FaultSpec::any() const {
   return loss > 0 || frag_loss > 0 || reorder > 0 || duplicate > 0 || delay_s > 0 || gnss_outage_s > 0 ||
          infra_dropout_s > 0 || can_burst > 0 || rogue_shift_m != 0 || rogue_future_s != 0 || rogue_ids > 0 ||
-         ego_time_jump_frame >= 0 || imu.any();
+         ego_time_jump_frame >= 0 || lidar_blind_s > 0 || imu.any();
 }
 
 bool parse_fault_spec(const std::string& spec, FaultSpec& out, std::string& error) {
@@ -61,6 +61,11 @@ bool parse_fault_spec(const std::string& spec, FaultSpec& out, std::string& erro
     } else if (key == "ego-time-jump") {
       ok = parse_fault_number(value, 0, 1e9, d);
       f.ego_time_jump_frame = static_cast<int>(d);
+    } else if (key == "lidar-blind") secs(f.lidar_blind_s);
+    else if (key == "lidar-blind-at") secs(f.lidar_blind_at_s);
+    else if (key == "lidar-blind-empty") {
+      ok = value == "0" || value == "1";
+      f.lidar_blind_empty = value == "1";
     } else if (!parse_imu_fault(key, value, f.imu, ok)) {
       error = "unknown fault '" + key + "'";
       return false;
@@ -89,6 +94,8 @@ std::string describe(const FaultSpec& f) {
   if (f.rogue_future_s > 0) o << " rogue-future=" << f.rogue_future_s;
   if (f.rogue_ids > 0) o << " rogue-ids=" << f.rogue_ids;
   if (f.ego_time_jump_frame >= 0) o << " ego-time-jump=" << f.ego_time_jump_frame;
+  if (f.lidar_blind_s > 0) o << " lidar-blind=" << f.lidar_blind_s << "@" << f.lidar_blind_at_s
+                              << (f.lidar_blind_empty ? "(empty scans)" : "(no scans)");
   o << describe(f.imu);
   const std::string s = o.str();
   return s.empty() ? "none" : s.substr(1);
@@ -142,6 +149,10 @@ bool FaultInjector::gnss_dropped(std::uint32_t id, double t) const {
 
 bool FaultInjector::infra_dropped(double t) const {
   return spec_.infra_dropout_s > 0 && t >= spec_.infra_dropout_at_s && t < spec_.infra_dropout_at_s + spec_.infra_dropout_s;
+}
+
+bool FaultInjector::lidar_blinded(double t) const {
+  return spec_.lidar_blind_s > 0 && t >= spec_.lidar_blind_at_s && t < spec_.lidar_blind_at_s + spec_.lidar_blind_s;
 }
 
 }  // namespace v2xloc::sim::replay

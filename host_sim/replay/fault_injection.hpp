@@ -26,6 +26,11 @@
 //                      (signed with rogue-signed=1: by a key not in the trust list)
 //   rogue-ids=N        an outsider floods N invented agent sender ids (unsigned) every share period
 //   ego-time-jump=F    ego scan F is stamped 1e18 ns (year 2001 + 31 years of ns: far future)
+//   lidar-blind=S      the ego LiDAR blind for S seconds from lidar-blind-at: the scans stamped in
+//                      the spell never reach the firmware (no registration, no odometry)
+//   lidar-blind-at=S   start of the spell, recording time (default 1.0)
+//   lidar-blind-empty=0|1  1: the LiDAR still sends its scans in the spell, with no points (a
+//                      covered sensor); 0 (default): it sends nothing (a silent sensor)
 //   imu-*              IMU dropout, stuck axis, bias step, repeated and reordered reports
 //                      (host_sim/replay/imu_faults.hpp)
 #pragma once
@@ -54,6 +59,8 @@ struct FaultSpec {
   double rogue_future_s = 0.0;
   int rogue_ids = 0;
   int ego_time_jump_frame = -1;
+  double lidar_blind_s = 0.0, lidar_blind_at_s = 1.0;
+  bool lidar_blind_empty = false;
   ImuFaultSpec imu{};
   bool any() const;
 };
@@ -68,6 +75,7 @@ struct FaultStats {
   std::uint64_t shares_lost = 0, datagrams_dropped = 0, datagrams_reordered = 0, datagrams_duplicated = 0;
   std::uint64_t shares_delayed = 0, gnss_frames_dropped = 0, infra_shares_dropped = 0, can_corrupt_sent = 0;
   std::uint64_t rogue_shares = 0, ego_time_jumps = 0;
+  std::uint64_t ego_scans_blinded = 0;  // ego scans withheld (or sent empty) by lidar-blind
   ImuFaultStats imu{};
 };
 
@@ -83,6 +91,8 @@ class FaultInjector {
   void transport(std::vector<std::vector<std::uint8_t>>& datagrams, FaultStats& stats);
   bool gnss_dropped(std::uint32_t can_id, double t_s) const;
   bool infra_dropped(double t_s) const;
+  // True for an ego scan stamped t_s inside the lidar-blind spell.
+  bool lidar_blinded(double t_s) const;
   Rng& rng() { return rng_; }
 
  private:

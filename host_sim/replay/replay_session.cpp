@@ -145,11 +145,13 @@ bool send_with_retry(SendFn&& send, std::size_t& retries) {
 }
 
 // The pose and diagnostic frames of replayed frame i as they arrive: complete once the odometry
-// attitude (sent last) names frame i and the pose (position, attitude with frame counter i, sigma)
-// and the other diagnostics (those with a frame counter naming i) decoded before it.
+// attitude (sent last) names the firmware's period and the pose (position, attitude with that frame
+// counter, sigma) and the other diagnostics (those with a frame counter naming it) decoded before it.
+// The firmware counts the scans it received: `period` is frame i less the scans never sent.
 class FrameCollector {
  public:
-  FrameCollector(int i, double t, ReplayResult& result) : result_(result), counter_(static_cast<std::uint16_t>(i & 0xFFFF)) {
+  FrameCollector(int i, std::uint32_t period, double t, ReplayResult& result)
+      : result_(result), counter_(static_cast<std::uint16_t>(period & 0xFFFFu)) {
     frame_.frame = i;
     frame_.t = t;
   }
@@ -224,8 +226,11 @@ class Lockstep {
     std::vector<WireEvent> events;
     for (int i = 0; i < stream_.frame_count(); ++i) {
       events.clear();
-      if (!stream_.next_frame(i, events, error) || !send_events(i, events, error) || !await_frame(i, error))
-        return finish(false, error);
+      if (!stream_.next_frame(i, events, error) || !send_events(i, events, error)) return finish(false, error);
+      // A frame whose scan was never sent (lidar-blind) closes no period: no pose to wait for.
+      const bool scan_sent = !events.empty() && events.back().kind == WireEvent::Kind::kEgoScan;
+      if (scan_sent && !await_frame(i, error)) return finish(false, error);
+      if (!scan_sent) ++result_.frames_without_scan;
     }
     return finish(true, error);
   }
@@ -354,7 +359,8 @@ class Lockstep {
   // Lockstep: the CAN frames until frame i's pose and diagnostics are complete, the frame timeout
   // passes or the started firmware exits.
   bool await_frame(int i, std::string& error) {
-    FrameCollector collector(i, reader_.frame_time(i), result_);
+    const auto period = static_cast<std::uint32_t>(i - result_.frames_without_scan);
+    FrameCollector collector(i, period, reader_.frame_time(i), result_);
     const auto wait0 = Clock::now();
     while (!collector.done()) {
       hal::CanRxFrame rx;

@@ -52,7 +52,8 @@ struct ReplayedFrame {
 };
 
 struct ReplayResult {
-  std::vector<ReplayedFrame> frames;
+  std::vector<ReplayedFrame> frames;   // one per period the firmware published (frame: the recording's)
+  int frames_without_scan = 0;         // recording frames whose ego scan was not sent (lidar-blind)
   int timeouts = 0;
   std::size_t heartbeats = 0;
   std::size_t pose_decode_errors = 0;

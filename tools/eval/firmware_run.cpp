@@ -75,16 +75,21 @@ LocalizerFrameOutput output_from_can(const sim::replay::ReplayedFrame& f, std::u
 
 bool records_from_outputs(const sim::RecordingReader& reader, const std::vector<LocalizerFrameOutput>& outputs,
                           const Eigen::Vector3d& gnss_antenna_in_body, std::vector<FrameRecord>& records,
-                          std::string& error) {
-  if (outputs.size() > reader.ground_truth().size()) {
-    error = "more frames than ground-truth poses";
+                          std::string& error, const std::vector<int>& recording_frames) {
+  if (!recording_frames.empty() && recording_frames.size() != outputs.size()) {
+    error = "one recording frame per output expected";
     return false;
   }
   records.assign(outputs.size(), FrameRecord{});
   for (std::size_t i = 0; i < outputs.size(); ++i) {
+    const int frame = recording_frames.empty() ? static_cast<int>(i) : recording_frames[i];
+    if (frame < 0 || static_cast<std::size_t>(frame) >= reader.ground_truth().size()) {
+      error = "frame " + std::to_string(frame) + " has no ground-truth pose";
+      return false;
+    }
     FrameRecord& rec = records[i];
-    rec.t = reader.frame_time(static_cast<int>(i));
-    rec.truth = reader.ground_truth()[i].pose;
+    rec.t = reader.frame_time(frame);
+    rec.truth = reader.ground_truth()[static_cast<std::size_t>(frame)].pose;
     rec.out = outputs[i];
     rec.lagged_pose = rec.out.fused_pose.matrix();
   }
@@ -134,12 +139,17 @@ bool run_firmware(const sim::RecordingReader& reader, const FirmwareRunOptions& 
     if (!result.firmware_output.empty()) error += "\nfirmware output:\n" + result.firmware_output;
     return false;
   }
+  // Output i is the firmware's period i (its frame counters count periods); a frame whose scan was
+  // never sent (lidar-blind) has no period and no record.
   std::vector<LocalizerFrameOutput> outputs;
+  std::vector<int> recording_frames;
   outputs.reserve(result.frames.size());
   for (std::size_t i = 0; i < result.frames.size(); ++i) {
     outputs.push_back(output_from_can(result.frames[i], static_cast<std::uint32_t>(i)));
+    recording_frames.push_back(result.frames[i].frame);
   }
-  if (!records_from_outputs(reader, outputs, options.gnss_antenna_in_body, records, error)) return false;
+  if (!records_from_outputs(reader, outputs, options.gnss_antenna_in_body, records, error, recording_frames)) return false;
+  stats.frames_without_pose = result.frames_without_scan;
   stats.seconds = result.wall_seconds;
   stats.can_decode_errors = result.pose_decode_errors + result.diagnostic_decode_errors;
   stats.map_clouds = result.stream_stats.map_clouds;
@@ -154,13 +164,15 @@ bool run_firmware(const sim::RecordingReader& reader, const FirmwareRunOptions& 
     // The firmware's own account of what it refused (trust, channel, time, CAN) and the injector's.
     const sim::replay::FaultStats& f = result.stream_stats.faults;
     std::fprintf(stderr, "  faults %s: shares lost %llu, datagrams dropped %llu reordered %llu duplicated %llu, delayed %llu,"
-                 " GNSS frames dropped %llu, infra shares dropped %llu, corrupt CAN %llu, rogue shares %llu, ego time jumps %llu\n",
+                 " GNSS frames dropped %llu, infra shares dropped %llu, corrupt CAN %llu, rogue shares %llu, ego time jumps %llu,"
+                 " ego scans blinded %llu (frames without a pose %d)\n",
                  sim::replay::describe(options.faults).c_str(), (unsigned long long)f.shares_lost,
                  (unsigned long long)f.datagrams_dropped, (unsigned long long)f.datagrams_reordered,
                  (unsigned long long)f.datagrams_duplicated, (unsigned long long)f.shares_delayed,
                  (unsigned long long)f.gnss_frames_dropped, (unsigned long long)f.infra_shares_dropped,
                  (unsigned long long)f.can_corrupt_sent, (unsigned long long)f.rogue_shares,
-                 (unsigned long long)f.ego_time_jumps);
+                 (unsigned long long)f.ego_time_jumps, (unsigned long long)f.ego_scans_blinded,
+                 result.frames_without_scan);
     std::size_t pos = 0;
     while (pos < result.firmware_output.size()) {
       const std::size_t end = result.firmware_output.find('\n', pos);

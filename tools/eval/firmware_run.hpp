@@ -41,12 +41,13 @@ bool run_firmware(const sim::RecordingReader& reader, const FirmwareRunOptions& 
 // frame_index is the replayed frame's index (the 16-bit frame counters are unwrapped against it).
 LocalizerFrameOutput output_from_can(const sim::replay::ReplayedFrame& frame, std::uint32_t frame_index);
 
-// Records from per-frame outputs: truth and GNSS from the recording (fill_gnss, as run_offline: latest valid
-// fix with t <= frame time, lever arm removed), fixed-lag decisions applied to the frames they
-// decide. outputs[i] belongs to frame i. False + error when the CAN log cannot be read.
+// Records from per-period outputs: truth and GNSS from the recording (fill_gnss, as run_offline: latest valid
+// fix with t <= frame time, lever arm removed), fixed-lag decisions applied to the periods they
+// decide. outputs[i] belongs to recording frame recording_frames[i] (empty: frame i). False + error
+// when the CAN log cannot be read or a frame has no ground truth.
 bool records_from_outputs(const sim::RecordingReader& reader, const std::vector<LocalizerFrameOutput>& outputs,
                           const Eigen::Vector3d& gnss_antenna_in_body, std::vector<FrameRecord>& records,
-                          std::string& error);
+                          std::string& error, const std::vector<int>& recording_frames = {});
 
 // Marks the columns the CAN interface does not carry as unavailable (null in JSON): fused_ungated,
 // the registration offset's yaw.

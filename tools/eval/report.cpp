@@ -148,6 +148,13 @@ std::string format_table(const std::vector<RowReport>& rows, bool aligned) {
                   r.sim, r.permutation.c_str(), r.metrics.frames_before_map);
     out += buf;
   }
+  for (const RowReport& r : rows) {
+    if (r.stats.frames_without_pose == 0) continue;
+    std::snprintf(buf, sizeof buf,
+                  "Sim %d %s: %d frames without a pose (their scan never reached the firmware) are not in the columns\n",
+                  r.sim, r.permutation.c_str(), r.stats.frames_without_pose);
+    out += buf;
+  }
   if (!aligned) out += drift_and_offset_text(rows);
   return out;
 }
@@ -159,6 +166,7 @@ std::string format_json(const std::vector<RowReport>& rows) {
                 {"perm", r.permutation},
                 {"frames", r.metrics.frames},
                 {"frames_before_map", r.metrics.frames_before_map},
+                {"frames_without_pose", r.stats.frames_without_pose},
                 {"valid_frames", r.metrics.valid_frames},
                 {"reg_ok_frames", r.metrics.reg_ok_frames},
                 {"first_localized_frame", r.metrics.first_localized_frame},

@@ -12,7 +12,7 @@ using Mat4x4 = Eigen::Matrix<double, 4, 4>;
 
 EkfVector EkfState::to_vector() const {
   EkfVector x;
-  x << pos_x, pos_y, pos_z, yaw, speed, yaw_rate, yaw_rate_bias, wheel_scale, gyro_bias;
+  x << pos_x, pos_y, pos_z, yaw, speed, yaw_rate, yaw_rate_bias, wheel_scale, gyro_bias, gyro_scale;
   return x;
 }
 
@@ -27,6 +27,7 @@ EkfState EkfState::from_vector(const EkfVector& x) {
   s.yaw_rate_bias = x(idx::kYawRateBias);
   s.wheel_scale = x(idx::kWheelScale);
   s.gyro_bias = x(idx::kGyroBias);
+  s.gyro_scale = x(idx::kGyroScale);
   return s;
 }
 
@@ -130,11 +131,9 @@ EkfFuseStatus Ekf::on_gyro(double t, double rate, double span) {
   e.type = EkfEventType::kGyro;
   e.z[0] = rate;
   e.z[1] = span;
-  // White rate noise averaged over the span, and the sensitivity error: a share of the rate itself,
-  // constant over a turn, that no state absorbs.
+  // White rate noise averaged over the span (the scale error is a state).
   const double n = params_.noise.gyro_noise_density;
-  const double k = params_.noise.gyro_scale_error * rate;
-  e.R[0][0] = n * n / span + k * k;
+  e.R[0][0] = n * n / span;
   return submit(e);
 }
 
@@ -333,6 +332,7 @@ void Ekf::propagate(double t) {
     P_(idx::kYawRateBias, idx::kYawRateBias) += q.yaw_rate_bias * q.yaw_rate_bias * h;
     P_(idx::kWheelScale, idx::kWheelScale) += q.wheel_scale * q.wheel_scale * h;
     P_(idx::kGyroBias, idx::kGyroBias) += q.gyro_bias_walk * q.gyro_bias_walk * h;
+    P_(idx::kGyroScale, idx::kGyroScale) += q.gyro_scale_walk * q.gyro_scale_walk * h;
     P_ = 0.5 * (P_ + P_.transpose());
   }
   time_ = t;
@@ -467,9 +467,11 @@ EkfFuseStatus Ekf::apply_scalar(const Event& e, bool count) {
     if (count && s == EkfFuseStatus::kFused) ++counters_.signals_fused;
     return s;
   }
-  y(0) = e.z[0] - (x_(idx::kYawRate) + x_(idx::kGyroBias));
-  H(0, idx::kYawRate) = 1.0;
+  const double gain = 1.0 + x_(idx::kGyroScale);
+  y(0) = e.z[0] - (gain * x_(idx::kYawRate) + x_(idx::kGyroBias));
+  H(0, idx::kYawRate) = gain;
   H(0, idx::kGyroBias) = 1.0;
+  H(0, idx::kGyroScale) = x_(idx::kYawRate);
   const double gate = params_.gates.gyro_gate_enabled ? params_.gates.gyro_nis_threshold : 0.0;
   const EkfFuseStatus s = fuse<1>(y, H, R, gate);
   if (count && s == EkfFuseStatus::kFused) ++counters_.gyro_fused;
@@ -481,16 +483,18 @@ EkfFuseStatus Ekf::apply_scalar(const Event& e, bool count) {
   }
   // The span continues the last one (1 us: the intake's stamps are differences of the same doubles).
   if (gyro_chain_.linked && std::fabs((e.t - span) - gyro_chain_.t) <= 1e-6) {
-    const double gyro_angle = (e.z[0] - x_(idx::kGyroBias)) * span;
-    x_(idx::kYaw) = det::wrap_pi(x_(idx::kYaw) + (gyro_angle - gyro_chain_.integrated));
-    // Its error: the held rate's share leaves it (-span dw), the bias's enters (-span db), and the
-    // gyro mean's own error over the span (R span^2: white noise, sensitivity error).
+    const double g = 1.0 + x_(idx::kGyroScale);
+    const double rate = (e.z[0] - x_(idx::kGyroBias)) / g;
+    x_(idx::kYaw) = det::wrap_pi(x_(idx::kYaw) + (rate * span - gyro_chain_.integrated));
+    // Its error: the held rate's share leaves it (-span dw), the bias's and the scale's enter
+    // (-span / g db, -span rate / g ds), and the gyro mean's white noise over the span (R span^2 / g^2).
     EkfCovariance J = EkfCovariance::Identity();
     J(idx::kYaw, idx::kYawRate) = -span;
-    J(idx::kYaw, idx::kGyroBias) = -span;
+    J(idx::kYaw, idx::kGyroBias) = -span / g;
+    J(idx::kYaw, idx::kGyroScale) = -span * rate / g;
     const EkfCovariance JP = J.lazyProduct(P_);
     P_ = JP.lazyProduct(J.transpose());
-    P_(idx::kYaw, idx::kYaw) += e.R[0][0] * span * span;
+    P_(idx::kYaw, idx::kYaw) += e.R[0][0] * span * span / (g * g);
     P_ = 0.5 * (P_ + P_.transpose());
   }
   gyro_chain_ = {true, e.t, 0.0};

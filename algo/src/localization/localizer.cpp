@@ -133,16 +133,17 @@ const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
 
 // The sweep's motion: the wheel speed, and the gyro's yaw rate when its samples reach the stamp
 // (imu_intake.hpp, rate_ahead: the samples before the stamp carried along their trend to the
-// sweep's middle, less the filter's bias), else the latest CAN yaw rate, half a sweep and one
-// sample's noise away from the rate the sweep turns at. The bias is the filter's, a slow state: the
-// deskew->registration->filter loop TUNING.md warns of stays open at the rate.
+// sweep's middle, less the filter's bias, over its scale), else the latest CAN yaw rate, half a
+// sweep and one sample's noise away from the rate the sweep turns at. Bias and scale are the
+// filter's, slow states: the deskew->registration->filter loop TUNING.md warns of stays open at
+// the rate.
 VehicleMotion Localizer::deskew_motion(double t) {
   VehicleMotion motion = vehicle_;
   double rate = 0.0;
   const ImuParams& p = params_.filter.imu;
   if (motion.valid && filter_.initialized() &&
       imu_.rate_ahead(t, p.deskew_window, p.deskew_trend, 0.5 * params_.scan.frame_period, rate)) {
-    motion.yaw_rate = rate - filter_.gyro_bias();
+    motion.yaw_rate = filter_.corrected_gyro_rate(rate);
     ++counters_.imu_deskews;
   }
   return motion;

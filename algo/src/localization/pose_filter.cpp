@@ -73,10 +73,10 @@ void PoseFilter::on_gyro(double t, double rate, double span, LocalizerCounters& 
   reset_gyro_bias(t, counters);
 }
 
-// Both sensors see the same body yaw rate: their difference is the bias difference the filter
-// holds, plus the CAN signal's noise. The gyro's mean over its span is compared with the latest CAN
-// sample inside that span (kept in a ring: the firmware hands a period's IMU samples on after its
-// CAN frames). A running mean (time constant consistency_window) beyond consistency_limit after a
+// Both sensors see the same body yaw rate: the gyro less its bias, over its scale, minus the CAN
+// rate less its bias, is the CAN signal's noise. The gyro's mean over its span is compared with the
+// latest CAN sample inside that span (kept in a ring: the firmware hands a period's IMU samples on
+// after its CAN frames). A running mean (time constant consistency_window) beyond consistency_limit after a
 // full window means the gyro's bias stepped faster than its random walk lets the filter follow (the
 // gyro, far less noisy, would drag the yaw rate along otherwise).
 void PoseFilter::watch_gyro_against_can(double t, double rate, double span, LocalizerCounters& counters) {
@@ -88,7 +88,7 @@ void PoseFilter::watch_gyro_against_can(double t, double rate, double span, Loca
   }
   if (match == nullptr) return;
   const EkfState s = ekf_.state();
-  const double d = rate - match->yaw_rate - (s.gyro_bias - s.yaw_rate_bias);
+  const double d = (rate - s.gyro_bias) / (1.0 + s.gyro_scale) - (match->yaw_rate - s.yaw_rate_bias);
   if (!can_gyro_running_ || !(t > can_gyro_t_) || t - can_gyro_t_ > params_.imu.max_gap) {
     can_gyro_running_ = true;
     can_gyro_mean_ = d;
@@ -172,9 +172,13 @@ void PoseFilter::restart(Ekf& ekf, double t, const Mat4d& pose, const VehicleMot
   EkfCovariance P = EkfCovariance::Zero();
   const double* sigmas = params_.restart_sigmas;
   for (int i = 0; i < kEkfStateSize; ++i) P(i, i) = sigmas[i] * sigmas[i];
-  if (ekf.counters().gyro_fused > 0) {  // the gyro's bias outlives a restart (reset() keeps the last state)
+  // The gyro's bias and scale outlive a restart (reset() keeps the last state).
+  if (ekf.counters().gyro_fused > 0) {
     s.gyro_bias = ekf.state_vector()(ekf_index::kGyroBias);
-    P(ekf_index::kGyroBias, ekf_index::kGyroBias) = ekf.covariance()(ekf_index::kGyroBias, ekf_index::kGyroBias);
+    s.gyro_scale = ekf.state_vector()(ekf_index::kGyroScale);
+    constexpr int kBias = ekf_index::kGyroBias;  // bias and scale: adjacent in the index table
+    static_assert(ekf_index::kGyroScale == kBias + 1);
+    P.block<2, 2>(kBias, kBias) = ekf.covariance().block<2, 2>(kBias, kBias);
   }
   ekf.initialize(t, s, P);
   ekf.predict_to(t);

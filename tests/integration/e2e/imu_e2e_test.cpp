@@ -6,24 +6,22 @@
 // in strictly increasing time; with the IMU faults the same holds and the losses are counted.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
 
 #include <cstdio>
 #include <cstdlib>
-#include <filesystem>
 #include <memory>
 #include <string>
 
 #include "firmware/app/configure_localizer.hpp"
 #include "host_sim/replay/event_stream.hpp"
 #include "host_sim/replay/replay_session.hpp"
+#include "tests/integration/e2e/generated_recording.hpp"
 #include "tools/eval/offline_run.hpp"
 
 namespace v2xloc::sim::replay {
 namespace {
 
-namespace fs = std::filesystem;
-const std::string kBin = std::string(V2XLOC_BINARY_DIR) + "/bin/";
+const std::string kBin = test::kBinDir;
 constexpr int kFrames = 15;
 
 Localizer g_localizer;
@@ -87,21 +85,13 @@ std::string localizer_line(std::uint64_t handed, std::uint64_t digest, const Loc
 class ImuE2e : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new std::string((fs::temp_directory_path() / ("v2xloc_imu_e2e_" + std::to_string(getpid()))).string());
-    fs::create_directories(*dir_);
-    const std::string cmd = kBin + "v2xloc-sim generate --scenario 3 --perm 2_infra --quick --no-stereo --out " +
-                            *dir_ + "/rec > " + *dir_ + "/gen.log 2>&1";
-    generated_ = std::system(cmd.c_str()) == 0;
+    recording_ = new test::GeneratedRecording("v2xloc_imu_e2e", "--scenario 3 --perm 2_infra --quick --no-stereo");
   }
-  static void TearDownTestSuite() {
-    std::error_code ec;
-    fs::remove_all(*dir_, ec);
-    delete dir_;
-  }
+  static void TearDownTestSuite() { delete recording_; }
   void SetUp() override {
-    ASSERT_TRUE(generated_) << "v2xloc-sim generate failed, see " << *dir_ << "/gen.log";
+    ASSERT_TRUE(recording_->ok()) << "v2xloc-sim generate failed, see " << recording_->log();
     std::string error;
-    ASSERT_TRUE(reader_.open(*dir_ + "/rec", error)) << error;
+    ASSERT_TRUE(reader_.open(recording_->path(), error)) << error;
     ASSERT_FALSE(reader_.imu_reports_path().empty()) << "recording without IMU reports";
   }
 
@@ -145,12 +135,10 @@ class ImuE2e : public ::testing::Test {
     EXPECT_EQ(tap.imu_after_scan, 0u);
   }
 
-  static std::string* dir_;
-  static bool generated_;
+  static test::GeneratedRecording* recording_;
   RecordingReader reader_;
 };
-std::string* ImuE2e::dir_ = nullptr;
-bool ImuE2e::generated_ = false;
+test::GeneratedRecording* ImuE2e::recording_ = nullptr;
 
 TEST_F(ImuE2e, FirmwareDecodesEveryReportAndFeedsTheSameSamplesAsInProcess) {
   firmware::ImuCounters counts;

@@ -15,6 +15,7 @@
 #include "firmware/wire/input_decoder.hpp"
 #include "firmware/wire/localizer_port.hpp"
 #include "firmware/wire/period_driver.hpp"
+#include "firmware/protocol/can_messages.hpp"
 #include "firmware/wire/wire_conventions.hpp"
 #include "hal/hid_imu_report.hpp"
 
@@ -275,6 +276,49 @@ TEST(ImuPeriodDriver, SamplesReachTheLocalizerAtThePeriodCloseInTimeOrder) {
   driver.close_period(scan);
   EXPECT_EQ(log.calls, "iiiei");
   EXPECT_EQ(decoder->imu().counters().handed, 4u);
+}
+
+// The period's vehicle signals are held and merged with the IMU samples by time, whatever order
+// the two devices were read in: the filter fuses gyro and wheel in sequence.
+TEST(ImuPeriodDriver, VehicleSignalsAndSamplesReachTheLocalizerInTimeOrder) {
+  auto decoder = std::make_unique<InputDecoder>(kEpochNs);
+  CallLog log;
+  PeriodDriver driver(*decoder, log);
+  protocol::VehicleMotion vm;
+  vm.wheel_speed_mps = 5.0;
+  vm.speed_valid = vm.yaw_rate_valid = true;
+  for (int k = 0; k < 3; ++k) {  // each vehicle frame 2.5 ms after the sample, and read before it
+    const std::int64_t unix_us = kUnixUs0 + k * kPeriodUs;
+    vm.counter = static_cast<std::uint8_t>(k);
+    driver.on_can(protocol::pack(vm), (unix_us + kPeriodUs / 2) * kUs);
+    driver.on_imu_report(report(static_cast<std::uint8_t>(k), static_cast<std::uint32_t>(unix_us)), (unix_us + 4000) * kUs);
+  }
+  EXPECT_EQ(log.calls, "");  // held until the period closes
+  DecodedCloud scan;
+  scan.kind = CloudKind::kEgoScan;
+  driver.close_period(scan);
+  EXPECT_EQ(log.calls, "ivivive");
+  EXPECT_EQ(driver.counters().imu_handed, 3u);
+  EXPECT_EQ(driver.counters().inputs_released_early, 0u);
+}
+
+TEST(ImuPeriodDriver, AStalledPeriodReleasesItsHeldInputsEarlyAndCountsThem) {
+  auto decoder = std::make_unique<InputDecoder>(kEpochNs);
+  CallLog log;
+  PeriodDriver driver(*decoder, log);
+  protocol::VehicleMotion vm;
+  vm.speed_valid = vm.yaw_rate_valid = true;
+  const std::size_t n = PendingInputs::kCapacity + 1;
+  for (std::size_t k = 0; k < n; ++k) {
+    vm.counter = static_cast<std::uint8_t>(k % protocol::kCounterModulo);
+    driver.on_can(protocol::pack(vm), (kUnixUs0 + static_cast<std::int64_t>(k) * 10'000) * kUs);
+  }
+  EXPECT_EQ(log.calls, std::string(PendingInputs::kCapacity, 'v'));  // none lost, none waits forever
+  EXPECT_EQ(driver.counters().inputs_released_early, PendingInputs::kCapacity);
+  DecodedCloud scan;
+  scan.kind = CloudKind::kEgoScan;
+  driver.close_period(scan);
+  EXPECT_EQ(log.calls, std::string(n, 'v') + "e");
 }
 
 }  // namespace

@@ -17,7 +17,7 @@ namespace {
 namespace idx = ekf_index;
 
 // Truth simulator: the filter's own process model (CTRV + random walks) with sampled noise, so a
-// consistent filter must give NEES ~ chi-square(9).
+// consistent filter must give NEES ~ chi-square(10).
 struct Truth {
   EkfVector x;
   void step(double h, const EkfNoise& q, std::mt19937_64& rng) {
@@ -33,12 +33,13 @@ struct Truth {
     x(idx::kYawRateBias) += q.yaw_rate_bias * std::sqrt(h) * n(rng);
     x(idx::kWheelScale) += q.wheel_scale * std::sqrt(h) * n(rng);
     x(idx::kGyroBias) += q.gyro_bias_walk * std::sqrt(h) * n(rng);
+    x(idx::kGyroScale) += q.gyro_scale_walk * std::sqrt(h) * n(rng);
   }
 };
 
 EkfCovariance initial_covariance() {
   EkfVector sd;
-  sd << 1.0, 1.0, 0.5, 0.05, 0.5, 0.02, 0.005, 0.02, 0.01;
+  sd << 1.0, 1.0, 0.5, 0.05, 0.5, 0.02, 0.005, 0.02, 0.01, 0.005;
   return sd.cwiseProduct(sd).asDiagonal();
 }
 
@@ -68,8 +69,8 @@ double chi2_quantile(double dof, double z) {
 }
 
 // Monte-Carlo NEES over 40 runs; with_gyro: the IMU gyro z (mean rate over 10 ms, its own noise) is
-// fused beside the vehicle signals, so the gyro bias state is observed too, and the yaw integrates
-// the gyro's angle. The gyro measures the mean rate over its span, the model the rate at its end:
+// fused beside the vehicle signals, so the gyro bias and scale states are observed too, and the yaw
+// integrates the gyro's angle. The gyro measures the mean rate over its span, the model the rate at its end:
 // the two agree within the gyro's noise only if the yaw rate walks slowly, so that run's truth and
 // filter take a car-like yaw acceleration density (0.005 rad/s^2/sqrt(Hz), not the CAN tuning's 0.3).
 void check_nees(bool with_gyro) {
@@ -104,7 +105,8 @@ void check_nees(bool with_gyro) {
         filter->on_vehicle_signals(t, wheel, gyro);
         if (with_gyro) {
           // The gyro's mean rate over the step (the rate the truth's yaw integrated).
-          const double imu = held_rate + truth.x(idx::kGyroBias) + q.gyro_noise_density / std::sqrt(0.01) * n(rng);
+          const double imu = (1.0 + truth.x(idx::kGyroScale)) * held_rate + truth.x(idx::kGyroBias) +
+                            q.gyro_noise_density / std::sqrt(0.01) * n(rng);
           filter->on_gyro(t, imu, 0.01);
         }
       }
@@ -139,7 +141,7 @@ void check_nees(bool with_gyro) {
     if (avg >= lo && avg <= hi) ++inside;
     else std::printf("  frame %d: averaged NEES %.2f outside\n", frame, avg);
   }
-  std::printf("averaged NEES: mean %.3f (expected 9), band [%.2f, %.2f], %d/%d frames inside\n",
+  std::printf("averaged NEES: mean %.3f (expected 10), band [%.2f, %.2f], %d/%d frames inside\n",
               mean, lo, hi, inside, kFrames);
   // Frames of one run are correlated, so excursions come in clusters; a consistent filter keeps
   // most frames and the grand mean inside (an over/under-confident one drifts out entirely).

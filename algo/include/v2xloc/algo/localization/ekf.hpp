@@ -2,7 +2,7 @@
 // documented layout and index table, fixed-size matrices, Joseph-form updates, innovation gates
 // with counters, a bounded history for delayed measurements).
 //
-// State (kEkfStateSize = 9), local ENU frame (x east, y north, z up), with the process noise that
+// State (kEkfStateSize = 10), local ENU frame (x east, y north, z up), with the process noise that
 // drives each state (EkfNoise, continuous densities; PX4 EKF2 lists its states and their process
 // noise parameters the same way):
 //
@@ -16,21 +16,27 @@
 // | 5 | yaw rate                                 | rad/s | yaw_accel [rad/s^2/sqrt(Hz)]              |
 // | 6 | CAN yaw-rate sensor bias (z = w + b)     | rad/s | yaw_rate_bias [rad/s/sqrt(s)]             |
 // | 7 | wheel-speed scale (z = k v)              | -     | wheel_scale [1/sqrt(s)]                   |
-// | 8 | IMU gyro z bias (z = w + b_g)            | rad/s | gyro_bias_walk [rad/s/sqrt(s)] (sensor's) |
+// | 8 | IMU gyro z bias (z = (1 + s_g) w + b_g)  | rad/s | gyro_bias_walk [rad/s/sqrt(s)] (sensor's) |
+// | 9 | IMU gyro z scale error s_g               | -     | gyro_scale_walk [1/sqrt(s)] (sensor's)    |
 //
-// Measurements: CAN wheel speed (z = k v) and yaw rate (z = w + b), the IMU gyro z (z = w + b_g,
-// noise from the sensor's angle random walk gyro_noise_density: sigma^2 = N^2 / span for the mean
-// rate over span seconds), GNSS position, registration pose (x, y, z, yaw), LiDAR odometry rates.
+// Measurements: CAN wheel speed (z = k v) and yaw rate (z = w + b), the IMU gyro z
+// (z = (1 + s_g) w + b_g, noise from the sensor's angle random walk gyro_noise_density:
+// sigma^2 = N^2 / span for the mean rate over span seconds), GNSS position, registration pose
+// (x, y, z, yaw), LiDAR odometry rates. The scale error s_g is what a turn adds to the gyro's
+// error beyond its bias (a MEMS part's sensitivity error, 0.5 % 1 sigma for the class): without it
+// the registrations' yaw corrections during a turn land in the bias, which is then wrong on the
+// straight that follows; with it the turn's share goes to the state it belongs to.
 // Process model: constant turn rate and velocity on the ground plane (Schubert et al. 2008,
 // CTRV), midpoint-yaw integration; z, speed, yaw rate, biases and scale are random walks.
-// Without gyro measurements state 8 has no cross-covariance and never touches the others: the
-// filter's arithmetic on states 0-7 is the 8-state filter's, bit for bit (state 8 is last, so it
-// only appends exact zero terms to each sum).
+// Without gyro measurements states 8 and 9 have no cross-covariance and never touch the others:
+// the filter's arithmetic on states 0-7 is the 8-state filter's, bit for bit (they are last, so
+// they only append exact zero terms to each sum).
 //
 // Design choice: the vehicle's wheel speed and yaw rate, and the IMU's gyro z, are fused as
-// measurements of the speed and yaw-rate states (z = k v, z = w + b, z = w + b_g) at their own
-// rate, and prediction integrates those states (the gyro, fused every ~10 ms with a noise far below
-// the CAN signal's, is what the yaw-rate state follows, so the yaw is the integrated gyro).
+// measurements of the speed and yaw-rate states (z = k v, z = w + b, z = (1 + s_g) w + b_g) at their
+// own rate, and prediction integrates those states (the gyro, fused every ~10 ms with a noise far below
+// the CAN signal's, is what the yaw-rate state follows, so the yaw is the integrated gyro, less its
+// bias, over its scale).
 // Compared with feeding them as control inputs this (a) makes wheel scale and gyro biases
 // observable from every absolute fix, (b) lets LiDAR odometry enter the same way, and (c) turns
 // history replay into a pure function of the time-ordered event log, with no separate input
@@ -47,7 +53,7 @@
 // replays the log: the result is bit-identical to on-time fusion of the same event sequence.
 // Events older than the oldest snapshot are rejected (counted as too_late).
 //
-// Size: ~114 kB (event log 512 x 176 B + 32 snapshots x 736 B); static storage, not the stack.
+// Size: ~117 kB (event log 512 x 176 B + 32 snapshots x 920 B); static storage, not the stack.
 #pragma once
 
 #include <cstddef>
@@ -59,7 +65,7 @@
 
 namespace v2xloc {
 
-inline constexpr int kEkfStateSize = 9;
+inline constexpr int kEkfStateSize = 10;
 
 // Index table of the state vector (EKF2's StateSample indices).
 namespace ekf_index {
@@ -72,6 +78,7 @@ inline constexpr int kYawRate = 5;
 inline constexpr int kYawRateBias = 6;
 inline constexpr int kWheelScale = 7;
 inline constexpr int kGyroBias = 8;
+inline constexpr int kGyroScale = 9;
 }  // namespace ekf_index
 
 using EkfVector = Eigen::Matrix<double, kEkfStateSize, 1>;
@@ -88,6 +95,7 @@ struct EkfState {
   double yaw_rate_bias = 0.0;  // [rad/s]
   double wheel_scale = 1.0;    // [-]
   double gyro_bias = 0.0;      // [rad/s] IMU gyro z
+  double gyro_scale = 0.0;     // [-] IMU gyro z scale error (z = (1 + s) w + b)
 
   EkfVector to_vector() const;
   static EkfState from_vector(const EkfVector& x);
@@ -110,7 +118,9 @@ struct EkfNoise {
   // 2-4 deg/h instability so the bias state follows a warming part (0.015 deg/s/K).
   double gyro_noise_density = 2.44e-4;  // angle random walk [rad/s/sqrt(Hz)]
   double gyro_bias_walk = 2e-5;        // bias random walk [rad/s/sqrt(s)]
-  double gyro_scale_error = 0.005;     // sensitivity error, 1 sigma [-] (the class's, host_sim/README.md)
+  // Sensitivity drift [1/sqrt(s)]: the BMI088's sensitivity temperature drift, 0.03 %/K, over a
+  // warming part (a few K in the first minutes) is ~1e-5 per second; a walk of that size per sqrt(s).
+  double gyro_scale_walk = 1e-5;
   // Measurement noise (1 sigma).
   double wheel_speed = 0.05;      // [m/s], incl. quantisation
   double gyro = 0.005;            // [rad/s] CAN yaw rate

@@ -215,9 +215,10 @@ struct PoseFilterParams {
   EkfParams ekf{};                           // filter noise and NIS gates (ekf.hpp)
   RegistrationCovarianceParams registration_covariance{};  // ICP information -> pose covariance
   std::uint32_t reset_after_rejections = 3;  // [registrations] NIS-rejected in a row -> restart
-  // [m, m, m, rad, m/s, rad/s, rad/s, -, rad/s] 1-sigma of each state (ekf_index order) at a (re)start;
-  // the gyro bias's (0.01 rad/s: the MEMS class's turn-on zero-rate offset) when no earlier estimate exists.
-  double restart_sigmas[kEkfStateSize] = {0.1, 0.1, 0.1, 0.01, 0.5, 0.05, 0.005, 0.02, 0.01};
+  // [m, m, m, rad, m/s, rad/s, rad/s, -, rad/s, -] 1-sigma of each state (ekf_index order) at a
+  // (re)start; the gyro bias's (0.01 rad/s: the MEMS class's turn-on zero-rate offset) and scale
+  // error's (0.5 %: the class's sensitivity error) when no earlier estimate exists.
+  double restart_sigmas[kEkfStateSize] = {0.1, 0.1, 0.1, 0.01, 0.5, 0.05, 0.005, 0.02, 0.01, 0.005};
   ImuParams imu{};                           // the IMU's intake and its use (above)
   double tracking_max_sigma_xy = 0.5;        // [m] EKF position sigma above which the start-up search runs
   std::uint32_t max_failed_frames = 10;      // [frames] consecutive unfused registrations -> start-up search

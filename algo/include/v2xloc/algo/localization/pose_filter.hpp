@@ -64,8 +64,12 @@ class PoseFilter {
   void on_gyro(double t, double rate, double span, LocalizerCounters& counters);
   // A gyro measurement was fused within filter.imu.live_window before t (the CAN yaw rate's stand-in).
   bool gyro_live(double t) const { return have_gyro_ && t - last_gyro_t_ <= params_.imu.live_window; }
-  // The gyro z bias estimate [rad/s] (0 before the filter runs).
-  double gyro_bias() const { return ekf_.initialized() ? ekf_.state().gyro_bias : 0.0; }
+  // A raw gyro z rate [rad/s] less the filter's bias, over its scale (as is before the filter runs).
+  double corrected_gyro_rate(double raw) const {
+    if (!ekf_.initialized()) return raw;
+    const EkfState s = ekf_.state();
+    return (raw - s.gyro_bias) / (1.0 + s.gyro_scale);
+  }
   // kDiverged: gnss_divergence_fixes fixes in a row far from the filter (the caller loses track).
   GnssFusion on_gnss(double t, const Vec3d& enu, double h_acc, double v_acc);
   void on_odometry(double t, double dt, const Mat4d& body_delta);
