@@ -87,6 +87,7 @@ void StartupSearch::on_track_lost() {
 void StartupSearch::nominate(std::uint32_t frame, const Pose3d& pose, const Pose3d& odom_T_body) {
   candidate_.valid = true;
   candidate_.output = true;  // found next to a tracked pose: a better estimate than GNSS
+  candidate_.contradicted = false;
   candidate_.frame = frame;
   candidate_.pose = pose.matrix();
   candidate_.odom = odom_T_body.matrix();
@@ -190,7 +191,15 @@ void StartupSearch::run_final_icp(const StartupFrame& f, StartupOutcome& out, Lo
   out.status = accept(f, final_, out.registration, counters);
   if (out.status == StartupStatus::kStartFilter) acquisition_ = Acquisition::kAcquired;
   if (exhaustive) widen_region(out.status, f.frame, final_.searched.best);
-  if (out.status == StartupStatus::kRejected && candidate_.valid && candidate_.frame == f.frame) keep_finalists(f);
+  if (out.status != StartupStatus::kRejected || !candidate_.valid || candidate_.frame != f.frame) return;
+  if (exhaustive || !candidate_.contradicted) {
+    keep_finalists(f);
+    return;
+  }
+  // The candidate's own finalists, re-decided, disagree with it through the odometry: neither
+  // pose is to be trusted, and re-deciding the same finalists again would only repeat them.
+  candidate_.output = false;
+  finalist_count_ = 0;  // the next search is exhaustive
 }
 
 // The period the job finishes in: its result carried here, the ambiguity check, the report,
@@ -345,6 +354,7 @@ void StartupSearch::start_job(const StartupFrame& f, LocalizerCounters& counters
   region_fix_ = confirm_finalists ? candidate_.region_fix : f.gnss.enu;
   region_odom_ = confirm_finalists ? candidate_.region_odom : job_odom_;
   if (!confirm_finalists) {
+    sp.max_offset = job_region_;  // what accept() checks around region_fix_ (this fix, this frame)
     transition(Event::kStartSearch);
     job_.start(f.search_scan, f.map, f.gnss.enu, sp);
     return;
@@ -464,6 +474,7 @@ bool StartupSearch::confirm(std::uint32_t frame, const Mat4d& pose, const Mat4d&
     }
     ++counters.global_inconsistent;
   }
+  candidate_.contradicted = candidate_.valid && frame - candidate_.frame <= params_.confirm_window;
   candidate_.valid = true;
   candidate_.frame = frame;
   candidate_.pose = pose;

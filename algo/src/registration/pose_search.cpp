@@ -503,20 +503,28 @@ void PoseSearch::refine_candidate(const IcpTarget& map, std::uint64_t stop) {
           params_.yaw_prior_tolerance) {
     refined.status = RegistrationStatus::kDidNotConverge;  // slid out of the prior
   }
-  if (refined.ok() && refined.fitness > best_fitness_) best_fitness_ = refined.fitness;
-  if (params_.provisional && refined.ok()) judge_provisional(map, refined, candidate_);
+  if (refined.ok() && params_.max_offset > 0.0 && !from_given_) {
+    const double dx = refined.transform(0, 3) - center_.x(), dy = refined.transform(1, 3) - center_.y();
+    if (dx * dx + dy * dy > params_.max_offset * params_.max_offset) {
+      refined.status = RegistrationStatus::kDidNotConverge;  // slid out of the region
+    }
+  }
+  const bool judge = refined.ok() && (params_.provisional || params_.clear_margin);
+  if (judge) judge_refined(map, refined, candidate_);
+  const bool sets_margin = refined.ok() && (!params_.clear_margin || rated_[candidate_] == 1);
+  if (sets_margin && refined.fitness > best_fitness_) best_fitness_ = refined.fitness;
   ++candidate_;
 }
 
-// The best refined pose so far by the selection's own measures (rays, tight fitness), for a
-// caller that outputs something while the search goes on; the final selection is unchanged.
-// Its measures are kept for the selection (select_candidate), which would compute the same.
-void PoseSearch::judge_provisional(const IcpTarget& map, const RegistrationResult& refined, std::uint32_t i) {
+// A refined pose judged as it comes by the selection's own measures (rays, tight fitness), kept
+// for the selection (select_candidate), which would compute the same; with params_.provisional
+// the best so far, for a caller that outputs something while the search goes on.
+void PoseSearch::judge_refined(const IcpTarget& map, const RegistrationResult& refined, std::uint32_t i) {
   conflicts_[i] = -1.0;
   tight_[i] = -1.0;
   const bool rated = rate_pose(map, refined.transform, conflicts_[i], tight_[i]);
   rated_[i] = rated ? 1 : 0;
-  if (rated && tight_[i] > provisional_tight_) {
+  if (params_.provisional && rated && tight_[i] > provisional_tight_) {
     provisional_tight_ = tight_[i];
     provisional_pose_ = refined.transform;
   }
@@ -563,7 +571,7 @@ void PoseSearch::select_candidate(const IcpTarget& map) {
   }
   const std::uint32_t i = candidate_++;
   const RegistrationResult& r = refined_[i];
-  const bool judged = rated_[i] >= 0;  // by judge_provisional: conflicts_[i], tight_[i] hold its measures
+  const bool judged = rated_[i] >= 0;  // by judge_refined: conflicts_[i], tight_[i] hold its measures
   const bool in_margin = r.ok() && r.fitness >= best_fitness_ - kPoseSearchFitnessMargin;
   if (!judged || !in_margin) {
     tight_[i] = -1.0;

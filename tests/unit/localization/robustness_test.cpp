@@ -9,6 +9,7 @@
 #include <random>
 #include <vector>
 
+#include "courtyard_search.hpp"
 #include "v2xloc/algo/core/det_math.hpp"
 #include "v2xloc/algo/localization/ekf.hpp"
 #include "v2xloc/algo/search/kdtree.hpp"
@@ -190,19 +191,7 @@ void build_courtyard_scene(CourtyardScene& c) {
   }
 }
 
-// The pose search over the courtyard scene: a 4 m disc on a 1 m grid, 24 headings, ICP at 1 m
-// then 0.3 m.
-PoseSearchParams courtyard_search_params() {
-  PoseSearchParams sp;
-  sp.radius = 4.0;
-  sp.step = 1.0;
-  sp.yaw_steps = 24;
-  sp.score_points = 128;
-  sp.icp.max_correspondence_distance = 1.0;
-  sp.fine_icp = sp.icp;
-  sp.fine_icp.max_correspondence_distance = 0.3;
-  return sp;
-}
+using testing::courtyard_search_params;
 
 // The start-up search and the basin audit run as a job over several periods: stepped with a
 // small query budget it reaches exactly run()'s result, and no step overruns its budget

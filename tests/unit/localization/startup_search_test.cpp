@@ -195,5 +195,51 @@ TEST(StartupSearch, FinalIcpRunsInSlicesWithTheSameResult) {
   EXPECT_EQ(sliced.outcome.registration.iterations, whole.outcome.registration.iterations);
 }
 
+// A confirming search re-decides its candidate's finalists; when the odometry says the pose it
+// finds is not the candidate's (here the odometry jumps 0.25 m while the scan stays put: more than a
+// 0.1 m confirmation allows, less than the fine ICP pulls back), neither is
+// trusted: the new candidate is not output, and the next search is exhaustive (the same
+// finalists re-decided again would only repeat themselves), which confirms it.
+TEST(StartupSearch, ContradictedCandidateIsNotOutputAndTheNextSearchIsExhaustive) {
+  CornerScene scene;
+  for (Vec3f& p : scene.scan) p -= Vec3f(5.0f, 5.0f, 0.0f);  // the body 5 m out from both walls
+  LocalizerParams params;
+  params.startup.confirm_distance = 0.1;
+  auto search = std::make_unique<StartupSearch>();
+  configure(*search, params);
+  LocalizerCounters counters;
+  struct Finished {
+    StartupStatus status;
+    std::uint64_t work;
+    bool output;
+  };
+  std::vector<Finished> searches;
+  Pose3d odom = Pose3d::Identity();
+  std::uint64_t work_before = 0;
+  for (std::uint32_t frame = 0; frame < 80 && searches.size() < 3; ++frame) {
+    if (searches.size() == 1) odom.matrix()(0, 3) = 0.25;  // after the first candidate: the jump
+    search->on_frame(true, odom, GnssFix{});
+    StartupFrame f = scene.frame(frame, Vec3d(7.0, 3.0, 0.0));
+    f.course_known = true;  // the scan's heading: a candidate that agrees is output
+    f.course = 0.0;
+    f.odom_T_body = odom;
+    const StartupOutcome out = search->step(f, *scene.scratch, counters);
+    if (out.status != StartupStatus::kRejected && out.status != StartupStatus::kStartFilter) continue;
+    Pose3d shown;
+    searches.push_back({out.status, counters.global_search_work - work_before, search->candidate_pose(frame, odom, shown)});
+    work_before = counters.global_search_work;
+  }
+  ASSERT_EQ(searches.size(), 3u);
+  EXPECT_EQ(searches[0].status, StartupStatus::kRejected) << "a candidate, to be confirmed";
+  EXPECT_TRUE(searches[0].output) << "its heading agrees with the course: output";
+  EXPECT_EQ(searches[1].status, StartupStatus::kRejected);
+  EXPECT_EQ(counters.global_inconsistent, 1u) << "the confirming search disagreed through the odometry";
+  EXPECT_FALSE(searches[1].output) << "a contradicted candidate is not output";
+  EXPECT_EQ(searches[2].status, StartupStatus::kStartFilter) << "the exhaustive search confirms it";
+  EXPECT_LT(searches[1].work, searches[0].work) << "the confirming search re-decides finalists only";
+  EXPECT_EQ(searches[2].work, searches[0].work) << "exhaustive, as the first (same scan, map and fix)";
+  EXPECT_EQ(counters.global_confirmed, 1u);
+}
+
 }  // namespace
 }  // namespace v2xloc

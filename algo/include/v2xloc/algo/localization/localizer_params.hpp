@@ -149,6 +149,7 @@ struct StartupSearchParams {
     p.refine_points = config::kEmbeddedProfile ? 0u : 256u;
     p.score_distance = 2.0;         // [m] score hit radius: half the grid cell's diagonal (TUNING.md)
     p.max_conflicts = 0.12;         // [0-1] ray conflict ratio above which a pose is no candidate (TUNING.md)
+    p.clear_margin = true;          // [switch] the fitness margin from the best pose whose rays pass (TUNING.md)
     p.fine_icp = TrackingParams::default_icp();  // [-] fine ICP: the tracking ICP's settings ...
     p.fine_icp.criteria.relative_fitness = 1e-5;  // [-] ... converged fully: candidates compare fitness
     p.fine_icp.criteria.relative_rmse = 1e-5;     // [m]

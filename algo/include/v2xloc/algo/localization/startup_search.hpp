@@ -112,6 +112,7 @@ class StartupSearch {
     Mat4d pose = Mat4d::Identity();  // world_T_body
     Mat4d odom = Mat4d::Identity();  // odom_T_body at that frame
     bool output = false;             // unambiguous: a better estimate than the GNSS fix
+    bool contradicted = false;       // it replaced a candidate it disagreed with
     Vec3d region_fix = Vec3d::Zero();          // its search's region centre (the GNSS fix) ...
     Mat4d region_odom = Mat4d::Identity();     // ... and odom_T_body when that fix was taken
   };

@@ -63,6 +63,11 @@ struct PoseSearchParams {
   // Fitness counts returns that land on the map and cannot see a pose whose rays go through walls
   // (a street's facades repeat along it, the cross street's opening does not). Measured: TUNING.md.
   double max_conflicts = 0.0;
+  // The selection's fitness margin (kPoseSearchFitnessMargin) is measured from the best refined
+  // pose whose rays do not cross the map, each refined pose rated as it comes: an alias that looks
+  // through walls is no candidate, and on a sparse map its loose fitness can exceed the truth's by
+  // more than the margin (false: from the best refined pose, rays unchecked).
+  bool clear_margin = false;
   Vec3d sensor_in_body{0.0, 0.0, 1.8};   // [m] ray origin (the LiDAR) in the body frame
   std::uint32_t conflict_rays = 128;     // [rays] per pose, <= kPoseSearchMaxConflictRays
   double conflict_step = 0.5;            // [m] sample spacing along a ray
@@ -77,6 +82,10 @@ struct PoseSearchParams {
   bool use_yaw_prior = false;
   double yaw_prior = 0.0;            // [rad]
   double yaw_prior_tolerance = 1.05; // [rad] (60 deg)
+  // [m] refined poses farther than this horizontally from the search's centre are no candidates,
+  // as those outside the yaw prior (0: off; a start-up search's region, which its acceptance
+  // checks: an alias the ICP pulled outside would only be refused after winning the selection)
+  double max_offset = 0.0;
   std::uint32_t refine_candidates = 10;  // best distinct hypotheses refined (<= kPoseSearchRefine)
   // [points] the ICPs refine on an even subsample of at most this many scan points (0: all); the
   // selection (rays, tight fitness) still judges every scan point. The ICP only has to reach the
@@ -223,7 +232,7 @@ class PoseSearch {
   void finish();
   bool copy_scan(std::span<const Vec3f> scan_body, const IcpTarget& map);
   void build_grid(const IcpTarget& map);
-  void judge_provisional(const IcpTarget& map, const RegistrationResult& refined, std::uint32_t i);
+  void judge_refined(const IcpTarget& map, const RegistrationResult& refined, std::uint32_t i);
   bool rate_pose(const IcpTarget& map, const Mat4d& pose, double& conflicts, double& tight);
   std::uint32_t refine_count() const {
     return params_.refine_candidates < kPoseSearchRefine ? params_.refine_candidates : kPoseSearchRefine;
@@ -263,7 +272,7 @@ class PoseSearch {
   double tight_[kPoseSearchRefine] = {};
   double conflicts_[kPoseSearchRefine] = {};
   double best_tight_ = -1.0;
-  // Refined candidate i judged by judge_provisional (its measures already in conflicts_[i] and
+  // Refined candidate i judged by judge_refined (its measures already in conflicts_[i] and
   // tight_[i]): -1 not judged, 0 its rays cross the map, 1 rated. The selection reuses them.
   std::int8_t rated_[kPoseSearchRefine] = {};
   double provisional_tight_ = -1.0;
