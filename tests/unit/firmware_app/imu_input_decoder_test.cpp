@@ -252,72 +252,67 @@ class CallLog final : public LocalizerPort {
   LocalizerFrameOutput output_{};
 };
 
-TEST(ImuPeriodDriver, SamplesReachTheLocalizerAtThePeriodCloseInTimeOrder) {
-  auto decoder = std::make_unique<InputDecoder>(kEpochNs);
-  CallLog log;
-  PeriodDriver driver(*decoder, log);
-  for (int k = 0; k < 3; ++k) {
-    const std::int64_t unix_us = kUnixUs0 + k * kPeriodUs;
-    driver.on_imu_report(report(static_cast<std::uint8_t>(k), static_cast<std::uint32_t>(unix_us)), (unix_us + 1000) * kUs);
+// A period driver over a call log, and the inputs the tests feed it.
+class ImuPeriodDriver : public ::testing::Test {
+ protected:
+  void sample(int k, std::int64_t unix_us, std::int64_t latency_us) {
+    driver.on_imu_report(report(static_cast<std::uint8_t>(k), static_cast<std::uint32_t>(unix_us)),
+                         (unix_us + latency_us) * kUs);
   }
+  void vehicle(std::size_t k, std::int64_t rx_unix_us) {
+    protocol::VehicleMotion vm;
+    vm.wheel_speed_mps = 5.0;
+    vm.speed_valid = vm.yaw_rate_valid = true;
+    vm.counter = static_cast<std::uint8_t>(k % protocol::kCounterModulo);
+    driver.on_can(protocol::pack(vm), rx_unix_us * kUs);
+  }
+  void close(CloudKind kind) {
+    DecodedCloud scan;
+    scan.kind = kind;
+    driver.close_period(scan);
+  }
+  std::unique_ptr<InputDecoder> decoder = std::make_unique<InputDecoder>(kEpochNs);
+  CallLog log;
+  PeriodDriver driver{*decoder, log};
+};
+
+TEST_F(ImuPeriodDriver, SamplesReachTheLocalizerAtThePeriodCloseInTimeOrder) {
+  for (int k = 0; k < 3; ++k) sample(k, kUnixUs0 + k * kPeriodUs, 1000);
   EXPECT_EQ(log.calls, "");  // queued until the period closes
-  DecodedCloud scan;
-  scan.kind = CloudKind::kEgoScan;
-  driver.close_period(scan);
+  close(CloudKind::kEgoScan);
   EXPECT_EQ(log.calls, "iiie");
   ASSERT_EQ(log.times.size(), 3u);
   EXPECT_LT(log.times[0], log.times[1]);
   EXPECT_LT(log.times[1], log.times[2]);
   EXPECT_EQ(driver.counters().imu_handed, 3u);
   // A refused scan still closes the period: the samples go on, no scan call.
-  const std::int64_t unix_us = kUnixUs0 + 3 * kPeriodUs;
-  driver.on_imu_report(report(3, static_cast<std::uint32_t>(unix_us)), (unix_us + 1000) * kUs);
-  scan.kind = CloudKind::kEgoRejected;
-  driver.close_period(scan);
+  sample(3, kUnixUs0 + 3 * kPeriodUs, 1000);
+  close(CloudKind::kEgoRejected);
   EXPECT_EQ(log.calls, "iiiei");
   EXPECT_EQ(decoder->imu().counters().handed, 4u);
 }
 
 // The period's vehicle signals are held and merged with the IMU samples by time, whatever order
 // the two devices were read in: the filter fuses gyro and wheel in sequence.
-TEST(ImuPeriodDriver, VehicleSignalsAndSamplesReachTheLocalizerInTimeOrder) {
-  auto decoder = std::make_unique<InputDecoder>(kEpochNs);
-  CallLog log;
-  PeriodDriver driver(*decoder, log);
-  protocol::VehicleMotion vm;
-  vm.wheel_speed_mps = 5.0;
-  vm.speed_valid = vm.yaw_rate_valid = true;
+TEST_F(ImuPeriodDriver, VehicleSignalsAndSamplesReachTheLocalizerInTimeOrder) {
   for (int k = 0; k < 3; ++k) {  // each vehicle frame 2.5 ms after the sample, and read before it
     const std::int64_t unix_us = kUnixUs0 + k * kPeriodUs;
-    vm.counter = static_cast<std::uint8_t>(k);
-    driver.on_can(protocol::pack(vm), (unix_us + kPeriodUs / 2) * kUs);
-    driver.on_imu_report(report(static_cast<std::uint8_t>(k), static_cast<std::uint32_t>(unix_us)), (unix_us + 4000) * kUs);
+    vehicle(static_cast<std::size_t>(k), unix_us + kPeriodUs / 2);
+    sample(k, unix_us, 4000);
   }
   EXPECT_EQ(log.calls, "");  // held until the period closes
-  DecodedCloud scan;
-  scan.kind = CloudKind::kEgoScan;
-  driver.close_period(scan);
+  close(CloudKind::kEgoScan);
   EXPECT_EQ(log.calls, "ivivive");
   EXPECT_EQ(driver.counters().imu_handed, 3u);
   EXPECT_EQ(driver.counters().inputs_released_early, 0u);
 }
 
-TEST(ImuPeriodDriver, AStalledPeriodReleasesItsHeldInputsEarlyAndCountsThem) {
-  auto decoder = std::make_unique<InputDecoder>(kEpochNs);
-  CallLog log;
-  PeriodDriver driver(*decoder, log);
-  protocol::VehicleMotion vm;
-  vm.speed_valid = vm.yaw_rate_valid = true;
+TEST_F(ImuPeriodDriver, AStalledPeriodReleasesItsHeldInputsEarlyAndCountsThem) {
   const std::size_t n = PendingInputs::kCapacity + 1;
-  for (std::size_t k = 0; k < n; ++k) {
-    vm.counter = static_cast<std::uint8_t>(k % protocol::kCounterModulo);
-    driver.on_can(protocol::pack(vm), (kUnixUs0 + static_cast<std::int64_t>(k) * 10'000) * kUs);
-  }
+  for (std::size_t k = 0; k < n; ++k) vehicle(k, kUnixUs0 + static_cast<std::int64_t>(k) * 10'000);
   EXPECT_EQ(log.calls, std::string(PendingInputs::kCapacity, 'v'));  // none lost, none waits forever
   EXPECT_EQ(driver.counters().inputs_released_early, PendingInputs::kCapacity);
-  DecodedCloud scan;
-  scan.kind = CloudKind::kEgoScan;
-  driver.close_period(scan);
+  close(CloudKind::kEgoScan);
   EXPECT_EQ(log.calls, std::string(n, 'v') + "e");
 }
 
