@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "v2xloc/algo/core/coarsening_step.hpp"
 #include "v2xloc/algo/core/det_math.hpp"
 #include "v2xloc/algo/core/even_thinning.hpp"
 #include "v2xloc/algo/core/spatial_hash.hpp"
@@ -282,13 +283,8 @@ void MapFusion::stage_candidate(const Mat4d& world_T_sensor, std::span<const Vec
 
 // The finest step, at most the stored cloud's, at which its voxels, x 2 per step finer, fit.
 std::uint32_t MapFusion::first_coarsen_step(std::size_t slot) const {
-  std::uint32_t step = std::min(coarsen_step_[slot], params_.max_coarsen_steps);
-  double finer = 2.0 * static_cast<double>(coarsen_voxels_[slot]);
-  while (step > 0 && finer <= static_cast<double>(candidate_.capacity())) {
-    --step;
-    finer *= 2.0;
-  }
-  return step;
+  return finest_fitting_step(coarsen_step_[slot], params_.max_coarsen_steps, static_cast<double>(coarsen_voxels_[slot]),
+                             2.0, static_cast<double>(candidate_.capacity()));
 }
 
 bool MapFusion::passes_consistency(std::size_t own_slot, bool trusted, MapInsertResult& r) {

@@ -76,9 +76,9 @@ void PoseFilter::on_gyro(double t, double rate, double span, LocalizerCounters& 
 
 // Both sensors see the same body yaw rate: the gyro less its bias, over its scale, minus the CAN
 // rate less its bias, is the CAN signal's noise. The gyro's mean over its span is compared with the
-// latest CAN sample inside that span (kept in a ring: the firmware hands a period's IMU samples on
-// after its CAN frames). A running mean (time constant consistency_window) beyond consistency_limit after a
-// full window means the gyro's bias stepped faster than its random walk lets the filter follow (the
+// latest CAN sample inside that span (kept in a ring, so the comparison does not depend on which
+// of the two reaches the filter first). A running mean (time constant consistency_window) beyond
+// consistency_limit after a full window means the gyro's bias stepped faster than its random walk lets the filter follow (the
 // gyro, far less noisy, would drag the yaw rate along otherwise).
 void PoseFilter::watch_gyro_against_can(double t, double rate, double span, LocalizerCounters& counters) {
   const std::size_t n = can_next_ < kCanRing ? can_next_ : kCanRing;
@@ -89,7 +89,7 @@ void PoseFilter::watch_gyro_against_can(double t, double rate, double span, Loca
   }
   if (match == nullptr) return;
   const EkfState s = ekf_.state();
-  const double d = (rate - s.gyro_bias) / (1.0 + s.gyro_scale) - (match->yaw_rate - s.yaw_rate_bias);
+  const double d = corrected_gyro_rate(rate) - (match->yaw_rate - s.yaw_rate_bias);
   if (!can_gyro_running_ || !(t > can_gyro_t_) || t - can_gyro_t_ > params_.imu.max_gap) {
     can_gyro_running_ = true;
     can_gyro_mean_ = d;

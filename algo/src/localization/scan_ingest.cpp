@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "v2xloc/algo/core/coarsening_step.hpp"
 #include "v2xloc/algo/core/det_math.hpp"
 #include "v2xloc/algo/core/finite.hpp"
 #include "v2xloc/algo/core/spatial_hash.hpp"
@@ -80,13 +81,8 @@ void ScanIngest::accumulate(std::span<const Vec3f> points, const float* times, c
 
 // The finest step at most the previous run's at which its voxels, x 81/64 per step finer, fit.
 std::uint32_t ScanIngest::first_step(const ScanIngestParams& params) const {
-  std::uint32_t step = std::min(last_step_, params.max_coarsen_steps);
-  double finer = static_cast<double>(last_count_) * (81.0 / 64.0);
-  while (step > 0 && finer <= static_cast<double>(kMaxVoxels)) {
-    --step;
-    finer *= 81.0 / 64.0;
-  }
-  return step;
+  return finest_fitting_step(last_step_, params.max_coarsen_steps, static_cast<double>(last_count_), 81.0 / 64.0,
+                             static_cast<double>(kMaxVoxels));
 }
 
 ScanIngestResult ScanIngest::run(std::span<const Vec3f> points, std::span<const float> times,

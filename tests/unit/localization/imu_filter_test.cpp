@@ -119,7 +119,7 @@ struct Drive {
   double dropout_from = -1.0, dropout_to = -1.0;  // [s] no IMU samples
   double stuck_from = -1.0;                       // [s] gyro z frozen from then on
   double step_at = -1.0, step = 0.0;              // [s], [rad/s] gyro bias step
-  bool batched = false;  // the firmware's order: a period's IMU samples after its CAN frames, before the scan
+  bool batched = false;  // a period's IMU samples after its CAN frames, before the scan (out of sequence)
   std::uint64_t seed = 7;
 };
 
@@ -410,7 +410,7 @@ TEST(ImuFilter, BiasStepIsDetectedAndReestimated) {
   EXPECT_LT(o.yaw_error_at_blind_end, 0.01);
 }
 
-// The firmware's delivery order (a period's IMU samples after its CAN frames): every gyro mean is
+// A period's IMU samples delivered after its CAN frames: every gyro mean is
 // older than the filter time and goes in through the EKF's rollback, with the same estimates as
 // interleaved delivery up to rounding; the CAN comparison still finds the bias step.
 TEST(ImuFilter, PeriodBatchedSamplesGiveTheSameFilter) {

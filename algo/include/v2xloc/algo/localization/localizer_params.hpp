@@ -190,7 +190,7 @@ struct ImuParams {
   double max_gap = 0.05;              // [s] a longer silence is a dropout: the stream restarts, the CAN yaw rate takes over
   double max_lead = 0.5;              // [s] a sample this far ahead of the latest other input is a time jump: refused
   // [s] the gyro stands in for the CAN yaw rate this long after its last fused measurement (the
-  // firmware hands a period's IMU samples on after that period's CAN frames: 0.1 s late at most)
+  // firmware hands a period's IMU samples on when the period closes: 0.1 s late at most)
   double live_window = 0.25;
   // [samples] identical values in a row on an axis: stuck (a live MEMS axis's noise spans many LSBs)
   std::uint32_t stuck_samples = 50;
