@@ -1,5 +1,5 @@
 // v2xloc-sim generate --scenario 0..3 --perm 4_infra_2_agent|4_infra|2_infra --out DIR [--seed N]
-//                     [--duration S] [--quick] [--no-stereo] [--no-imu]
+//                     [--duration S] [--quick] [--no-stereo] [--no-imu] [--grade G --grade-heading DEG --crown C]
 // v2xloc-sim generate --all --out DIR [--seed N] [--duration S] [--quick] [--no-stereo] [--no-imu]
 // --all writes DIR/sim<k>_<perm>/ for all 12 combinations (one after the other; tools/run-demo.sh
 // runs one process per recording instead, on every core).
@@ -8,6 +8,7 @@
 #include "host_sim/recording/pcd_export.hpp"
 #include "host_sim/recording/recorder.hpp"
 
+#include <cmath>
 #include <CLI/CLI.hpp>
 #include <unistd.h>
 
@@ -129,6 +130,13 @@ int main(int argc, char** argv) {
   generate->add_flag("--no-stereo", no_stereo, "no disparity maps");
   bool no_imu = false;
   generate->add_flag("--no-imu", no_imu, "no IMU reports (imu_reports.txt)");
+  double grade_heading_deg = 0.0;
+  generate->add_option("--grade", base.terrain.grade, "site-wide slope, rise/run (e.g. 0.05)")
+      ->check(CLI::Range(-0.15, 0.15));
+  generate->add_option("--grade-heading", grade_heading_deg, "direction of steepest ascent, deg from east")
+      ->check(CLI::Range(-360.0, 360.0));
+  generate->add_option("--crown", base.terrain.crown, "road cross slope from the axis to the curb, rise/run (e.g. 0.02)")
+      ->check(CLI::Range(0.0, 0.08));
   CLI::App* export_pcd = app.add_subcommand(
       "export-pcd", "standard PCD copies of a recording's clouds (float32 x y z intensity t) for PCL / Open3D");
   std::string export_in, export_out, encoding_name = "binary_compressed";
@@ -147,5 +155,6 @@ int main(int argc, char** argv) {
   if (export_pcd->parsed()) return run_export(export_in, export_out, encoding_name);
   base.stereo = !no_stereo;
   base.imu = !no_imu;
+  base.terrain.grade_heading = grade_heading_deg * M_PI / 180.0;
   return run_generate(base, all, scenario, perm_name, out);
 }

@@ -78,13 +78,6 @@ Json lidar_json(const LidarConfig& l) {
   return j;
 }
 
-Eigen::Isometry3d planar(const PlanarPose& p) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = Eigen::AngleAxisd(p.yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  T.translation() = Eigen::Vector3d(p.x, p.y, 0.0);
-  return T;
-}
-
 std::uint64_t folder_bytes(const fs::path& dir) {
   std::uint64_t total = 0;
   std::error_code ec;
@@ -152,11 +145,13 @@ bool setup(Session& s, std::string& error) {
     return false;
   }
   const double duration = cfg.duration > 0 ? cfg.duration : (cfg.quick ? 3.0 : 0.0);
-  build_simulation(cfg.scenario, cfg.seed, duration, WorldConfig{}, s.sim);
+  WorldConfig world_config;
+  world_config.terrain = cfg.terrain;
+  build_simulation(cfg.scenario, cfg.seed, duration, world_config, s.sim);
   s.root = fs::path(cfg.out_dir);
   s.ego_cfg = ego_lidar_config(cfg.quick);
   s.stereo_cfg = ego_stereo_config(cfg.quick);
-  s.sites = infra_sites(cfg.permutation);
+  s.sites = infra_sites(cfg.permutation, cfg.terrain);
   s.agents = uses_agents(cfg.permutation);
   s.frames = s.scenario().frame_count();
   s.dt_frame = 1.0 / s.scenario().frame_rate;
@@ -256,7 +251,7 @@ void record_agent_clouds(Session& s, int i, double t, AgentPoseError& pose_error
     e["stamp_s"] = t;
     e["file"] = rel;
     e["points"] = s.scan.points.size();
-    e["sensor_pose_enu"] = pose_to_json(planar(rep) * acfg.mount);
+    e["sensor_pose_enu"] = pose_to_json(cfg.terrain.vehicle_pose(rep.x, rep.y, rep.yaw) * acfg.mount);
     e["true_sensor_pose_enu"] = pose_to_json(traj.body_to_enu(t) * acfg.mount);
     out.map_clouds.push_back(std::move(e));
   }
@@ -422,6 +417,7 @@ bool write_backgrounds(const Session& s, trust::TrustList& list, std::string& er
   IntersectionWorld survey;  // the recording's world (same seed), no dynamic bodies
   WorldConfig world_config;
   world_config.seed = s.cfg.seed;
+  world_config.terrain = s.cfg.terrain;
   build_intersection_world(world_config, survey);
   for (std::size_t k = 0; k < s.sites.size(); ++k) {
     std::uint32_t id = 0;
@@ -536,6 +532,14 @@ Json build_manifest(const Session& s, const FrameProducts& products, const Recor
   m["seed"] = static_cast<double>(cfg.seed);
   m["quick"] = cfg.quick;
   m["duration_s"] = sc.duration;
+  if (!cfg.terrain.flat()) {
+    Json terrain = Json::object();
+    terrain["grade"] = cfg.terrain.grade;
+    terrain["grade_heading_deg"] = cfg.terrain.grade_heading * 180.0 / M_PI;
+    terrain["crown"] = cfg.terrain.crown;
+    terrain["road_half_width_m"] = cfg.terrain.road_half_width;
+    m["terrain"] = terrain;
+  }
   m["frame_rate_hz"] = sc.frame_rate;
   m["frame_count"] = s.frames;
   m["time_origin_unix_s"] = cfg.time_origin_unix_s;

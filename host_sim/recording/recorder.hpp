@@ -21,6 +21,7 @@ struct RecorderConfig {
   double gnss_rate_hz = 5.0;
   double vehicle_rate_hz = 100.0;
   bool imu = true;             // the ego IMU's HID reports (imu_reports.txt, host_sim/sensors/imu.hpp)
+  Terrain terrain;             // sloped streets (grade, crown); flat by default
   // Geodetic origin of the local ENU frame (the intersection centre).
   double origin_lat_deg = 48.1374, origin_lon_deg = 11.5755, origin_alt_m = 520.0;
   double time_origin_unix_s = 1700000000.0;  // CAN log timestamps = this + recording time

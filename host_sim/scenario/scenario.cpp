@@ -32,7 +32,7 @@ bool parse_permutation(const std::string& name, Permutation& out) {
   return false;
 }
 
-Scenario make_scenario(int id, double duration) {
+Scenario make_scenario(int id, double duration, const Terrain& terrain) {
   Scenario sc;
   sc.id = id;
   sc.name = "sim" + std::to_string(id);
@@ -96,10 +96,12 @@ Scenario make_scenario(int id, double duration) {
   constexpr double kRecordingHour[kScenarioCount] = {0.0, 2.0, 6.0, 9.0};
   if (id >= 0 && id < kScenarioCount) sc.gnss_epoch_offset_s = 3600.0 * kRecordingHour[id];
   if (duration > 0.0) sc.duration = duration;
+  sc.ego.set_terrain(terrain);
+  for (Trajectory& agent : sc.agents) agent.set_terrain(terrain);
   return sc;
 }
 
-std::vector<InfraSite> infra_sites(Permutation p) {
+std::vector<InfraSite> infra_sites(Permutation p, const Terrain& terrain) {
   const double c = L::kRoadHalfWidth + 2.5;  // on the sidewalk corner
   const double height = 5.0;
   const double tilt = 10.0 * M_PI / 180.0;
@@ -116,7 +118,7 @@ std::vector<InfraSite> infra_sites(Permutation p) {
     // Positive rotation about the sensor's y axis pitches its x axis down.
     s.sensor_to_enu.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
                                 Eigen::AngleAxisd(tilt, Eigen::Vector3d::UnitY())).toRotationMatrix();
-    s.sensor_to_enu.translation() = Eigen::Vector3d(k.sx * c, k.sy * c, height);
+    s.sensor_to_enu.translation() = Eigen::Vector3d(k.sx * c, k.sy * c, height + terrain.height(k.sx * c, k.sy * c));
     out.push_back(s);
   }
   return out;

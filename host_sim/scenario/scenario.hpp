@@ -36,16 +36,16 @@ struct Scenario {
 };
 
 constexpr int kScenarioCount = 4;
-// duration <= 0: the scenario's default (24-30 s).
-Scenario make_scenario(int id, double duration = 0.0);
+// duration <= 0: the scenario's default (24-30 s). The vehicles drive on `terrain`.
+Scenario make_scenario(int id, double duration = 0.0, const Terrain& terrain = {});
 
 struct InfraSite {
   std::string name;            // infra_0 .. infra_3 (NE, NW, SW, SE corners)
   Eigen::Isometry3d sensor_to_enu;  // surveyed pose
 };
-// Four corner units, or the two diagonal ones (NE, SW) for 2_infra. All 5 m high, facing the
-// centre, tilted 10 deg down.
-std::vector<InfraSite> infra_sites(Permutation p);
+// Four corner units, or the two diagonal ones (NE, SW) for 2_infra. All 5 m above the ground
+// under them, facing the centre, tilted 10 deg down.
+std::vector<InfraSite> infra_sites(Permutation p, const Terrain& terrain = {});
 inline bool uses_agents(Permutation p) { return p == Permutation::k4Infra2Agent; }
 
 }  // namespace v2xloc::sim

@@ -4,7 +4,7 @@ namespace v2xloc::sim {
 
 void build_simulation(int scenario_id, std::uint64_t seed, double duration, WorldConfig world_config,
                       Simulation& out) {
-  out.scenario = make_scenario(scenario_id, duration);
+  out.scenario = make_scenario(scenario_id, duration, world_config.terrain);
   world_config.seed = seed;
   build_intersection_world(world_config, out.iw);
   const Trajectory ego = out.scenario.ego;

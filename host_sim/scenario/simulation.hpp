@@ -17,7 +17,8 @@ struct Simulation {
   std::vector<int> agent_bodies;
 };
 
-// The world layout depends on the seed; `world_config.seed` is overwritten with `seed`.
+// The world layout depends on the seed; `world_config.seed` is overwritten with `seed`. The
+// vehicles drive on `world_config.terrain`.
 void build_simulation(int scenario_id, std::uint64_t seed, double duration, WorldConfig world_config,
                       Simulation& out);
 

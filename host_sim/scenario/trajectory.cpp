@@ -83,13 +83,6 @@ double Path::curvature(double s) const {
   return 0.0;
 }
 
-Eigen::Isometry3d VehicleState::body_to_enu() const {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = Eigen::AngleAxisd(pose.yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  T.translation() = Eigen::Vector3d(pose.x, pose.y, 0.0);
-  return T;
-}
-
 Trajectory Trajectory::stationary(const PlanarPose& pose) {
   Path p(pose);
   return Trajectory(std::move(p), 0.0, 0.0);
@@ -98,6 +91,7 @@ Trajectory Trajectory::stationary(const PlanarPose& pose) {
 VehicleState Trajectory::state(double t) const {
   VehicleState st;
   st.t = t;
+  st.terrain = terrain_;
   double s = s0_ + v0_ * t;
   st.speed = v0_;
   st.accel = 0.0;

@@ -1,5 +1,6 @@
-// Smooth planar vehicle trajectories: a path of straight lines and circular arcs (continuous
-// heading), driven with a smooth speed profile v(t) = v0 + dv sin(w t) (or standing still).
+// Smooth vehicle trajectories: a planar path of straight lines and circular arcs (continuous
+// heading), driven with a smooth speed profile v(t) = v0 + dv sin(w t) (or standing still), on
+// the ground of a Terrain (height, roll and pitch from the road under the wheels).
 // Everything is analytic, so the ground truth at any time (frames, LiDAR firings, 100 Hz vehicle
 // signals) is exact.
 #pragma once
@@ -39,8 +40,9 @@ struct VehicleState {
   PlanarPose pose;
   double speed = 0;        // m/s, along the heading
   double yaw_rate = 0;     // rad/s
-  double accel = 0;        // m/s^2, longitudinal
-  Eigen::Isometry3d body_to_enu() const;
+  double accel = 0;        // m/s^2, longitudinal (along the path)
+  Terrain terrain;         // the ground the body stands on
+  Eigen::Isometry3d body_to_enu() const { return terrain.vehicle_pose(pose.x, pose.y, pose.yaw); }
 };
 
 class Trajectory {
@@ -55,10 +57,12 @@ class Trajectory {
   PlanarPose pose(double t) const { return state(t).pose; }
   Eigen::Isometry3d body_to_enu(double t) const { return state(t).body_to_enu(); }
   bool is_stationary() const { return v0_ == 0.0 && dv_ == 0.0; }
+  void set_terrain(const Terrain& terrain) { terrain_ = terrain; }
 
  private:
   Path path_;
   double s0_ = 0, v0_ = 0, dv_ = 0, w_ = 0;
+  Terrain terrain_;
 };
 
 }  // namespace v2xloc::sim

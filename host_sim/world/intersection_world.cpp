@@ -233,6 +233,7 @@ void build_intersection_world(const WorldConfig& cfg, IntersectionWorld& iw) {
       }
     }
   }
+  iw.world.drape_on(cfg.terrain);
   iw.world.build();
 }
 

@@ -29,6 +29,7 @@ struct WorldConfig {
   bool facade_detail = true;   // ledges, pilasters, balconies
   bool street_furniture = true;
   bool parked_cars = true;
+  Terrain terrain;             // the ground the site stands on (flat: z = 0)
 };
 
 struct BuildingInfo {  // the layout's blocks, for checks of the canyon

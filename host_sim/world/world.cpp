@@ -20,9 +20,10 @@ DynamicSnapshot World::snapshot(double t) const {
     const auto& body = bodies_[b];
     const PlanarPose p = body.pose_at(t);
     const double c = std::cos(p.yaw), sn = std::sin(p.yaw);
+    const double ground = terrain_.flat() ? 0.0 : terrain_.vehicle_pose(p.x, p.y, p.yaw).translation().z();
     for (const auto& part : body.parts) {
       const Eigen::Vector3d centre(p.x + c * part.centre.x() - sn * part.centre.y(),
-                                   p.y + sn * part.centre.x() + c * part.centre.y(), part.centre.z());
+                                   p.y + sn * part.centre.x() + c * part.centre.y(), part.centre.z() + ground);
       s.prims.push_back(Primitive::yaw_box(centre, part.half, p.yaw, body.material, body.object_id));
       s.body_of_prim.push_back(static_cast<int>(b));
     }
@@ -59,15 +60,14 @@ bool World::cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, doub
       found = true;
     }
   }
-  if (ground_plane_ && dir.z() < -1e-12 && origin.z() > 0.0) {
-    const double tg = -origin.z() / dir.z();
-    if (tg < best) {
-      best = tg;
-      hit.normal = Eigen::Vector3d::UnitZ();
-      hit.material = kMatRoad;
-      hit.object_id = 0;
-      found = true;
-    }
+  double tg = 0.0;
+  if (ground_plane_ && terrain_.intersect(origin, dir, best, tg)) {
+    best = tg;
+    const Eigen::Vector3d at = origin + tg * dir;
+    hit.normal = terrain_.flat() ? Eigen::Vector3d::UnitZ() : terrain_.normal(at.x(), at.y());
+    hit.material = kMatRoad;
+    hit.object_id = 0;
+    found = true;
   }
   if (found) hit.range = best;
   return found;

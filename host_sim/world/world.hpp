@@ -1,10 +1,12 @@
-// The simulated world: static analytic primitives in a BVH, an optional ground plane z = 0, and
-// moving vehicle bodies (yaw boxes) whose poses come from trajectories. Local ENU, metres.
+// The simulated world: static analytic primitives in a BVH, an optional ground (the plane z = 0 or
+// a sloped terrain), and moving vehicle bodies (yaw boxes) whose poses come from trajectories.
+// Local ENU, metres.
 #pragma once
 
 #include "host_sim/world/bvh.hpp"
 #include "host_sim/world/primitives.hpp"
 #include "host_sim/world/ray_caster.hpp"
+#include "host_sim/world/terrain.hpp"
 
 #include <Eigen/Geometry>
 #include <functional>
@@ -13,7 +15,7 @@
 
 namespace v2xloc::sim {
 
-// Planar vehicle pose: x, y [m], yaw [rad] (vehicles stay on the flat road: roll = pitch = 0).
+// Planar vehicle pose: x, y [m], yaw [rad]; height, roll and pitch follow the ground (Terrain).
 struct PlanarPose {
   double x = 0.0, y = 0.0, yaw = 0.0;
 };
@@ -32,7 +34,8 @@ struct DynamicBody {
   int object_id = -1;
 };
 
-// Dynamic bodies posed at one instant: the primitives a ray is tested against besides the BVH.
+// Dynamic bodies posed at one instant: the primitives a ray is tested against besides the BVH
+// (level yaw boxes standing at the ground height under the body).
 struct DynamicSnapshot {
   double t = 0.0;
   std::vector<Primitive> prims;   // yaw boxes in ENU
@@ -46,6 +49,8 @@ class World : public RayCaster {
   void add(const Primitive& p) { prims_.push_back(p); }
   void build();
   void set_ground_plane(bool enabled) { ground_plane_ = enabled; }
+  // Sloped ground (before build()): stands the static primitives on it (world_drape.cpp).
+  void drape_on(const Terrain& terrain);
   int add_dynamic_body(DynamicBody body);  // returns its body index
 
   // Snapshot of all moving bodies at time t (cheap: a few boxes).
@@ -64,6 +69,7 @@ class World : public RayCaster {
   const std::vector<DynamicBody>& bodies() const { return bodies_; }
   std::size_t bvh_nodes() const { return bvh_.node_count(); }
   bool ground_plane() const { return ground_plane_; }
+  const Terrain& terrain() const { return terrain_; }
 
  private:
   std::vector<Primitive> prims_;
@@ -71,6 +77,7 @@ class World : public RayCaster {
   Bvh bvh_;
   DynamicSnapshot current_;
   bool ground_plane_ = true;
+  Terrain terrain_;  // flat: the plane z = 0
   int next_object_id_ = 1;  // 0 is the ground plane
 };
 

@@ -12,7 +12,7 @@ using Mat4x4 = Eigen::Matrix<double, 4, 4>;
 
 EkfVector EkfState::to_vector() const {
   EkfVector x;
-  x << pos_x, pos_y, pos_z, yaw, speed, yaw_rate, yaw_rate_bias, wheel_scale, gyro_bias, gyro_scale;
+  x << pos_x, pos_y, pos_z, yaw, speed, yaw_rate, yaw_rate_bias, wheel_scale, gyro_bias, gyro_scale, road_grade;
   return x;
 }
 
@@ -28,6 +28,7 @@ EkfState EkfState::from_vector(const EkfVector& x) {
   s.wheel_scale = x(idx::kWheelScale);
   s.gyro_bias = x(idx::kGyroBias);
   s.gyro_scale = x(idx::kGyroScale);
+  s.road_grade = x(idx::kRoadGrade);
   return s;
 }
 
@@ -109,6 +110,15 @@ EkfFuseStatus Ekf::on_vehicle_signals(double t, double wheel_speed, double yaw_r
   e.z[1] = yaw_rate;
   e.R[0][0] = params_.noise.wheel_speed * params_.noise.wheel_speed;
   e.R[1][1] = params_.noise.gyro * params_.noise.gyro;
+  return submit(e);
+}
+
+EkfFuseStatus Ekf::on_road_grade(double t, double grade, double sigma) {
+  Event e;
+  e.t = t;
+  e.type = EkfEventType::kRoadGrade;
+  e.z[0] = grade;
+  e.R[0][0] = sigma * sigma;
   return submit(e);
 }
 
@@ -305,11 +315,12 @@ void Ekf::propagate(double t) {
   const double h = dt / n;
   const EkfNoise& q = params_.noise;
   for (int k = 0; k < steps; ++k) {
-    const double v = x_(idx::kSpeed), w = x_(idx::kYawRate);
+    const double v = x_(idx::kSpeed), w = x_(idx::kYawRate), g = x_(idx::kRoadGrade);
     const double yaw_mid = x_(idx::kYaw) + 0.5 * w * h;
     const double c = det::cos(yaw_mid), s = det::sin(yaw_mid);
     x_(idx::kPosX) += v * h * c;
     x_(idx::kPosY) += v * h * s;
+    x_(idx::kPosZ) += v * h * g;
     x_(idx::kYaw) = det::wrap_pi(x_(idx::kYaw) + w * h);
     gyro_chain_.integrated += w * h;
 
@@ -320,8 +331,10 @@ void Ekf::propagate(double t) {
     F(idx::kPosY, idx::kYaw) = v * h * c;
     F(idx::kPosY, idx::kSpeed) = h * s;
     F(idx::kPosY, idx::kYawRate) = v * h * c * 0.5 * h;
+    F(idx::kPosZ, idx::kSpeed) = h * g;
+    F(idx::kPosZ, idx::kRoadGrade) = v * h;
     F(idx::kYaw, idx::kYawRate) = h;
-    // lazyProduct: coefficient-wise products; Eigen's GEMM path for 8x8 would reference malloc.
+    // lazyProduct: coefficient-wise products; Eigen's GEMM path for these sizes would reference malloc.
     const EkfCovariance FP = F.lazyProduct(P_);
     P_ = FP.lazyProduct(F.transpose());
     P_(idx::kPosX, idx::kPosX) += q.lateral * q.lateral * h;
@@ -333,6 +346,7 @@ void Ekf::propagate(double t) {
     P_(idx::kWheelScale, idx::kWheelScale) += q.wheel_scale * q.wheel_scale * h;
     P_(idx::kGyroBias, idx::kGyroBias) += q.gyro_bias_walk * q.gyro_bias_walk * h;
     P_(idx::kGyroScale, idx::kGyroScale) += q.gyro_scale_walk * q.gyro_scale_walk * h;
+    P_(idx::kRoadGrade, idx::kRoadGrade) += q.road_grade_walk * q.road_grade_walk * h;
     P_ = 0.5 * (P_ + P_.transpose());
   }
   time_ = t;
@@ -376,6 +390,7 @@ EkfFuseStatus Ekf::apply(const Event& e) {
     case EkfEventType::kWheelSpeed:
     case EkfEventType::kGyro:
     case EkfEventType::kGyroBiasReset:
+    case EkfEventType::kRoadGrade:
       return apply_scalar(e, count);
     case EkfEventType::kVehicleSignals: {
       Eigen::Matrix<double, 2, 1> y;
@@ -458,6 +473,13 @@ EkfFuseStatus Ekf::apply_scalar(const Event& e, bool count) {
     P_(idx::kGyroBias, idx::kGyroBias) = e.R[0][0];
     if (count) ++counters_.gyro_bias_resets;
     return EkfFuseStatus::kFused;
+  }
+  if (e.type == EkfEventType::kRoadGrade) {
+    y(0) = e.z[0] - x_(idx::kRoadGrade);
+    H(0, idx::kRoadGrade) = 1.0;
+    const EkfFuseStatus s = fuse<1>(y, H, R, 0.0);
+    if (count && s == EkfFuseStatus::kFused) ++counters_.grade_fused;
+    return s;
   }
   if (e.type == EkfEventType::kWheelSpeed) {
     y(0) = e.z[0] - x_(idx::kWheelScale) * x_(idx::kSpeed);

@@ -177,6 +177,8 @@ void Localizer::run_odometry(const EgoScanInput& in) {
   odom_T_body_ = output_.odometry_pose;
   if (r.status != OdometryStatus::kOk || !have_frame_) return;
   filter_.on_odometry(in.t, in.t - last_frame_t_, body_T_lidar * r.delta.matrix() * lidar_T_body);
+  double grade = 0.0;
+  if (attitude_.grade(odom_T_body_, grade)) filter_.on_road_grade(in.t, grade);
 }
 
 // Tracking from the filter's prediction while it is tight, else the start-up search; then the
@@ -215,7 +217,7 @@ void Localizer::register_frame(double t, const Mat4d& body_T_lidar) {
 // withheld: the track's rival basin is not decided (rival_basin.hpp).
 RegistrationResult Localizer::track(double t, const Mat4d& body_T_lidar, bool& withheld) {
   probe_(LocalizerStage::kTracking);
-  const TrackingFrame frame{filter_.pose(),       scan_.registration_scan(), scan_.tracking_scan(),
+  const TrackingFrame frame{attitude_.tilt(filter_.pose(), odom_T_body_), scan_.registration_scan(), scan_.tracking_scan(),
                             scan_.search_scan(),  scan_.stereo_cloud(),
                             map_.target(),        body_T_lidar.topRightCorner<3, 1>(),
                             icp_hints(),          probe_,
@@ -307,6 +309,8 @@ void Localizer::fuse(double t, const RegistrationResult& result, bool attempted_
   reg.odom_T_body = odom_T_body_;
   reg.vehicle = vehicle_;
   const RegistrationFusion f = filter_.fuse(reg, counters_);
+  // The tilt is well constrained by the ground even where the gate is still undecided.
+  if (attempted_ok && !withheld && result.ok()) attitude_.on_registration(Pose3d(result.transform), odom_T_body_);
   output_.registration_fused = f.fused;
   output_.gate_decided = f.gate_decided;
   output_.gate_decided_frame = f.gate_decided_frame;
@@ -316,6 +320,7 @@ void Localizer::fuse(double t, const RegistrationResult& result, bool attempted_
 // Tracking is lost (GNSS divergence monitor or basin audit): the filter and the search start over.
 void Localizer::lose_track() {
   filter_.lose_track();
+  attitude_.reset();
   startup_.on_track_lost();
   tracking_.on_track_lost();
   ++counters_.track_losses;

@@ -139,6 +139,12 @@ void PoseFilter::on_odometry(double t, double dt, const Mat4d& body_delta) {
   if (params_.shadow_ungated_filter) shadow_.on_odometry(t, dt, prev_T_curr);
 }
 
+void PoseFilter::on_road_grade(double t, double grade) {
+  if (!ekf_.initialized()) return;
+  ekf_.on_road_grade(t, grade, params_.road_grade_sigma);
+  if (params_.shadow_ungated_filter) shadow_.on_road_grade(t, grade, params_.road_grade_sigma);
+}
+
 void PoseFilter::predict_to(double t) {
   if (!ekf_.initialized()) return;
   ekf_.predict_to(t);
@@ -183,6 +189,8 @@ void PoseFilter::restart(Ekf& ekf, double t, const Mat4d& pose, const VehicleMot
   s.yaw = yaw_of(pose.topLeftCorner<3, 3>());
   s.speed = vehicle.speed;
   s.yaw_rate = vehicle.yaw_rate;
+  // The body's pitch is the road's grade (a car's suspension pitches it by a few tenths of a degree).
+  s.road_grade = pose(2, 0) / std::hypot(pose(0, 0), pose(1, 0));
   EkfCovariance P = EkfCovariance::Zero();
   const double* sigmas = params_.restart_sigmas;
   for (int i = 0; i < kEkfStateSize; ++i) P(i, i) = sigmas[i] * sigmas[i];

@@ -60,9 +60,12 @@ TEST(HostSimWorld, DynamicBodiesOccludeAndCanBeExcluded) {
 
 TEST(HostSimWorld, IntersectionIsDeterministicAndHasACanyon) {
   IntersectionWorld a, b, c;
-  build_intersection_world(WorldConfig{.seed = 5}, a);
-  build_intersection_world(WorldConfig{.seed = 5}, b);
-  build_intersection_world(WorldConfig{.seed = 6}, c);
+  WorldConfig five, six;
+  five.seed = 5;
+  six.seed = 6;
+  build_intersection_world(five, a);
+  build_intersection_world(five, b);
+  build_intersection_world(six, c);
   ASSERT_EQ(a.world.primitives().size(), b.world.primitives().size());
   for (std::size_t i = 0; i < a.world.primitives().size(); ++i)
     EXPECT_EQ(a.world.primitives()[i].hi, b.world.primitives()[i].hi);

@@ -17,7 +17,7 @@ namespace {
 namespace idx = ekf_index;
 
 // Truth simulator: the filter's own process model (CTRV + random walks) with sampled noise, so a
-// consistent filter must give NEES ~ chi-square(10).
+// consistent filter must give NEES ~ chi-square(kEkfStateSize).
 struct Truth {
   EkfVector x;
   void step(double h, const EkfNoise& q, std::mt19937_64& rng) {
@@ -26,7 +26,7 @@ struct Truth {
     const double yaw_mid = x(idx::kYaw) + 0.5 * w * h;
     x(idx::kPosX) += v * h * det::cos(yaw_mid) + q.lateral * std::sqrt(h) * n(rng);
     x(idx::kPosY) += v * h * det::sin(yaw_mid) + q.lateral * std::sqrt(h) * n(rng);
-    x(idx::kPosZ) += q.vertical * std::sqrt(h) * n(rng);
+    x(idx::kPosZ) += v * h * x(idx::kRoadGrade) + q.vertical * std::sqrt(h) * n(rng);
     x(idx::kYaw) = det::wrap_pi(x(idx::kYaw) + w * h);
     x(idx::kSpeed) += q.accel * std::sqrt(h) * n(rng);
     x(idx::kYawRate) += q.yaw_accel * std::sqrt(h) * n(rng);
@@ -34,12 +34,13 @@ struct Truth {
     x(idx::kWheelScale) += q.wheel_scale * std::sqrt(h) * n(rng);
     x(idx::kGyroBias) += q.gyro_bias_walk * std::sqrt(h) * n(rng);
     x(idx::kGyroScale) += q.gyro_scale_walk * std::sqrt(h) * n(rng);
+    x(idx::kRoadGrade) += q.road_grade_walk * std::sqrt(h) * n(rng);
   }
 };
 
 EkfCovariance initial_covariance() {
   EkfVector sd;
-  sd << 1.0, 1.0, 0.5, 0.05, 0.5, 0.02, 0.005, 0.02, 0.01, 0.005;
+  sd << 1.0, 1.0, 0.5, 0.05, 0.5, 0.02, 0.005, 0.02, 0.01, 0.005, 0.02;
   return sd.cwiseProduct(sd).asDiagonal();
 }
 

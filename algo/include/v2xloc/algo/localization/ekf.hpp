@@ -2,7 +2,7 @@
 // documented layout and index table, fixed-size matrices, Joseph-form updates, innovation gates
 // with counters, a bounded history for delayed measurements).
 //
-// State (kEkfStateSize = 10), local ENU frame (x east, y north, z up), with the process noise that
+// State (kEkfStateSize = 11), local ENU frame (x east, y north, z up), with the process noise that
 // drives each state (EkfNoise, continuous densities; PX4 EKF2 lists its states and their process
 // noise parameters the same way):
 //
@@ -10,7 +10,7 @@
 // |---|------------------------------------------|-------|-------------------------------------------|
 // | 0 | position x of the vehicle reference point| m     | lateral [m/sqrt(s)] (slip, model error)   |
 // | 1 | position y                               | m     | lateral                                   |
-// | 2 | position z                               | m     | vertical [m/sqrt(s)] (road grade)         |
+// | 2 | position z                               | m     | vertical [m/sqrt(s)] (model error)        |
 // | 3 | yaw, body x from east, wrapped (-pi, pi] | rad   | none: integrates the yaw rate             |
 // | 4 | forward speed along body x               | m/s   | accel [m/s^2/sqrt(Hz)]                    |
 // | 5 | yaw rate                                 | rad/s | yaw_accel [rad/s^2/sqrt(Hz)]              |
@@ -18,19 +18,21 @@
 // | 7 | wheel-speed scale (z = k v)              | -     | wheel_scale [1/sqrt(s)]                   |
 // | 8 | IMU gyro z bias (z = (1 + s_g) w + b_g)  | rad/s | gyro_bias_walk [rad/s/sqrt(s)] (sensor's) |
 // | 9 | IMU gyro z scale error s_g               | -     | gyro_scale_walk [1/sqrt(s)] (sensor's)    |
+// |10 | road grade g along the heading (dz/ds)   | -     | road_grade_walk [1/sqrt(s)] (road design) |
 //
 // Measurements: CAN wheel speed (z = k v) and yaw rate (z = w + b), the IMU gyro z
 // (z = (1 + s_g) w + b_g, noise from the sensor's angle random walk gyro_noise_density:
 // sigma^2 = N^2 / span for the mean rate over span seconds), GNSS position, registration pose
-// (x, y, z, yaw), LiDAR odometry rates. The scale error s_g is what a turn adds to the gyro's
+// (x, y, z, yaw), LiDAR odometry rates, the road grade (the body's pitch, ground_attitude.hpp). The scale error s_g is what a turn adds to the gyro's
 // error beyond its bias (a MEMS part's sensitivity error, 0.5 % 1 sigma for the class): without it
 // the registrations' yaw corrections during a turn land in the bias, which is then wrong on the
 // straight that follows; with it the turn's share goes to the state it belongs to.
 // Process model: constant turn rate and velocity on the ground plane (Schubert et al. 2008,
-// CTRV), midpoint-yaw integration; z, speed, yaw rate, biases and scale are random walks.
-// Without gyro measurements states 8 and 9 have no cross-covariance and never touch the others:
-// the filter's arithmetic on states 0-7 is the 8-state filter's, bit for bit (they are last, so
-// they only append exact zero terms to each sum).
+// CTRV), midpoint-yaw integration, climbing at the road grade (z' = v g: on a 5 % street at 6 m/s
+// z changes 0.3 m/s, which a random-walk z follows only with a lag); z, speed, yaw rate, biases,
+// scale and grade are random walks.
+// Without gyro measurements states 8 and 9 have no cross-covariance with states 0-7 and never
+// touch them.
 //
 // Design choice: the vehicle's wheel speed and yaw rate, and the IMU's gyro z, are fused as
 // measurements of the speed and yaw-rate states (z = k v, z = w + b, z = (1 + s_g) w + b_g) at their
@@ -53,7 +55,7 @@
 // replays the log: the result is bit-identical to on-time fusion of the same event sequence.
 // Events older than the oldest snapshot are rejected (counted as too_late).
 //
-// Size: ~117 kB (event log 512 x 176 B + 32 snapshots x 920 B); static storage, not the stack.
+// Size: ~125 kB (event log 512 x 176 B + 32 snapshots x 1,096 B); static storage, not the stack.
 #pragma once
 
 #include <cstddef>
@@ -65,7 +67,7 @@
 
 namespace v2xloc {
 
-inline constexpr int kEkfStateSize = 10;
+inline constexpr int kEkfStateSize = 11;
 
 // Index table of the state vector (EKF2's StateSample indices).
 namespace ekf_index {
@@ -79,6 +81,7 @@ inline constexpr int kYawRateBias = 6;
 inline constexpr int kWheelScale = 7;
 inline constexpr int kGyroBias = 8;
 inline constexpr int kGyroScale = 9;
+inline constexpr int kRoadGrade = 10;
 }  // namespace ekf_index
 
 using EkfVector = Eigen::Matrix<double, kEkfStateSize, 1>;
@@ -96,6 +99,7 @@ struct EkfState {
   double wheel_scale = 1.0;    // [-]
   double gyro_bias = 0.0;      // [rad/s] IMU gyro z
   double gyro_scale = 0.0;     // [-] IMU gyro z scale error (z = (1 + s) w + b)
+  double road_grade = 0.0;     // [-] dz per metre driven
 
   EkfVector to_vector() const;
   static EkfState from_vector(const EkfVector& x);
@@ -121,6 +125,9 @@ struct EkfNoise {
   // Sensitivity drift [1/sqrt(s)]: the BMI088's sensitivity temperature drift, 0.03 %/K, over a
   // warming part (a few K in the first minutes) is ~1e-5 per second; a walk of that size per sqrt(s).
   double gyro_scale_walk = 1e-5;
+  // Road grade [1/sqrt(s)]: a vertical curve between grades changes them by ~0.5 %/s at city speed
+  // (AASHTO crest/sag curves, K = 5-20 m/%); a walk of 0.01/sqrt(s) follows that within a second.
+  double road_grade_walk = 0.002;
   // Measurement noise (1 sigma).
   double wheel_speed = 0.05;      // [m/s], incl. quantisation
   double gyro = 0.005;            // [rad/s] CAN yaw rate
@@ -175,6 +182,7 @@ enum class EkfEventType : std::uint8_t {
   kWheelSpeed,     // wheel speed alone (the IMU gyro stands in for the CAN yaw rate)
   kGyro,           // IMU gyro z, mean over a span
   kGyroBiasReset,  // the gyro bias variance restarts (persistent gyro rejections)
+  kRoadGrade,      // the body's pitch as the road's grade (z = g)
 };
 
 enum class EkfFuseStatus : std::uint8_t {
@@ -194,6 +202,7 @@ struct EkfCounters {
   std::uint64_t registration_rejected = 0;
   std::uint64_t odometry_fused = 0;
   std::uint64_t odometry_rejected = 0;
+  std::uint64_t grade_fused = 0;
   std::uint64_t signals_fused = 0;      // vehicle signals, with or without their yaw rate
   std::uint64_t gyro_fused = 0;
   std::uint64_t gyro_rejected = 0;      // NIS gate
@@ -240,6 +249,8 @@ class Ekf {
   EkfFuseStatus on_registration(double t, const Pose3d& pose, const PoseCovariance& covariance);
   // LiDAR odometry between t - dt and t: relative pose prev_T_curr (body frame).
   EkfFuseStatus on_odometry(double t, double dt, const Pose3d& relative_pose);
+  // The road grade along the heading (dz per metre driven), 1-sigma sigma.
+  EkfFuseStatus on_road_grade(double t, double grade, double sigma);
   // Propagates to t (a frame boundary) and snapshots the state for later rollbacks.
   EkfFuseStatus predict_to(double t);
 

@@ -23,6 +23,7 @@
 #include "v2xloc/algo/localization/frame_output.hpp"
 #include "v2xloc/algo/localization/imu_intake.hpp"
 #include "v2xloc/algo/localization/gnss_course.hpp"
+#include "v2xloc/algo/localization/ground_attitude.hpp"
 #include "v2xloc/algo/localization/localizer_params.hpp"
 #include "v2xloc/algo/localization/localizer_types.hpp"
 #include "v2xloc/algo/localization/map_fusion.hpp"
@@ -142,6 +143,7 @@ class Localizer {
   double tracking_forecast_ = 0.0;       // [instructions] the last tracked period's registration
   std::uint32_t rebuild_deferred_ = 0;   // rebuild steps deferred in a row
   PoseFilter filter_{};
+  GroundAttitude attitude_{};  // roll and pitch for the tracking guess
   StartupSearch startup_{};
   TrackingRegistration tracking_{};
   FrameOutput frame_output_{};

@@ -73,6 +73,7 @@ class PoseFilter {
   // kDiverged: gnss_divergence_fixes fixes in a row far from the filter (the caller loses track).
   GnssFusion on_gnss(double t, const Vec3d& enu, double h_acc, double v_acc);
   void on_odometry(double t, double dt, const Mat4d& body_delta);
+  void on_road_grade(double t, double grade);
   void predict_to(double t);
 
   // Starts both filters at a confirmed start-up pose.
