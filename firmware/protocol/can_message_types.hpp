@@ -95,7 +95,7 @@ struct PoseFlags {
   bool pose_valid = false;          // the localizer vouches for this pose
   bool registration_valid = false;  // the latest registration passed the validity gate
   bool gnss_used = false;           // GNSS contributed since the last frame
-  bool degraded = false;            // dead-reckoning only for longer than the configured limit
+  bool degraded = false;            // dead reckoning: not localized, or no LiDAR scan this period
 };
 
 struct PosePosition {
@@ -190,6 +190,7 @@ inline constexpr std::uint8_t kCapacityOverflow = 1u << 3;  // reassembly ran ou
 struct Heartbeat {
   LocalizerState state = LocalizerState::kInit;
   std::uint8_t error_flags = 0;    // heartbeat_error bits (4 bits)
+  bool lidar_timeout = false;      // no ego scan with points within the ego-scan timeout
   double uptime_s = 0.0;           // [0, 1677721.5], 0.1 s
   std::uint8_t can_rx_errors = 0;  // saturating counters since start-up, [0, 255]
   std::uint8_t udp_dropped = 0;

@@ -182,6 +182,10 @@ void Localizer::run_odometry(const EgoScanInput& in) {
 // Tracking from the filter's prediction while it is tight, else the start-up search; then the
 // registration goes through the validity gate to the filter.
 void Localizer::register_frame(double t, const Mat4d& body_T_lidar) {
+  if (scan_.deskewed().empty()) {
+    predict_only(t);
+    return;
+  }
   if (!map_.ready()) {
     filter_.count_failed_frame();
     return;
@@ -297,13 +301,29 @@ void Localizer::report_registration(const RegistrationResult& result) {
   output_.inlier_rmse = result.inlier_rmse;
 }
 
-void Localizer::fuse(double t, const RegistrationResult& result, bool attempted_ok, bool withheld) {
+// A sweep without points (a covered or silent LiDAR; the firmware's period closed without a scan)
+// is no evidence against the track: nothing is registered or counted towards
+// filter.max_failed_frames, the filter carries its prediction (its covariance grows) and the gate's
+// window moves on. Whether the next sweep with points is tracked or searched is decided as for any
+// frame (PoseFilter::can_track: the prediction's sigma against filter.tracking_max_sigma_xy).
+void Localizer::predict_only(double t) {
+  output_.no_scan_data = true;
+  ++counters_.frames_without_scan_data;
+  if (!map_.ready()) return;  // as any frame before the map: nothing to gate
+  output_.mode = filter_.can_track() ? LocalizationMode::kTracking : LocalizationMode::kGlobalSearch;
+  RegistrationResult none;
+  none.status = RegistrationStatus::kNotEnoughPoints;
+  fuse(t, none, true, false, true);
+}
+
+void Localizer::fuse(double t, const RegistrationResult& result, bool attempted_ok, bool withheld, bool no_data) {
   FrameRegistration reg;
   reg.frame = frame_;
   reg.t = t;
   reg.result = result;
   reg.attempted_ok = attempted_ok;
   reg.withheld = withheld;
+  reg.no_data = no_data;
   reg.odom_T_body = odom_T_body_;
   reg.vehicle = vehicle_;
   const RegistrationFusion f = filter_.fuse(reg, counters_);

@@ -103,7 +103,8 @@ class Localizer {
   void register_frame(double t, const Mat4d& body_T_lidar);
   RegistrationResult track(double t, const Mat4d& body_T_lidar, bool& withheld);
   StartupOutcome search(double t, const Mat4d& body_T_lidar);
-  void fuse(double t, const RegistrationResult& result, bool attempted_ok, bool withheld);
+  void predict_only(double t);
+  void fuse(double t, const RegistrationResult& result, bool attempted_ok, bool withheld, bool no_data = false);
   void fill_output(double t);
   void push_backfill();
 
