@@ -18,6 +18,8 @@ void Localizer::configure(const LocalizerParams& params, const GeodeticOrigin& o
   frame_ = 0;
   last_frame_t_ = 0.0;
   have_frame_ = false;
+  last_odometry_t_ = 0.0;
+  have_odometry_frame_ = false;
   vehicle_ = {};
   gnss_ = {};
   course_.configure(params.course);
@@ -98,9 +100,13 @@ const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
     work_.add(params_.work.scan * passes);
     if (params_.use_stereo && !in.stereo.disparity.empty()) scan_.prepare_stereo(in.stereo);
     probe_(LocalizerStage::kOdometry);
-    run_odometry(in);
+    // A sweep without points has nothing to register: the odometry and the start-up search's
+    // hypotheses wait for the next sweep with points, as if this one had not come.
+    const bool has_points = !scan_.deskewed().empty();
+    if (has_points) run_odometry(in);
+    output_.odometry_pose = odom_T_body_;
     probe_(LocalizerStage::kFusion);
-    startup_.on_frame(output_.odometry_ok, odom_T_body_, gnss_);
+    if (has_points) startup_.on_frame(output_.odometry_ok, odom_T_body_, gnss_);
     filter_.predict_to(in.t);
     probe_(LocalizerStage::kMapRefresh);
     LazyNormalCounters normals;
@@ -154,10 +160,12 @@ VehicleMotion Localizer::deskew_motion(double t) {
 void Localizer::run_odometry(const EgoScanInput& in) {
   const Mat4d& body_T_lidar = in.body_T_lidar.matrix();
   Pose3d predicted = Pose3d::Identity();
-  const bool predict = scan_.has_vehicle_motion() && have_frame_ &&
-                       in.t - last_frame_t_ < params_.odometry_prediction_max_gap;
+  const bool have_previous = have_odometry_frame_;
+  const double dt = in.t - last_odometry_t_;
+  last_odometry_t_ = in.t;
+  have_odometry_frame_ = true;
+  const bool predict = scan_.has_vehicle_motion() && have_previous && dt < params_.odometry_prediction_max_gap;
   if (predict) {
-    const double dt = in.t - last_frame_t_;
     Vec6d xi = Vec6d::Zero();
     xi(0) = vehicle_.speed * dt;
     xi(5) = vehicle_.yaw_rate * dt;
@@ -175,8 +183,8 @@ void Localizer::run_odometry(const EgoScanInput& in) {
   output_.odometry_ok = ok;
   output_.odometry_pose = Pose3d(r.pose.matrix() * lidar_T_body);
   odom_T_body_ = output_.odometry_pose;
-  if (r.status != OdometryStatus::kOk || !have_frame_) return;
-  filter_.on_odometry(in.t, in.t - last_frame_t_, body_T_lidar * r.delta.matrix() * lidar_T_body);
+  if (r.status != OdometryStatus::kOk || !have_previous) return;
+  filter_.on_odometry(in.t, dt, body_T_lidar * r.delta.matrix() * lidar_T_body);
 }
 
 // Tracking from the filter's prediction while it is tight, else the start-up search; then the

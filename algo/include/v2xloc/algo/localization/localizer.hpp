@@ -127,6 +127,8 @@ class Localizer {
   std::uint32_t frame_ = 0;
   double last_frame_t_ = 0.0;
   bool have_frame_ = false;
+  double last_odometry_t_ = 0.0;     // [s] the last sweep with points (the odometry's previous frame)
+  bool have_odometry_frame_ = false;
   VehicleMotion vehicle_{};
   GnssFix gnss_{};
   GnssCourse course_{};
