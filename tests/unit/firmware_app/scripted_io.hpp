@@ -102,11 +102,11 @@ class RecordingPort final : public LocalizerPort {
   LocalizerFrameOutput output_{};
 };
 
+// `xyz` (sensor frame, metres) stamped kEpoch + t_ns as the wire's datagrams, at most max_bytes each.
 // frame_seq: a sender's clouds must differ in it (the reassembler drops a repeated one as stale).
-inline std::vector<Datagram> cloud(protocol::CloudMessageType type, std::uint32_t sender, std::int64_t t_ns,
-                                   std::uint32_t frame_seq = 0) {
-  std::vector<float> xyz;
-  for (int i = 0; i < 600; ++i) xyz.insert(xyz.end(), {0.01f * i, 5.0f - 0.01f * i, 1.0f});
+inline std::vector<Datagram> wire_cloud(protocol::CloudMessageType type, std::uint32_t sender, std::uint32_t frame_seq,
+                                        std::int64_t t_ns, const std::vector<float>& xyz,
+                                        std::size_t max_bytes = protocol::pointcloud_wire::kMaxDatagramBytes) {
   protocol::CloudFrameInfo info;
   info.type = type;
   info.sender_id = sender;
@@ -114,12 +114,20 @@ inline std::vector<Datagram> cloud(protocol::CloudMessageType type, std::uint32_
   info.timestamp_ns = static_cast<std::uint64_t>(kEpoch + t_ns);
   info.scale_m = kCloudScaleM;
   protocol::PointCloudFragmenter f;
-  EXPECT_EQ(f.begin(info, protocol::CloudPointsView{xyz, {}, {}}, 600), protocol::CloudStatus::kOk);
+  EXPECT_EQ(f.begin(info, protocol::CloudPointsView{xyz, {}, {}}, max_bytes), protocol::CloudStatus::kOk);
   std::vector<Datagram> out;
-  Datagram buf(600);
+  Datagram buf(max_bytes);
   std::size_t n = 0;
   while (f.next(buf, n) == protocol::CloudStatus::kOk) out.emplace_back(buf.begin(), buf.begin() + static_cast<long>(n));
   return out;
+}
+
+// A small 600-point cloud in 600-byte datagrams.
+inline std::vector<Datagram> cloud(protocol::CloudMessageType type, std::uint32_t sender, std::int64_t t_ns,
+                                   std::uint32_t frame_seq = 0) {
+  std::vector<float> xyz;
+  for (int i = 0; i < 600; ++i) xyz.insert(xyz.end(), {0.01f * i, 5.0f - 0.01f * i, 1.0f});
+  return wire_cloud(type, sender, frame_seq, t_ns, xyz, 600);
 }
 
 }  // namespace v2xloc::firmware::test
