@@ -78,11 +78,17 @@ std::size_t FirmwareApp::drain_can() {
   return n;
 }
 
-// The period timer fired on this CAN frame's stamp: the IMU reports received by now first (the
-// samples before the expected stamp belong to the period), then each overdue period goes out.
+// The period timer fired on this CAN frame's stamp: the shares already received on the V2X
+// endpoint and the IMU reports received by now belong to the period (as at a scan: the input order
+// is a function of what was sent, not of the read timing), then each overdue period goes out.
+// Reading the V2X endpoint drains CAN frames again; those do not close periods from in here.
 void FirmwareApp::close_overdue_periods() {
+  if (closing_overdue_) return;
+  closing_overdue_ = true;
+  drain_link(hal_.clouds, false);
   drain_imu();
   driver_.close_overdue_periods([this](const PeriodOutput& period) { publish(period); });
+  closing_overdue_ = false;
 }
 
 void FirmwareApp::discipline_clock(std::int64_t rx_monotonic_ns) {

@@ -106,6 +106,7 @@ class FirmwareApp {
   FirmwareConfig config_;
   FirmwareCounters counters_{};
   bool led_on_ = false;
+  bool closing_overdue_ = false;  // close_overdue_periods is running (it reads the V2X endpoint)
   std::uint8_t heartbeat_counter_ = 0;
   std::int64_t start_ns_ = 0;
   std::int64_t next_heartbeat_ns_ = 0;

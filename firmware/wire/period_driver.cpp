@@ -23,6 +23,7 @@ PeriodDriver::PeriodDriver(InputDecoder& decoder, LocalizerPort& localizer) : de
 DecodedCan PeriodDriver::on_can(const hal::CanFrame& frame, std::int64_t time_ns) {
   const DecodedCan decoded = decoder_.decode_can(frame, time_ns);
   timer_.on_input(localizer_time_s(time_ns, decoder_.epoch_ns()));
+  if (time_ns > input_time_ns_) input_time_ns_ = time_ns;
   PendingInput input;
   if (decoded.kind == CanInputKind::kVehicle) {
     input.kind = PendingInput::Kind::kVehicle;
@@ -133,12 +134,18 @@ const PeriodOutput& PeriodDriver::close_with_scan(const DecodedCloud& scan) {
   return publish_latest(gnss_used);
 }
 
-// The period the timer names, closed at its expected stamp t with a scan without points.
-const PeriodOutput& PeriodDriver::close_without_scan(double t) {
+// The period the timer names, closed at its expected stamp t with a scan without points; the
+// waiting shares too when a CAN input closed it (the period boundary is that input's time).
+const PeriodOutput& PeriodDriver::close_without_scan(double t, bool release_shares_now) {
   ++counters_.periods;
   ++counters_.periods_without_scan;
   gnss_released_ = false;
   release_inputs_until(t);
+  if (release_shares_now) {
+    decoder_.shares().begin_period(input_time_ns_);
+    release_shares();
+    localizer_.add_period_work(decoder_.take_trust_work());
+  }
   EgoScanInput empty;
   empty.t = t;
   empty.body_T_lidar = body_T_lidar_;

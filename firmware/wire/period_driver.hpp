@@ -19,8 +19,10 @@
 // A period without a scan (period_timer.hpp): once a CAN input is stamped past the expected scan's
 // stamp plus the tolerance (timer_due), or a scan's stamp shows the expected one was skipped, the
 // driver closes the period with an empty scan stamped at the expected time: the held inputs stamped
-// up to it and the IMU samples before it go to the localizer, no shares (they wait for the next
-// scan), the localizer predicts and the pose frames go out (flagged: no registration, Degraded).
+// up to it and the IMU samples before it go to the localizer, then the waiting shares as at a scan
+// (judged by the clock of the CAN input that closed it; a period a scan's stamp shows was skipped
+// leaves them to the scan's own), the localizer predicts and the pose frames go out (flagged: no
+// registration, Degraded).
 // A scan stamped within half a period of a period the timer already closed is late: counted, not
 // used, nothing published (the period had its pose); a scan after it opens the next period.
 // Periods are numbered in the order closed, with or without a scan (the pose frames' counter).
@@ -108,7 +110,7 @@ class PeriodDriver {
     timer_.on_scan();
     double t = 0.0;
     if (scan.kind == CloudKind::kEgoScan) {
-      while (timer_.next_skipped(scan.ego.t, t)) publish(close_without_scan(t));
+      while (timer_.next_skipped(scan.ego.t, t)) publish(close_without_scan(t, false));
       counters_.timer_restarts = timer_.restarts();
       if (timer_.late(scan.ego.t)) {
         ++counters_.late_scans;
@@ -124,7 +126,7 @@ class PeriodDriver {
   template <class Publish>
   void close_overdue_periods(Publish&& publish) {
     double t = 0.0;
-    while (timer_.next_due(t)) publish(close_without_scan(t));
+    while (timer_.next_due(t)) publish(close_without_scan(t, true));
     counters_.timer_restarts = timer_.restarts();
   }
   void configure_timer(const PeriodTimerParams& params) { timer_.configure(params); }
@@ -136,7 +138,7 @@ class PeriodDriver {
 
  private:
   const PeriodOutput& close_with_scan(const DecodedCloud& scan);
-  const PeriodOutput& close_without_scan(double t);
+  const PeriodOutput& close_without_scan(double t, bool release_shares_now);
   const PeriodOutput& publish_latest(bool gnss_used);
   void release_inputs();
   void release_inputs_until(double t);
@@ -155,6 +157,7 @@ class PeriodDriver {
   PeriodCounters counters_{};
   PendingInputs pending_{};
   PeriodTimer timer_{};
+  std::int64_t input_time_ns_ = 0;     // the latest CAN input's disciplined time (a timer period's boundary)
   bool gnss_released_ = false;         // a GNSS fix went to the localizer in this period
   Pose3d body_T_lidar_ = Pose3d::Identity();  // the last scan's mount, for a period without one
 };
