@@ -190,11 +190,11 @@ inline constexpr std::uint8_t kCapacityOverflow = 1u << 3;  // reassembly ran ou
 struct Heartbeat {
   LocalizerState state = LocalizerState::kInit;
   std::uint8_t error_flags = 0;    // heartbeat_error bits (4 bits)
-  bool lidar_timeout = false;      // no ego scan with points within the ego-scan timeout
   double uptime_s = 0.0;           // [0, 1677721.5], 0.1 s
   std::uint8_t can_rx_errors = 0;  // saturating counters since start-up, [0, 255]
   std::uint8_t udp_dropped = 0;
   std::uint8_t counter = 0;
+  bool lidar_timeout = false;      // no ego scan with points within the ego-scan timeout (bit 52)
 };
 
 // ---- Security diagnostics (0x301, 0x302; 1 Hz, after the heartbeat) ----------------------------
