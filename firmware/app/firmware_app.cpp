@@ -26,12 +26,14 @@ std::uint8_t saturate_u8(std::uint64_t v) { return v > 255 ? 255 : static_cast<s
 
 FirmwareApp::FirmwareApp(const FirmwareHal& hal, InputDecoder& decoder, LocalizerPort& localizer,
                          const FirmwareConfig& config)
-    : hal_(hal), decoder_(decoder), driver_(decoder, localizer), config_(config) {}
+    : hal_(hal), decoder_(decoder), driver_(decoder, localizer), config_(config) {
+  driver_.configure_timer(config.period_timer);
+}
 
 hal::Status FirmwareApp::start() {
   start_ns_ = hal_.clock.monotonic_ns();
   next_heartbeat_ns_ = start_ns_ + config_.heartbeat_period_ns;
-  last_can_ns_ = last_datagram_ns_ = last_gnss_ns_ = start_ns_;
+  last_can_ns_ = last_datagram_ns_ = last_gnss_ns_ = last_ego_scan_ns_ = start_ns_;
   if (hal_.led != nullptr) hal_.led->set_value(false);
   if (hal_.imu != nullptr) {
     std::array<std::uint8_t, hal::hid_imu::kOutputReportBytes> command{};
@@ -71,8 +73,22 @@ std::size_t FirmwareApp::drain_can() {
       last_gnss_ns_ = rx.timestamp_ns;
       discipline_clock(rx.timestamp_ns);
     }
+    if (driver_.timer_due()) close_overdue_periods();
   }
   return n;
+}
+
+// The period timer fired on this CAN frame's stamp: the shares already received on the V2X
+// endpoint and the IMU reports received by now belong to the period (as at a scan: the input order
+// is a function of what was sent, not of the read timing), then each overdue period goes out.
+// Reading the V2X endpoint drains CAN frames again; those do not close periods from in here.
+void FirmwareApp::close_overdue_periods() {
+  if (closing_overdue_) return;
+  closing_overdue_ = true;
+  drain_link(hal_.clouds, false);
+  drain_imu();
+  driver_.close_overdue_periods([this](const PeriodOutput& period) { publish(period); });
+  closing_overdue_ = false;
 }
 
 void FirmwareApp::discipline_clock(std::int64_t rx_monotonic_ns) {
@@ -163,7 +179,8 @@ std::size_t FirmwareApp::drain_link(hal::DatagramLink& link, bool ego_link) {
     // datagrams, not of the read timing.
     if (ego_link) drain_link(hal_.clouds, false);
     drain_imu();  // every report received by the period boundary
-    publish(driver_.close_period(decoded));
+    if (decoded.kind == CloudKind::kEgoScan && !decoded.ego.points.empty()) last_ego_scan_ns_ = now;
+    driver_.close_period(decoded, [this](const PeriodOutput& period) { publish(period); });
   }
   return n;
 }
@@ -211,6 +228,8 @@ protocol::Heartbeat FirmwareApp::heartbeat_now() const {
       (now - last_datagram_ns_ > config_.input_timeout_ns ? err::kUdpTimeout : 0u) |
       (now - last_gnss_ns_ > config_.gnss_timeout_ns ? err::kGnssTimeout : 0u) |
       (r.over_capacity + r.frames_evicted > 0 ? err::kCapacityOverflow : 0u));
+  // A LiDAR that sends nothing, or scans without points, while the V2X shares keep the UDP alive.
+  hb.lidar_timeout = now - last_ego_scan_ns_ > config_.ego_scan_timeout_ns;
   hb.uptime_s = static_cast<double>(now - start_ns_) * 1e-9;
   hb.can_rx_errors = saturate_u8(c.can_rejected + counters_.can_error_frames);
   hb.udp_dropped = saturate_u8(d.datagrams_rejected + counters_.datagrams_oversize + r.frames_timed_out +

@@ -1,6 +1,7 @@
 // The ECU application loop: polls the HAL, hands CAN frames and completed clouds to the period
 // driver (firmware/wire/period_driver.hpp: the order of a period, the share checks, the localizer
-// calls), sends the pose and diagnostic frames it publishes after every ego scan, drives the
+// calls), sends the pose and diagnostic frames it publishes every period (with or without an ego
+// scan: the period timer), drives the
 // "localized" LED, disciplines the clock on GNSS PPS edges and sends a 1 Hz heartbeat. It only
 // knows hal/ interfaces; main() picks backends. What is left here is transport: which socket is
 // read when, and which clock stamps an input.
@@ -35,6 +36,9 @@ struct FirmwareConfig {
   std::int64_t heartbeat_period_ns = 1'000'000'000;
   std::int64_t input_timeout_ns = 1'000'000'000;   // heartbeat error bits: CAN / UDP silent
   std::int64_t gnss_timeout_ns = 2'000'000'000;
+  // Heartbeat LidarTimeout: no ego scan with points for longer than this (5 LiDAR periods).
+  std::int64_t ego_scan_timeout_ns = 500'000'000;
+  PeriodTimerParams period_timer{};                // periods closed without a scan (period_timer.hpp)
   // Once disciplined, a GNSS second may move the clock by at most this (a receiver's time does
   // not jump; a week number going 2300 -> 0 -> 65535 is a fault or a spoof, not a correction).
   std::int64_t max_clock_step_ns = 1'000'000'000;
@@ -89,6 +93,7 @@ class FirmwareApp {
   std::size_t drain_imu();
   void maybe_heartbeat();
   void publish(const PeriodOutput& period);
+  void close_overdue_periods();
   void discipline_clock(std::int64_t rx_monotonic_ns);
   void send(const hal::CanFrame& frame);
   std::int64_t disciplined(std::int64_t monotonic_ns) const {
@@ -101,10 +106,11 @@ class FirmwareApp {
   FirmwareConfig config_;
   FirmwareCounters counters_{};
   bool led_on_ = false;
+  bool closing_overdue_ = false;  // close_overdue_periods is running (it reads the V2X endpoint)
   std::uint8_t heartbeat_counter_ = 0;
   std::int64_t start_ns_ = 0;
   std::int64_t next_heartbeat_ns_ = 0;
-  std::int64_t last_can_ns_ = 0, last_datagram_ns_ = 0, last_gnss_ns_ = 0;
+  std::int64_t last_can_ns_ = 0, last_datagram_ns_ = 0, last_gnss_ns_ = 0, last_ego_scan_ns_ = 0;
   bool pps_pending_ = false;
   std::int64_t pps_edge_ns_ = 0;
   std::array<std::uint8_t, 2048> datagram_buffer_{};  // > 1400-byte fragments; larger ones are counted

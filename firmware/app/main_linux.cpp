@@ -135,6 +135,9 @@ void print_counters(const FirmwareApp& app) {
               (unsigned long long)can.can_repeated, (unsigned long long)can.can_counter_gaps,
               (unsigned long long)can.gnss_position_dropped, (unsigned long long)c.gnss_time_rejected,
               (unsigned long long)p.inputs_released_early);
+  std::printf("v2xloc-firmware: periods %llu periods_without_scan %llu late_scans %llu timer_restarts %llu\n",
+              (unsigned long long)p.periods, (unsigned long long)p.periods_without_scan,
+              (unsigned long long)p.late_scans, (unsigned long long)p.timer_restarts);
   std::printf("v2xloc-firmware: map fusion of trusted shares: inconsistent %llu (infrastructure %llu) background_mismatch %llu"
               " (off_background_before_signature %llu) held_back %llu no_slot %llu stale %llu; paced (not needed, source's last recent) %llu on arrival (not hashed),"
               " %llu before and %llu after the signature check\n",

@@ -130,7 +130,8 @@ inline constexpr std::tuple kMessages{
         field(&Heartbeat::uptime_s, scaled("Uptime", 8, 24, kUnsigned, 0.1, 0.0, 0.0, 1677721.5)),
         field(&Heartbeat::can_rx_errors, integer("CanRxErrors", 32, 8, 255.0)),
         field(&Heartbeat::udp_dropped, integer("UdpDropped", 40, 8, 255.0)),
-        field(&Heartbeat::counter, rolling_counter(48))),
+        field(&Heartbeat::counter, rolling_counter(48)),
+        field(&Heartbeat::lidar_timeout, flag("LidarTimeout", 52))),
     message<TrustRejections>(
         kTrustRejectionsId, "TrustRejections",
         field(&TrustRejections::unknown_signer, integer("UnknownSigner", 0, 8, 255.0)),

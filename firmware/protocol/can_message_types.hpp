@@ -95,7 +95,7 @@ struct PoseFlags {
   bool pose_valid = false;          // the localizer vouches for this pose
   bool registration_valid = false;  // the latest registration passed the validity gate
   bool gnss_used = false;           // GNSS contributed since the last frame
-  bool degraded = false;            // dead-reckoning only for longer than the configured limit
+  bool degraded = false;            // dead reckoning: not localized, or no LiDAR scan this period
 };
 
 struct PosePosition {
@@ -194,6 +194,7 @@ struct Heartbeat {
   std::uint8_t can_rx_errors = 0;  // saturating counters since start-up, [0, 255]
   std::uint8_t udp_dropped = 0;
   std::uint8_t counter = 0;
+  bool lidar_timeout = false;      // no ego scan with points within the ego-scan timeout (bit 52)
 };
 
 // ---- Security diagnostics (0x301, 0x302; 1 Hz, after the heartbeat) ----------------------------

@@ -2,6 +2,8 @@
 
 #include <limits>
 
+#include "firmware/wire/wire_conventions.hpp"
+
 namespace v2xloc::firmware {
 
 std::uint64_t imu_digest_step(std::uint64_t h, const ImuInput& s) {
@@ -20,6 +22,8 @@ PeriodDriver::PeriodDriver(InputDecoder& decoder, LocalizerPort& localizer) : de
 
 DecodedCan PeriodDriver::on_can(const hal::CanFrame& frame, std::int64_t time_ns) {
   const DecodedCan decoded = decoder_.decode_can(frame, time_ns);
+  timer_.on_input(localizer_time_s(time_ns, decoder_.epoch_ns()));
+  if (time_ns > input_time_ns_) input_time_ns_ = time_ns;
   PendingInput input;
   if (decoded.kind == CanInputKind::kVehicle) {
     input.kind = PendingInput::Kind::kVehicle;
@@ -78,14 +82,22 @@ void PeriodDriver::release_imu_before(double t) {
 
 // The held CAN inputs in arrival order, each after the IMU samples older than it, then every
 // remaining sample received up to now.
-void PeriodDriver::release_inputs() {
-  for (; !pending_.empty(); pending_.pop()) {
+void PeriodDriver::release_inputs() { release_inputs_until(std::numeric_limits<double>::infinity()); }
+
+// The same for a period ending at t: the held inputs stamped up to t (in arrival order, up to the
+// first later one) and the samples before t; the rest wait for the next period.
+void PeriodDriver::release_inputs_until(double t) {
+  for (; !pending_.empty() && pending_.front().t() <= t; pending_.pop()) {
     const PendingInput& input = pending_.front();
     release_imu_before(input.t());
-    if (input.kind == PendingInput::Kind::kVehicle) localizer_.on_vehicle(input.vehicle);
-    else localizer_.on_gnss(input.gnss);
+    if (input.kind == PendingInput::Kind::kVehicle) {
+      localizer_.on_vehicle(input.vehicle);
+    } else {
+      localizer_.on_gnss(input.gnss);
+      gnss_released_ = true;
+    }
   }
-  release_imu_before(std::numeric_limits<double>::infinity());
+  release_imu_before(t);
 }
 
 // The period's share budget: the schedule's cap or the localizer's (one while tracking). Shares
@@ -99,27 +111,58 @@ void PeriodDriver::release_shares() {
   }
 }
 
-const PeriodOutput& PeriodDriver::close_period(const DecodedCloud& scan) {
+const PeriodOutput& PeriodDriver::close_with_scan(const DecodedCloud& scan) {
   ++counters_.periods;
   release_inputs();
   release_shares();
   // Trust work (hashing, ECDSA) counts against this period's budget; a refused scan ends the
   // period without a localizer frame, so its work is dropped with it.
   const double trust_work = decoder_.take_trust_work();
-  published_.frame_index = scan.frame_index;
   published_.held = scan.kind != CloudKind::kEgoScan;
+  bool gnss_used = false;
   if (published_.held) {
     ++counters_.ego_frames_held;  // a pose every frame: the last one again, or "no pose" before any
-    published_.gnss_used = false;
+    timer_.closed_by_refused_scan();  // its stamp is not trusted
   } else {
     localizer_.add_period_work(trust_work);
     latest_ = localizer_.on_ego_scan(scan.ego);
-    published_.gnss_used = scan.gnss_used;
+    gnss_used = scan.gnss_used;
+    body_T_lidar_ = scan.ego.body_T_lidar;
+    timer_.closed_by_scan(scan.ego.t);
   }
+  published_.without_scan = false;
+  return publish_latest(gnss_used);
+}
+
+// The period the timer names, closed at its expected stamp t with a scan without points; the
+// waiting shares too when a CAN input closed it (the period boundary is that input's time).
+const PeriodOutput& PeriodDriver::close_without_scan(double t, bool release_shares_now) {
+  ++counters_.periods;
+  ++counters_.periods_without_scan;
+  gnss_released_ = false;
+  release_inputs_until(t);
+  if (release_shares_now) {
+    decoder_.shares().begin_period(input_time_ns_);
+    release_shares();
+    localizer_.add_period_work(decoder_.take_trust_work());
+  }
+  EgoScanInput empty;
+  empty.t = t;
+  empty.body_T_lidar = body_T_lidar_;
+  latest_ = localizer_.on_ego_scan(empty);
+  published_.held = false;
+  published_.without_scan = true;
+  return publish_latest(gnss_released_);
+}
+
+const PeriodOutput& PeriodDriver::publish_latest(bool gnss_used) {
+  const auto frame_index = static_cast<std::uint32_t>(counters_.periods - 1);
   has_output_ = true;
+  published_.frame_index = frame_index;
+  published_.gnss_used = gnss_used;
   published_.output = &latest_;
-  published_.pose = pose_encoder_.encode(latest_, scan.frame_index, published_.gnss_used);
-  published_.diagnostics = diagnostic_encoder_.encode(latest_, scan.frame_index);
+  published_.pose = pose_encoder_.encode(latest_, frame_index, gnss_used);
+  published_.diagnostics = diagnostic_encoder_.encode(latest_, frame_index);
   return published_;
 }
 

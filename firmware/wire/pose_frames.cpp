@@ -7,9 +7,11 @@ namespace v2xloc::firmware {
 protocol::PoseFlags pose_flags(const LocalizerFrameOutput& out, bool gnss_used) {
   protocol::PoseFlags f;
   f.pose_valid = out.localized;
-  f.registration_valid = out.registration_fused;
+  // A period without LiDAR points is the filter's prediction: never a registration, always dead reckoning.
+  f.registration_valid = out.registration_fused && !out.no_scan_data;
   f.gnss_used = gnss_used;
-  f.degraded = out.mode != LocalizationMode::kUninitialized && !out.localized;
+  f.degraded = (out.mode != LocalizationMode::kUninitialized && !out.localized) ||
+               (out.no_scan_data && out.filter_initialized);
   return f;
 }
 

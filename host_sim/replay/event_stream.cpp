@@ -366,27 +366,32 @@ bool EventStream::append_ego_scan(int i, std::int64_t t_i, std::vector<WireEvent
   return true;
 }
 
-bool WireEventDecoder::feed(const WireEvent& event, DecodedFrame& frame) {
+int WireEventDecoder::feed(const WireEvent& event, const std::function<void(const DecodedFrame&)>& on_frame) {
+  int produced = 0;
+  const auto publish = [&](const firmware::PeriodOutput& period) {
+    DecodedFrame frame;
+    frame.frame = static_cast<int>(period.frame_index);
+    frame.without_scan = period.without_scan;
+    frame.output = *period.output;
+    frame.pose = period.pose;
+    frame.diagnostics = period.diagnostics;
+    ++produced;
+    on_frame(frame);
+  };
   if (event.kind == WireEvent::Kind::kCan) {
     driver_.on_can(event.can, decoder_.epoch_ns() + event.time_ns);
-    return false;
+    driver_.close_overdue_periods(publish);
+    return produced;
   }
   if (event.kind == WireEvent::Kind::kImuReport) {
     driver_.on_imu_report(std::span<const std::uint8_t>(event.imu.bytes.data(), event.imu.size),
                           decoder_.epoch_ns() + event.time_ns);
-    return false;
+    return produced;
   }
-  bool produced = false;
   for (const auto& d : event.datagrams) {
     if (!decoder_.on_datagram(d, event.time_ns)) continue;
     const firmware::DecodedCloud decoded = driver_.take_completed();
-    if (!firmware::PeriodDriver::closes_period(decoded)) continue;
-    const firmware::PeriodOutput& period = driver_.close_period(decoded);
-    frame.frame = static_cast<int>(period.frame_index);
-    frame.output = *period.output;
-    frame.pose = period.pose;
-    frame.diagnostics = period.diagnostics;
-    produced = true;
+    if (firmware::PeriodDriver::closes_period(decoded)) driver_.close_period(decoded, publish);
   }
   return produced;
 }
@@ -405,10 +410,7 @@ bool run_offline(const RecordingReader& reader, Localizer& localizer, firmware::
   for (int i = 0; i < stream.frame_count(); ++i) {
     events.clear();
     if (!stream.next_frame(i, events, error)) return false;
-    for (const WireEvent& ev : events) {
-      DecodedFrame f;
-      if (wire.feed(ev, f)) on_frame(f);
-    }
+    for (const WireEvent& ev : events) wire.feed(ev, on_frame);
   }
   return true;
 }

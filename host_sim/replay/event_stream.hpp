@@ -151,7 +151,8 @@ class EventStream {
 // order, share checks and localizer calls as the firmware, and the ego frames' outputs encoded as
 // its pose and diagnostic CAN frames. Transport only: an event's time is its receive time.
 struct DecodedFrame {
-  int frame = -1;
+  int frame = -1;             // the period's index (periods closed before it)
+  bool without_scan = false;  // closed by the period timer (firmware/wire/period_timer.hpp)
   LocalizerFrameOutput output{};
   firmware::PoseFrames pose{};
   firmware::DiagnosticFrames diagnostics{};
@@ -179,8 +180,10 @@ class WireEventDecoder {
       : decoder_(decoder), port_(localizer), driver_(decoder, port_) {}
   WireEventDecoder(const WireEventDecoder&) = delete;
   WireEventDecoder& operator=(const WireEventDecoder&) = delete;
-  // Returns true and fills `frame` when the event closed a period (an ego scan, used or refused).
-  bool feed(const WireEvent& event, DecodedFrame& frame);
+  // Hands each period the event closed to `on_frame` (an ego scan, used or refused, and the periods
+  // its stamp shows were skipped; a CAN frame past the period timer's deadline: the periods closed
+  // without a scan); returns how many.
+  int feed(const WireEvent& event, const std::function<void(const DecodedFrame&)>& on_frame);
   const firmware::PeriodDriver& driver() const { return driver_; }
   void set_tap(LocalizerInputTap* tap) { port_.tap = tap; }
 

@@ -105,14 +105,15 @@ void print_counters(const ReplayOptions& options, const ReplayResult& result) {
   const FaultStats& fs = result.stream_stats.faults;
   std::printf("v2xloc-replay: faults %s: shares lost %llu, datagrams dropped %llu reordered %llu duplicated %llu, "
               "shares delayed %llu, GNSS frames dropped %llu, infra shares dropped %llu, corrupt CAN %llu, rogue shares "
-              "%llu, ego time jumps %llu, ego scans blinded %llu (frames without a pose %d)\n",
+              "%llu, ego time jumps %llu, ego scans blinded %llu (frames without a scan %d, periods closed without a scan %d, "
+              "late scans %d, frames without a pose %d)\n",
               describe(options.stream.faults).c_str(), (unsigned long long)fs.shares_lost,
               (unsigned long long)fs.datagrams_dropped, (unsigned long long)fs.datagrams_reordered,
               (unsigned long long)fs.datagrams_duplicated, (unsigned long long)fs.shares_delayed,
               (unsigned long long)fs.gnss_frames_dropped, (unsigned long long)fs.infra_shares_dropped,
               (unsigned long long)fs.can_corrupt_sent, (unsigned long long)fs.rogue_shares,
               (unsigned long long)fs.ego_time_jumps, (unsigned long long)fs.ego_scans_blinded,
-              result.frames_without_scan);
+              result.frames_without_scan, result.periods_without_scan, result.late_scans, result.frames_without_pose);
   std::printf("v2xloc-replay: IMU reports %zu; faults: dropped %llu stuck %llu biased %llu repeated %llu reordered %llu\n",
               s.imu_reports, (unsigned long long)fs.imu.dropped, (unsigned long long)fs.imu.stuck,
               (unsigned long long)fs.imu.biased, (unsigned long long)fs.imu.repeated, (unsigned long long)fs.imu.reordered);

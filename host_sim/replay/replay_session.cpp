@@ -10,9 +10,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <deque>
 #include <string>
 #include <thread>
 
+#include "firmware/wire/period_timer.hpp"
 #include "firmware/wire/wire_conventions.hpp"
 #include "hal/emulated/emulated_can_bus.hpp"
 #include "hal/emulated/sim_clock.hpp"
@@ -147,7 +149,7 @@ bool send_with_retry(SendFn&& send, std::size_t& retries) {
 // The pose and diagnostic frames of replayed frame i as they arrive: complete once the odometry
 // attitude (sent last) names the firmware's period and the pose (position, attitude with that frame
 // counter, sigma) and the other diagnostics (those with a frame counter naming it) decoded before it.
-// The firmware counts the scans it received: `period` is frame i less the scans never sent.
+// `period`: the firmware's period index (it counts the periods it closed, with or without a scan).
 class FrameCollector {
  public:
   FrameCollector(int i, std::uint32_t period, double t, ReplayResult& result)
@@ -227,15 +229,72 @@ class Lockstep {
     for (int i = 0; i < stream_.frame_count(); ++i) {
       events.clear();
       if (!stream_.next_frame(i, events, error) || !send_events(i, events, error)) return finish(false, error);
-      // A frame whose scan was never sent (lidar-blind) closes no period: no pose to wait for.
+      // A frame whose scan was never sent (lidar-blind) gets the period the timer closes at its stamp.
       const bool scan_sent = !events.empty() && events.back().kind == WireEvent::Kind::kEgoScan;
-      if (scan_sent && !await_frame(i, error)) return finish(false, error);
-      if (!scan_sent) ++result_.frames_without_scan;
+      if (!scan_sent) {
+        ++result_.frames_without_scan;
+        blind_.push_back(i);
+      }
     }
+    // Frames whose deadline the recording's last input did not pass.
+    result_.frames_without_pose += static_cast<int>(blind_.size());
     return finish(true, error);
   }
 
  private:
+  double localizer_t(std::int64_t time_ns) const {
+    return firmware::localizer_time_s(stream_.epoch_ns() + time_ns, stream_.epoch_ns());
+  }
+
+  // After a CAN frame: the periods the firmware's timer closes on its stamp (period_timer.hpp, the
+  // same rule), each awaited before anything else is sent.
+  bool after_can(std::int64_t time_ns, std::string& error) {
+    timer_.on_input(localizer_t(time_ns));
+    double t = 0.0;
+    while (timer_.next_due(t)) {
+      if (!await_period_without_scan(t, error)) return false;
+    }
+    return true;
+  }
+
+  // After frame i's ego scan: the periods its stamp shows were skipped, then its own (none when late).
+  bool after_scan(int i, std::int64_t time_ns, std::string& error) {
+    timer_.on_scan();
+    if (i == options_.stream.faults.ego_time_jump_frame) {  // refused for its stamp: a held period
+      timer_.closed_by_refused_scan();
+      return await_frame(i, error);
+    }
+    const double ts = localizer_t(time_ns);
+    double t = 0.0;
+    while (timer_.next_skipped(ts, t)) {
+      if (!await_period_without_scan(t, error)) return false;
+    }
+    if (timer_.late(ts)) {
+      ++result_.late_scans;
+      ++result_.frames_without_pose;
+      return true;
+    }
+    timer_.closed_by_scan(ts);
+    return await_frame(i, error);
+  }
+
+  // A period closed without a scan at t: the recording frame without a scan nearest to it (none:
+  // awaited, not reported); frames without a scan before it got no period (a timer restart).
+  bool await_period_without_scan(double t, std::string& error) {
+    const double half = 0.5 * timer_.params().period_s;
+    while (!blind_.empty() && reader_.frame_time(blind_.front()) < t - half) {
+      blind_.pop_front();
+      ++result_.frames_without_pose;
+    }
+    ++result_.periods_without_scan;
+    int frame = -1;
+    if (!blind_.empty() && reader_.frame_time(blind_.front()) <= t + half) {
+      frame = blind_.front();
+      blind_.pop_front();
+    }
+    return await_frame(frame, error);
+  }
+
   bool open_sockets(std::string& error) {
     if (!hal::parse_ipv4(options_.host.c_str(), host_)) {
       error = "bad host address " + options_.host;
@@ -352,15 +411,17 @@ class Lockstep {
         error = "send failed at frame " + std::to_string(i);
         return false;
       }
+      if (ev.kind == WireEvent::Kind::kCan && !after_can(ev.time_ns, error)) return false;
+      if (ev.kind == WireEvent::Kind::kEgoScan && !after_scan(i, ev.time_ns, error)) return false;
     }
     return true;
   }
 
-  // Lockstep: the CAN frames until frame i's pose and diagnostics are complete, the frame timeout
-  // passes or the started firmware exits.
+  // Lockstep: the CAN frames until the next period's pose and diagnostics are complete, the frame
+  // timeout passes or the started firmware exits. i: its recording frame (reported), or -1.
   bool await_frame(int i, std::string& error) {
-    const auto period = static_cast<std::uint32_t>(i - result_.frames_without_scan);
-    FrameCollector collector(i, period, reader_.frame_time(i), result_);
+    const std::uint32_t period = periods_++;
+    FrameCollector collector(i, period, i >= 0 ? reader_.frame_time(i) : 0.0, result_);
     const auto wait0 = Clock::now();
     while (!collector.done()) {
       hal::CanRxFrame rx;
@@ -379,11 +440,11 @@ class Lockstep {
     }
     if (!collector.done()) {
       ++result_.timeouts;
-      error = "timeout waiting for the pose and diagnostic frames of frame " + std::to_string(i) + " (" +
-              std::to_string(options_.frame_timeout_s) + " s)";
+      error = "timeout waiting for the pose and diagnostic frames of frame " + std::to_string(i) + " (period " +
+              std::to_string(period) + ", " + std::to_string(options_.frame_timeout_s) + " s)";
       return false;
     }
-    report(collector.frame());
+    if (i >= 0) report(collector.frame());
     return true;
   }
 
@@ -425,6 +486,9 @@ class Lockstep {
   hal::EmulatedCanBus can_;
   FirmwareProcess process_;
   std::int64_t last_time_sent_ = -1;
+  firmware::PeriodTimer timer_{};  // the firmware's period timer, run on the events sent
+  std::uint32_t periods_ = 0;      // periods the firmware closed
+  std::deque<int> blind_;          // frames without a scan, waiting for their period
   struct TempFile {
     std::string path;
     ~TempFile() {

@@ -52,8 +52,12 @@ struct ReplayedFrame {
 };
 
 struct ReplayResult {
-  std::vector<ReplayedFrame> frames;   // one per period the firmware published (frame: the recording's)
+  // One per period the firmware published for a recording frame (frame: the recording's), in order.
+  std::vector<ReplayedFrame> frames;
   int frames_without_scan = 0;         // recording frames whose ego scan was not sent (lidar-blind)
+  int periods_without_scan = 0;        // periods the firmware's timer closed (period_timer.hpp)
+  int frames_without_pose = 0;         // recording frames no period stands for (late scan, recording end)
+  int late_scans = 0;                  // scans for a period the timer had closed (the firmware drops them)
   int timeouts = 0;
   std::size_t heartbeats = 0;
   std::size_t pose_decode_errors = 0;

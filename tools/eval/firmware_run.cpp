@@ -139,8 +139,8 @@ bool run_firmware(const sim::RecordingReader& reader, const FirmwareRunOptions& 
     if (!result.firmware_output.empty()) error += "\nfirmware output:\n" + result.firmware_output;
     return false;
   }
-  // Output i is the firmware's period i (its frame counters count periods); a frame whose scan was
-  // never sent (lidar-blind) has no period and no record.
+  // Output i is the firmware's period i (its frame counters count periods, with or without a scan:
+  // a frame whose scan was never sent gets the period the firmware's timer closes at its stamp).
   std::vector<LocalizerFrameOutput> outputs;
   std::vector<int> recording_frames;
   outputs.reserve(result.frames.size());
@@ -149,7 +149,7 @@ bool run_firmware(const sim::RecordingReader& reader, const FirmwareRunOptions& 
     recording_frames.push_back(result.frames[i].frame);
   }
   if (!records_from_outputs(reader, outputs, options.gnss_antenna_in_body, records, error, recording_frames)) return false;
-  stats.frames_without_pose = result.frames_without_scan;
+  stats.frames_without_pose = result.frames_without_pose;
   stats.seconds = result.wall_seconds;
   stats.can_decode_errors = result.pose_decode_errors + result.diagnostic_decode_errors;
   stats.map_clouds = result.stream_stats.map_clouds;
@@ -165,14 +165,14 @@ bool run_firmware(const sim::RecordingReader& reader, const FirmwareRunOptions& 
     const sim::replay::FaultStats& f = result.stream_stats.faults;
     std::fprintf(stderr, "  faults %s: shares lost %llu, datagrams dropped %llu reordered %llu duplicated %llu, delayed %llu,"
                  " GNSS frames dropped %llu, infra shares dropped %llu, corrupt CAN %llu, rogue shares %llu, ego time jumps %llu,"
-                 " ego scans blinded %llu (frames without a pose %d)\n",
+                 " ego scans blinded %llu (frames without a scan %d, without a pose %d)\n",
                  sim::replay::describe(options.faults).c_str(), (unsigned long long)f.shares_lost,
                  (unsigned long long)f.datagrams_dropped, (unsigned long long)f.datagrams_reordered,
                  (unsigned long long)f.datagrams_duplicated, (unsigned long long)f.shares_delayed,
                  (unsigned long long)f.gnss_frames_dropped, (unsigned long long)f.infra_shares_dropped,
                  (unsigned long long)f.can_corrupt_sent, (unsigned long long)f.rogue_shares,
                  (unsigned long long)f.ego_time_jumps, (unsigned long long)f.ego_scans_blinded,
-                 result.frames_without_scan);
+                 result.frames_without_scan, result.frames_without_pose);
     std::size_t pos = 0;
     while (pos < result.firmware_output.size()) {
       const std::size_t end = result.firmware_output.find('\n', pos);

@@ -15,9 +15,9 @@ the per-frame trace against the truth.
 
 Scenarios (the spells sit on Sim 3's left turn, 6.1-8.8 s, 35 deg/s at 6-7 m/s; Sim 0 drives straight):
   lidar-blind        no ego scan reaches the firmware for 3 s from 6.0 s (18.6 m, 90 deg of the
-                     turn): the error of the first pose after the spell
-  lidar-blind-empty  the scans of the same spell arrive without points: the error of the spell's last
-                     frame and the largest in the spell
+                     turn; its period timer closes each period without a scan): the error of the
+                     spell's last pose, the largest in the spell, and of the first pose after it
+  lidar-blind-empty  the scans of the same spell arrive without points: the same figures
   gnss-outage        no GNSS from 2 s for 30 s (to the end of the 20-22 s recordings): the largest
                      error in the outage
   infra_0 refused    Sim 0 / 2_infra, infra_0 declares a pose shifted 3 m (signed, refused): the error
@@ -48,21 +48,21 @@ def trace_rows(path):
         return [dict(zip(names, map(float, line.split()))) for line in f if line.strip()]
 
 
-def blind_end(rows):
-    after = [r for r in rows if r["t"] >= BLIND_AT + BLIND_S - 1e-6]
-    if not after:
-        return None
-    r = after[0]
-    return f"{r['err_fused_3d']:.3f} m, yaw {r['err_fused_yaw_deg']:+.2f} deg at {r['t']:.1f} s"
-
-
-def blind_empty(rows):
+def blind_spell(rows):
+    """The spell's last pose and largest error (if it had poses), then the first pose after it."""
     spell = [r for r in rows if BLIND_AT - 1e-6 <= r["t"] < BLIND_AT + BLIND_S - 1e-6]
-    if not spell:
-        return None
-    last = spell[-1]
-    worst = max(r["err_fused_3d"] for r in spell)
-    return f"{last['err_fused_3d']:.3f} m at {last['t']:.1f} s (spell max {worst:.3f})"
+    after = [r for r in rows if r["t"] >= BLIND_AT + BLIND_S - 1e-6]
+    parts = []
+    if spell:
+        last = spell[-1]
+        worst = max(r["err_fused_3d"] for r in spell)
+        parts.append(f"{last['err_fused_3d']:.3f} m at {last['t']:.1f} s (spell max {worst:.3f})")
+    else:
+        parts.append("no pose in the spell")
+    if after:
+        r = after[0]
+        parts.append(f"after {r['err_fused_3d']:.3f} m, yaw {r['err_fused_yaw_deg']:+.2f} deg at {r['t']:.1f} s")
+    return "; ".join(parts)
 
 
 def worst_from(at):
@@ -80,9 +80,9 @@ def last_frame(rows):
 # (label, --faults spec, recordings, figure from the trace; None: the fault row's delta to "none")
 SCENARIOS = [
     ("none", "none", TURN + ["sim0_2_infra", "sim0_4_infra_2_agent"], last_frame),
-    ("LiDAR blind 3 s (no scans)", f"lidar-blind={BLIND_S:g},lidar-blind-at={BLIND_AT:g}", TURN, blind_end),
+    ("LiDAR blind 3 s (no scans)", f"lidar-blind={BLIND_S:g},lidar-blind-at={BLIND_AT:g}", TURN, blind_spell),
     ("LiDAR blind 3 s (empty scans)", f"lidar-blind={BLIND_S:g},lidar-blind-at={BLIND_AT:g},lidar-blind-empty=1",
-     TURN, blind_empty),
+     TURN, blind_spell),
     ("GNSS outage 30 s", f"gnss-outage=30,gnss-outage-at={GNSS_AT:g}", ["sim0_2_infra", "sim3_2_infra"],
      worst_from(GNSS_AT)),
     ("infra_0 refused (declares 3 m off)", "rogue-shift=3", ["sim0_2_infra"], last_frame),

@@ -111,14 +111,19 @@ bool feed_frame(const sim::RecordingReader& reader, const RunOptions& options, i
       if (!stereo_of(reader, options, i, disparity, stereo, error)) return false;
       port.set_scan(std::move(ev.source), stereo);
     }
-    sim::replay::DecodedFrame decoded;
-    if (wire.feed(ev, decoded)) {
-      if (decoded.frame != i) {
-        error = "in-process run: frame " + std::to_string(i) + " closed period " + std::to_string(decoded.frame);
-        return false;
+    std::string period_error;
+    wire.feed(ev, [&](const sim::replay::DecodedFrame& decoded) {
+      if (decoded.frame != i || decoded.without_scan) {
+        period_error = "in-process run: frame " + std::to_string(i) + " closed period " + std::to_string(decoded.frame) +
+                       (decoded.without_scan ? " without a scan (a missing scan: run it through --firmware)" : "");
+        return;
       }
       rec.out = decoded.output;
       closed = true;
+    });
+    if (!period_error.empty()) {
+      error = period_error;
+      return false;
     }
     if (!port.error().empty()) {
       error = port.error();

@@ -65,7 +65,7 @@ struct RunStats {
   std::uint64_t map_background_mismatch = 0;  // of those: refused
   trust::VerifierCounters trust{};       // the share verifier's counts (in process; zero through --firmware)
   std::vector<StageMs> period_stage_ms;  // one per frame when RunOptions::timing
-  int frames_without_pose = 0;           // --firmware: frames whose scan never reached it (lidar-blind)
+  int frames_without_pose = 0;           // --firmware: frames no period stands for (late scan, recording end)
 };
 
 struct TimingSummary {

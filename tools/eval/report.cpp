@@ -151,7 +151,7 @@ std::string format_table(const std::vector<RowReport>& rows, bool aligned) {
   for (const RowReport& r : rows) {
     if (r.stats.frames_without_pose == 0) continue;
     std::snprintf(buf, sizeof buf,
-                  "Sim %d %s: %d frames without a pose (their scan never reached the firmware) are not in the columns\n",
+                  "Sim %d %s: %d frames without a pose (late scans, or the recording ended before their period closed) are not in the columns\n",
                   r.sim, r.permutation.c_str(), r.stats.frames_without_pose);
     out += buf;
   }

@@ -18,6 +18,8 @@ void Localizer::configure(const LocalizerParams& params, const GeodeticOrigin& o
   frame_ = 0;
   last_frame_t_ = 0.0;
   have_frame_ = false;
+  last_odometry_t_ = 0.0;
+  have_odometry_frame_ = false;
   vehicle_ = {};
   gnss_ = {};
   course_.configure(params.course);
@@ -98,9 +100,13 @@ const LocalizerFrameOutput& Localizer::on_ego_scan(const EgoScanInput& in) {
     work_.add(params_.work.scan * passes);
     if (params_.use_stereo && !in.stereo.disparity.empty()) scan_.prepare_stereo(in.stereo);
     probe_(LocalizerStage::kOdometry);
-    run_odometry(in);
+    // A sweep without points has nothing to register: the odometry and the start-up search's
+    // hypotheses wait for the next sweep with points, as if this one had not come.
+    const bool has_points = !scan_.deskewed().empty();
+    if (has_points) run_odometry(in);
+    output_.odometry_pose = odom_T_body_;
     probe_(LocalizerStage::kFusion);
-    startup_.on_frame(output_.odometry_ok, odom_T_body_, gnss_);
+    if (has_points) startup_.on_frame(output_.odometry_ok, odom_T_body_, gnss_);
     filter_.predict_to(in.t);
     probe_(LocalizerStage::kMapRefresh);
     LazyNormalCounters normals;
@@ -154,10 +160,12 @@ VehicleMotion Localizer::deskew_motion(double t) {
 void Localizer::run_odometry(const EgoScanInput& in) {
   const Mat4d& body_T_lidar = in.body_T_lidar.matrix();
   Pose3d predicted = Pose3d::Identity();
-  const bool predict = scan_.has_vehicle_motion() && have_frame_ &&
-                       in.t - last_frame_t_ < params_.odometry_prediction_max_gap;
+  const bool have_previous = have_odometry_frame_;
+  const double dt = in.t - last_odometry_t_;
+  last_odometry_t_ = in.t;
+  have_odometry_frame_ = true;
+  const bool predict = scan_.has_vehicle_motion() && have_previous && dt < params_.odometry_prediction_max_gap;
   if (predict) {
-    const double dt = in.t - last_frame_t_;
     Vec6d xi = Vec6d::Zero();
     xi(0) = vehicle_.speed * dt;
     xi(5) = vehicle_.yaw_rate * dt;
@@ -175,8 +183,8 @@ void Localizer::run_odometry(const EgoScanInput& in) {
   output_.odometry_ok = ok;
   output_.odometry_pose = Pose3d(r.pose.matrix() * lidar_T_body);
   odom_T_body_ = output_.odometry_pose;
-  if (r.status != OdometryStatus::kOk || !have_frame_) return;
-  filter_.on_odometry(in.t, in.t - last_frame_t_, body_T_lidar * r.delta.matrix() * lidar_T_body);
+  if (r.status != OdometryStatus::kOk || !have_previous) return;
+  filter_.on_odometry(in.t, dt, body_T_lidar * r.delta.matrix() * lidar_T_body);
   double grade = 0.0;
   if (attitude_.grade(odom_T_body_, grade)) filter_.on_road_grade(in.t, grade);
 }
@@ -184,6 +192,10 @@ void Localizer::run_odometry(const EgoScanInput& in) {
 // Tracking from the filter's prediction while it is tight, else the start-up search; then the
 // registration goes through the validity gate to the filter.
 void Localizer::register_frame(double t, const Mat4d& body_T_lidar) {
+  if (scan_.deskewed().empty()) {
+    predict_only(t);
+    return;
+  }
   if (!map_.ready()) {
     filter_.count_failed_frame();
     return;
@@ -299,13 +311,29 @@ void Localizer::report_registration(const RegistrationResult& result) {
   output_.inlier_rmse = result.inlier_rmse;
 }
 
-void Localizer::fuse(double t, const RegistrationResult& result, bool attempted_ok, bool withheld) {
+// A sweep without points (a covered or silent LiDAR; the firmware's period closed without a scan)
+// is no evidence against the track: nothing is registered or counted towards
+// filter.max_failed_frames, the filter carries its prediction (its covariance grows) and the gate's
+// window moves on. Whether the next sweep with points is tracked or searched is decided as for any
+// frame (PoseFilter::can_track: the prediction's sigma against filter.tracking_max_sigma_xy).
+void Localizer::predict_only(double t) {
+  output_.no_scan_data = true;
+  ++counters_.frames_without_scan_data;
+  if (!map_.ready()) return;  // as any frame before the map: nothing to gate
+  output_.mode = filter_.can_track() ? LocalizationMode::kTracking : LocalizationMode::kGlobalSearch;
+  RegistrationResult none;
+  none.status = RegistrationStatus::kNotEnoughPoints;
+  fuse(t, none, true, false, true);
+}
+
+void Localizer::fuse(double t, const RegistrationResult& result, bool attempted_ok, bool withheld, bool no_data) {
   FrameRegistration reg;
   reg.frame = frame_;
   reg.t = t;
   reg.result = result;
   reg.attempted_ok = attempted_ok;
   reg.withheld = withheld;
+  reg.no_data = no_data;
   reg.odom_T_body = odom_T_body_;
   reg.vehicle = vehicle_;
   const RegistrationFusion f = filter_.fuse(reg, counters_);

@@ -226,9 +226,10 @@ RegistrationFusion PoseFilter::fuse(const FrameRegistration& in, LocalizerCounte
   out.fused = fuse_gate_decision(reg, GateSample{result.fitness, result.inlier_rmse, reg.ok}, now, out, counters);
   if (out.fused) {
     failed_frames_ = 0;
-  } else if (!reg.ok) {
+  } else if (!reg.ok && !in.no_data) {
     ++failed_frames_;
   }
+  if (in.no_data) return out;  // no registration to reject
   if (!reg.ok || (params_.gate_mode != GateMode::kFixedLag && !out.fused)) {
     ++counters.registrations_gate_rejected;
   }

@@ -82,11 +82,12 @@ TEST(CanMessages, RoundTripEveryMessage) {
   EXPECT_NEAR(ps2.sigma_z_m, 0.5, 0.0025);
   EXPECT_NEAR(ps2.sigma_yaw_rad, 0.01, 5e-5);
 
-  Heartbeat hb{LocalizerState::kLocalized, 0x5, 3600.4, 17, 200, 12}, hb2;
+  Heartbeat hb{LocalizerState::kLocalized, 0x5, 3600.4, 17, 200, 12, true}, hb2;
   ASSERT_EQ(unpack(pack(hb), hb2), DecodeStatus::kOk);
   EXPECT_EQ(hb2.state, LocalizerState::kLocalized);
   EXPECT_EQ(hb2.error_flags, 0x5);
   EXPECT_NEAR(hb2.uptime_s, 3600.4, 0.05);
+  EXPECT_TRUE(hb2.lidar_timeout);
   EXPECT_EQ(hb2.can_rx_errors, 17);
   EXPECT_EQ(hb2.udp_dropped, 200);
 }

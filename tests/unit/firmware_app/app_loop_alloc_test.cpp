@@ -12,6 +12,7 @@
 #include "firmware/app/firmware_app.hpp"
 #include "firmware/app/configure_localizer.hpp"
 #include "firmware/wire/wire_conventions.hpp"
+#include "scripted_io.hpp"
 #include "share_signing.hpp"
 #include "hal/emulated/emulated_can_bus.hpp"
 #include "hal/linux/udp_link.hpp"
@@ -19,7 +20,7 @@
 namespace v2xloc::firmware {
 namespace {
 
-constexpr std::int64_t kEpoch = 1'700'000'000'000'000'000;
+using test::kEpoch;
 Localizer g_localizer;
 InputDecoder g_decoder(kEpoch);
 
@@ -37,19 +38,7 @@ std::vector<std::vector<std::uint8_t>> cloud_datagrams(protocol::CloudMessageTyp
       xyz.push_back(static_cast<float>(1.9 + r * std::sin(el)));
     }
   }
-  protocol::CloudFrameInfo info;
-  info.type = type;
-  info.sender_id = sender;
-  info.frame_seq = seq;
-  info.timestamp_ns = static_cast<std::uint64_t>(kEpoch + t_ns);
-  info.scale_m = kCloudScaleM;
-  protocol::PointCloudFragmenter f;
-  EXPECT_EQ(f.begin(info, protocol::CloudPointsView{xyz, {}, {}}), protocol::CloudStatus::kOk);
-  std::vector<std::vector<std::uint8_t>> out;
-  std::vector<std::uint8_t> buf(1400);
-  std::size_t n = 0;
-  while (f.next(buf, n) == protocol::CloudStatus::kOk) out.emplace_back(buf.begin(), buf.begin() + static_cast<long>(n));
-  return out;
+  return test::wire_cloud(type, sender, seq, t_ns, xyz);
 }
 
 TEST(FirmwareAppLoop, NoHeapAllocationAfterStartUpAndOnePosePerFrame) {

@@ -269,7 +269,7 @@ class ImuPeriodDriver : public ::testing::Test {
   void close(CloudKind kind) {
     DecodedCloud scan;
     scan.kind = kind;
-    driver.close_period(scan);
+    driver.close_period(scan, [](const PeriodOutput&) {});
   }
   std::unique_ptr<InputDecoder> decoder = std::make_unique<InputDecoder>(kEpochNs);
   CallLog log;

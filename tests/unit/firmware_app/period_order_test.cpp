@@ -14,103 +14,18 @@
 #include "firmware/app/firmware_app.hpp"
 #include "firmware/wire/share_schedule.hpp"
 #include "firmware/wire/wire_conventions.hpp"
+#include "scripted_io.hpp"
 #include "share_signing.hpp"
 
 namespace v2xloc::firmware {
 namespace {
 
-constexpr std::int64_t kEpoch = 1'700'000'000'000'000'000;
+using test::cloud;
+using test::kEpoch;
+using test::RecordingPort;
+using test::ScriptedCan;
+using test::ScriptedLink;
 
-using Datagram = std::vector<std::uint8_t>;
-
-// A datagram endpoint fed by the test. `gate` (optional) holds this link's datagrams back until
-// another link has been read `after_reads` times: the V2X share that "arrives" while the firmware
-// is busy reading the ego socket.
-class ScriptedLink final : public hal::DatagramLink {
- public:
-  hal::Status send(std::span<const std::uint8_t>) override { return hal::Status::kOk; }
-  hal::Status send_to(const hal::Ipv4Endpoint&, std::span<const std::uint8_t>) override { return hal::Status::kOk; }
-  hal::Status receive(std::span<std::uint8_t> buffer, hal::DatagramInfo& info) override {
-    ++reads;
-    if (gate != nullptr && gate->reads < after_reads) return hal::Status::kWouldBlock;
-    if (queue.empty()) return hal::Status::kWouldBlock;
-    const Datagram d = queue.front();
-    queue.pop_front();
-    if (d.size() > buffer.size()) return hal::Status::kBufferTooSmall;
-    std::copy(d.begin(), d.end(), buffer.begin());
-    info.size = d.size();
-    return hal::Status::kOk;
-  }
-  std::deque<Datagram> queue;
-  const ScriptedLink* gate = nullptr;
-  int after_reads = 0;
-  int reads = 0;
-};
-
-// A CAN bus fed by the test (the SimTimeCanBus on top turns sim-time frames into clock steps).
-class ScriptedCan final : public hal::CanBus {
- public:
-  hal::Status send(const hal::CanFrame& f) override {
-    sent.push_back(f);
-    return hal::Status::kOk;
-  }
-  std::vector<hal::CanFrame> sent;
-  hal::Status receive(hal::CanRxFrame& out) override {
-    if (gate != nullptr && gate->reads < after_reads) return hal::Status::kWouldBlock;
-    if (queue.empty()) return hal::Status::kWouldBlock;
-    out = hal::CanRxFrame{};
-    out.frame = queue.front();
-    queue.pop_front();
-    return hal::Status::kOk;
-  }
-  hal::Status set_filters(std::span<const hal::CanFilter>) override { return hal::Status::kOk; }
-  hal::Status accept_all() override { return hal::Status::kOk; }
-  hal::Status set_error_mask(std::uint32_t) override { return hal::Status::kOk; }
-  hal::CanCounters counters() const override { return {}; }
-  std::deque<hal::CanFrame> queue;
-  const ScriptedLink* gate = nullptr;
-  int after_reads = 0;
-};
-
-// Records the order of the localizer calls.
-class RecordingPort final : public LocalizerPort {
- public:
-  void on_vehicle(const VehicleInput&) override { calls += "v"; }
-  void on_gnss(const GnssInput&) override { calls += "g"; }
-  void on_imu(const ImuInput&) override { calls += "i"; }
-  MapInsertResult on_map_cloud(const MapCloudInput&) override {
-    calls += "m";
-    MapInsertResult r;
-    r.status = insert_status;
-    return r;
-  }
-  MapInsertStatus insert_status = MapInsertStatus::kInvalidInput;  // what map fusion answers
-  const LocalizerFrameOutput& on_ego_scan(const EgoScanInput&) override {
-    calls += "e";
-    return output_;
-  }
-  std::string calls;
-
- private:
-  LocalizerFrameOutput output_{};
-};
-
-std::vector<Datagram> cloud(protocol::CloudMessageType type, std::uint32_t sender, std::int64_t t_ns) {
-  std::vector<float> xyz;
-  for (int i = 0; i < 600; ++i) xyz.insert(xyz.end(), {0.01f * i, 5.0f - 0.01f * i, 1.0f});
-  protocol::CloudFrameInfo info;
-  info.type = type;
-  info.sender_id = sender;
-  info.timestamp_ns = static_cast<std::uint64_t>(kEpoch + t_ns);
-  info.scale_m = kCloudScaleM;
-  protocol::PointCloudFragmenter f;
-  EXPECT_EQ(f.begin(info, protocol::CloudPointsView{xyz, {}, {}}, 600), protocol::CloudStatus::kOk);
-  std::vector<Datagram> out;
-  Datagram buf(600);
-  std::size_t n = 0;
-  while (f.next(buf, n) == protocol::CloudStatus::kOk) out.emplace_back(buf.begin(), buf.begin() + static_cast<long>(n));
-  return out;
-}
 
 // One period at kT: a signed share and an ego scan, both stamped kT, and the sim-time frame that
 // moves the emulated clock to kT. The CAN frame becomes readable once the ego endpoint was read

@@ -76,5 +76,23 @@ TEST(PoseFrames, UnlocalizedOutputIsDegradedAndHeartbeatStateFollows) {
   EXPECT_EQ(localizer_state(&out), protocol::LocalizerState::kWaitingForGnss);
 }
 
+// A period without LiDAR points (the period timer's, or a covered sensor's) is the filter's
+// prediction: never reported as a registration, always flagged Degraded, still vouched for while
+// its sigma is below the localized threshold.
+TEST(PoseFrames, APeriodWithoutScanDataIsNoRegistrationAndDegraded) {
+  LocalizerFrameOutput out = make_output(1.0, 2.0, 0.0, 0.0);
+  out.filter_initialized = true;
+  out.registration_fused = true;  // a fixed-lag decision about an earlier frame may land here
+  out.no_scan_data = true;
+  const protocol::PoseFlags f = pose_flags(out, false);
+  EXPECT_TRUE(f.pose_valid);
+  EXPECT_FALSE(f.registration_valid);
+  EXPECT_TRUE(f.degraded);
+  out.no_scan_data = false;
+  const protocol::PoseFlags g = pose_flags(out, false);
+  EXPECT_TRUE(g.registration_valid);
+  EXPECT_FALSE(g.degraded);
+}
+
 }  // namespace
 }  // namespace v2xloc::firmware

@@ -104,7 +104,8 @@ class Localizer {
   void register_frame(double t, const Mat4d& body_T_lidar);
   RegistrationResult track(double t, const Mat4d& body_T_lidar, bool& withheld);
   StartupOutcome search(double t, const Mat4d& body_T_lidar);
-  void fuse(double t, const RegistrationResult& result, bool attempted_ok, bool withheld);
+  void predict_only(double t);
+  void fuse(double t, const RegistrationResult& result, bool attempted_ok, bool withheld, bool no_data = false);
   void fill_output(double t);
   void push_backfill();
 
@@ -127,6 +128,8 @@ class Localizer {
   std::uint32_t frame_ = 0;
   double last_frame_t_ = 0.0;
   bool have_frame_ = false;
+  double last_odometry_t_ = 0.0;     // [s] the last sweep with points (the odometry's previous frame)
+  bool have_odometry_frame_ = false;
   VehicleMotion vehicle_{};
   GnssFix gnss_{};
   GnssCourse course_{};

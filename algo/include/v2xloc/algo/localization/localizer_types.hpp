@@ -111,6 +111,9 @@ struct LocalizerFrameOutput {
   bool gate_decided_valid = false;
   double sigma_x = 0.0, sigma_y = 0.0, sigma_z = 0.0, sigma_yaw = 0.0;  // fused 1-sigma
   bool localized = false;                   // fused sigma_xy below the localized threshold
+  // The sweep had no points to register (a covered or silent LiDAR): the pose is the filter's
+  // prediction, and the frame counts neither as a registration nor as a failed one.
+  bool no_scan_data = false;
   // Earlier frames whose output the filter's start at this frame revised (Localizer::backfill()).
   std::uint32_t revised_frames = 0;
 };
@@ -143,6 +146,7 @@ struct LocalizerCounters {
   std::uint32_t scan_points_dropped = 0;       // non-finite, out of range or over capacity
   std::uint32_t scans_coarsened = 0;           // sweeps over the ingest capacity, read again with a coarser voxel
   std::uint32_t odometry_failures = 0;
+  std::uint32_t frames_without_scan_data = 0;  // sweeps with no points to register: predicted only
   std::uint32_t pending_overflow = 0;          // fixed-lag registrations that found no slot
   std::uint32_t filter_resets = 0;             // filter restarted at a registration
   std::uint32_t reacquisitions_refused = 0;    // search answers outside the running filter's belief

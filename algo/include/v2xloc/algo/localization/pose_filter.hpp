@@ -26,6 +26,7 @@ struct FrameRegistration {
   RegistrationResult result{};
   bool attempted_ok = false;        // false: reported, but neither gated nor fused
   bool withheld = false;            // gated (shapes the envelopes) but neither valid nor fused
+  bool no_data = false;             // the sweep had no points: not a failure (max_failed_frames)
   Pose3d odom_T_body = Pose3d::Identity();  // this frame's odometry (carries late restarts)
   VehicleMotion vehicle{};          // speed and yaw rate for a restart
 };
@@ -83,7 +84,8 @@ class PoseFilter {
   bool accepts_restart_at(const Pose3d& pose) const;
   // Tracking is lost (GNSS divergence or basin audit): everything starts over.
   void lose_track();
-  // A frame that produced no registration to gate counts towards max_failed_frames.
+  // A frame that produced no registration to gate counts towards max_failed_frames (a frame
+  // without data does not: FrameRegistration::no_data).
   void count_failed_frame() { ++failed_frames_; }
 
   // Validity gate -> EKF (fixed-lag: a registration is fused w/2 frames later, at its own stamp
