@@ -233,13 +233,14 @@ Vec3f LidarOdometry::coarse_normal(const Vec3d& mean, const std::int32_t key[3],
 }
 
 // Gauss-Newton with a Geman-McClure kernel, left-multiplied twist (rho, omega).
-Mat4d LidarOdometry::align(const Mat4d& prediction, OdometryResult& r) const {
+Mat4d LidarOdometry::align(const Mat4d& prediction, OdometryResult& r) {
   const double tau = r.threshold;
   const double kappa = r.sigma / 3.0;
   const double k2 = kappa * kappa;
   Mat4d T = prediction;
   r.status = OdometryStatus::kOk;
   const std::uint64_t per_iteration = frame_coarse_.size();
+  for (std::size_t i = 0; i < frame_coarse_.size(); ++i) blocks_[i].lo[0] = OdometryVoxelMap::kNoBlock;
   for (std::uint32_t it = 0; it < params_.max_iterations; ++it) {
     if (it > 0 && params_.max_queries > 0 && (it + 1) * per_iteration > params_.max_queries) {
       r.query_capped = true;
@@ -259,7 +260,7 @@ Mat4d LidarOdometry::align(const Mat4d& prediction, OdometryResult& r) const {
       const Vec3d p = transform(T, frame_coarse_[i]);
       Vec3d q;
       double d2;
-      if (!map_.nearest(p, tau * tau, q, d2)) continue;
+      if (!map_.nearest(p, tau * tau, q, d2, blocks_[i])) continue;
       const Vec3d res = p - q;
       if (params_.point_to_plane) {
         const double e = n.dot(res);

@@ -78,6 +78,12 @@ std::uint32_t OdometryVoxelMap::insert_voxel(const std::int32_t key[3]) {
 // voxel whose cell lies farther than the best match so far is not looked up, and a voxel whose
 // points' bounding box does is not scanned: neither can hold a closer point.
 bool OdometryVoxelMap::nearest(const Vec3d& p, double max_d2, Vec3d& q, double& d2) const {
+  NeighborBlock block;
+  block.lo[0] = kNoBlock;
+  return nearest(p, max_d2, q, d2, block);
+}
+
+bool OdometryVoxelMap::nearest(const Vec3d& p, double max_d2, Vec3d& q, double& d2, NeighborBlock& block) const {
   std::int32_t key[3];
   double quotient[3];
   if (!voxel_key(p, key, quotient)) return false;
@@ -88,6 +94,15 @@ bool OdometryVoxelMap::nearest(const Vec3d& p, double max_d2, Vec3d& q, double& 
     side[a] = frac < 0.5 ? -1 : 1;
     const double gap = (side[a] < 0 ? frac : 1.0 - frac) * voxel_size_;
     gap2[a] = gap * gap;
+  }
+  // The block's lowest key, and p's own voxel's offset in it (per axis bit: 1 when p lies in the
+  // upper half of the block).
+  const std::int32_t lo[3] = {key[0] + (side[0] < 0 ? -1 : 0), key[1] + (side[1] < 0 ? -1 : 0),
+                              key[2] + (side[2] < 0 ? -1 : 0)};
+  const int own = (side[0] < 0 ? 1 : 0) | (side[1] < 0 ? 2 : 0) | (side[2] < 0 ? 4 : 0);
+  if (block.lo[0] != lo[0] || block.lo[1] != lo[1] || block.lo[2] != lo[2]) {
+    V2XLOC_UNROLL_AXES for (int a = 0; a < 3; ++a) block.lo[a] = lo[a];
+    for (BlockVoxel& v : block.voxel) v = kUnknown;
   }
   // Own voxel, faces, edges, corner; each cell's squared distance summed over the axes in x, y, z
   // order (the sums are formed once here instead of per cell).
@@ -104,11 +119,14 @@ bool OdometryVoxelMap::nearest(const Vec3d& p, double max_d2, Vec3d& q, double& 
   const MapPoint* best = nullptr;
   for (int c = 0; c < 8; ++c) {
     if (box2[c] * 0.999 >= d2) continue;  // 0.1 % slack: voxel keys are floors of rounded quotients
-    const int corner = kCornerOrder[c];
-    const std::int32_t k[3] = {key[0] + ((corner & 1) ? side[0] : 0), key[1] + ((corner & 2) ? side[1] : 0),
-                               key[2] + ((corner & 4) ? side[2] : 0)};
-    const std::uint32_t v = find_voxel(k);
-    if (v != kNone) scan_voxel(voxels_[v], p, d2, best);
+    const int offset = own ^ kCornerOrder[c];
+    BlockVoxel& v = block.voxel[offset];
+    if (v == kUnknown) {
+      const std::int32_t k[3] = {lo[0] + (offset & 1), lo[1] + ((offset >> 1) & 1), lo[2] + ((offset >> 2) & 1)};
+      const std::uint32_t found = find_voxel(k);
+      v = found == kNone ? kBlockNone : static_cast<BlockVoxel>(found);
+    }
+    if (v != kBlockNone) scan_voxel(voxels_[v], p, d2, best);
   }
   if (best == nullptr) return false;
   q = Vec3d(best->x, best->y, best->z);

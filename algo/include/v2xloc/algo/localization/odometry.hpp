@@ -119,7 +119,7 @@ class LidarOdometry {
   void build_coarse_frame(OdometryResult& r);
   std::uint32_t find_coarse(const std::int32_t key[3]) const;
   Vec3f coarse_normal(const Vec3d& mean, const std::int32_t key[3], double cv) const;
-  Mat4d align(const Mat4d& prediction, OdometryResult& r) const;
+  Mat4d align(const Mat4d& prediction, OdometryResult& r);
   void thin_fine_frame(OdometryResult& r);
   double model_sigma() const;
 
@@ -153,6 +153,8 @@ class LidarOdometry {
   CoarseVoxel coarse_[kMaxCoarse];
   std::uint32_t coarse_slots_[kCoarseSlots] = {};  // coarse voxel index + 1, 0 = empty
   Vec3f coarse_normals_[config::kMaxDownsampledPoints];
+  // Per registration point: its last query's voxel block (align(): the map is fixed meanwhile).
+  OdometryVoxelMap::NeighborBlock blocks_[config::kMaxDownsampledPoints];
 };
 
 }  // namespace v2xloc

@@ -11,7 +11,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <span>
+#include <type_traits>
 
 #include "v2xloc/algo/core/config.hpp"
 #include "v2xloc/algo/core/types.hpp"
@@ -25,6 +27,17 @@ struct MapPoint {
 
 class OdometryVoxelMap {
  public:
+  // Voxel indices fit 16 bits when the map's capacity does (EMBEDDED): half the cache below.
+  using BlockVoxel = std::conditional_t<(config::kOdometryMapPoints < 0xFFFEu), std::uint16_t, std::uint32_t>;
+  // A query's 2 x 2 x 2 voxel block, remembered between queries of one source point while the
+  // map is unchanged (the odometry's ICP iterations move a point by millimetres): a query whose
+  // block is the remembered one reads its voxel indices instead of hashing their keys again.
+  struct NeighborBlock {
+    std::int32_t lo[3];      // the block's lowest key; kNoBlock in lo[0]: nothing remembered
+    BlockVoxel voxel[8];     // by offset from lo (x 1, y 2, z 4); kUnknown until looked up
+  };
+  static constexpr std::int32_t kNoBlock = std::numeric_limits<std::int32_t>::min();  // no key: |key| < 2^30
+
   OdometryVoxelMap() = default;
   OdometryVoxelMap(const OdometryVoxelMap&) = delete;
   OdometryVoxelMap& operator=(const OdometryVoxelMap&) = delete;
@@ -35,6 +48,9 @@ class OdometryVoxelMap {
   // The nearest map point to p with squared distance < max_d2 among the 2 x 2 x 2 voxels around
   // p (see odometry_map.cpp); false when there is none.
   bool nearest(const Vec3d& p, double max_d2, Vec3d& q, double& d2) const;
+  // The same result, remembering the block in `block` (set lo[0] = kNoBlock before the first
+  // query and after every update()).
+  bool nearest(const Vec3d& p, double max_d2, Vec3d& q, double& d2, NeighborBlock& block) const;
   // Adds frame (sensor frame) moved by pose, in order, up to the per-voxel and total caps, then
   // drops voxels whose centre lies beyond max_range of the sensor. Points that found no room
   // (total cap, hash probes, key range) are added to dropped; evicted voxels to evicted.
@@ -62,6 +78,8 @@ class OdometryVoxelMap {
   static constexpr std::size_t kSlots = config::kOdometryHashSlots;
   static_assert((kSlots & (kSlots - 1)) == 0, "hash slots must be a power of two");
   static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
+  static constexpr BlockVoxel kBlockNone = static_cast<BlockVoxel>(~BlockVoxel{0});
+  static constexpr BlockVoxel kUnknown = static_cast<BlockVoxel>(kBlockNone - 1);
 
   bool voxel_key(const Vec3d& p, std::int32_t key[3], double quotient[3]) const;
   std::uint32_t find_voxel(const std::int32_t key[3]) const;  // index or kNone
