@@ -170,7 +170,7 @@ void LidarOdometry::build_coarse_frame(OdometryResult& r) {
                       coarse_[last].key[2] == key[2];
     std::uint32_t v = same ? last : (ok ? find_coarse(key) : kNone);
     if (ok && v == kNone && voxels < kMaxCoarse) {
-      const ProbeResult probe = linear_probe(spatial_hash(key), kCoarseSlots, kMaxProbes,
+      const ProbeResult probe = linear_probe(spatial_hash_folded(key), kCoarseSlots, kMaxProbes,
                                              [&](std::size_t slot) { return coarse_slots_[slot] == 0; });
       if (probe.stopped) {
         v = static_cast<std::uint32_t>(voxels++);

@@ -62,7 +62,7 @@ std::span<const MapPoint> OdometryVoxelMap::voxel_points(const std::int32_t key[
 
 std::uint32_t OdometryVoxelMap::insert_voxel(const std::int32_t key[3]) {
   if (num_voxels_ == kMaxPoints) return kNone;
-  const ProbeResult probe = linear_probe(spatial_hash(key), kSlots, kMaxProbes,
+  const ProbeResult probe = linear_probe(spatial_hash_folded(key), kSlots, kMaxProbes,
                                          [&](std::size_t slot) { return slots_[slot] == 0; });
   if (!probe.stopped) return kNone;
   Voxel& vx = voxels_[num_voxels_];
@@ -256,7 +256,7 @@ void OdometryVoxelMap::rebuild_index() {
     Voxel& vx = voxels_[v];
     // The table holds at most kMaxPoints <= kSlots voxels; probing beyond the cap would only
     // happen for a pathological key set and then the voxel is unreachable (still counted in map).
-    const ProbeResult probe = linear_probe(spatial_hash(vx.key), kSlots, kMaxProbes,
+    const ProbeResult probe = linear_probe(spatial_hash_folded(vx.key), kSlots, kMaxProbes,
                                            [&](std::size_t slot) { return slots_[slot] == 0; });
     if (probe.stopped) {
       slots_[probe.slot] = static_cast<std::uint32_t>(v + 1);
