@@ -27,14 +27,18 @@ struct MapPoint {
 
 class OdometryVoxelMap {
  public:
-  // Voxel indices fit 16 bits when the map's capacity does (EMBEDDED): half the cache below.
-  using BlockVoxel = std::conditional_t<(config::kOdometryMapPoints < 0xFFFEu), std::uint16_t, std::uint32_t>;
+  // Voxel indices fit 16 bits when the map's capacity does (EMBEDDED): a smaller cache below.
+  using BlockVoxel = std::conditional_t<(config::kOdometryMapPoints <= 0xFFFFu), std::uint16_t, std::uint32_t>;
   // A query's 2 x 2 x 2 voxel block, remembered between queries of one source point while the
   // map is unchanged (the odometry's ICP iterations move a point by millimetres): a query whose
-  // block is the remembered one reads its voxel indices instead of hashing their keys again.
+  // block and own voxel are the remembered ones scans the block's non-empty voxels from the list
+  // instead of hashing eight keys again (most of a block's voxels are empty).
   struct NeighborBlock {
-    std::int32_t lo[3];      // the block's lowest key; kNoBlock in lo[0]: nothing remembered
-    BlockVoxel voxel[8];     // by offset from lo (x 1, y 2, z 4); kUnknown until looked up
+    std::int32_t lo[3];        // the block's lowest key; kNoBlock in lo[0]: nothing remembered
+    std::uint8_t own;          // the query's own voxel's offset from lo (x 1, y 2, z 4)
+    std::uint8_t count;        // non-empty voxels of the block
+    std::uint8_t rank[8];      // their places in the search order (own voxel, faces, edges, corner)
+    BlockVoxel voxel[8];       // their indices, in that order
   };
   static constexpr std::int32_t kNoBlock = std::numeric_limits<std::int32_t>::min();  // no key: |key| < 2^30
 
@@ -78,10 +82,10 @@ class OdometryVoxelMap {
   static constexpr std::size_t kSlots = config::kOdometryHashSlots;
   static_assert((kSlots & (kSlots - 1)) == 0, "hash slots must be a power of two");
   static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
-  static constexpr BlockVoxel kBlockNone = static_cast<BlockVoxel>(~BlockVoxel{0});
-  static constexpr BlockVoxel kUnknown = static_cast<BlockVoxel>(kBlockNone - 1);
+  static_assert(kMaxPoints <= std::numeric_limits<BlockVoxel>::max(), "voxel index fits NeighborBlock");
 
   bool voxel_key(const Vec3d& p, std::int32_t key[3], double quotient[3]) const;
+  void fill_block(const std::int32_t lo[3], int own, NeighborBlock& block) const;
   std::uint32_t find_voxel(const std::int32_t key[3]) const;  // index or kNone
   std::uint32_t insert_voxel(const std::int32_t key[3]);      // index or kNone (full)
   void scan_voxel(const Voxel& vx, const Vec3d& p, double& d2, const MapPoint*& best) const;
