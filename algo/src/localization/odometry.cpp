@@ -200,7 +200,7 @@ void LidarOdometry::build_coarse_frame(OdometryResult& r) {
     const CoarseVoxel& c = coarse_[v];
     const Vec3d mean = c.sum / static_cast<double>(c.count);
     frame_coarse_.push_back(mean.cast<float>());
-    coarse_normals_[v] = params_.point_to_plane ? coarse_normal(mean, c.key, cv) : Vec3f::Zero();
+    coarse_normals_[v] = params_.point_to_plane ? coarse_normal(static_cast<std::uint32_t>(v), mean, cv) : Vec3f::Zero();
   }
   for (std::size_t v = 0; v < voxels; ++v) coarse_slots_[coarse_[v].slot] = 0;
 }
@@ -209,7 +209,8 @@ std::uint32_t LidarOdometry::find_coarse(const std::int32_t key[3]) const {
   return find_indexed(coarse_slots_, kCoarseSlots, kMaxProbes, coarse_, key);
 }
 
-Vec3f LidarOdometry::coarse_normal(const Vec3d& mean, const std::int32_t key[3], double cv) const {
+Vec3f LidarOdometry::coarse_normal(std::uint32_t self, const Vec3d& mean, double cv) const {
+  const std::int32_t* key = coarse_[self].key;
   std::int32_t side[3];
   for (int a = 0; a < 3; ++a) side[a] = mean(a) / cv - key[a] < 0.5 ? -1 : 1;
   Vec3d sum = Vec3d::Zero();
@@ -218,7 +219,7 @@ Vec3f LidarOdometry::coarse_normal(const Vec3d& mean, const std::int32_t key[3],
   for (int corner = 0; corner < 8; ++corner) {
     const std::int32_t k[3] = {key[0] + ((corner & 1) ? side[0] : 0), key[1] + ((corner & 2) ? side[1] : 0),
                                key[2] + ((corner & 4) ? side[2] : 0)};
-    const std::uint32_t v = find_coarse(k);
+    const std::uint32_t v = corner == 0 ? self : find_coarse(k);
     if (v == kNone) continue;
     sum += coarse_[v].sum;
     for (int e = 0; e < 6; ++e) outer[e] += coarse_[v].outer[e];

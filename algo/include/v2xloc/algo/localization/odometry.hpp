@@ -118,7 +118,8 @@ class LidarOdometry {
   void update_threshold(OdometryResult& r);
   void build_coarse_frame(OdometryResult& r);
   std::uint32_t find_coarse(const std::int32_t key[3]) const;
-  Vec3f coarse_normal(const Vec3d& mean, const std::int32_t key[3], double cv) const;
+  // The normal of coarse voxel `self` (its fine points' mean `mean`; coarse edge cv).
+  Vec3f coarse_normal(std::uint32_t self, const Vec3d& mean, double cv) const;
   Mat4d align(const Mat4d& prediction, OdometryResult& r);
   void thin_fine_frame(OdometryResult& r);
   double model_sigma() const;
