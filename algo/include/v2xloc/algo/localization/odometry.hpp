@@ -17,8 +17,9 @@
 // map changes every frame, and a rebuild over ~1e5 points per frame costs more than the voxel-
 // neighbour search, which the voxel hash gives for free. The Gauss-Newton step is 6x6 like theirs.
 // Serial, ordered reductions (no TBB): the same bits on every ISA.
-// Storage: the map (double-buffered for compaction), its voxel index and the frame buffers live in
-// the object (~13 MB host, ~2.2 MB EMBEDDED, estimated from the capacities): static storage only.
+// Storage: the map (double-buffered for compaction), its voxel index, the frame buffers and each
+// registration point's remembered voxel block live in the object (sizeof: 24.4 MB host, 2.98 MB
+// EMBEDDED): static storage only.
 #pragma once
 
 #include <cstddef>
