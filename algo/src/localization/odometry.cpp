@@ -170,7 +170,7 @@ void LidarOdometry::build_coarse_frame(OdometryResult& r) {
                       coarse_[last].key[2] == key[2];
     std::uint32_t v = same ? last : (ok ? find_coarse(key) : kNone);
     if (ok && v == kNone && voxels < kMaxCoarse) {
-      const ProbeResult probe = linear_probe(spatial_hash(key), kCoarseSlots, kMaxProbes,
+      const ProbeResult probe = linear_probe(spatial_hash_folded(key), kCoarseSlots, kMaxProbes,
                                              [&](std::size_t slot) { return coarse_slots_[slot] == 0; });
       if (probe.stopped) {
         v = static_cast<std::uint32_t>(voxels++);
@@ -200,7 +200,7 @@ void LidarOdometry::build_coarse_frame(OdometryResult& r) {
     const CoarseVoxel& c = coarse_[v];
     const Vec3d mean = c.sum / static_cast<double>(c.count);
     frame_coarse_.push_back(mean.cast<float>());
-    coarse_normals_[v] = params_.point_to_plane ? coarse_normal(mean, c.key, cv) : Vec3f::Zero();
+    coarse_normals_[v] = params_.point_to_plane ? coarse_normal(static_cast<std::uint32_t>(v), mean, cv) : Vec3f::Zero();
   }
   for (std::size_t v = 0; v < voxels; ++v) coarse_slots_[coarse_[v].slot] = 0;
 }
@@ -209,7 +209,8 @@ std::uint32_t LidarOdometry::find_coarse(const std::int32_t key[3]) const {
   return find_indexed(coarse_slots_, kCoarseSlots, kMaxProbes, coarse_, key);
 }
 
-Vec3f LidarOdometry::coarse_normal(const Vec3d& mean, const std::int32_t key[3], double cv) const {
+Vec3f LidarOdometry::coarse_normal(std::uint32_t self, const Vec3d& mean, double cv) const {
+  const std::int32_t* key = coarse_[self].key;
   std::int32_t side[3];
   for (int a = 0; a < 3; ++a) side[a] = mean(a) / cv - key[a] < 0.5 ? -1 : 1;
   Vec3d sum = Vec3d::Zero();
@@ -218,7 +219,7 @@ Vec3f LidarOdometry::coarse_normal(const Vec3d& mean, const std::int32_t key[3],
   for (int corner = 0; corner < 8; ++corner) {
     const std::int32_t k[3] = {key[0] + ((corner & 1) ? side[0] : 0), key[1] + ((corner & 2) ? side[1] : 0),
                                key[2] + ((corner & 4) ? side[2] : 0)};
-    const std::uint32_t v = find_coarse(k);
+    const std::uint32_t v = corner == 0 ? self : find_coarse(k);
     if (v == kNone) continue;
     sum += coarse_[v].sum;
     for (int e = 0; e < 6; ++e) outer[e] += coarse_[v].outer[e];
@@ -233,13 +234,14 @@ Vec3f LidarOdometry::coarse_normal(const Vec3d& mean, const std::int32_t key[3],
 }
 
 // Gauss-Newton with a Geman-McClure kernel, left-multiplied twist (rho, omega).
-Mat4d LidarOdometry::align(const Mat4d& prediction, OdometryResult& r) const {
+Mat4d LidarOdometry::align(const Mat4d& prediction, OdometryResult& r) {
   const double tau = r.threshold;
   const double kappa = r.sigma / 3.0;
   const double k2 = kappa * kappa;
   Mat4d T = prediction;
   r.status = OdometryStatus::kOk;
   const std::uint64_t per_iteration = frame_coarse_.size();
+  for (std::size_t i = 0; i < frame_coarse_.size(); ++i) blocks_[i].lo[0] = OdometryVoxelMap::kNoBlock;
   for (std::uint32_t it = 0; it < params_.max_iterations; ++it) {
     if (it > 0 && params_.max_queries > 0 && (it + 1) * per_iteration > params_.max_queries) {
       r.query_capped = true;
@@ -259,7 +261,7 @@ Mat4d LidarOdometry::align(const Mat4d& prediction, OdometryResult& r) const {
       const Vec3d p = transform(T, frame_coarse_[i]);
       Vec3d q;
       double d2;
-      if (!map_.nearest(p, tau * tau, q, d2)) continue;
+      if (!map_.nearest(p, tau * tau, q, d2, blocks_[i])) continue;
       const Vec3d res = p - q;
       if (params_.point_to_plane) {
         const double e = n.dot(res);

@@ -62,7 +62,7 @@ std::span<const MapPoint> OdometryVoxelMap::voxel_points(const std::int32_t key[
 
 std::uint32_t OdometryVoxelMap::insert_voxel(const std::int32_t key[3]) {
   if (num_voxels_ == kMaxPoints) return kNone;
-  const ProbeResult probe = linear_probe(spatial_hash(key), kSlots, kMaxProbes,
+  const ProbeResult probe = linear_probe(spatial_hash_folded(key), kSlots, kMaxProbes,
                                          [&](std::size_t slot) { return slots_[slot] == 0; });
   if (!probe.stopped) return kNone;
   Voxel& vx = voxels_[num_voxels_];
@@ -74,10 +74,38 @@ std::uint32_t OdometryVoxelMap::insert_voxel(const std::int32_t key[3]) {
 
 // The nearest map point among the 2 x 2 x 2 voxels around p (its own and, per axis, the
 // neighbour on the side p lies in): exact for every point within half a voxel of p, which
-// covers the tracking threshold tau; 8 voxel lookups instead of KISS-ICP's 27. A neighbour
-// voxel whose cell lies farther than the best match so far is not looked up, and a voxel whose
-// points' bounding box does is not scanned: neither can hold a closer point.
+// covers the tracking threshold tau; 8 voxel lookups instead of KISS-ICP's 27, once per block
+// (NeighborBlock). A neighbour voxel whose cell lies farther than the best match so far is not
+// scanned, nor is a voxel whose points' bounding box does: neither can hold a closer point.
 bool OdometryVoxelMap::nearest(const Vec3d& p, double max_d2, Vec3d& q, double& d2) const {
+  NeighborBlock block;
+  block.lo[0] = kNoBlock;
+  return nearest(p, max_d2, q, d2, block);
+}
+
+namespace {
+// Own voxel, faces, edges, corner: the search order of a block's voxels, as offsets from the own
+// voxel (x 1, y 2, z 4).
+constexpr int kCornerOrder[8] = {0, 1, 2, 4, 3, 5, 6, 7};
+}  // namespace
+
+// The block's non-empty voxels in search order.
+void OdometryVoxelMap::fill_block(const std::int32_t lo[3], int own, NeighborBlock& block) const {
+  V2XLOC_UNROLL_AXES for (int a = 0; a < 3; ++a) block.lo[a] = lo[a];
+  block.own = static_cast<std::uint8_t>(own);
+  block.count = 0;
+  for (int c = 0; c < 8; ++c) {
+    const int offset = own ^ kCornerOrder[c];
+    const std::int32_t k[3] = {lo[0] + (offset & 1), lo[1] + ((offset >> 1) & 1), lo[2] + ((offset >> 2) & 1)};
+    const std::uint32_t v = find_voxel(k);
+    if (v == kNone) continue;
+    block.rank[block.count] = static_cast<std::uint8_t>(c);
+    block.voxel[block.count] = static_cast<BlockVoxel>(v);
+    ++block.count;
+  }
+}
+
+bool OdometryVoxelMap::nearest(const Vec3d& p, double max_d2, Vec3d& q, double& d2, NeighborBlock& block) const {
   std::int32_t key[3];
   double quotient[3];
   if (!voxel_key(p, key, quotient)) return false;
@@ -89,9 +117,16 @@ bool OdometryVoxelMap::nearest(const Vec3d& p, double max_d2, Vec3d& q, double& 
     const double gap = (side[a] < 0 ? frac : 1.0 - frac) * voxel_size_;
     gap2[a] = gap * gap;
   }
-  // Own voxel, faces, edges, corner; each cell's squared distance summed over the axes in x, y, z
-  // order (the sums are formed once here instead of per cell).
-  static constexpr int kCornerOrder[8] = {0, 1, 2, 4, 3, 5, 6, 7};
+  // The block's lowest key, and p's own voxel's offset in it (per axis bit: 1 when p lies in the
+  // upper half of the block).
+  const std::int32_t lo[3] = {key[0] + (side[0] < 0 ? -1 : 0), key[1] + (side[1] < 0 ? -1 : 0),
+                              key[2] + (side[2] < 0 ? -1 : 0)};
+  const int own = (side[0] < 0 ? 1 : 0) | (side[1] < 0 ? 2 : 0) | (side[2] < 0 ? 4 : 0);
+  if (block.lo[0] != lo[0] || block.lo[1] != lo[1] || block.lo[2] != lo[2] || block.own != own) {
+    fill_block(lo, own, block);
+  }
+  // Each cell's squared distance summed over the axes in x, y, z order (formed once here
+  // instead of per cell), by place in the search order.
   const double box2[8] = {0.0,
                           gap2[0],
                           gap2[1],
@@ -102,13 +137,10 @@ bool OdometryVoxelMap::nearest(const Vec3d& p, double max_d2, Vec3d& q, double& 
                           (gap2[0] + gap2[1]) + gap2[2]};
   d2 = max_d2;
   const MapPoint* best = nullptr;
-  for (int c = 0; c < 8; ++c) {
-    if (box2[c] * 0.999 >= d2) continue;  // 0.1 % slack: voxel keys are floors of rounded quotients
-    const int corner = kCornerOrder[c];
-    const std::int32_t k[3] = {key[0] + ((corner & 1) ? side[0] : 0), key[1] + ((corner & 2) ? side[1] : 0),
-                               key[2] + ((corner & 4) ? side[2] : 0)};
-    const std::uint32_t v = find_voxel(k);
-    if (v != kNone) scan_voxel(voxels_[v], p, d2, best);
+  for (int j = 0; j < block.count; ++j) {
+    // 0.1 % slack: voxel keys are floors of rounded quotients
+    if (box2[block.rank[j]] * 0.999 >= d2) continue;
+    scan_voxel(voxels_[block.voxel[j]], p, d2, best);
   }
   if (best == nullptr) return false;
   q = Vec3d(best->x, best->y, best->z);
@@ -238,7 +270,7 @@ void OdometryVoxelMap::rebuild_index() {
     Voxel& vx = voxels_[v];
     // The table holds at most kMaxPoints <= kSlots voxels; probing beyond the cap would only
     // happen for a pathological key set and then the voxel is unreachable (still counted in map).
-    const ProbeResult probe = linear_probe(spatial_hash(vx.key), kSlots, kMaxProbes,
+    const ProbeResult probe = linear_probe(spatial_hash_folded(vx.key), kSlots, kMaxProbes,
                                            [&](std::size_t slot) { return slots_[slot] == 0; });
     if (probe.stopped) {
       slots_[probe.slot] = static_cast<std::uint32_t>(v + 1);

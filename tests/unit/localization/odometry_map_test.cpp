@@ -100,6 +100,52 @@ TEST(OdometryVoxelMap, PrunedNearestMatchesPlainScanBitForBit) {
   EXPECT_EQ(dropped, 0u);
 }
 
+// A query through a remembered block (one per source point, kept across ICP-like iterations
+// whose steps keep, shift or flip the block) returns bit for bit what a fresh query returns.
+TEST(OdometryVoxelMap, RememberedBlockMatchesFreshQuery) {
+  static OdometryVoxelMap map;
+  map.configure(1.0, 20);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-10.0f, 10.0f), small(-0.05f, 0.05f);
+  std::vector<Vec3f> scan;
+  for (int i = 0; i < 2400; ++i) {
+    const float x = u(rng), y = u(rng);
+    if (i % 3 == 0) scan.emplace_back(x, y, -1.7f + small(rng));
+    if (i % 3 == 1) scan.emplace_back(x, 5.0f + small(rng), 0.3f * y);
+    if (i % 3 == 2) scan.emplace_back(x, y, 0.2f * u(rng));
+  }
+  std::uint32_t dropped = 0, evicted = 0;
+  map.update(scan, Mat4d::Identity(), 30.0, dropped, evicted);
+  constexpr int kPoints = 4000;
+  std::vector<Vec3d> points;
+  std::vector<OdometryVoxelMap::NeighborBlock> blocks(kPoints);
+  for (int i = 0; i < kPoints; ++i) {
+    points.emplace_back(u(rng), u(rng), i % 2 == 0 ? -1.7 + 0.05 * u(rng) : 0.1 * u(rng));
+    blocks[i].lo[0] = OdometryVoxelMap::kNoBlock;
+  }
+  std::uniform_real_distribution<double> step(-0.6, 0.6);
+  std::size_t found = 0, compared = 0;
+  for (int it = 0; it < 8; ++it) {
+    const double scale = it < 4 ? 1.0 : 0.01;  // large steps first, then converging ones
+    for (int i = 0; i < kPoints; ++i) {
+      if (it > 0) points[i] += scale * Vec3d(step(rng), step(rng), step(rng));
+      const double max_d2 = (i % 2 == 0) ? 0.25 : 0.04;
+      Vec3d q_block(0, 0, 0), q_fresh(0, 0, 0);
+      double d_block = 0.0, d_fresh = 0.0;
+      const bool f_block = map.nearest(points[i], max_d2, q_block, d_block, blocks[i]);
+      const bool f_fresh = map.nearest(points[i], max_d2, q_fresh, d_fresh);
+      ASSERT_EQ(f_block, f_fresh) << "iteration " << it << " point " << i;
+      ++compared;
+      if (!f_fresh) continue;
+      ++found;
+      ASSERT_TRUE(same_bits(d_block, d_fresh));
+      for (int a = 0; a < 3; ++a) ASSERT_TRUE(same_bits(q_block(a), q_fresh(a)));
+    }
+  }
+  EXPECT_GT(found, compared / 4);
+  EXPECT_LT(found, compared);
+}
+
 // Every stored point is found in the voxel of its key, and nearest() finds a point itself.
 TEST(OdometryVoxelMap, EveryPointReachableAfterIncrementalUpdates) {
   static OdometryVoxelMap map;

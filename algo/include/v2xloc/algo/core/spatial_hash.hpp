@@ -23,11 +23,13 @@ inline std::uint32_t spatial_hash(std::int32_t x, std::int32_t y, std::int32_t z
 inline std::uint32_t spatial_hash(const std::int32_t key[3]) { return spatial_hash(key[0], key[1], key[2]); }
 
 // The hash with its high half folded into the low bits, for tables indexed by the low bits of a
-// small mask (the downsampler's).
+// small mask (the downsampler's, the scan ingest's, the odometry's): bit k of the plain hash
+// depends only on bits <= k of the keys, so neighbouring keys crowd a few probe chains.
 inline std::uint32_t spatial_hash_folded(std::int32_t x, std::int32_t y, std::int32_t z) {
   const std::uint32_t h = spatial_hash(x, y, z);
   return h ^ (h >> 16);
 }
+inline std::uint32_t spatial_hash_folded(const std::int32_t key[3]) { return spatial_hash_folded(key[0], key[1], key[2]); }
 
 struct ProbeResult {
   bool stopped = false;     // visit() returned true at slot `slot`
@@ -53,14 +55,14 @@ ProbeResult linear_probe(std::uint32_t hash, std::size_t num_slots, std::uint32_
 }
 
 // Tables whose slots hold an item index + 1 (0 = empty) over items that carry their `key[3]`
-// (the odometry's map voxels and coarse frame voxels): the index of the item with this key, or
+// (the odometry's map voxels and coarse frame voxels, placed by spatial_hash_folded): the index of the item with this key, or
 // kNoItem when a probe reaches an empty slot or max_probes first.
 inline constexpr std::uint32_t kNoItem = 0xFFFFFFFFu;
 template <class Item>
 std::uint32_t find_indexed(const std::uint32_t* slots, std::size_t num_slots, std::uint32_t max_probes,
                            const Item* items, const std::int32_t key[3]) {
   std::uint32_t found = kNoItem;
-  linear_probe(spatial_hash(key), num_slots, max_probes, [&](std::size_t slot) {
+  linear_probe(spatial_hash_folded(key), num_slots, max_probes, [&](std::size_t slot) {
     const std::uint32_t v = slots[slot];
     if (v == 0) return true;
     const Item& item = items[v - 1];

@@ -11,7 +11,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <span>
+#include <type_traits>
 
 #include "v2xloc/algo/core/config.hpp"
 #include "v2xloc/algo/core/types.hpp"
@@ -25,6 +27,21 @@ struct MapPoint {
 
 class OdometryVoxelMap {
  public:
+  // Voxel indices fit 16 bits when the map's capacity does (EMBEDDED): a smaller cache below.
+  using BlockVoxel = std::conditional_t<(config::kOdometryMapPoints <= 0xFFFFu), std::uint16_t, std::uint32_t>;
+  // A query's 2 x 2 x 2 voxel block, remembered between queries of one source point while the
+  // map is unchanged (the odometry's ICP iterations move a point by millimetres): a query whose
+  // block and own voxel are the remembered ones scans the block's non-empty voxels from the list
+  // instead of hashing eight keys again (most of a block's voxels are empty).
+  struct NeighborBlock {
+    std::int32_t lo[3];        // the block's lowest key; kNoBlock in lo[0]: nothing remembered
+    std::uint8_t own;          // the query's own voxel's offset from lo (x 1, y 2, z 4)
+    std::uint8_t count;        // non-empty voxels of the block
+    std::uint8_t rank[8];      // their places in the search order (own voxel, faces, edges, corner)
+    BlockVoxel voxel[8];       // their indices, in that order
+  };
+  static constexpr std::int32_t kNoBlock = std::numeric_limits<std::int32_t>::min();  // no key: |key| < 2^30
+
   OdometryVoxelMap() = default;
   OdometryVoxelMap(const OdometryVoxelMap&) = delete;
   OdometryVoxelMap& operator=(const OdometryVoxelMap&) = delete;
@@ -35,6 +52,9 @@ class OdometryVoxelMap {
   // The nearest map point to p with squared distance < max_d2 among the 2 x 2 x 2 voxels around
   // p (see odometry_map.cpp); false when there is none.
   bool nearest(const Vec3d& p, double max_d2, Vec3d& q, double& d2) const;
+  // The same result, remembering the block in `block` (set lo[0] = kNoBlock before the first
+  // query and after every update()).
+  bool nearest(const Vec3d& p, double max_d2, Vec3d& q, double& d2, NeighborBlock& block) const;
   // Adds frame (sensor frame) moved by pose, in order, up to the per-voxel and total caps, then
   // drops voxels whose centre lies beyond max_range of the sensor. Points that found no room
   // (total cap, hash probes, key range) are added to dropped; evicted voxels to evicted.
@@ -62,8 +82,10 @@ class OdometryVoxelMap {
   static constexpr std::size_t kSlots = config::kOdometryHashSlots;
   static_assert((kSlots & (kSlots - 1)) == 0, "hash slots must be a power of two");
   static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
+  static_assert(kMaxPoints <= std::numeric_limits<BlockVoxel>::max(), "voxel index fits NeighborBlock");
 
   bool voxel_key(const Vec3d& p, std::int32_t key[3], double quotient[3]) const;
+  void fill_block(const std::int32_t lo[3], int own, NeighborBlock& block) const;
   std::uint32_t find_voxel(const std::int32_t key[3]) const;  // index or kNone
   std::uint32_t insert_voxel(const std::int32_t key[3]);      // index or kNone (full)
   void scan_voxel(const Voxel& vx, const Vec3d& p, double& d2, const MapPoint*& best) const;
