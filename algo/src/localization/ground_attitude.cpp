@@ -25,7 +25,7 @@ Pose3d GroundAttitude::tilt(const Pose3d& level, const Pose3d& odom_T_body) cons
 bool GroundAttitude::grade(const Pose3d& odom_T_body, double& out) const {
   if (!known_) return false;
   const Vec3d forward = world_R_odom_ * odom_T_body.linear().col(0);
-  out = forward.z() / std::hypot(forward.x(), forward.y());
+  out = forward.z() / std::sqrt(forward.x() * forward.x() + forward.y() * forward.y());  // sqrt, not hypot: libms round hypot differently
   return true;
 }
 
