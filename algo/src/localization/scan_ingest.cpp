@@ -34,17 +34,6 @@ ScanIngest::Accumulator* ScanIngest::find_or_add(const std::int32_t key[3]) {
   return found;
 }
 
-ScanIngest::Accumulator* ScanIngest::find_recent_or_add(const std::int32_t key[3]) {
-  std::uint32_t& recent = recent_[spatial_hash_folded(key[0], key[1], key[2]) & (kRecent - 1)];
-  if (recent < count_) {
-    Accumulator& a = voxels_[recent];
-    if (a.key[0] == key[0] && a.key[1] == key[1] && a.key[2] == key[2]) return &a;
-  }
-  Accumulator* a = find_or_add(key);
-  if (a != nullptr) recent = static_cast<std::uint32_t>(a - voxels_);
-  return a;
-}
-
 // One pass over the returns (see the header), specialised on whether times are given. The
 // finite and range tests share one comparison on the fast path (NaN and Inf fail it); a return
 // failing it is classified in the order of the full tests. stop_when_full: a pass that will be
@@ -75,7 +64,7 @@ void ScanIngest::accumulate(std::span<const Vec3f> points, const float* times, c
                                  det::floor_to_int(p.z() * inv)};
     Accumulator* a = last;
     if (a == nullptr || key[0] != last_key[0] || key[1] != last_key[1] || key[2] != last_key[2]) {
-      a = find_recent_or_add(key);
+      a = find_or_add(key);
       if (a == nullptr) {
         ++r.capacity_dropped;
         if (stop_when_full) return;

@@ -73,21 +73,12 @@ class ScanIngest {
     double time_sum;
   };
   Accumulator* find_or_add(const std::int32_t key[3]);
-  Accumulator* find_recent_or_add(const std::int32_t key[3]);
   template <bool kTimes>
   void accumulate(std::span<const Vec3f> points, const float* times, const ScanIngestParams& params,
                   bool stop_when_full, ScanIngestResult& r);
 
   Accumulator voxels_[kMaxVoxels];
   std::uint32_t slots_[kSlots] = {};  // voxel index + 1, 0 = empty
-  // Direct-mapped by the folded key hash: the voxel a recent return of that hash went to. A
-  // sweep revisits a voxel a firing later (the next azimuth step of the same beam), after
-  // returns of other voxels; the table's own probe chains are long (its slots come from the
-  // plain hash, whose low bits mix only the keys' low bits, and its layout decides which
-  // returns a full pass drops, so it stays). Entries are checked, never cleared: an index
-  // beyond this pass's voxels or holding another key is a miss.
-  static constexpr std::size_t kRecent = 1024;
-  std::uint32_t recent_[kRecent] = {};
   Vec3f points_[kMaxVoxels];
   float times_[kMaxVoxels];
   std::size_t count_ = 0;
