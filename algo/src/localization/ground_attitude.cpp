@@ -8,6 +8,10 @@
 namespace v2xloc {
 
 void GroundAttitude::on_registration(const Pose3d& world_T_body, const Pose3d& odom_T_body) {
+  if (!(world_T_body.linear()(2, 2) >= kMinUpCosine)) {
+    known_ = false;
+    return;
+  }
   world_R_odom_ = world_T_body.linear() * odom_T_body.linear().transpose();
   known_ = true;
 }
@@ -15,6 +19,7 @@ void GroundAttitude::on_registration(const Pose3d& world_T_body, const Pose3d& o
 Pose3d GroundAttitude::tilt(const Pose3d& level, const Pose3d& odom_T_body) const {
   if (!known_) return level;
   const Mat3d carried = world_R_odom_ * odom_T_body.linear();
+  if (carried(2, 2) > kLevelUpCosine) return level;
   // Carried = Rz(heading) * tilt: keep the tilt, take the heading from `level`.
   const double heading = det::atan2(carried(1, 0), carried(0, 0));
   Pose3d out = level;

@@ -49,6 +49,22 @@ TEST(GroundAttitude, LevelUntilARegistrationThenItsTiltUnderTheFiltersHeading) {
 
   attitude.reset();
   EXPECT_TRUE(attitude.tilt(level, odom_later).isApprox(level));
+
+  // A tilt within the registrations' scatter on level ground (0.2 deg) leaves the guess level.
+  attitude.on_registration(pose(rot_y(0.0035), Vec3d::Zero()), odom_at_reg);
+  EXPECT_TRUE(attitude.tilt(level, odom_at_reg).isApprox(level));
+}
+
+TEST(GroundAttitude, AnImplausibleTiltIsForgottenNotCarried) {
+  GroundAttitude attitude;
+  const Pose3d odom = Pose3d::Identity();
+  attitude.on_registration(pose(rot_y(-0.05), Vec3d::Zero()), odom);
+  double grade = 0.0;
+  ASSERT_TRUE(attitude.grade(odom, grade));
+  attitude.on_registration(pose(rot_x(0.4), Vec3d::Zero()), odom);  // 23 deg of roll: no road
+  EXPECT_FALSE(attitude.grade(odom, grade));
+  const Pose3d level = pose(rot_z(1.0), Vec3d(1, 2, 3));
+  EXPECT_TRUE(attitude.tilt(level, odom).isApprox(level));
 }
 
 EkfState driving(double grade) {

@@ -10,10 +10,19 @@
 
 namespace v2xloc {
 
+// A registration tilted more than this (0.15 rad, 8.6 deg: steeper than a 15 % street with its
+// crown) did not find a road vehicle's attitude (a degenerate scan: one plane, one line, noise);
+// its tilt would only misguide the next frames' ICP, so the attitude is forgotten instead.
+inline constexpr double kMinUpCosine = 0.98877;  // cos(0.15)
+// A carried tilt under 0.5 deg (a 0.9 % slope) is within the registrations' own scatter on level
+// ground: the guess stays level, as the tracking ICP's work on a degenerate scan depends on it.
+inline constexpr double kLevelUpCosine = 0.99996;  // cos(0.5 deg)
+
 class GroundAttitude {
  public:
   void reset() { known_ = false; }
-  // A converged registration: world_T_body from it, odom_T_body the odometry at its frame.
+  // A converged registration: world_T_body from it, odom_T_body the odometry at its frame (an
+  // implausible tilt resets the attitude to unknown).
   void on_registration(const Pose3d& world_T_body, const Pose3d& odom_T_body);
   // `level` (the filter's pose, roll = pitch = 0) tilted by the carried attitude; level itself
   // before any fused registration.
