@@ -7,6 +7,10 @@
 
 namespace v2xloc {
 
+double road_grade_of(const Vec3d& forward) {
+  return forward.z() / std::sqrt(forward.x() * forward.x() + forward.y() * forward.y());
+}
+
 void GroundAttitude::on_registration(const Pose3d& world_T_body, const Pose3d& odom_T_body) {
   if (!(world_T_body.linear()(2, 2) >= kMinUpCosine)) {
     known_ = false;
@@ -29,8 +33,7 @@ Pose3d GroundAttitude::tilt(const Pose3d& level, const Pose3d& odom_T_body) cons
 
 bool GroundAttitude::grade(const Pose3d& odom_T_body, double& out) const {
   if (!known_) return false;
-  const Vec3d forward = world_R_odom_ * odom_T_body.linear().col(0);
-  out = forward.z() / std::sqrt(forward.x() * forward.x() + forward.y() * forward.y());  // sqrt, not hypot: libms round hypot differently
+  out = road_grade_of(world_R_odom_ * odom_T_body.linear().col(0));
   return true;
 }
 

@@ -5,6 +5,7 @@
 
 #include "v2xloc/algo/core/det_math.hpp"
 #include "v2xloc/algo/core/rigid_motion.hpp"
+#include "v2xloc/algo/localization/ground_attitude.hpp"
 
 namespace v2xloc {
 
@@ -190,7 +191,7 @@ void PoseFilter::restart(Ekf& ekf, double t, const Mat4d& pose, const VehicleMot
   s.speed = vehicle.speed;
   s.yaw_rate = vehicle.yaw_rate;
   // The body's pitch is the road's grade (a car's suspension pitches it by a few tenths of a degree).
-  s.road_grade = pose(2, 0) / std::sqrt(pose(0, 0) * pose(0, 0) + pose(1, 0) * pose(1, 0));  // sqrt, not hypot: libms round hypot differently
+  s.road_grade = road_grade_of(pose.topLeftCorner<3, 3>().col(0));
   EkfCovariance P = EkfCovariance::Zero();
   const double* sigmas = params_.restart_sigmas;
   for (int i = 0; i < kEkfStateSize; ++i) P(i, i) = sigmas[i] * sigmas[i];

@@ -6,6 +6,7 @@
 // replaces the carried heading.
 #pragma once
 
+#include "v2xloc/algo/core/types.hpp"
 #include "v2xloc/algo/localization/pose_types.hpp"
 
 namespace v2xloc {
@@ -17,6 +18,10 @@ inline constexpr double kMinUpCosine = 0.98877;  // cos(0.15)
 // A carried tilt under 0.5 deg (a 0.9 % slope) is within the registrations' own scatter on level
 // ground: the guess stays level, as the tracking ICP's work on a degenerate scan depends on it.
 inline constexpr double kLevelUpCosine = 0.99996;  // cos(0.5 deg)
+
+// The rise per metre driven along a body x axis (world frame): a road's grade from a pose's pitch.
+// sqrt, not hypot: libms round hypot differently (the target must give the host's bits).
+double road_grade_of(const Vec3d& forward);
 
 class GroundAttitude {
  public:
