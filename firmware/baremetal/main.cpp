@@ -36,6 +36,7 @@ v2xloc::RegistrationWorkspace g_workspace;
 v2xloc::MapFusion g_map;
 v2xloc::FixedVector<v2xloc::Vec3f, v2xloc::config::kMaxMapPoints> g_map_points;
 v2xloc::LidarOdometry g_odometry;
+v2xloc::OdometryScanBuffers g_odometry_buffers;
 v2xloc::Ekf g_ekf;
 v2xloc::FixedLagValidityGate g_fixed_lag_gate;
 v2xloc::CausalValidityGate g_causal_gate;
@@ -123,8 +124,8 @@ v2xloc::OdometryResult run_odometry(std::span<const v2xloc::Vec3f> target,
   params.max_range = 20.0;
   params.min_range = 0.1;
   g_odometry.configure(params);
-  g_odometry.register_frame(target);
-  return g_odometry.register_frame(std::span<const v2xloc::Vec3f>(g_deskewed, d.points_out));
+  g_odometry.register_frame(target, g_odometry_buffers);
+  return g_odometry.register_frame(std::span<const v2xloc::Vec3f>(g_deskewed, d.points_out), g_odometry_buffers);
 }
 
 // A few frames of registration quality through both validity-gate variants.

@@ -15,6 +15,11 @@ LidarOdometry& odometry() {
   return odom;
 }
 
+OdometryScanBuffers& odometry_buffers() {
+  static OdometryScanBuffers buffers;
+  return buffers;
+}
+
 double wall_ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -45,7 +50,7 @@ bool run_kitti(const KittiRunOptions& options, KittiRunResult& result, std::stri
     result.read_ms += wall_ms_since(t0);
     result.points_read += cloud.size();
     const std::uint64_t c0 = thread_cpu_ns();
-    const OdometryResult r = odom.register_frame(cloud.points);
+    const OdometryResult r = odom.register_frame(cloud.points, odometry_buffers());
     result.odometry_ms += static_cast<double>(thread_cpu_ns() - c0) * 1e-6;
     result.status.push_back(r.status);
     result.poses.push_back(velo_pose_to_cam(r.pose.matrix(), result.sequence.velo_to_cam));

@@ -62,14 +62,15 @@ void LidarOdometry::keep_in_range(std::span<const Vec3f> points, BoundedVector<V
   }
 }
 
-OdometryResult LidarOdometry::register_frame(std::span<const Vec3f> scan, const Pose3d* predicted_delta) {
+OdometryResult LidarOdometry::register_frame(std::span<const Vec3f> scan, OdometryScanBuffers& buffers,
+                                             const Pose3d* predicted_delta) {
   OdometryResult r;
   // Range filter (also drops NaN / Inf).
-  keep_in_range(scan, in_range_, r);
+  keep_in_range(scan, buffers.in_range, r);
   // Double voxelisation (KISS-ICP III-B): 0.5 v for the map, 1.5 v for registration.
   frame_fine_.clear();
-  const VoxelDownsampleResult fine = downsample_.run(
-      in_range_.span(), static_cast<float>(0.5 * params_.voxel_size), frame_fine_);
+  const VoxelDownsampleResult fine = buffers.downsample.run(
+      buffers.in_range.span(), static_cast<float>(0.5 * params_.voxel_size), frame_fine_);
   r.points_dropped_capacity += fine.output_overflow + fine.hash_overflow + fine.range_overflow;
   return register_fine(predicted_delta != nullptr ? &predicted_delta->matrix() : nullptr, r);
 }

@@ -64,7 +64,7 @@ void ScanPreparation::prepare_stereo(const StereoInput& stereo) {
   double sum = 0.0;
   for (std::uint32_t i = 0; i < r.points_out; ++i) sum += stereo_sigma_[i];
   stereo_mean_sigma_ = sum / r.points_out;
-  voxel_.run(std::span<const Vec3f>(stereo_points_, r.points_out), params_.stereo_voxel, stereo_down_);
+  stereo_voxel_.run(std::span<const Vec3f>(stereo_points_, r.points_out), params_.stereo_voxel, stereo_down_);
 }
 
 // The ingested scan is already one point per registration voxel: moved to the body frame, with

@@ -50,6 +50,7 @@ std::vector<Vec3d> sample_scene(double sx, double sy, double range, std::mt19937
 
 TEST(LidarOdometry, SyntheticCorridorDriftIsSmall) {
   static LidarOdometry odom;  // ~13 MB: static storage
+  static OdometryScanBuffers buffers;
   OdometryParams p;
   p.voxel_size = 0.5;
   p.max_range = 40.0;
@@ -82,7 +83,7 @@ TEST(LidarOdometry, SyntheticCorridorDriftIsSmall) {
       scan.push_back(ps.cast<float>());
     }
     const auto t0 = std::chrono::steady_clock::now();
-    r = odom.register_frame(scan);
+    r = odom.register_frame(scan, buffers);
     total_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     if (k == 0) {
       EXPECT_EQ(r.status, OdometryStatus::kFirstFrame);

@@ -17,9 +17,10 @@ namespace {
 
 TEST(LidarOdometry, EmptyAndNonFiniteScansAreHandled) {
   static LidarOdometry odom;
+  static OdometryScanBuffers buffers;
   odom.reset();
   std::vector<Vec3f> scan(10, Vec3f(NAN, 0.0f, 0.0f));
-  const OdometryResult r = odom.register_frame(scan);
+  const OdometryResult r = odom.register_frame(scan, buffers);
   EXPECT_EQ(r.status, OdometryStatus::kEmptyScan);
   EXPECT_EQ(r.points_dropped_range, 10u);
   EXPECT_TRUE(r.pose.matrix().allFinite());
@@ -27,6 +28,7 @@ TEST(LidarOdometry, EmptyAndNonFiniteScansAreHandled) {
 
 TEST(LidarOdometry, MapEvictsVoxelsBeyondRange) {
   static LidarOdometry odom;
+  static OdometryScanBuffers buffers;
   OdometryParams p;
   p.voxel_size = 1.0;
   p.max_range = 20.0;
@@ -35,13 +37,13 @@ TEST(LidarOdometry, MapEvictsVoxelsBeyondRange) {
   for (int i = -15; i <= 15; ++i)
     for (int j = -15; j <= 15; ++j) scan.emplace_back(float(i), float(j), -1.5f);
   odom.reset();
-  odom.register_frame(scan);
+  odom.register_frame(scan, buffers);
   const std::size_t before = odom.map_voxel_count();
   // Restart 100 m away: the first frame's voxels are all beyond max_range and must go.
   Mat4d far = Mat4d::Identity();
   far(0, 3) = 100.0;
   odom.reset(Pose3d(far));
-  odom.register_frame(scan);
+  odom.register_frame(scan, buffers);
   EXPECT_GT(before, 0u);
   for (const MapPoint& m : odom.map_points()) EXPECT_GT(m.x, 80.0f);
 }

@@ -478,6 +478,7 @@ TEST(PoseSearchRobustness, RayConflictsCountRaysThroughWallsOnly) {
 
 TEST(OdometryRobustness, GivenPredictionIsUsedAndNonFiniteOneIgnored) {
   static LidarOdometry odom;
+  static OdometryScanBuffers buffers;
   OdometryParams p;
   p.voxel_size = 0.5;
   p.max_range = 40.0;
@@ -492,9 +493,9 @@ TEST(OdometryRobustness, GivenPredictionIsUsedAndNonFiniteOneIgnored) {
     const Vec3d s = inv.topLeftCorner<3, 3>() * q.cast<double>() + inv.topRightCorner<3, 1>();
     scan1.push_back(s.cast<float>());
   }
-  EXPECT_EQ(odom.register_frame(scan0).status, OdometryStatus::kFirstFrame);
+  EXPECT_EQ(odom.register_frame(scan0, buffers).status, OdometryStatus::kFirstFrame);
   const Pose3d given(motion);
-  const OdometryResult r = odom.register_frame(scan1, &given);
+  const OdometryResult r = odom.register_frame(scan1, buffers, &given);
   ASSERT_EQ(r.status, OdometryStatus::kOk);
   const Mat4d e = se3_inverse(motion) * r.delta.matrix();
   const Vec3d e_t = e.topRightCorner<3, 1>();
@@ -503,7 +504,7 @@ TEST(OdometryRobustness, GivenPredictionIsUsedAndNonFiniteOneIgnored) {
 
   Pose3d bad(motion);
   bad(0, 3) = std::nan("");
-  const OdometryResult r2 = odom.register_frame(scan1, &bad);  // falls back to constant velocity
+  const OdometryResult r2 = odom.register_frame(scan1, buffers, &bad);  // falls back to constant velocity
   EXPECT_TRUE(r2.pose.matrix().allFinite());
   EXPECT_NE(r2.status, OdometryStatus::kEmptyScan);
 }

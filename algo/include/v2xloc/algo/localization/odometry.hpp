@@ -88,6 +88,14 @@ struct OdometryResult {
   std::uint32_t voxels_evicted = 0;
 };
 
+// The raw-sweep path's scratch (LidarOdometry::register_frame): the range-filtered returns and the
+// fine voxel table. The caller's, not every odometry's: the localizer's scan ingest voxelises the
+// sweep once (register_voxelized_frame), so its odometry would carry ~0.8 MiB (EMBEDDED) unused.
+struct OdometryScanBuffers {
+  VoxelDownsampleStorage<config::kVoxelHashSlots, config::kMaxDownsampledPoints> downsample;
+  FixedVector<Vec3f, config::kMaxScanPoints> in_range;
+};
+
 class LidarOdometry {
  public:
   explicit LidarOdometry(const OdometryParams& params = {});
@@ -100,7 +108,9 @@ class LidarOdometry {
   // One deskewed scan in the sensor frame. predicted_delta (optional): the sensor's motion since
   // the last frame from other sensors (wheel speed + gyro); replaces the constant-velocity
   // prediction, which lags a whole frame at a turn's onset.
-  OdometryResult register_frame(std::span<const Vec3f> scan, const Pose3d* predicted_delta = nullptr);
+  // buffers: scratch for this call (large: static storage).
+  OdometryResult register_frame(std::span<const Vec3f> scan, OdometryScanBuffers& buffers,
+                                const Pose3d* predicted_delta = nullptr);
   // The same for a scan already voxelised at 0.5 v in the sensor frame (the localizer's ingest
   // does it once for odometry and registration): skips the range filter's copy and the fine pass.
   OdometryResult register_voxelized_frame(std::span<const Vec3f> fine, const Pose3d* predicted_delta = nullptr);
@@ -137,8 +147,6 @@ class LidarOdometry {
   OdometryVoxelMap map_;  // the local map (odometry_map.hpp)
 
   // Per-frame buffers.
-  VoxelDownsampleStorage<config::kVoxelHashSlots, config::kMaxDownsampledPoints> downsample_;
-  FixedVector<Vec3f, config::kMaxScanPoints> in_range_;
   FixedVector<Vec3f, config::kMaxDownsampledPoints> frame_fine_;
   FixedVector<Vec3f, config::kMaxDownsampledPoints> frame_coarse_;
   // 1.5 v voxels of this frame with the moments of their fine points (source normals).

@@ -52,7 +52,8 @@ class ScanPreparation {
   FixedVector<Vec3f, config::kMaxDownsampledPoints> down_;
   FixedVector<Vec3f, config::kMaxDownsampledPoints> tracking_;
   FixedVector<Vec3f, config::kMaxSearchPoints> search_;
-  VoxelDownsampleStorage<config::kVoxelHashSlots, config::kMaxDownsampledPoints> voxel_;
+  // The stereo cloud's voxels (the sweep's are the ingest's): twice the slots of the voxels it holds.
+  VoxelDownsampleStorage<2 * config::kMaxDownsampledPoints, config::kMaxDownsampledPoints> stereo_voxel_;
   Vec3f stereo_points_[config::kMaxStereoPoints];
   float stereo_sigma_[config::kMaxStereoPoints];
   FixedVector<Vec3f, config::kMaxDownsampledPoints> stereo_down_;
