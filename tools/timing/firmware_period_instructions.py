@@ -2,8 +2,9 @@
 """Instructions per 100 ms period of the whole firmware (localizer + V2X trust + decoding), by callgrind.
 
 Replays RECORDING through `v2xloc-firmware` (`v2xloc-eval REC --firmware ...`, the demo's path) with
-the firmware under `valgrind --tool=callgrind --dump-before=PeriodDriver::close_period`: an ego scan
-closes a period, so each dump holds one period's work: the shares verified at its boundary, map
+the firmware under `valgrind --tool=callgrind --dump-before=PeriodDriver::close_with_scan` (and
+`close_without_scan`, the period timer's): an ego scan closes a period, so each dump holds one
+period's work: the shares verified at its boundary, map
 fusion, the localizer's frame, and the datagrams (fragment CRC, reassembly, share hashing) and CAN
 frames that arrive until the next scan. A recording with an IMU stream (imu_reports.txt) is replayed
 with it: the firmware reads every HID report from its emulated device at the full rate, decodes it
@@ -83,7 +84,8 @@ def main():
     wrapper = os.path.join(work, "firmware-under-callgrind.sh")
     with open(wrapper, "w") as f:
         f.write("#!/bin/sh\nexec valgrind --tool=callgrind "
-                "'--dump-before=v2xloc::firmware::PeriodDriver::close_period*' "
+                "'--dump-before=v2xloc::firmware::PeriodDriver::close_with_scan*' "
+                "'--dump-before=v2xloc::firmware::PeriodDriver::close_without_scan*' "
                 f"--callgrind-out-file={work}/cg.%p {firmware} \"$@\" 2>{work}/valgrind.err\n")
     os.chmod(wrapper, 0o755)
     cmd = [args.eval, args.recording, "--firmware", wrapper, "--frames", str(args.frames), "--json"]
