@@ -191,6 +191,15 @@ def check_budget(a, periods, summary):
     need(not over, f"{len(over)} periods over {max(a.budget, a.known_over) / 1e6:.0f} M instructions")
 
 
+def check_stack(a, summary):
+    """The painted stack's high-water mark the image reports ('# stack_high_water N painted P')."""
+    marks = [s.split() for s in summary if s.startswith("# stack_high_water")]
+    need(len(marks) == 1 and len(marks[0]) >= 3, "no stack high-water line in the target's output")
+    used, painted = int(marks[0][2]), int(marks[0][4]) if len(marks[0]) >= 5 else 0
+    need(used < painted, f"the stack reached the end of its painted {painted} B: the mark is a floor, not a measure")
+    need(used <= a.max_stack, f"stack high-water {used} B over {a.max_stack} B")
+
+
 def parse_args():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--name", required=True)
@@ -203,6 +212,8 @@ def parse_args():
     ap.add_argument("--recording", help="an existing recording folder instead of --sim/--generate")
     ap.add_argument("--worst-case", help="test_worst_case_localizer: its adversarial drive is the fixture")
     ap.add_argument("--budget", type=float, default=100e6, help="instructions per period outside 'setup'")
+    ap.add_argument("--max-stack", type=int, default=64 * 1024,
+                    help="bytes of stack the run may reach (the painted high-water mark; docs/target.md)")
     ap.add_argument("--timeout", type=int, default=900, help="seconds for the QEMU run")
     ap.add_argument("--golden", help="the committed host lines the host reference must equal")
     ap.add_argument("--update-golden", action="store_true",
@@ -243,6 +254,7 @@ def main():
         periods, summary = compare(a, host_lines, target, recorded)
     need(not mismatch, "the golden check (above)")
     check_budget(a, periods, summary)
+    check_stack(a, summary)
     return 0
 
 
