@@ -9,15 +9,15 @@
 namespace v2xloc::dataset {
 namespace {
 
-// ~13 MB of map and frame buffers: static storage, as on the ECU.
-LidarOdometry& odometry() {
-  static LidarOdometry odom;
-  return odom;
-}
+// The odometry and its raw-sweep scratch (~24 MB): static storage, as on the ECU.
+struct RawSweepOdometry {
+  LidarOdometry odometry;
+  OdometryScanBuffers buffers;
+};
 
-OdometryScanBuffers& odometry_buffers() {
-  static OdometryScanBuffers buffers;
-  return buffers;
+RawSweepOdometry& raw_sweep_odometry() {
+  static RawSweepOdometry state;
+  return state;
 }
 
 double wall_ms_since(std::chrono::steady_clock::time_point t0) {
@@ -40,7 +40,8 @@ const char* status_name(OdometryStatus s) {
 bool run_kitti(const KittiRunOptions& options, KittiRunResult& result, std::string& error) {
   result = KittiRunResult{};
   if (!load_kitti_sequence(options.seq_dir, options.poses_path, result.sequence, error)) return false;
-  LidarOdometry& odom = odometry();
+  RawSweepOdometry& state = raw_sweep_odometry();
+  LidarOdometry& odom = state.odometry;
   odom.configure(options.odometry);
   odom.reset();
   cloud_io::PointCloud cloud;
@@ -50,7 +51,7 @@ bool run_kitti(const KittiRunOptions& options, KittiRunResult& result, std::stri
     result.read_ms += wall_ms_since(t0);
     result.points_read += cloud.size();
     const std::uint64_t c0 = thread_cpu_ns();
-    const OdometryResult r = odom.register_frame(cloud.points, odometry_buffers());
+    const OdometryResult r = odom.register_frame(cloud.points, state.buffers);
     result.odometry_ms += static_cast<double>(thread_cpu_ns() - c0) * 1e-6;
     result.status.push_back(r.status);
     result.poses.push_back(velo_pose_to_cam(r.pose.matrix(), result.sequence.velo_to_cam));

@@ -49,7 +49,7 @@ std::vector<Vec3d> sample_scene(double sx, double sy, double range, std::mt19937
 }
 
 TEST(LidarOdometry, SyntheticCorridorDriftIsSmall) {
-  static LidarOdometry odom;  // ~13 MB: static storage
+  static LidarOdometry odom;  // ~18 MB: static storage
   static OdometryScanBuffers buffers;
   OdometryParams p;
   p.voxel_size = 0.5;

@@ -93,9 +93,9 @@ inline constexpr std::size_t kMapFusionHashSlots = kEmbeddedProfile ? 16384 : 26
 inline constexpr std::size_t kMapReferenceCellSlots = kEmbeddedProfile ? 65536 : 262144;
 // Surveyed backgrounds (localization/surveyed_background.hpp): infrastructure units that have one,
 // and its cells (4 B packed keys in the firmware's static storage: kMaxBackgroundUnits x
-// kMaxBackgroundCells x 4 B, EMBEDDED 4 x 8,192 x 4 B = 128 KiB). A
-// 32-beam unit's static scene has ~14k cells at 0.2 m and ~7.6-8k at 0.52 m; the simulator grows
-// the cell until a background fits kBackgroundFileCells, so every profile loads the same file.
+// kMaxBackgroundCells x 4 B, EMBEDDED 4 x 8,192 x 4 B = 128 KiB). A 32-beam unit's static scene
+// has ~14k cells at 0.2 m and ~7.6-8k at 0.52 m; the simulator grows the cell until a background
+// fits kBackgroundFileCells, so every profile loads the same file.
 inline constexpr std::size_t kMaxBackgroundUnits = kEmbeddedProfile ? 4 : 8;
 inline constexpr std::size_t kMaxBackgroundCells = kEmbeddedProfile ? 8192 : 32768;
 inline constexpr std::size_t kBackgroundFileCells = 8192;

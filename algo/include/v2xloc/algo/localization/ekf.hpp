@@ -23,8 +23,9 @@
 // Measurements: CAN wheel speed (z = k v) and yaw rate (z = w + b), the IMU gyro z
 // (z = (1 + s_g) w + b_g, noise from the sensor's angle random walk gyro_noise_density:
 // sigma^2 = N^2 / span for the mean rate over span seconds), GNSS position, registration pose
-// (x, y, z, yaw), LiDAR odometry rates, the road grade (the body's pitch, ground_attitude.hpp). The scale error s_g is what a turn adds to the gyro's
-// error beyond its bias (a MEMS part's sensitivity error, 0.5 % 1 sigma for the class): without it
+// (x, y, z, yaw), LiDAR odometry rates, the road grade (the body's pitch, ground_attitude.hpp).
+// The scale error s_g is what a turn adds to the gyro's error beyond its bias (a MEMS part's
+// sensitivity error, 0.5 % 1 sigma for the class): without it
 // the registrations' yaw corrections during a turn land in the bias, which is then wrong on the
 // straight that follows; with it the turn's share goes to the state it belongs to.
 // Process model: constant turn rate and velocity on the ground plane (Schubert et al. 2008,
