@@ -19,22 +19,16 @@ TrackingOutcome TrackingRegistration::step(const TrackingFrame& f, PoseSearchScr
   if (result.status == RegistrationStatus::kDidNotConverge) ++counters.tracking_work_capped;  // params_.icp.max_work
   const std::uint64_t queries = (static_cast<std::uint64_t>(result.iterations) + 1) * f.tracking_scan.size();
   counters.tracking_queries += queries;
-  std::uint64_t audit_cap = ~std::uint64_t{0};
-  bool room_to_start = true;
   if (f.work != nullptr) {
     const PeriodWorkParams& w = f.work->params();
     const std::uint32_t normals = f.map.lazy_normals != nullptr ? f.map.lazy_normals->this_period().computed : 0u;
     f.work->add(static_cast<double>(queries) * w.tracking_query + normals * w.map_normal);
-    if (w.search_unit > 0.0) audit_cap = static_cast<std::uint64_t>(f.work->left() / w.search_unit);
-    room_to_start = f.work->left() >= w.audit_start;
   }
   if (result.ok()) {
-    AuditFrame audit{Pose3d(result.transform), f.scan, f.tracking_scan, f.search_scan, f.map, f.sensor_in_body, f.icp_hints,
-                     f.probe, f.frame, f.odom_T_body, f.map_busy};
-    audit.work_cap = audit_cap;
-    audit.room_to_start = room_to_start;
-    out.audit = audit_.step(audit, scratch, counters);
-    if (!out.audit.switch_basin) check_rival(f, out, counters);
+    // A contest withholds the track from the filter: its check comes first, the audit (insurance)
+    // takes the period's rest.
+    check_rival(f, out, counters);
+    if (!out.audit.switch_basin) run_audit(f, out, scratch, counters);
     if (out.audit.switch_basin) result.status = RegistrationStatus::kDidNotConverge;
   }
   if (result.ok() && f.stereo_cloud.size() >= params_.stereo_min_points) {
@@ -46,13 +40,35 @@ TrackingOutcome TrackingRegistration::step(const TrackingFrame& f, PoseSearchScr
   return out;
 }
 
-// A contested track: the rival is refined and judged on this frame's scan (priced as tracking).
+void TrackingRegistration::run_audit(const TrackingFrame& f, TrackingOutcome& out, PoseSearchScratch& scratch,
+                                     LocalizerCounters& counters) {
+  AuditFrame audit{Pose3d(out.registration.transform), f.scan, f.tracking_scan, f.search_scan, f.map, f.sensor_in_body,
+                   f.icp_hints, f.probe, f.frame, f.odom_T_body, f.map_busy};
+  if (f.work != nullptr) {
+    const PeriodWorkParams& w = f.work->params();
+    if (w.search_unit > 0.0) audit.work_cap = static_cast<std::uint64_t>(f.work->left() / w.search_unit);
+    audit.room_to_start = f.work->left() >= w.audit_start;
+  }
+  out.audit = audit_.step(audit, scratch, counters);
+}
+
+// A contested track: the rival is refined and judged on this frame's scan, within the period's
+// remaining budget (priced as tracking queries and fitness evaluations).
 void TrackingRegistration::check_rival(const TrackingFrame& f, TrackingOutcome& out, LocalizerCounters& counters) {
   if (!rival_.contested()) return;
-  const RivalFrame rf{Pose3d(out.registration.transform), f.scan, f.tracking_scan, f.map, f.icp_hints, f.frame, f.odom_T_body};
+  RivalFrame rf{Pose3d(out.registration.transform), f.scan, f.tracking_scan, f.map, f.icp_hints, f.frame, f.odom_T_body};
+  if (f.work != nullptr) {
+    rf.room = f.work->left();
+    rf.pass_price = f.work->params().tracking_query;
+    rf.evaluation_price = f.work->params().evaluation_point;
+  }
   const RivalOutcome r = rival_.check(rf);
   counters.tracking_queries += r.queries;
-  if (f.work != nullptr) f.work->add(static_cast<double>(r.queries) * f.work->params().tracking_query);
+  if (r.deferred) ++counters.rival_checks_deferred;
+  if (f.work != nullptr) {
+    const PeriodWorkParams& w = f.work->params();
+    f.work->add(static_cast<double>(r.queries) * w.tracking_query + static_cast<double>(r.evaluated) * w.evaluation_point);
+  }
   if (r.switch_basin) {
     ++counters.basin_switches;
     out.audit.switch_basin = true;

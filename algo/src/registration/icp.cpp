@@ -116,12 +116,12 @@ float search_bound(const Vec3d& pt, double max_distance) {
 }
 
 // hints (optional, one per source point): last pass's match, seeds the search (same result).
-// Accumulates source points [cursor, end) into pass until `work` reaches work_limit (one unit a
-// point plus its query's node visits); true when the pass is complete.
+// Accumulates source points [cursor, end), every stride-th, into pass until `work` reaches
+// work_limit (one unit a point plus its query's node visits); true when the pass is complete.
 bool run_pass(std::span<const Vec3f> source, const IcpTarget& target, const Mat4d& transform,
               double max_distance, const RobustKernel& kernel, PassMode mode, Pass& pass,
               std::span<std::uint32_t> hints, std::uint32_t& cursor, std::uint64_t& work,
-              std::uint64_t work_limit) {
+              std::uint64_t work_limit, std::uint32_t stride = 1) {
   const Mat3d r = transform.topLeftCorner<3, 3>();
   const Vec3d t = transform.topRightCorner<3, 1>();
   const double max_d2 = max_distance * max_distance;
@@ -131,7 +131,7 @@ bool run_pass(std::span<const Vec3f> source, const IcpTarget& target, const Mat4
   constexpr double kVicinitySlack = 1e-3;
   const bool skip_empty = target.vicinity != nullptr && target.vicinity->ready() && target.vicinity->valid() &&
                           max_distance + kVicinitySlack <= target.vicinity->reach();
-  for (; cursor < source.size(); ++cursor) {
+  for (; cursor < source.size(); cursor += stride) {
     if (work >= work_limit) return false;
     ++work;
     const std::size_t k = cursor;
@@ -190,10 +190,10 @@ bool run_pass(std::span<const Vec3f> source, const IcpTarget& target, const Mat4
 
 // A whole pass at once.
 void run_pass(std::span<const Vec3f> source, const IcpTarget& target, const Mat4d& transform,
-              double max_distance, const RobustKernel& kernel, PassMode mode, Pass& pass) {
+              double max_distance, const RobustKernel& kernel, PassMode mode, Pass& pass, std::uint32_t stride = 1) {
   std::uint32_t cursor = 0;
   std::uint64_t work = 0;
-  run_pass(source, target, transform, max_distance, kernel, mode, pass, {}, cursor, work, ~std::uint64_t{0});
+  run_pass(source, target, transform, max_distance, kernel, mode, pass, {}, cursor, work, ~std::uint64_t{0}, stride);
 }
 
 bool target_valid(const IcpTarget& target, bool need_normals) {
@@ -251,17 +251,18 @@ bool update_transform(const Pass& pass, bool plane, const IcpParams& params, Mat
 }  // namespace
 
 RegistrationResult evaluate_registration(std::span<const Vec3f> source, const IcpTarget& target,
-                                         const Mat4d& transform, double max_correspondence_distance) {
+                                         const Mat4d& transform, double max_correspondence_distance,
+                                         std::uint32_t stride) {
   RegistrationResult result;
   result.transform = transform;
-  if (!target_valid(target, false) || !(max_correspondence_distance > 0.0) || !transform.allFinite()) {
+  if (!target_valid(target, false) || !(max_correspondence_distance > 0.0) || !transform.allFinite() || stride == 0) {
     result.status = RegistrationStatus::kInvalidInput;
     return result;
   }
   result.nonfinite_dropped = count_nonfinite(source);
   Pass pass;
   run_pass(source, target, transform, max_correspondence_distance, RobustKernel{},
-           PassMode::kEvaluateOnly, pass);
+           PassMode::kEvaluateOnly, pass, stride);
   fill_from_pass(pass, result);
   result.search_truncated = pass.search_truncated;
   result.node_visits = pass.node_visits;

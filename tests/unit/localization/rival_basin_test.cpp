@@ -118,5 +118,79 @@ TEST(RivalBasin, ATrueTrackStandsAgainstAWeakRival) {
   EXPECT_FALSE(rival.check(scene.frame(at(0.0, 0.0), 2)).checked) << "decided: no more checks";
 }
 
+// The period's remaining budget prices the check: priced work never exceeds the room it was
+// given; a frame without room for one ICP pass waits, an ICP the room ends resumes next frame from
+// the carried pose, and after max_deferred_frames frames without a decision one runs regardless.
+TEST(RivalBasin, TheCheckStaysWithinThePeriodsRoomAndStillDecides) {
+  Scene scene;
+  ASSERT_TRUE(scene.map.normals_ok);
+  LocalizerParams params;
+  params.tracking.rival.min_decision_points = 300;
+  RivalBasin rival;
+  configure(rival, params);
+  const Pose3d wrong = at(3.0, 3.0);
+  rival.note(wrong, 0.20, 0, Pose3d::Identity());
+  rival.note(at(0.1, 0.0), 0.18, 0, Pose3d::Identity());
+  rival.on_start(wrong, 0, Pose3d::Identity());
+  ASSERT_TRUE(rival.contested());
+  const double n = static_cast<double>(scene.scan.size());
+  const std::uint32_t max_deferred = params.tracking.rival.max_deferred_frames;
+  std::uint32_t deferred = 0, frames = 0;
+  RivalOutcome decided;
+  for (std::uint32_t k = 1; k <= 2 * max_deferred + 2 && rival.contested(); ++k) {
+    RivalFrame f = scene.frame(wrong, k);
+    f.pass_price = 1000.0;
+    f.evaluation_price = 1000.0;
+    f.room = k == 1 ? 0.5 * n * f.pass_price : 2.5 * n * f.pass_price;  // no pass, then two a frame
+    const bool forced = deferred >= max_deferred;
+    const RivalOutcome r = rival.check(f);
+    ++frames;
+    EXPECT_TRUE(r.checked);
+    const double priced = static_cast<double>(r.queries) * f.pass_price + static_cast<double>(r.evaluated) * f.evaluation_price;
+    if (!forced) EXPECT_LE(priced, f.room) << "frame " << k;
+    if (k == 1) EXPECT_EQ(r.queries, 0u) << "no room for a pass: nothing runs";
+    if (r.deferred) {
+      ++deferred;
+      EXPECT_EQ(r.evaluated, 0u);
+      EXPECT_TRUE(rival.contested());
+      continue;
+    }
+    deferred = 0;
+    decided = r;
+  }
+  EXPECT_FALSE(rival.contested()) << "decided within " << frames << " frames";
+  EXPECT_GE(frames, 3u) << "frame 1 waited, and two passes a frame did not finish the ICP at once";
+  EXPECT_TRUE(decided.switch_basin);
+  EXPECT_GT(decided.stride, 1u) << "the room held a subsample, not the whole scan";
+  EXPECT_LT(decided.candidate.translation().norm(), 0.05) << "refined onto the walls across frames";
+}
+
+// Room for the ICP and for a third of the scan per pose: the two poses are judged on an even
+// subsample and the true basin still wins.
+TEST(RivalBasin, AnEvenSubsampleDecidesWhenTheWholeScanDoesNotFit) {
+  Scene scene;
+  ASSERT_TRUE(scene.map.normals_ok);
+  LocalizerParams params;
+  params.tracking.rival.min_decision_points = 300;
+  RivalBasin rival;
+  configure(rival, params);
+  const Pose3d wrong = at(3.0, 3.0);
+  rival.note(wrong, 0.20, 0, Pose3d::Identity());
+  rival.note(at(0.1, 0.0), 0.18, 0, Pose3d::Identity());
+  rival.on_start(wrong, 0, Pose3d::Identity());
+  RivalFrame f = scene.frame(wrong, 1);
+  const double n = static_cast<double>(scene.scan.size());
+  f.pass_price = 1.0;
+  f.evaluation_price = 1000.0;
+  f.room = n * (params.tracking.icp.criteria.max_iterations + 1.0) + 2.0 * f.evaluation_price * n / 3.0;
+  const RivalOutcome r = rival.check(f);
+  EXPECT_FALSE(r.deferred);
+  EXPECT_GE(r.stride, 2u);
+  EXPECT_LE(r.stride, 3u);
+  EXPECT_LE(static_cast<double>(r.queries) * f.pass_price + static_cast<double>(r.evaluated) * f.evaluation_price, f.room);
+  EXPECT_TRUE(r.switch_basin);
+  EXPECT_FALSE(rival.contested());
+}
+
 }  // namespace
 }  // namespace v2xloc

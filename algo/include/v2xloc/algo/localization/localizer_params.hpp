@@ -73,6 +73,11 @@ struct RivalBasinParams {
   double resolve_ratio = 1.3;    // [ratio] tracked full-scan tight fitness over the rival's: the track stands
   double switch_ratio = 1.15;    // [ratio] the rival's over the tracked: a basin switch (a search confirms it)
   std::uint32_t max_age_frames = 50;  // [frames] older start-up hypotheses are forgotten (odometry drift)
+  // A check the period's remaining budget cannot hold waits (its ICP resumes next frame from the
+  // carried pose, its two fitness evaluations take an even subsample of at least
+  // min_decision_points); after max_deferred_frames frames without a decision one runs regardless.
+  std::uint32_t min_decision_points = 1000;  // [points]
+  std::uint32_t max_deferred_frames = 5;     // [frames]
 };
 
 struct TrackingParams {
@@ -287,6 +292,7 @@ struct LocalizerParams {
     PeriodWorkParams p;  // per-unit costs: callgrind, x86-64 -O2, Sim 0 / 4_infra_2_agent (TUNING.md)
     p.odometry_query = 2450.0;  // [instructions] per odometry point and iteration
     p.tracking_query = 2300.0;  // [instructions] per tracking ICP point and pass
+    p.evaluation_point = 1000.0;  // [instructions] per fitness-evaluation point (912 on a real 17.9k-point scan)
     p.map_normal = 5000.0;      // [instructions] per map normal
     p.search_unit = 150.0;      // [instructions] per search unit: the dear end of the measured 77-170
     return p;

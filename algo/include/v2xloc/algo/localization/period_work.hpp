@@ -23,6 +23,7 @@ struct PeriodWorkParams {
   double background_check = 0.8e6;     // [instructions] a cloud scored on its unit's surveyed background
   double odometry_query = 0.0;         // [instructions] per odometry source point and iteration
   double tracking_query = 0.0;         // [instructions] per tracking ICP point and pass
+  double evaluation_point = 0.0;       // [instructions] per point of a full-scan fitness evaluation
   double map_normal = 0.0;             // [instructions] per map normal computed on first use
   double rebuild_step = 16e6;          // [instructions] one map rebuild step (extract, or a tree slice)
   double activation = 14e6;            // [instructions] the new map's first normals, in the period it activates

@@ -9,11 +9,14 @@
 // the track stands when it beats the rival by resolve_ratio, and the rival takes over (a basin
 // switch, confirmed by the start-up search as an audit's nomination is) when it beats the track
 // by switch_ratio. The caller withholds a contested track's registrations from the filter and
-// from validity.
+// from validity. The check lives within the period's budget (RivalFrame::room): its ICP runs the
+// passes the room prices and resumes next frame from the carried pose; the two evaluations take
+// the whole scan when the room holds them, else an even subsample of it.
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <span>
 
 #include "v2xloc/algo/localization/pose_types.hpp"
@@ -31,11 +34,19 @@ struct RivalFrame {
   std::span<std::uint32_t> icp_hints{};    // ICP scratch, >= scan.size()
   std::uint32_t frame = 0;                 // localizer frame index
   Pose3d odom_T_body = Pose3d::Identity();  // this frame's odometry pose
+  // [instructions] the period's remaining budget, the price of one ICP pass over one scan point,
+  // and of one point of a fitness evaluation (room infinite: the check always completes)
+  double room = std::numeric_limits<double>::infinity();
+  double pass_price = 0.0;
+  double evaluation_price = 0.0;
 };
 
 struct RivalOutcome {
   bool checked = false;                   // the rival was compared this frame
+  bool deferred = false;                  // no decision this frame: the room did not hold one
   std::uint64_t queries = 0;              // nearest-neighbour queries of its ICP
+  std::uint64_t evaluated = 0;            // points of its two fitness evaluations
+  std::uint32_t stride = 0;               // evaluation subsample stride (1: the whole scan)
   bool switch_basin = false;              // the rival beat the track ...
   Pose3d candidate = Pose3d::Identity();  // ... refined here (world_T_body)
 };
@@ -65,12 +76,16 @@ class RivalBasin {
   };
   static constexpr std::size_t kNotes = 8;
 
+  RivalOutcome& defer(RivalOutcome& out);
+  std::uint32_t evaluation_stride(const RivalFrame& f, double icp_cost, bool forced) const;
+
   RivalBasinParams params_{};
   PoseSearchParams search_{};
   IcpParams icp_{};
   std::array<Note, kNotes> notes_{};
   std::size_t note_count_ = 0;
   bool contested_ = false;
+  std::uint32_t deferred_ = 0;            // frames in a row without a decision
   Mat4d rival_ = Mat4d::Identity();       // world_T_body at rival_odom_
   Mat4d rival_odom_ = Mat4d::Identity();
 };

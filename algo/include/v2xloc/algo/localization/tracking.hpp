@@ -57,6 +57,7 @@ class TrackingRegistration {
 
  private:
   void check_rival(const TrackingFrame& f, TrackingOutcome& out, LocalizerCounters& counters);
+  void run_audit(const TrackingFrame& f, TrackingOutcome& out, PoseSearchScratch& scratch, LocalizerCounters& counters);
 
   TrackingParams params_{};
   BasinAudit audit_{};

@@ -133,8 +133,10 @@ bool icp_continue(IcpRun& run, std::span<const Vec3f> source, const IcpTarget& t
 
 // Open3D's evaluate_registration: fitness, inlier RMSE, inliers and the information matrix of
 // `transform` without iterating (status kOk, kNoCorrespondences, kNotEnoughPoints or
-// kInvalidInput).
+// kInvalidInput). stride > 1 judges every stride-th source point only (points 0, stride, ...):
+// a decision that must fit a period's remaining budget (0: kInvalidInput).
 RegistrationResult evaluate_registration(std::span<const Vec3f> source, const IcpTarget& target,
-                                         const Mat4d& transform, double max_correspondence_distance);
+                                         const Mat4d& transform, double max_correspondence_distance,
+                                         std::uint32_t stride = 1);
 
 }  // namespace v2xloc
