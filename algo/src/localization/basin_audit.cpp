@@ -8,12 +8,6 @@
 
 namespace v2xloc {
 
-bool distinct_basin(const Mat4d& a, const Mat4d& b, const PoseSearchParams& sp) {
-  const Mat4d d = se3_inverse(a) * b;
-  return std::sqrt(d(0, 3) * d(0, 3) + d(1, 3) * d(1, 3)) >= sp.distinct_distance ||
-         std::abs(det::wrap_pi(yaw_of(d.topLeftCorner<3, 3>()))) >= sp.distinct_yaw;
-}
-
 void BasinAudit::configure(const BasinAuditParams& params, const PoseSearchParams& search, const IcpParams& icp) {
   params_ = params;
   search_ = search;
@@ -25,6 +19,12 @@ void BasinAudit::configure(const BasinAuditParams& params, const PoseSearchParam
 }
 
 AuditOutcome BasinAudit::step(const AuditFrame& f, PoseSearchScratch& scratch, LocalizerCounters& counters) {
+  if (pending_) {  // a nomination's decision the room did not hold
+    f.probe(LocalizerStage::kAudit);
+    const AuditOutcome out = decide(f, f.decision.room, counters);
+    f.probe(LocalizerStage::kTracking);
+    return out;
+  }
   // A search that outlived its track (frames without tracking in between) is dropped.
   if (running_ && f.frame - started_frame_ > params_.max_frames) running_ = false;
   // Periods that fused map clouds have spent part of their spare work: the audit is insurance, it
@@ -55,7 +55,7 @@ AuditOutcome BasinAudit::step(const AuditFrame& f, PoseSearchScratch& scratch, L
   if (done) {
     running_ = false;
     first_of_track_ = false;
-    out = finish(f, counters);
+    out = finish(f, f.decision.room - static_cast<double>(job_.work() - before) * f.unit_price, counters);
   }
   f.probe(LocalizerStage::kTracking);
   return out;
@@ -75,7 +75,7 @@ void BasinAudit::start(const AuditFrame& f) {
 
 // The search's verdict, in the frame it started at; a nominated basin is carried to this frame
 // by the odometry and decided on this frame's full scan.
-AuditOutcome BasinAudit::finish(const AuditFrame& f, LocalizerCounters& counters) const {
+AuditOutcome BasinAudit::finish(const AuditFrame& f, double room, LocalizerCounters& counters) {
   AuditOutcome out;
   ++counters.basin_audits;
   out.audited = true;
@@ -89,32 +89,51 @@ AuditOutcome BasinAudit::finish(const AuditFrame& f, LocalizerCounters& counters
   if (dx * dx + dy * dy > reach * reach) return out;
   const double tracked_tight = evaluate_registration(job_.scan(), f.map, tracked_at_start_, sp.select_distance).fitness;
   if (!(s.best_tight_fitness > params_.switch_ratio * tracked_tight)) return out;
-  const Mat4d nominated = s.best.transform * se3_inverse(odom_at_start_) * f.odom_T_body.matrix();
-  Mat4d refined = Mat4d::Identity();
-  if (!wins_on_full_scan(f, nominated, refined)) return out;
-  ++counters.basin_switches;
-  out.switch_basin = true;
-  out.candidate = Pose3d(refined);
-  return out;
+  pending_ = true;
+  pending_frames_ = 0;
+  pending_pose_ = s.best.transform;
+  pending_odom_ = odom_at_start_;
+  AuditOutcome decided = decide(f, room, counters);
+  decided.audited = true;
+  return decided;
 }
 
 // The candidate is refined with the tracking ICP on the tracking subsample (as an accepted pose
 // and every tracked frame are: on the whole scan the ICP's work cap ended it unconverged, so no
 // audit could switch) and must still be another basin and beat the tracked pose's full-scan tight
 // fitness.
-bool BasinAudit::wins_on_full_scan(const AuditFrame& f, const Mat4d& nominated, Mat4d& refined) const {
-  const Mat4d& tracked = f.tracked.matrix();
-  const double select = search_.select_distance;
-  const std::span<const Vec3f> scan = f.tracking_scan.empty() ? f.scan : f.tracking_scan;
-  const RegistrationResult full = icp(scan, f.map, nominated, icp_, f.icp_hints);
-  const double tracked_full = evaluate_registration(f.scan, f.map, tracked, select).fitness;
-  const double cand_full = full.ok() ? evaluate_registration(f.scan, f.map, full.transform, select).fitness : 0.0;
-  if (!full.ok() || !distinct_basin(tracked, full.transform, search_) ||
-      !(cand_full > params_.full_switch_ratio * tracked_full)) {
-    return false;
+AuditOutcome BasinAudit::decide(const AuditFrame& f, double room, LocalizerCounters& counters) {
+  AuditOutcome out;
+  BasinDecisionInput in;
+  in.tracked = f.tracked.matrix();
+  in.candidate = carried_by_odometry(pending_pose_, pending_odom_, f.odom_T_body.matrix());
+  in.scan = f.scan;
+  in.tracking_scan = f.tracking_scan;
+  in.map = f.map;
+  in.icp_hints = f.icp_hints;
+  BasinDecisionBudget budget = f.decision;
+  budget.room = room;
+  budget.min_points = params_.decision.min_points;
+  budget.forced = pending_frames_ >= params_.decision.max_deferred_frames;
+  const BasinDecision d = decide_basin(in, icp_, search_, budget);
+  out.queries = d.queries;
+  out.evaluated = d.evaluated;
+  if (d.state == BasinDecisionState::kWaiting) {
+    ++pending_frames_;
+    if (d.queries > 0) {  // refined this frame: carried on from here
+      pending_pose_ = d.refined;
+      pending_odom_ = f.odom_T_body.matrix();
+    }
+    return out;
   }
-  refined = full.transform;
-  return true;
+  pending_ = false;
+  if (d.state == BasinDecisionState::kLost || !(d.candidate_fitness > params_.full_switch_ratio * d.tracked_fitness)) {
+    return out;
+  }
+  ++counters.basin_switches;
+  out.switch_basin = true;
+  out.candidate = Pose3d(d.refined);
+  return out;
 }
 
 }  // namespace v2xloc

@@ -48,8 +48,18 @@ void TrackingRegistration::run_audit(const TrackingFrame& f, TrackingOutcome& ou
     const PeriodWorkParams& w = f.work->params();
     if (w.search_unit > 0.0) audit.work_cap = static_cast<std::uint64_t>(f.work->left() / w.search_unit);
     audit.room_to_start = f.work->left() >= w.audit_start;
+    audit.decision.room = f.work->left();
+    audit.decision.pass_price = w.tracking_query;
+    audit.decision.evaluation_price = w.evaluation_point;
+    audit.unit_price = w.search_unit;
   }
   out.audit = audit_.step(audit, scratch, counters);
+  counters.tracking_queries += out.audit.queries;
+  if (f.work != nullptr) {
+    const PeriodWorkParams& w = f.work->params();
+    f.work->add(static_cast<double>(out.audit.queries) * w.tracking_query +
+                static_cast<double>(out.audit.evaluated) * w.evaluation_point);
+  }
 }
 
 // A contested track: the rival is refined and judged on this frame's scan, within the period's
@@ -58,9 +68,9 @@ void TrackingRegistration::check_rival(const TrackingFrame& f, TrackingOutcome& 
   if (!rival_.contested()) return;
   RivalFrame rf{Pose3d(out.registration.transform), f.scan, f.tracking_scan, f.map, f.icp_hints, f.frame, f.odom_T_body};
   if (f.work != nullptr) {
-    rf.room = f.work->left();
-    rf.pass_price = f.work->params().tracking_query;
-    rf.evaluation_price = f.work->params().evaluation_point;
+    rf.budget.room = f.work->left();
+    rf.budget.pass_price = f.work->params().tracking_query;
+    rf.budget.evaluation_price = f.work->params().evaluation_point;
   }
   const RivalOutcome r = rival_.check(rf);
   counters.tracking_queries += r.queries;

@@ -136,5 +136,51 @@ TEST(BasinAudit, NewTrackIsAuditedEarly) {
   EXPECT_EQ(first, 30u);
 }
 
+// Tracking 3 m off the walls (another basin): the audit nominates the true one. Its full-scan
+// decision is priced: a frame without room for it leaves the nomination pending (no switch yet),
+// and the next frame decides it within its room (the evaluations on a subsample).
+TEST(BasinAudit, ANominationIsDecidedWithinThePeriodsRoom) {
+  AuditScene scene;
+  ASSERT_TRUE(scene.map.normals_ok);
+  LocalizerParams params;
+  params.audit.period_frames = 1;
+  params.audit.first_frames = 1;
+  params.audit.work_per_period = 0;  // the search in one period
+  params.audit.decision.min_points = 100;
+  auto audit = std::make_unique<BasinAudit>();
+  configure(*audit, params);
+  LocalizerCounters counters;
+  AuditFrame f = scene.frame();
+  f.tracked = Pose3d::Identity();
+  f.tracked.translation() = Vec3d(3.0, 3.0, 0.0);
+  f.tracking_scan = scene.scan;
+  f.sensor_in_body = Vec3d(1.0, 1.0, 1.8);  // rays from inside the corner: none crosses a wall
+  f.decision.pass_price = 1000.0;
+  f.decision.evaluation_price = 1000.0;
+  const double n = static_cast<double>(scene.scan.size());
+  f.decision.room = 0.5 * n * f.decision.pass_price;  // not one pass
+  const AuditOutcome first = audit->step(f, *scene.scratch, counters);
+  ASSERT_TRUE(first.audited);
+  EXPECT_FALSE(first.switch_basin) << "nominated, but the room holds no decision";
+  EXPECT_EQ(first.queries, 0u);
+  AuditOutcome out;
+  std::uint32_t frames = 0;
+  for (std::uint32_t k = 1; k <= params.audit.decision.max_deferred_frames + 2 && !out.switch_basin; ++k) {
+    f.frame = k;
+    f.decision.room = 2.5 * n * f.decision.pass_price;  // two passes a frame
+    out = audit->step(f, *scene.scratch, counters);
+    ++frames;
+    EXPECT_FALSE(out.audited) << "no new audit while a nomination is pending";
+    const double priced = static_cast<double>(out.queries) * f.decision.pass_price +
+                          static_cast<double>(out.evaluated) * f.decision.evaluation_price;
+    if (k <= params.audit.decision.max_deferred_frames) {
+      EXPECT_LE(priced, f.decision.room) << "frame " << k;
+    }
+  }
+  ASSERT_TRUE(out.switch_basin) << "decided within " << frames << " frames";
+  EXPECT_LT(out.candidate.translation().norm(), 0.05) << "the walls' true pose";
+  EXPECT_EQ(counters.basin_switches, 1u);
+}
+
 }  // namespace
 }  // namespace v2xloc

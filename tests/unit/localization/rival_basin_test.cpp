@@ -125,7 +125,7 @@ TEST(RivalBasin, TheCheckStaysWithinThePeriodsRoomAndStillDecides) {
   Scene scene;
   ASSERT_TRUE(scene.map.normals_ok);
   LocalizerParams params;
-  params.tracking.rival.min_decision_points = 300;
+  params.tracking.rival.decision.min_points = 300;
   RivalBasin rival;
   configure(rival, params);
   const Pose3d wrong = at(3.0, 3.0);
@@ -134,21 +134,26 @@ TEST(RivalBasin, TheCheckStaysWithinThePeriodsRoomAndStillDecides) {
   rival.on_start(wrong, 0, Pose3d::Identity());
   ASSERT_TRUE(rival.contested());
   const double n = static_cast<double>(scene.scan.size());
-  const std::uint32_t max_deferred = params.tracking.rival.max_deferred_frames;
+  const std::uint32_t max_deferred = params.tracking.rival.decision.max_deferred_frames;
   std::uint32_t deferred = 0, frames = 0;
   RivalOutcome decided;
   for (std::uint32_t k = 1; k <= 2 * max_deferred + 2 && rival.contested(); ++k) {
     RivalFrame f = scene.frame(wrong, k);
-    f.pass_price = 1000.0;
-    f.evaluation_price = 1000.0;
-    f.room = k == 1 ? 0.5 * n * f.pass_price : 2.5 * n * f.pass_price;  // no pass, then two a frame
+    BasinDecisionBudget& b = f.budget;
+    b.pass_price = 1000.0;
+    b.evaluation_price = 1000.0;
+    b.room = k == 1 ? 0.5 * n * b.pass_price : 2.5 * n * b.pass_price;  // no pass, then two a frame
     const bool forced = deferred >= max_deferred;
     const RivalOutcome r = rival.check(f);
     ++frames;
     EXPECT_TRUE(r.checked);
-    const double priced = static_cast<double>(r.queries) * f.pass_price + static_cast<double>(r.evaluated) * f.evaluation_price;
-    if (!forced) EXPECT_LE(priced, f.room) << "frame " << k;
-    if (k == 1) EXPECT_EQ(r.queries, 0u) << "no room for a pass: nothing runs";
+    const double priced = static_cast<double>(r.queries) * b.pass_price + static_cast<double>(r.evaluated) * b.evaluation_price;
+    if (!forced) {
+      EXPECT_LE(priced, b.room) << "frame " << k;
+    }
+    if (k == 1) {
+      EXPECT_EQ(r.queries, 0u) << "no room for a pass: nothing runs";
+    }
     if (r.deferred) {
       ++deferred;
       EXPECT_EQ(r.evaluated, 0u);
@@ -171,7 +176,7 @@ TEST(RivalBasin, AnEvenSubsampleDecidesWhenTheWholeScanDoesNotFit) {
   Scene scene;
   ASSERT_TRUE(scene.map.normals_ok);
   LocalizerParams params;
-  params.tracking.rival.min_decision_points = 300;
+  params.tracking.rival.decision.min_points = 300;
   RivalBasin rival;
   configure(rival, params);
   const Pose3d wrong = at(3.0, 3.0);
@@ -180,14 +185,15 @@ TEST(RivalBasin, AnEvenSubsampleDecidesWhenTheWholeScanDoesNotFit) {
   rival.on_start(wrong, 0, Pose3d::Identity());
   RivalFrame f = scene.frame(wrong, 1);
   const double n = static_cast<double>(scene.scan.size());
-  f.pass_price = 1.0;
-  f.evaluation_price = 1000.0;
-  f.room = n * (params.tracking.icp.criteria.max_iterations + 1.0) + 2.0 * f.evaluation_price * n / 3.0;
+  BasinDecisionBudget& b = f.budget;
+  b.pass_price = 1.0;
+  b.evaluation_price = 1000.0;
+  b.room = n * (params.tracking.icp.criteria.max_iterations + 1.0) + 2.0 * b.evaluation_price * n / 3.0;
   const RivalOutcome r = rival.check(f);
   EXPECT_FALSE(r.deferred);
   EXPECT_GE(r.stride, 2u);
   EXPECT_LE(r.stride, 3u);
-  EXPECT_LE(static_cast<double>(r.queries) * f.pass_price + static_cast<double>(r.evaluated) * f.evaluation_price, f.room);
+  EXPECT_LE(static_cast<double>(r.queries) * b.pass_price + static_cast<double>(r.evaluated) * b.evaluation_price, b.room);
   EXPECT_TRUE(r.switch_basin);
   EXPECT_FALSE(rival.contested());
 }

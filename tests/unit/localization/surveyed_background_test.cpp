@@ -32,7 +32,7 @@ struct Unit {
   // Nearest hit along o + t d (world frame) within 100 m, else -1.
   static double cast(const Vec3d& o, const Vec3d& d) {
     double best = -1.0;
-    const auto take = [&](double t, const Vec3d& p, bool inside) {
+    const auto take = [&](double t, const Vec3d& /*hit*/, bool inside) {
       if (t > 0.5 && t < 100.0 && inside && (best < 0.0 || t < best)) best = t;
     };
     if (d.z() < 0.0) {  // ground z = 0

@@ -58,7 +58,9 @@ TEST(KdTreeIncremental, WorkLeftShrinksToZero) {
     const std::size_t now = sliced.tree.build_work_left();
     EXPECT_LE(now, left);
     left = now;
-    if (last_step_expected) EXPECT_TRUE(done) << "the estimate fit the quota: the step must finish the tree";
+    if (last_step_expected) {
+      EXPECT_TRUE(done) << "the estimate fit the quota: the step must finish the tree";
+    }
     if (done) break;
   }
   EXPECT_EQ(sliced.tree.build_work_left(), 0u);

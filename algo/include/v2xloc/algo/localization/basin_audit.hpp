@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <span>
 
+#include "v2xloc/algo/localization/basin_decision.hpp"
 #include "v2xloc/algo/localization/localizer_params.hpp"
 #include "v2xloc/algo/localization/localizer_types.hpp"
 #include "v2xloc/algo/localization/stage_probe.hpp"
@@ -34,16 +35,19 @@ struct AuditFrame {
   // [work units] at most this much this period (the period budget's rest; 0: it waits)
   std::uint64_t work_cap = ~std::uint64_t{0};
   bool room_to_start = true;  // the period budget has room for an audit's set-up
+  // The period's rest before the audit's slice and the prices of a full-scan decision (room
+  // infinite: decided at once); unit_price prices the slice's work units out of that room.
+  BasinDecisionBudget decision{};
+  double unit_price = 0.0;
 };
 
 struct AuditOutcome {
   bool audited = false;                   // the audit ran this frame
   bool switch_basin = false;              // tracking is in a wrong basin ...
   Pose3d candidate = Pose3d::Identity();  // ... and this is the better one (world_T_body)
+  std::uint64_t queries = 0;    // the full-scan decision's ICP queries, for the period budget
+  std::uint64_t evaluated = 0;  // and its fitness evaluations' points
 };
-
-// Another basin: a and b (world_T_body) apart by the search's distinct distance or heading.
-bool distinct_basin(const Mat4d& a, const Mat4d& b, const PoseSearchParams& search);
 
 class BasinAudit {
  public:
@@ -56,6 +60,7 @@ class BasinAudit {
   // audited early (see first_audit_due()).
   void cancel() {
     running_ = false;
+    pending_ = false;
     frames_since_audit_ = first_audit_due();
     first_of_track_ = true;
   }
@@ -68,10 +73,11 @@ class BasinAudit {
   std::uint32_t first_audit_due() const {
     return params_.period_frames > params_.first_frames ? params_.period_frames - params_.first_frames : 0u;
   }
-  AuditOutcome finish(const AuditFrame& f, LocalizerCounters& counters) const;
-  // Refines the nominated basin on the full scan; true when it still differs from the tracked
-  // pose and beats it by full_switch_ratio.
-  bool wins_on_full_scan(const AuditFrame& f, const Mat4d& nominated, Mat4d& refined) const;
+  AuditOutcome finish(const AuditFrame& f, double room, LocalizerCounters& counters);
+  // The nominated basin against the tracked pose on this frame's full scan (basin_decision.hpp),
+  // within room: a switch when it still differs and beats it by full_switch_ratio; a decision the
+  // room cannot hold stays pending for the next tracked frame.
+  AuditOutcome decide(const AuditFrame& f, double room, LocalizerCounters& counters);
 
   BasinAuditParams params_{};
   PoseSearchParams search_{};  // as configured; search_params_ is the running job's
@@ -87,6 +93,10 @@ class BasinAudit {
   std::uint32_t started_frame_ = 0;
   Mat4d tracked_at_start_ = Mat4d::Identity();  // world_T_body the search was started around
   Mat4d odom_at_start_ = Mat4d::Identity();     // odom_T_body at that frame
+  bool pending_ = false;                        // a nomination waits for its full-scan decision
+  std::uint32_t pending_frames_ = 0;            // frames it has waited
+  Mat4d pending_pose_ = Mat4d::Identity();      // the nominated world_T_body at pending_odom_
+  Mat4d pending_odom_ = Mat4d::Identity();
 };
 
 }  // namespace v2xloc

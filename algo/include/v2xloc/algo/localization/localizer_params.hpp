@@ -66,6 +66,16 @@ struct ReferenceMapParams {
 };
 
 // TrackingRegistration (tracking.hpp).
+// A decision between the tracked basin and another on one frame's scan, within the period's
+// remaining budget (basin_decision.hpp): a frame whose room cannot hold it waits (the candidate's
+// ICP resumes next frame from the carried pose; the two fitness evaluations take an even subsample
+// of at least min_points), and after max_deferred_frames frames without a decision one runs
+// regardless.
+struct BasinDecisionParams {
+  std::uint32_t min_points = 1000;        // [points]
+  std::uint32_t max_deferred_frames = 5;  // [frames]
+};
+
 // RivalBasin (rival_basin.hpp): a new track whose start-up searches saw another basin nearly as
 // good is contested (its registrations neither fused nor valid) until the full scan decides.
 struct RivalBasinParams {
@@ -73,11 +83,7 @@ struct RivalBasinParams {
   double resolve_ratio = 1.3;    // [ratio] tracked full-scan tight fitness over the rival's: the track stands
   double switch_ratio = 1.15;    // [ratio] the rival's over the tracked: a basin switch (a search confirms it)
   std::uint32_t max_age_frames = 50;  // [frames] older start-up hypotheses are forgotten (odometry drift)
-  // A check the period's remaining budget cannot hold waits (its ICP resumes next frame from the
-  // carried pose, its two fitness evaluations take an even subsample of at least
-  // min_decision_points); after max_deferred_frames frames without a decision one runs regardless.
-  std::uint32_t min_decision_points = 1000;  // [points]
-  std::uint32_t max_deferred_frames = 5;     // [frames]
+  BasinDecisionParams decision{};     // the check within the period's budget
 };
 
 struct TrackingParams {
@@ -178,6 +184,7 @@ struct BasinAuditParams {
   std::uint32_t refine_candidates = 5;  // [hypotheses] the audit refines by ICP (<= kPoseSearchRefine; TUNING.md)
   double switch_ratio = 1.15;         // [ratio] audit pose's tight fitness over tracked: switch
   double full_switch_ratio = 1.15;    // [ratio] ... and again on the full scan after ICP: switch
+  BasinDecisionParams decision{};     // that full-scan decision within the period's budget
 };
 
 // GnssCourse (gnss_course.hpp).

@@ -16,9 +16,9 @@
 
 #include <array>
 #include <cstdint>
-#include <limits>
 #include <span>
 
+#include "v2xloc/algo/localization/basin_decision.hpp"
 #include "v2xloc/algo/localization/pose_types.hpp"
 #include "v2xloc/algo/localization/localizer_params.hpp"
 #include "v2xloc/algo/registration/icp.hpp"
@@ -34,11 +34,7 @@ struct RivalFrame {
   std::span<std::uint32_t> icp_hints{};    // ICP scratch, >= scan.size()
   std::uint32_t frame = 0;                 // localizer frame index
   Pose3d odom_T_body = Pose3d::Identity();  // this frame's odometry pose
-  // [instructions] the period's remaining budget, the price of one ICP pass over one scan point,
-  // and of one point of a fitness evaluation (room infinite: the check always completes)
-  double room = std::numeric_limits<double>::infinity();
-  double pass_price = 0.0;
-  double evaluation_price = 0.0;
+  BasinDecisionBudget budget{};  // room and prices (room infinite: the check always completes)
 };
 
 struct RivalOutcome {
@@ -75,9 +71,6 @@ class RivalBasin {
     std::uint32_t frame = 0;
   };
   static constexpr std::size_t kNotes = 8;
-
-  RivalOutcome& defer(RivalOutcome& out);
-  std::uint32_t evaluation_stride(const RivalFrame& f, double icp_cost, bool forced) const;
 
   RivalBasinParams params_{};
   PoseSearchParams search_{};

@@ -1,0 +1,65 @@
+// Tracked basin or another one, decided on this frame's scan within the period's remaining budget.
+// The rival basin's check and the basin audit's nomination both end here: the other basin's pose
+// is refined with the tracking ICP (on the tracking subsample), then both poses' tight fitness is
+// evaluated on the registration scan, and the caller compares the two with its own ratios. On a
+// real 17.9k-point scan the whole decision costs ~50 M instructions, more than a tracked period of
+// a real drive has left, so it is priced as it runs: the ICP takes the passes the room holds (an
+// unfinished ICP hands back its latest pose, to be carried by the odometry and resumed next frame)
+// and the two evaluations take the whole scan when the room holds them, else an even subsample of
+// at least min_points; a forced decision (the caller's bound on waiting) ignores the room.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <span>
+
+#include "v2xloc/algo/core/types.hpp"
+#include "v2xloc/algo/registration/icp.hpp"
+#include "v2xloc/algo/registration/pose_search.hpp"
+
+namespace v2xloc {
+
+struct BasinDecisionBudget {
+  double room = std::numeric_limits<double>::infinity();  // [instructions] the period's rest
+  double pass_price = 0.0;        // [instructions] per ICP point and nearest-neighbour pass
+  double evaluation_price = 0.0;  // [instructions] per point of a fitness evaluation
+  std::uint32_t min_points = 1000;  // [points] the fewest a subsampled evaluation judges each pose on
+  bool forced = false;              // decide whatever the room
+};
+
+struct BasinDecisionInput {
+  Mat4d tracked = Mat4d::Identity();    // this frame's tracking registration (world_T_body)
+  Mat4d candidate = Mat4d::Identity();  // the other basin's pose, carried to this frame
+  std::span<const Vec3f> scan{};           // registration scan: both poses are judged on it
+  std::span<const Vec3f> tracking_scan{};  // its subsample the ICP registers (empty: the scan)
+  IcpTarget map{};
+  std::span<std::uint32_t> icp_hints{};  // ICP scratch, >= the registered scan's size
+};
+
+enum class BasinDecisionState : std::uint8_t {
+  kDecided,  // both fitnesses evaluated
+  kWaiting,  // the room ended the ICP or cannot hold the evaluations: `refined` carries on
+  kLost,     // the ICP failed, or the candidate slid into the tracked basin: nothing to decide
+};
+
+struct BasinDecision {
+  BasinDecisionState state = BasinDecisionState::kWaiting;
+  Mat4d refined = Mat4d::Identity();  // the candidate after this frame's ICP passes
+  double tracked_fitness = 0.0;       // tight fitness on the (subsampled) scan (kDecided)
+  double candidate_fitness = 0.0;
+  std::uint64_t queries = 0;    // ICP nearest-neighbour queries (points x passes)
+  std::uint64_t evaluated = 0;  // points of the two evaluations
+  std::uint32_t stride = 0;     // evaluation subsample stride (1: the whole scan; 0: none ran)
+  double priced(const BasinDecisionBudget& b) const {
+    return static_cast<double>(queries) * b.pass_price + static_cast<double>(evaluated) * b.evaluation_price;
+  }
+};
+
+// Another basin: a and b (world_T_body) apart by the search's distinct distance or heading.
+bool distinct_basin(const Mat4d& a, const Mat4d& b, const PoseSearchParams& search);
+
+// icp: the tracking ICP; search: distinct basins and the tight select distance.
+BasinDecision decide_basin(const BasinDecisionInput& in, const IcpParams& icp, const PoseSearchParams& search,
+                           const BasinDecisionBudget& budget);
+
+}  // namespace v2xloc

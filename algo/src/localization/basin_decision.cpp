@@ -1,0 +1,71 @@
+#include "v2xloc/algo/localization/basin_decision.hpp"
+
+#include <cmath>
+
+#include "v2xloc/algo/core/det_math.hpp"
+#include "v2xloc/algo/core/rigid_motion.hpp"
+
+namespace v2xloc {
+namespace {
+
+// 1: the whole scan fits what the room has left after the ICP; s > 1: every s-th point, at least
+// min_points of them; 0: not even that fits (a forced decision takes the minimum).
+std::uint32_t evaluation_stride(std::size_t n, double left, const BasinDecisionBudget& b) {
+  const double need = 2.0 * b.evaluation_price * static_cast<double>(n);
+  if (!(need > left)) return 1;
+  const std::size_t floor_points = b.min_points < n ? b.min_points : n;
+  const std::size_t min_stride = floor_points > 0 ? n / floor_points : 1;
+  if (b.forced) return min_stride > 0 ? static_cast<std::uint32_t>(min_stride) : 1u;
+  if (!(left > 0.0)) return 0;
+  const double fit = left / (2.0 * b.evaluation_price);  // points per pose the room holds
+  const double stride = std::ceil(static_cast<double>(n) / fit);
+  if (stride > static_cast<double>(min_stride)) return 0;
+  return static_cast<std::uint32_t>(stride);
+}
+
+}  // namespace
+
+bool distinct_basin(const Mat4d& a, const Mat4d& b, const PoseSearchParams& sp) {
+  const Mat4d d = se3_inverse(a) * b;
+  return std::sqrt(d(0, 3) * d(0, 3) + d(1, 3) * d(1, 3)) >= sp.distinct_distance ||
+         std::abs(det::wrap_pi(yaw_of(d.topLeftCorner<3, 3>()))) >= sp.distinct_yaw;
+}
+
+BasinDecision decide_basin(const BasinDecisionInput& in, const IcpParams& icp_params, const PoseSearchParams& search,
+                           const BasinDecisionBudget& budget) {
+  BasinDecision d;
+  d.refined = in.candidate;
+  const std::span<const Vec3f> scan = in.tracking_scan.empty() ? in.scan : in.tracking_scan;
+  // The passes the room prices; no bound when it holds the ICP's most, when forced or unpriced.
+  const double pass_cost = budget.pass_price * static_cast<double>(scan.size());
+  std::uint32_t passes = ~std::uint32_t{0};
+  if (!budget.forced && pass_cost > 0.0 && budget.room < pass_cost * (icp_params.criteria.max_iterations + 1.0)) {
+    passes = static_cast<std::uint32_t>(budget.room / pass_cost);
+    if (passes == 0) return d;  // waiting, nothing ran
+  }
+  IcpRun run;
+  icp_begin(run, scan, in.map, in.candidate, icp_params, in.icp_hints);
+  const std::uint64_t work = icp_params.max_work > 0 ? icp_params.max_work : ~std::uint64_t{0};
+  const bool finished = icp_continue(run, scan, in.map, icp_params, passes, in.icp_hints, work);
+  d.queries = static_cast<std::uint64_t>(run.passes) * scan.size();
+  const bool out_of_work = !finished && run.in_pass;  // as icp(): ends like its iteration cap
+  d.refined = finished ? run.result.transform : run.transform;
+  if (out_of_work || (finished && !run.result.ok()) || !d.refined.allFinite() ||
+      !distinct_basin(in.tracked, d.refined, search)) {
+    d.state = BasinDecisionState::kLost;
+    return d;
+  }
+  if (!finished) return d;  // the room ended the ICP: waiting
+  const double left = budget.room - static_cast<double>(run.passes) * pass_cost;
+  const std::uint32_t stride = evaluation_stride(in.scan.size(), left, budget);
+  if (stride == 0) return d;
+  d.stride = stride;
+  d.evaluated = 2 * ((in.scan.size() + stride - 1) / stride);
+  const double select = search.select_distance;
+  d.tracked_fitness = evaluate_registration(in.scan, in.map, in.tracked, select, stride).fitness;
+  d.candidate_fitness = evaluate_registration(in.scan, in.map, d.refined, select, stride).fitness;
+  d.state = BasinDecisionState::kDecided;
+  return d;
+}
+
+}  // namespace v2xloc
