@@ -104,13 +104,8 @@ AuditOutcome BasinAudit::finish(const AuditFrame& f, double room, LocalizerCount
 // fitness.
 AuditOutcome BasinAudit::decide(const AuditFrame& f, double room, LocalizerCounters& counters) {
   AuditOutcome out;
-  BasinDecisionInput in;
-  in.tracked = f.tracked.matrix();
-  in.candidate = carried_by_odometry(pending_pose_, pending_odom_, f.odom_T_body.matrix());
-  in.scan = f.scan;
-  in.tracking_scan = f.tracking_scan;
-  in.map = f.map;
-  in.icp_hints = f.icp_hints;
+  const BasinDecisionInput in{f.tracked.matrix(), carried_by_odometry(pending_pose_, pending_odom_, f.odom_T_body.matrix()),
+                              f.scan, f.tracking_scan, f.map, f.icp_hints};
   BasinDecisionBudget budget = f.decision;
   budget.room = room;
   budget.min_points = params_.decision.min_points;

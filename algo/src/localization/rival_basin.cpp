@@ -59,13 +59,8 @@ RivalOutcome RivalBasin::check(const RivalFrame& f) {
   RivalOutcome out;
   if (!contested_) return out;
   out.checked = true;
-  BasinDecisionInput in;
-  in.tracked = f.tracked.matrix();
-  in.candidate = carried_by_odometry(rival_, rival_odom_, f.odom_T_body.matrix());
-  in.scan = f.scan;
-  in.tracking_scan = f.tracking_scan;
-  in.map = f.map;
-  in.icp_hints = f.icp_hints;
+  const BasinDecisionInput in{f.tracked.matrix(), carried_by_odometry(rival_, rival_odom_, f.odom_T_body.matrix()),
+                              f.scan, f.tracking_scan, f.map, f.icp_hints};
   BasinDecisionBudget budget = f.budget;
   budget.min_points = params_.decision.min_points;
   budget.forced = deferred_ >= params_.decision.max_deferred_frames;

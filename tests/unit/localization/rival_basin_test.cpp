@@ -78,6 +78,16 @@ struct Scene {
   }
 };
 
+// A start 3 m off the walls (a wrong basin) while the search also saw the true pose: contested.
+Pose3d start_wrong(RivalBasin& rival, const LocalizerParams& params) {
+  configure(rival, params);
+  const Pose3d wrong = at(3.0, 3.0);
+  rival.note(wrong, 0.20, 0, Pose3d::Identity());
+  rival.note(at(0.1, 0.0), 0.18, 0, Pose3d::Identity());
+  rival.on_start(wrong, 0, Pose3d::Identity());
+  return wrong;
+}
+
 // A track started in a wrong basin (3 m off the walls) while the search also saw the true one:
 // on the next tracked frame the rival, refined, explains the scan far better and takes over.
 TEST(RivalBasin, TheTrueBasinTakesOverAWrongStart) {
@@ -85,11 +95,7 @@ TEST(RivalBasin, TheTrueBasinTakesOverAWrongStart) {
   ASSERT_TRUE(scene.map.normals_ok);
   LocalizerParams params;
   RivalBasin rival;
-  configure(rival, params);
-  const Pose3d wrong = at(3.0, 3.0);
-  rival.note(wrong, 0.20, 0, Pose3d::Identity());
-  rival.note(at(0.1, 0.0), 0.18, 0, Pose3d::Identity());
-  rival.on_start(wrong, 0, Pose3d::Identity());
+  const Pose3d wrong = start_wrong(rival, params);
   ASSERT_TRUE(rival.contested());
   const RivalOutcome r = rival.check(scene.frame(wrong, 1));
   EXPECT_TRUE(r.checked);
@@ -127,11 +133,7 @@ TEST(RivalBasin, TheCheckStaysWithinThePeriodsRoomAndStillDecides) {
   LocalizerParams params;
   params.tracking.rival.decision.min_points = 300;
   RivalBasin rival;
-  configure(rival, params);
-  const Pose3d wrong = at(3.0, 3.0);
-  rival.note(wrong, 0.20, 0, Pose3d::Identity());
-  rival.note(at(0.1, 0.0), 0.18, 0, Pose3d::Identity());
-  rival.on_start(wrong, 0, Pose3d::Identity());
+  const Pose3d wrong = start_wrong(rival, params);
   ASSERT_TRUE(rival.contested());
   const double n = static_cast<double>(scene.scan.size());
   const std::uint32_t max_deferred = params.tracking.rival.decision.max_deferred_frames;
@@ -178,11 +180,7 @@ TEST(RivalBasin, AnEvenSubsampleDecidesWhenTheWholeScanDoesNotFit) {
   LocalizerParams params;
   params.tracking.rival.decision.min_points = 300;
   RivalBasin rival;
-  configure(rival, params);
-  const Pose3d wrong = at(3.0, 3.0);
-  rival.note(wrong, 0.20, 0, Pose3d::Identity());
-  rival.note(at(0.1, 0.0), 0.18, 0, Pose3d::Identity());
-  rival.on_start(wrong, 0, Pose3d::Identity());
+  const Pose3d wrong = start_wrong(rival, params);
   RivalFrame f = scene.frame(wrong, 1);
   const double n = static_cast<double>(scene.scan.size());
   BasinDecisionBudget& b = f.budget;
