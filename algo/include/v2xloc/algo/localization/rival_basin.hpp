@@ -9,9 +9,8 @@
 // the track stands when it beats the rival by resolve_ratio, and the rival takes over (a basin
 // switch, confirmed by the start-up search as an audit's nomination is) when it beats the track
 // by switch_ratio. The caller withholds a contested track's registrations from the filter and
-// from validity. The check lives within the period's budget (RivalFrame::room): its ICP runs the
-// passes the room prices and resumes next frame from the carried pose; the two evaluations take
-// the whole scan when the room holds them, else an even subsample of it.
+// from validity. The check lives within the period's budget (RivalFrame::budget,
+// basin_decision.hpp): a frame whose room holds no decision carries the rival on to the next.
 #pragma once
 
 #include <array>
