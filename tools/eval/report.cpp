@@ -202,7 +202,8 @@ std::string format_json(const std::vector<RowReport>& rows) {
                    {"tracking_work_capped", c.tracking_work_capped},
                    {"rebuild_steps_deferred", c.rebuild_steps_deferred},
                    {"audit_periods_starved", c.audit_periods_starved},
-                   {"rival_checks_deferred", c.rival_checks_deferred}};
+                   {"rival_checks_deferred", c.rival_checks_deferred},
+                   {"audit_decisions_deferred", c.audit_decisions_deferred}};
     row["rpe_1s"] = {{"fused", number(r.metrics.rpe_1s.fused)},
                      {"slam", number(r.metrics.rpe_1s.slam)},
                      {"gps", number(r.metrics.rpe_1s.gps)}};

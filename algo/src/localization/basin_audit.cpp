@@ -14,12 +14,16 @@ void BasinAudit::configure(const BasinAuditParams& params, const PoseSearchParam
   icp_ = icp;
   job_.set_proximity_grid(&grid_);
   running_ = false;
+  pending_ = false;
   frames_since_audit_ = first_audit_due();
   first_of_track_ = true;
 }
 
 AuditOutcome BasinAudit::step(const AuditFrame& f, PoseSearchScratch& scratch, LocalizerCounters& counters) {
-  if (pending_) {  // a nomination's decision the room did not hold
+  // A nomination whose decision the room did not hold; dropped when it outlived its track (frames
+  // without tracking in between), as a running search is.
+  if (pending_ && f.frame - pending_frame_ > params_.max_frames) pending_ = false;
+  if (pending_) {
     f.probe(LocalizerStage::kAudit);
     const AuditOutcome out = decide(f, f.decision.room, counters);
     f.probe(LocalizerStage::kTracking);
@@ -34,6 +38,8 @@ AuditOutcome BasinAudit::step(const AuditFrame& f, PoseSearchScratch& scratch, L
   const std::uint32_t fixed = f.map_busy ? params_.work_per_busy_period : params_.work_per_period;
   const std::uint64_t quota = first_of_track_ ? f.work_cap : (fixed < f.work_cap ? fixed : f.work_cap);
   const bool paused = (!first_of_track_ && f.map_busy && fixed == 0) || f.work_cap == 0;
+  // This period's work units, the set-up's included (start() counts the job's work from 0).
+  const std::uint64_t slice_from = running_ ? job_.work() : 0;
   if (!running_) {
     if (params_.period_frames == 0 || ++frames_since_audit_ < params_.period_frames) return {};
     if (paused || !f.room_to_start) return {};  // due: starts in the next period with room
@@ -55,7 +61,7 @@ AuditOutcome BasinAudit::step(const AuditFrame& f, PoseSearchScratch& scratch, L
   if (done) {
     running_ = false;
     first_of_track_ = false;
-    out = finish(f, f.decision.room - static_cast<double>(job_.work() - before) * f.unit_price, counters);
+    out = finish(f, f.decision.room - static_cast<double>(job_.work() - slice_from) * f.unit_price, counters);
   }
   f.probe(LocalizerStage::kTracking);
   return out;
@@ -90,6 +96,8 @@ AuditOutcome BasinAudit::finish(const AuditFrame& f, double room, LocalizerCount
   const double tracked_tight = evaluate_registration(job_.scan(), f.map, tracked_at_start_, sp.select_distance).fitness;
   if (!(s.best_tight_fitness > params_.switch_ratio * tracked_tight)) return out;
   pending_ = true;
+  pending_refined_ = false;
+  pending_frame_ = f.frame;
   pending_frames_ = 0;
   pending_pose_ = s.best.transform;
   pending_odom_ = odom_at_start_;
@@ -105,7 +113,7 @@ AuditOutcome BasinAudit::finish(const AuditFrame& f, double room, LocalizerCount
 AuditOutcome BasinAudit::decide(const AuditFrame& f, double room, LocalizerCounters& counters) {
   AuditOutcome out;
   const BasinDecisionInput in{f.tracked.matrix(), carried_by_odometry(pending_pose_, pending_odom_, f.odom_T_body.matrix()),
-                              f.scan, f.tracking_scan, f.map, f.icp_hints};
+                              f.scan, f.tracking_scan, f.map, f.icp_hints, pending_refined_};
   BasinDecisionBudget budget = f.decision;
   budget.room = room;
   budget.min_points = params_.decision.min_points;
@@ -115,6 +123,8 @@ AuditOutcome BasinAudit::decide(const AuditFrame& f, double room, LocalizerCount
   out.evaluated = d.evaluated;
   if (d.state == BasinDecisionState::kWaiting) {
     ++pending_frames_;
+    ++counters.audit_decisions_deferred;
+    pending_refined_ = d.icp_finished;
     if (d.queries > 0) {  // refined this frame: carried on from here
       pending_pose_ = d.refined;
       pending_odom_ = f.odom_T_body.matrix();

@@ -15,6 +15,7 @@ void RivalBasin::reset() {
   note_count_ = 0;
   contested_ = false;
   deferred_ = 0;
+  rival_refined_ = false;
 }
 
 void RivalBasin::note(const Pose3d& pose, double tight, std::uint32_t frame, const Pose3d& odom_T_body) {
@@ -53,6 +54,7 @@ void RivalBasin::on_start(const Pose3d& pose, std::uint32_t frame, const Pose3d&
   rival_odom_ = odom_T_body.matrix();
   contested_ = true;
   deferred_ = 0;
+  rival_refined_ = false;
 }
 
 RivalOutcome RivalBasin::check(const RivalFrame& f) {
@@ -60,7 +62,7 @@ RivalOutcome RivalBasin::check(const RivalFrame& f) {
   if (!contested_) return out;
   out.checked = true;
   const BasinDecisionInput in{f.tracked.matrix(), carried_by_odometry(rival_, rival_odom_, f.odom_T_body.matrix()),
-                              f.scan, f.tracking_scan, f.map, f.icp_hints};
+                              f.scan, f.tracking_scan, f.map, f.icp_hints, rival_refined_};
   BasinDecisionBudget budget = f.budget;
   budget.min_points = params_.decision.min_points;
   budget.forced = deferred_ >= params_.decision.max_deferred_frames;
@@ -77,6 +79,7 @@ RivalOutcome RivalBasin::check(const RivalFrame& f) {
     rival_ = d.refined;
     rival_odom_ = f.odom_T_body.matrix();
   }
+  rival_refined_ = d.state == BasinDecisionState::kWaiting && d.icp_finished;
   if (d.state == BasinDecisionState::kWaiting) {
     ++deferred_;
     out.deferred = true;

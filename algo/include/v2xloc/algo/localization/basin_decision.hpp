@@ -4,9 +4,11 @@
 // evaluated on the registration scan, and the caller compares the two with its own ratios. On a
 // real 17.9k-point scan the whole decision costs ~50 M instructions, more than a tracked period of
 // a real drive has left, so it is priced as it runs: the ICP takes the passes the room holds (an
-// unfinished ICP hands back its latest pose, to be carried by the odometry and resumed next frame)
-// and the two evaluations take the whole scan when the room holds them, else an even subsample of
-// at least min_points; a forced decision (the caller's bound on waiting) ignores the room.
+// unfinished ICP hands back its latest pose, to be carried by the odometry and resumed next frame;
+// fewer than two passes wait, as one cannot converge) and the two evaluations take the whole scan
+// when the room holds them, else an even subsample of at least min_points (a finished ICP whose
+// evaluations wait is not run again). A forced decision (the caller's bound on waiting) runs the
+// whole ICP and the finest subsample the room holds, at worst min_points.
 #pragma once
 
 #include <cstdint>
@@ -23,7 +25,7 @@ struct BasinDecisionBudget {
   double room = std::numeric_limits<double>::infinity();  // [instructions] the period's rest
   double pass_price = 0.0;        // [instructions] per ICP point and nearest-neighbour pass
   double evaluation_price = 0.0;  // [instructions] per point of a fitness evaluation
-  std::uint32_t min_points = 1000;  // [points] the fewest a subsampled evaluation judges each pose on
+  std::uint32_t min_points = 1000;  // [points] the fewest a subsampled evaluation judges each pose on (0: no floor)
   bool forced = false;              // decide whatever the room
 };
 
@@ -34,6 +36,7 @@ struct BasinDecisionInput {
   std::span<const Vec3f> tracking_scan{};  // its subsample the ICP registers (empty: the scan)
   IcpTarget map{};
   std::span<std::uint32_t> icp_hints{};  // ICP scratch, >= the registered scan's size
+  bool refined = false;  // the candidate is an earlier frame's finished ICP: only the evaluations are left
 };
 
 enum class BasinDecisionState : std::uint8_t {
@@ -45,6 +48,7 @@ enum class BasinDecisionState : std::uint8_t {
 struct BasinDecision {
   BasinDecisionState state = BasinDecisionState::kWaiting;
   Mat4d refined = Mat4d::Identity();  // the candidate after this frame's ICP passes
+  bool icp_finished = false;          // refined is a finished ICP's (waiting: only the evaluations left)
   double tracked_fitness = 0.0;       // tight fitness on the (subsampled) scan (kDecided)
   double candidate_fitness = 0.0;
   std::uint64_t queries = 0;    // ICP nearest-neighbour queries (points x passes)

@@ -173,6 +173,7 @@ struct LocalizerCounters {
   std::uint32_t tracking_work_capped = 0;      // tracking ICPs that ran out of work (tracking.icp.max_work)
   std::uint32_t rebuild_steps_deferred = 0;    // map rebuild steps that waited for a period with room
   std::uint32_t rival_checks_deferred = 0;     // contested frames the period's room held no rival decision in
+  std::uint32_t audit_decisions_deferred = 0;  // tracked frames an audit nomination waited for its decision
   std::uint32_t audit_periods_starved = 0;     // running audits that got no work in a period
 };
 
