@@ -96,11 +96,8 @@ AuditOutcome BasinAudit::finish(const AuditFrame& f, double room, LocalizerCount
   const double tracked_tight = evaluate_registration(job_.scan(), f.map, tracked_at_start_, sp.select_distance).fitness;
   if (!(s.best_tight_fitness > params_.switch_ratio * tracked_tight)) return out;
   pending_ = true;
-  pending_refined_ = false;
   pending_frame_ = f.frame;
-  pending_frames_ = 0;
-  pending_pose_ = s.best.transform;
-  pending_odom_ = odom_at_start_;
+  nomination_.start(s.best.transform, odom_at_start_);
   AuditOutcome decided = decide(f, room, counters);
   decided.audited = true;
   return decided;
@@ -112,23 +109,14 @@ AuditOutcome BasinAudit::finish(const AuditFrame& f, double room, LocalizerCount
 // fitness.
 AuditOutcome BasinAudit::decide(const AuditFrame& f, double room, LocalizerCounters& counters) {
   AuditOutcome out;
-  const BasinDecisionInput in{f.tracked.matrix(), carried_by_odometry(pending_pose_, pending_odom_, f.odom_T_body.matrix()),
-                              f.scan, f.tracking_scan, f.map, f.icp_hints, pending_refined_};
+  const BasinDecisionInput in{f.tracked.matrix(), Mat4d::Identity(), f.scan, f.tracking_scan, f.map, f.icp_hints};
   BasinDecisionBudget budget = f.decision;
   budget.room = room;
-  budget.min_points = params_.decision.min_points;
-  budget.forced = pending_frames_ >= params_.decision.max_deferred_frames;
-  const BasinDecision d = decide_basin(in, icp_, search_, budget);
+  const BasinDecision d = nomination_.step(in, f.odom_T_body.matrix(), icp_, search_, budget, params_.decision);
   out.queries = d.queries;
   out.evaluated = d.evaluated;
   if (d.state == BasinDecisionState::kWaiting) {
-    ++pending_frames_;
     ++counters.audit_decisions_deferred;
-    pending_refined_ = d.icp_finished;
-    if (d.queries > 0) {  // refined this frame: carried on from here
-      pending_pose_ = d.refined;
-      pending_odom_ = f.odom_T_body.matrix();
-    }
     return out;
   }
   pending_ = false;

@@ -82,4 +82,23 @@ BasinDecision decide_basin(const BasinDecisionInput& in, const IcpParams& icp_pa
   return d;
 }
 
+BasinDecision PendingBasinDecision::step(BasinDecisionInput in, const Mat4d& odom_now, const IcpParams& icp,
+                                         const PoseSearchParams& search, BasinDecisionBudget budget,
+                                         const BasinDecisionParams& params) {
+  in.candidate = carried_by_odometry(pose_, odom_, odom_now);
+  in.refined = refined_;
+  budget.min_points = params.min_points;
+  budget.forced = waited_ >= params.max_deferred_frames;
+  const BasinDecision d = decide_basin(in, icp, search, budget);
+  if (d.state == BasinDecisionState::kLost) return d;
+  if (d.queries > 0) {  // refined this frame: carried on from here
+    pose_ = d.refined;
+    odom_ = odom_now;
+  }
+  const bool waiting = d.state == BasinDecisionState::kWaiting;
+  refined_ = waiting && d.icp_finished;
+  waited_ = waiting ? waited_ + 1 : 0;
+  return d;
+}
+
 }  // namespace v2xloc

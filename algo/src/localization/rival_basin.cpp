@@ -14,8 +14,6 @@ void RivalBasin::configure(const RivalBasinParams& params, const PoseSearchParam
 void RivalBasin::reset() {
   note_count_ = 0;
   contested_ = false;
-  deferred_ = 0;
-  rival_refined_ = false;
 }
 
 void RivalBasin::note(const Pose3d& pose, double tight, std::uint32_t frame, const Pose3d& odom_T_body) {
@@ -36,6 +34,7 @@ void RivalBasin::note(const Pose3d& pose, double tight, std::uint32_t frame, con
 void RivalBasin::on_start(const Pose3d& pose, std::uint32_t frame, const Pose3d& odom_T_body) {
   contested_ = false;
   double same = 0.0, any = 0.0, rival_tight = 0.0;
+  Mat4d rival = Mat4d::Identity();
   for (std::size_t i = 0; i < note_count_; ++i) {
     const Note& n = notes_[i];
     if (frame - n.frame > params_.max_age_frames) continue;
@@ -45,28 +44,22 @@ void RivalBasin::on_start(const Pose3d& pose, std::uint32_t frame, const Pose3d&
       if (n.tight > same) same = n.tight;
     } else if (n.tight > rival_tight) {
       rival_tight = n.tight;
-      rival_ = carried;
+      rival = carried;
     }
   }
   note_count_ = 0;
   const double reference = same > 0.0 ? same : any;
   if (!(rival_tight > 0.0) || rival_tight < params_.contest_ratio * reference) return;
-  rival_odom_ = odom_T_body.matrix();
+  pending_.start(rival, odom_T_body.matrix());
   contested_ = true;
-  deferred_ = 0;
-  rival_refined_ = false;
 }
 
 RivalOutcome RivalBasin::check(const RivalFrame& f) {
   RivalOutcome out;
   if (!contested_) return out;
   out.checked = true;
-  const BasinDecisionInput in{f.tracked.matrix(), carried_by_odometry(rival_, rival_odom_, f.odom_T_body.matrix()),
-                              f.scan, f.tracking_scan, f.map, f.icp_hints, rival_refined_};
-  BasinDecisionBudget budget = f.budget;
-  budget.min_points = params_.decision.min_points;
-  budget.forced = deferred_ >= params_.decision.max_deferred_frames;
-  const BasinDecision d = decide_basin(in, icp_, search_, budget);
+  const BasinDecisionInput in{f.tracked.matrix(), Mat4d::Identity(), f.scan, f.tracking_scan, f.map, f.icp_hints};
+  const BasinDecision d = pending_.step(in, f.odom_T_body.matrix(), icp_, search_, f.budget, params_.decision);
   out.queries = d.queries;
   out.evaluated = d.evaluated;
   out.stride = d.stride;
@@ -75,17 +68,10 @@ RivalOutcome RivalBasin::check(const RivalFrame& f) {
     contested_ = false;
     return out;
   }
-  if (d.queries > 0) {  // refined this frame: carried on from here
-    rival_ = d.refined;
-    rival_odom_ = f.odom_T_body.matrix();
-  }
-  rival_refined_ = d.state == BasinDecisionState::kWaiting && d.icp_finished;
   if (d.state == BasinDecisionState::kWaiting) {
-    ++deferred_;
     out.deferred = true;
     return out;
   }
-  deferred_ = 0;
   contested_ = false;
   if (d.candidate_fitness > params_.switch_ratio * d.tracked_fitness) {
     out.switch_basin = true;

@@ -3,6 +3,27 @@
 #include "v2xloc/algo/registration/lazy_normals.hpp"
 
 namespace v2xloc {
+namespace {
+
+// The period's rest and the prices of a basin decision (basin_decision.hpp); unpriced without a budget.
+BasinDecisionBudget decision_budget(const PeriodWork* work) {
+  BasinDecisionBudget b;
+  if (work == nullptr) return b;
+  b.room = work->left();
+  b.pass_price = work->params().tracking_query;
+  b.evaluation_price = work->params().evaluation_point;
+  return b;
+}
+
+// A decision's work: its ICP queries count as tracking's, and both go into the period's estimate.
+void charge_decision(PeriodWork* work, std::uint64_t queries, std::uint64_t evaluated, LocalizerCounters& counters) {
+  counters.tracking_queries += queries;
+  if (work == nullptr) return;
+  const PeriodWorkParams& w = work->params();
+  work->add(static_cast<double>(queries) * w.tracking_query + static_cast<double>(evaluated) * w.evaluation_point);
+}
+
+}  // namespace
 
 void TrackingRegistration::configure(const TrackingParams& params, const BasinAuditParams& audit,
                                      const PoseSearchParams& search) {
@@ -48,37 +69,22 @@ void TrackingRegistration::run_audit(const TrackingFrame& f, TrackingOutcome& ou
     const PeriodWorkParams& w = f.work->params();
     if (w.search_unit > 0.0) audit.work_cap = static_cast<std::uint64_t>(f.work->left() / w.search_unit);
     audit.room_to_start = f.work->left() >= w.audit_start;
-    audit.decision.room = f.work->left();
-    audit.decision.pass_price = w.tracking_query;
-    audit.decision.evaluation_price = w.evaluation_point;
     audit.unit_price = w.search_unit;
   }
+  audit.decision = decision_budget(f.work);
   out.audit = audit_.step(audit, scratch, counters);
-  counters.tracking_queries += out.audit.queries;
-  if (f.work != nullptr) {
-    const PeriodWorkParams& w = f.work->params();
-    f.work->add(static_cast<double>(out.audit.queries) * w.tracking_query +
-                static_cast<double>(out.audit.evaluated) * w.evaluation_point);
-  }
+  charge_decision(f.work, out.audit.queries, out.audit.evaluated, counters);
 }
 
 // A contested track: the rival is refined and judged on this frame's scan, within the period's
 // remaining budget (priced as tracking queries and fitness evaluations).
 void TrackingRegistration::check_rival(const TrackingFrame& f, TrackingOutcome& out, LocalizerCounters& counters) {
   if (!rival_.contested()) return;
-  RivalFrame rf{Pose3d(out.registration.transform), f.scan, f.tracking_scan, f.map, f.icp_hints, f.frame, f.odom_T_body};
-  if (f.work != nullptr) {
-    rf.budget.room = f.work->left();
-    rf.budget.pass_price = f.work->params().tracking_query;
-    rf.budget.evaluation_price = f.work->params().evaluation_point;
-  }
+  const RivalFrame rf{Pose3d(out.registration.transform), f.scan, f.tracking_scan, f.map, f.icp_hints, f.frame,
+                      f.odom_T_body, decision_budget(f.work)};
   const RivalOutcome r = rival_.check(rf);
-  counters.tracking_queries += r.queries;
   if (r.deferred) ++counters.rival_checks_deferred;
-  if (f.work != nullptr) {
-    const PeriodWorkParams& w = f.work->params();
-    f.work->add(static_cast<double>(r.queries) * w.tracking_query + static_cast<double>(r.evaluated) * w.evaluation_point);
-  }
+  charge_decision(f.work, r.queries, r.evaluated, counters);
   if (r.switch_basin) {
     ++counters.basin_switches;
     out.audit.switch_basin = true;

@@ -94,11 +94,8 @@ class BasinAudit {
   Mat4d tracked_at_start_ = Mat4d::Identity();  // world_T_body the search was started around
   Mat4d odom_at_start_ = Mat4d::Identity();     // odom_T_body at that frame
   bool pending_ = false;                        // a nomination waits for its full-scan decision
-  bool pending_refined_ = false;                // its ICP finished: only the evaluations wait
   std::uint32_t pending_frame_ = 0;             // the frame it was nominated at
-  std::uint32_t pending_frames_ = 0;            // tracked frames it has waited
-  Mat4d pending_pose_ = Mat4d::Identity();      // the nominated world_T_body at pending_odom_
-  Mat4d pending_odom_ = Mat4d::Identity();
+  PendingBasinDecision nomination_{};
 };
 
 }  // namespace v2xloc

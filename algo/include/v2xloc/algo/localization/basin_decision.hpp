@@ -16,6 +16,7 @@
 #include <span>
 
 #include "v2xloc/algo/core/types.hpp"
+#include "v2xloc/algo/localization/localizer_params.hpp"
 #include "v2xloc/algo/registration/icp.hpp"
 #include "v2xloc/algo/registration/pose_search.hpp"
 
@@ -65,5 +66,29 @@ bool distinct_basin(const Mat4d& a, const Mat4d& b, const PoseSearchParams& sear
 // icp: the tracking ICP; search: distinct basins and the tight select distance.
 BasinDecision decide_basin(const BasinDecisionInput& in, const IcpParams& icp, const PoseSearchParams& search,
                            const BasinDecisionBudget& budget);
+
+// Another basin's pose waiting for its decision over tracked frames: carried by the odometry,
+// refined as far as each frame's room allows, decided regardless after max_deferred_frames waits.
+// The rival basin's contest and the basin audit's nomination each hold one.
+class PendingBasinDecision {
+ public:
+  // pose (world_T_body) at the frame whose odometry pose is odom.
+  void start(const Mat4d& pose, const Mat4d& odom) {
+    pose_ = pose;
+    odom_ = odom;
+    refined_ = false;
+    waited_ = 0;
+  }
+  // This frame's decision (decide_basin): in without its candidate, which comes from the carried
+  // pose; odom_now this frame's odometry pose; budget's min_points and forced from params.
+  BasinDecision step(BasinDecisionInput in, const Mat4d& odom_now, const IcpParams& icp, const PoseSearchParams& search,
+                     BasinDecisionBudget budget, const BasinDecisionParams& params);
+
+ private:
+  Mat4d pose_ = Mat4d::Identity();  // world_T_body at odom_
+  Mat4d odom_ = Mat4d::Identity();
+  bool refined_ = false;            // pose_ is a finished ICP's: only the evaluations wait
+  std::uint32_t waited_ = 0;        // frames in a row without a decision
+};
 
 }  // namespace v2xloc

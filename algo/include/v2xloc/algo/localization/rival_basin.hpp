@@ -77,10 +77,7 @@ class RivalBasin {
   std::array<Note, kNotes> notes_{};
   std::size_t note_count_ = 0;
   bool contested_ = false;
-  std::uint32_t deferred_ = 0;            // frames in a row without a decision
-  bool rival_refined_ = false;            // rival_ is a finished ICP's: only the evaluations wait
-  Mat4d rival_ = Mat4d::Identity();       // world_T_body at rival_odom_
-  Mat4d rival_odom_ = Mat4d::Identity();
+  PendingBasinDecision pending_{};        // the rival, while contested
 };
 
 }  // namespace v2xloc
