@@ -219,6 +219,7 @@ bool PoseSearch::copy_scan(std::span<const Vec3f> scan_body, const IcpTarget& ma
   winner_ = kPoseSearchRefine;
   provisional_tight_ = -1.0;
   leader_coarse_ok_ = false;
+  leader_refuted_ = false;
   return true;
 }
 
@@ -492,6 +493,7 @@ void PoseSearch::refine_candidate(const IcpTarget& map, std::uint64_t stop) {
       refining_fine_ = true;
       return;
     }
+    if (candidate_ == 0) leader_refuted_ = true;
     refined.status = RegistrationStatus::kDidNotConverge;
     ++candidate_;
     return;
@@ -511,6 +513,7 @@ void PoseSearch::refine_candidate(const IcpTarget& map, std::uint64_t stop) {
   }
   const bool judge = refined.ok() && (params_.provisional || params_.clear_margin);
   if (judge) judge_refined(map, refined, candidate_);
+  if (candidate_ == 0 && !(judge && rated_[0] == 1)) leader_refuted_ = true;
   const bool sets_margin = refined.ok() && (!params_.clear_margin || rated_[candidate_] == 1);
   if (sets_margin && refined.fitness > best_fitness_) best_fitness_ = refined.fitness;
   ++candidate_;
@@ -545,6 +548,10 @@ bool PoseSearch::rate_pose(const IcpTarget& map, const Mat4d& pose, double& conf
   return true;
 }
 
+// The best-scored hypothesis stands in (provisional_scored) until its own refinement refutes it:
+// its coarse or fine ICP finds no basin there, the pose slides out of the region or the yaw prior,
+// or its rays cross the map's surfaces. On a sparse map the leader among thousands of hypotheses
+// is an alias as often as the truth, and these checks are the first evidence either way.
 bool PoseSearch::provisional(Mat4d& pose) const {
   // Refined poses first: the best-scored hypothesis alone can be an alias along the street
   // (algo/TUNING.md, start-up); it stands in only with provisional_scored, once scoring is over.
@@ -552,8 +559,8 @@ bool PoseSearch::provisional(Mat4d& pose) const {
     pose = provisional_pose_;
     return true;
   }
-  if (!params_.provisional_scored || phase_ == Phase::kScore || phase_ == Phase::kClimb || phase_ == Phase::kDone ||
-      !(top_[0].score >= 0.0)) {
+  if (!params_.provisional_scored || leader_refuted_ || phase_ == Phase::kScore || phase_ == Phase::kClimb ||
+      phase_ == Phase::kDone || !(top_[0].score >= 0.0)) {
     return false;
   }
   pose = leader_coarse_ok_ ? leader_coarse_ : pose_of(top_[0].x, top_[0].y, result_.ground_z, top_[0].yaw);

@@ -1,6 +1,7 @@
 // The pose search's selection on a sparse map (EMBEDDED start-up): a refined pose outside the
-// searched region is no candidate (max_offset), and a pose whose rays cross the map does not set
-// the fitness margin the others are judged against (clear_margin).
+// searched region is no candidate (max_offset), a pose whose rays cross the map does not set
+// the fitness margin the others are judged against (clear_margin), and the best-scored hypothesis
+// output while the search runs (provisional_scored) is withdrawn once its refinement refutes it.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -163,6 +164,58 @@ TEST(PoseSearchSelection, WallCrossingPoseDoesNotSetTheFitnessMargin) {
   EXPECT_LT(horizontal(r.best.transform, truth.topRightCorner<3, 1>()), 0.05);
   EXPECT_GT(r.best_tight_fitness, 0.0);
   EXPECT_EQ(r.conflict_rejected, 1u);
+}
+
+// The same two courtyards searched exhaustively from between them. The west one, whole, outscores
+// the partial east one where the vehicle stands, so the best-scored hypothesis is an alias there;
+// its refined pose looks through the partition. The search outputs the alias while it refines it
+// (provisional_scored), then nothing once the ray check refuted it (not the alias while the other
+// candidates are refined), until a refined pose is rated; its last output is a refined
+// pose in the vehicle's courtyard (the truth or its mirror: the selection decides between them).
+TEST(PoseSearchSelection, ALeaderItsRefinementRefutesIsNoLongerOutput) {
+  std::mt19937_64 rng(11);
+  static Target map;
+  courtyard(map.points, rng, 0.0f, 15u);
+  wall(map.points, rng, 5.0f, -4.0f, 5.0f, 4.0f, 600);
+  courtyard(map.points, rng, 40.0f, 2u | 4u);
+  wall(map.points, rng, 30.0f, 6.0f, 40.0f, 6.0f, 750);
+  build(map);
+  std::vector<Vec3f> world;
+  courtyard(world, rng, 40.0f, 15u);
+  const Vec3d truth(40.5, 0.0, 0.0);
+  const std::vector<Vec3f> scan = scan_of(world, pose_at(truth.x(), truth.y(), 0.0));
+
+  PoseSearchParams sp = testing::courtyard_search_params();
+  sp.radius = 22.0;
+  sp.step = 2.0;
+  sp.yaw_steps = 8;
+  sp.max_conflicts = 0.1;
+  sp.sensor_in_body = Vec3d(0.0, 0.0, 1.0);
+  sp.clear_margin = true;
+  sp.provisional = true;
+  sp.provisional_scored = true;
+  static PoseSearch search;
+  search.start(scan, map.icp, Vec3d(20.5, 0.0, 0.0), sp);
+  std::vector<double> output_x;  // each step's output: its x (NaN: none)
+  bool done = false;
+  for (int i = 0; i < 100000 && !done; ++i) {
+    done = search.step(map.icp, scratch(), 2000);
+    Mat4d pose;
+    output_x.push_back(search.provisional(pose) ? pose(0, 3) : std::nan(""));
+  }
+  ASSERT_TRUE(done);
+  ASSERT_TRUE(search.result().best.ok());
+  EXPECT_LT(horizontal(search.result().best.transform, truth), 1.5) << "the vehicle's courtyard";
+  const auto in_west = [](double x) { return std::isfinite(x) && x < 20.0; };
+  const auto first_west = std::find_if(output_x.begin(), output_x.end(), in_west);
+  ASSERT_NE(first_west, output_x.end()) << "the scored leader (the alias) is output while it is refined";
+  const auto after = std::find_if_not(first_west, output_x.end(), in_west);
+  ASSERT_NE(after, output_x.end());
+  EXPECT_TRUE(std::isnan(*after)) << "refuted, the alias gives way to no output (the GNSS fix's) "
+                                     "until a refined pose is rated";
+  EXPECT_EQ(std::find_if(after, output_x.end(), in_west), output_x.end()) << "nor is it output again";
+  ASSERT_TRUE(std::isfinite(output_x.back()));
+  EXPECT_NEAR(output_x.back(), truth.x(), 1.5);
 }
 
 }  // namespace

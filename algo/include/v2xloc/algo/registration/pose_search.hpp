@@ -96,7 +96,8 @@ struct PoseSearchParams {
   bool provisional = false;
   // ... and before any is refined, once every hypothesis is scored (and climbed), the best-scored
   // one (~0.1-1.2 m and half a yaw step from its basin's bottom; power-up, where the alternative
-  // is the GNSS fix), replaced by its coarse ICP's result once that converged.
+  // is the GNSS fix), replaced by its coarse ICP's result once that converged; none once its own
+  // refinement refutes it (no basin, outside the region or prior, rays through the map).
   bool provisional_scored = false;
   // Scoring on a proximity grid (set_proximity_grid): a score point hits when a map point lies
   // in a cell within ceil(grid_reach / grid_cell) cells of its own on every axis, a cube that
@@ -277,6 +278,7 @@ class PoseSearch {
   std::int8_t rated_[kPoseSearchRefine] = {};
   double provisional_tight_ = -1.0;
   Mat4d provisional_pose_ = Mat4d::Identity();
+  bool leader_refuted_ = false;                   // top_[0]'s refinement refuted it (provisional_scored)
   bool leader_coarse_ok_ = false;                 // top_[0]'s coarse ICP converged (provisional_scored)
   Mat4d leader_coarse_ = Mat4d::Identity();
   std::uint32_t winner_ = kPoseSearchRefine;
