@@ -59,6 +59,7 @@ DecodedCloud ShareVerificationQueue::queue(const protocol::ReassembledCloud& clo
   q.world_T_sensor = world_T_sensor;
   q.point_count = cloud.point_count;
   q.judged = false;
+  q.background_fits = false;
   copy_cloud_points(cloud, std::span<Vec3f>(queue_points_[at].data(), cloud.point_count));
   ++counters_.shares_queued;
   check_on_arrival(q);
@@ -111,11 +112,13 @@ bool ShareVerificationQueue::release_next(const MapShareWanted* wanted, std::siz
     // An infrastructure cloud off its unit's surveyed background would be refused by map fusion
     // anyway: refused here, it does not take one of the period's signature checks (the scoring,
     // ~0.8 M, is a fifteenth of one; map fusion scores a cloud that passes again).
-    if (worth && wanted != nullptr && signer != nullptr && signer->role == trust::SignerRole::kInfrastructure &&
-        !wanted->fits_background(signer->sender_id, q.world_T_sensor,
-                                 std::span<const Vec3f>(queue_points_[at].data(), q.point_count))) {
-      worth = false;
-      refused = &counters_.shares_off_background;
+    if (worth && wanted != nullptr && signer != nullptr && signer->role == trust::SignerRole::kInfrastructure) {
+      q.background_fits = wanted->fits_background(signer->sender_id, q.world_T_sensor,
+                                                  std::span<const Vec3f>(queue_points_[at].data(), q.point_count));
+      if (!q.background_fits) {
+        worth = false;
+        refused = &counters_.shares_off_background;
+      }
     }
     if (worth) return true;
     ++*refused;
@@ -147,6 +150,10 @@ DecodedCloud ShareVerificationQueue::verify(const QueuedShare& q, std::size_t at
   in.t = q.t;
   in.world_T_sensor = q.world_T_sensor;
   in.points = std::span<const Vec3f>(queue_points_[at].data(), q.point_count);
+  // The filter scored these very points at this pose for this signer: map fusion does not again.
+  const trust::TrustList& list = verifier_.trust_list();
+  in.background_fits = q.background_fits && q.job.signer_index < list.count &&
+                       &list.signers[q.job.signer_index] == verdict.signer;
   ++counters_.map_clouds;
   return out;
 }

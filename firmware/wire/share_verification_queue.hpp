@@ -120,6 +120,7 @@ class ShareVerificationQueue {
     std::uint32_t point_count = 0;
     bool judged = false;             // judge_time_ns is set
     std::int64_t judge_time_ns = 0;  // local clock of the first period boundary after completion
+    bool background_fits = false;    // scored on its unit's surveyed background by the filter and fit
   };
   // Until the localizer has a map, a queued share's ECDSA runs as it completes.
   void check_on_arrival(QueuedShare& q);

@@ -25,7 +25,13 @@ DeskewResult deskew(std::span<const Vec3f> points, std::span<const float> times,
   // 53k distinct, ~12 us apart): one exp per stamp was the scan's dearest step. The third-order
   // term, |w d|^3 / 6 of the range (1 rad/s, 40 us: 1e-14), is far below float resolution; points
   // sharing the anchor's stamp (a firing of all beams at one azimuth) take the exp alone.
-  constexpr double kSeriesSpan = 40e-6;  // [s], under one azimuth step of a 10 Hz, 2048-step sweep
+  // The span scales with the rotation: the term is (|w| d)^3 / 6, so kSeriesSpan / |w| keeps it at
+  // the 1 rad/s figure (a car turning at 0.2 rad/s: 200 us), up to kMaxSeriesSpan (the series is
+  // exact for a pure translation).
+  constexpr double kSeriesSpan = 40e-6;    // [s] at 1 rad/s: under one azimuth step of a 10 Hz, 2048-step sweep
+  constexpr double kMaxSeriesSpan = 1e-3;  // [s]
+  const double rate = w.norm();
+  const double span = rate * kMaxSeriesSpan > kSeriesSpan ? kSeriesSpan / rate : kMaxSeriesSpan;
   Mat4d T = Mat4d::Identity();
   double t_of_T = 0.0;
   bool have_T = false;
@@ -41,7 +47,7 @@ DeskewResult deskew(std::span<const Vec3f> points, std::span<const float> times,
       r.status = DeskewStatus::kTruncated;
       continue;
     }
-    if (!have_T || !(std::abs(ti - t_of_T) < kSeriesSpan)) {
+    if (!have_T || !(std::abs(ti - t_of_T) < span)) {
       T = se3_exp(twist * (ti - params.reference_time));
       t_of_T = ti;
       have_T = true;

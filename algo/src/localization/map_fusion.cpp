@@ -51,8 +51,12 @@ bool MapFusion::fits_background(std::uint32_t source_id, const Mat4d& world_T_se
 }
 
 bool MapFusion::passes_background(const SurveyedBackground& background, const Mat4d& world_T_sensor,
-                                  std::span<const Vec3f> points, MapInsertResult& r) {
-  r.background = score_on_background(background, world_T_sensor, points);
+                                  std::span<const Vec3f> points, bool known_to_fit, MapInsertResult& r) {
+  if (known_to_fit) {
+    r.background.consistent = true;  // the caller's score (fits_background) on the same points
+  } else {
+    r.background = score_on_background(background, world_T_sensor, points);
+  }
   r.background_checked = true;
   ++counters_.background_checked;
   if (r.background.consistent) return true;
@@ -388,7 +392,7 @@ std::uint32_t MapFusion::store_candidate(std::size_t slot, bool trusted, MapInse
 
 MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
                                   const Pose3d& world_T_sensor_pose, std::span<const Vec3f> points,
-                                  bool trusted) {
+                                  bool trusted, bool background_fits) {
   const Mat4d& world_T_sensor = world_T_sensor_pose.matrix();
   MapInsertResult r;
   r.input_points = static_cast<std::uint32_t>(points.size());
@@ -413,7 +417,7 @@ MapInsertResult MapFusion::insert(std::uint32_t source_id, double timestamp,
   // A unit with a surveyed background shows it, or nothing of its cloud is used (checked on the
   // sensor-frame points before any staging; the other checks below still apply to it).
   const SurveyedBackground* background = trusted && params_.check_background ? this->background(source_id) : nullptr;
-  if (background != nullptr && !passes_background(*background, world_T_sensor, points, r)) return r;
+  if (background != nullptr && !passes_background(*background, world_T_sensor, points, background_fits, r)) return r;
 
   stage_candidate(world_T_sensor, points, known ? first_coarsen_step(slot) : 0u, r);
   // The source's previous cloud is left out of the reference (a displaced slot is not its own).

@@ -58,7 +58,7 @@ MapInsertResult ReferenceMap::insert(const MapCloudInput& in) {
   }
   fused_this_period_ = true;
   record_attempt(in.source_id, in.t);
-  return fusion_.insert(in.source_id, in.t, in.world_T_sensor, in.points, !in.is_agent);
+  return fusion_.insert(in.source_id, in.t, in.world_T_sensor, in.points, !in.is_agent, in.background_fits);
 }
 
 IcpTarget ReferenceMap::target() {

@@ -230,6 +230,43 @@ TEST(ShareVerificationQueue, SharesOffTheirBackgroundCostNoSignatureCheck) {
   EXPECT_EQ(queue->shares_waiting(), 1u) << "the budget is spent: the last share waits for the next period";
 }
 
+// A released infrastructure share says its filter found it on its background, so map fusion does
+// not score the same points again; an agent's (never asked) and a share released without a filter
+// do not.
+TEST(ShareVerificationQueue, ASharesBackgroundVerdictTravelsWithIt) {
+  struct Fits final : MapShareWanted {
+    bool wants(std::uint32_t, double) const override { return true; }
+    bool fits_background(std::uint32_t, const Mat4d&, std::span<const Vec3f>) const override { return true; }
+  };
+  auto queue = std::make_unique<ShareVerificationQueue>();
+  ShareFeed feed(*queue);
+  trust::TrustList list = infrastructure_signers(1);
+  test::add_signer(list, kAgentSenderBase, trust::SignerRole::kAgent);
+  queue->provision_trust(list);
+  const std::vector<float> xyz = ramp_points(100);
+  queue->begin_period(kEpoch + 400'000'000);
+  ASSERT_EQ(feed.send_signed(kInfraSenderBase, 500'000'000, xyz), CloudKind::kMapQueued);
+  ASSERT_EQ(feed.send_signed(kAgentSenderBase, 500'000'000, xyz), CloudKind::kMapQueued);
+  queue->begin_period(kEpoch + 600'000'000);
+  const Fits wanted;
+  std::vector<std::pair<std::uint32_t, bool>> released;
+  for (DecodedCloud share = queue->next_verified_share(&wanted); share.kind == CloudKind::kMapCloud;
+       share = queue->next_verified_share(&wanted)) {
+    released.emplace_back(share.map.source_id, share.map.background_fits);
+  }
+  EXPECT_EQ(released, (std::vector<std::pair<std::uint32_t, bool>>{{kInfraSenderBase, true}, {kAgentSenderBase, false}}));
+
+  auto plain = std::make_unique<ShareVerificationQueue>();
+  ShareFeed plain_feed(*plain);
+  plain->provision_trust(list);
+  plain->begin_period(kEpoch + 400'000'000);
+  ASSERT_EQ(plain_feed.send_signed(kInfraSenderBase, 500'000'000, xyz), CloudKind::kMapQueued);
+  plain->begin_period(kEpoch + 600'000'000);
+  const DecodedCloud unfiltered = plain->next_verified_share(nullptr);
+  ASSERT_EQ(unfiltered.kind, CloudKind::kMapCloud);
+  EXPECT_FALSE(unfiltered.map.background_fits) << "no filter asked: map fusion scores it";
+}
+
 // Until the localizer has a map, a share's ECDSA runs as it completes, at most
 // kMaxSignatureVerificationsPerPeriod a period (before the first period boundary: every share); the
 // period that fuses it releases it on the same schedule as ever without verifying it again (a share

@@ -91,8 +91,8 @@ double per_laser_deskew_error(const Vec6d& twist, const int (&order)[4], double&
   return max_diff;
 }
 
-// A fast turning vehicle, and (a check of the series' second-order term and its sign) a sensor
-// spinning at 30 rad/s (3 rad a period: within se3_log's range) with each block's last firing as
+// A fast turning vehicle, a slow one (the series' span widest), and (a check of the series'
+// second-order term and its sign) a sensor spinning at 30 rad/s (3 rad a period: within se3_log's range) with each block's last firing as
 // its anchor: both match the exact exp to float resolution (7.6e-6 m a unit in the last place at
 // 80 m; without the second-order term the spinning case is 5e-5 m off).
 TEST(Deskew, PerLaserStampsMatchTheExactMotion) {
@@ -111,6 +111,12 @@ TEST(Deskew, PerLaserStampsMatchTheExactMotion) {
   const double spinning_err = per_laser_deskew_error(spinning, before_anchor, motion);
   std::printf("deskew, 30 rad/s: max difference %.2e m\n", spinning_err);
   EXPECT_LT(spinning_err, 2e-5);
+  // A slow turn widens the series' span (0.1 rad/s: 400 us, 32 firings an anchor): still exact.
+  Vec6d slow;
+  slow << 10.0, 0.0, 0.0, 0.0, 0.0, 0.1;
+  const double slow_err = per_laser_deskew_error(slow, in_order, motion);
+  std::printf("deskew, 0.1 rad/s: max difference %.2e m\n", slow_err);
+  EXPECT_LT(slow_err, 2e-5);
 }
 
 // A fronto-parallel plane at 10 m: d = f b / z everywhere.

@@ -264,6 +264,28 @@ TEST_F(SurveyedBackgroundTest, FitsBackgroundIsInsertsVerdictWithoutSideEffects)
   EXPECT_TRUE(map.fits_background(5, pose.matrix(), unit_->moved(*genuine_, Vec3d(3.0, 0, 0))));
 }
 
+// A cloud the caller already found on its background (fits_background, before its signature
+// check) is not scored again: the same verdict and counts as scoring it, the score itself not taken.
+TEST_F(SurveyedBackgroundTest, ACloudTheCallerFoundOnItsBackgroundIsNotScoredAgain) {
+  const Pose3d pose(unit_->world_T_sensor);
+  MapFusion& scored = fresh_map();
+  ASSERT_TRUE(scored.set_background(5, survey_->background()));
+  ASSERT_TRUE(scored.fits_background(5, pose.matrix(), *genuine_));
+  const MapInsertResult a = scored.insert(5, 1.0, pose, *genuine_, true);
+  const std::uint32_t points = scored.point_count();
+  static MapFusion vouched;
+  vouched.configure(MapFusionParams{});
+  ASSERT_TRUE(vouched.set_background(5, survey_->background()));
+  const MapInsertResult b = vouched.insert(5, 1.0, pose, *genuine_, true, true);
+  EXPECT_EQ(b.status, a.status);
+  EXPECT_TRUE(b.background_checked);
+  EXPECT_TRUE(b.background.consistent);
+  EXPECT_GT(a.background.sampled, 0u);
+  EXPECT_EQ(b.background.sampled, 0u) << "not scored";
+  EXPECT_EQ(vouched.point_count(), points);
+  EXPECT_EQ(vouched.counters().background_checked, scored.counters().background_checked);
+}
+
 TEST_F(SurveyedBackgroundTest, UnitsWithoutABackgroundAreHandledAsBefore) {
   const std::vector<Vec3f> moved = unit_->moved(*genuine_, Vec3d(3.0, 0, 0));
   // The same inserts into a map with no backgrounds and into one where only another unit has one.

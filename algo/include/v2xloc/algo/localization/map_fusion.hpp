@@ -201,8 +201,10 @@ class MapFusion {
   // different corners see different faces of the same buildings, so one pair's overlap score is
   // low (0.2-0.4 for exact poses) and only the shift probe applies; two or three other units
   // form the quorum (infra_quorum_*) that can outvote it and evict its stored cloud.
+  // background_fits: fits_background(source_id, world_T_sensor, points) was true for exactly
+  // these points (the firmware's share filter asked before the signature check): not scored again.
   MapInsertResult insert(std::uint32_t source_id, double timestamp, const Pose3d& world_T_sensor,
-                         std::span<const Vec3f> points, bool trusted = false);
+                         std::span<const Vec3f> points, bool trusted = false, bool background_fits = false);
   // The surveyed background of infrastructure unit source_id (its cells stay the caller's and must
   // outlive this object's use of them; a second call replaces the unit's). False, nothing kept:
   // not background_valid, or config::kMaxBackgroundUnits other units have one.
@@ -240,7 +242,7 @@ class MapFusion {
                                       std::span<const Vec3f> points) const;
   // The background verdict on a trusted cloud (r filled; false: rejected and counted).
   bool passes_background(const SurveyedBackground& background, const Mat4d& world_T_sensor,
-                         std::span<const Vec3f> points, MapInsertResult& r);
+                         std::span<const Vec3f> points, bool known_to_fit, MapInsertResult& r);
   void remove_source_points(std::size_t slot);
   // Point `from` (with its source and cell slots) to index `to` <= from: stable compaction.
   void move_point(std::size_t from, std::size_t to);
