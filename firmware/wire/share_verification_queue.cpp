@@ -150,10 +150,9 @@ DecodedCloud ShareVerificationQueue::verify(const QueuedShare& q, std::size_t at
   in.t = q.t;
   in.world_T_sensor = q.world_T_sensor;
   in.points = std::span<const Vec3f>(queue_points_[at].data(), q.point_count);
-  // The filter scored these very points at this pose for this signer: map fusion does not again.
-  const trust::TrustList& list = verifier_.trust_list();
-  in.background_fits = q.background_fits && q.job.signer_index < list.count &&
-                       &list.signers[q.job.signer_index] == verdict.signer;
+  // The filter scored these very points at this pose for the job's signer, the one the verifier
+  // accepted: map fusion does not score them again.
+  in.background_fits = q.background_fits;
   ++counters_.map_clouds;
   return out;
 }

@@ -219,7 +219,6 @@ bool PoseSearch::copy_scan(std::span<const Vec3f> scan_body, const IcpTarget& ma
   winner_ = kPoseSearchRefine;
   provisional_tight_ = -1.0;
   leader_coarse_ok_ = false;
-  leader_refuted_ = false;
   return true;
 }
 
@@ -493,7 +492,6 @@ void PoseSearch::refine_candidate(const IcpTarget& map, std::uint64_t stop) {
       refining_fine_ = true;
       return;
     }
-    if (candidate_ == 0) leader_refuted_ = true;
     refined.status = RegistrationStatus::kDidNotConverge;
     ++candidate_;
     return;
@@ -513,7 +511,6 @@ void PoseSearch::refine_candidate(const IcpTarget& map, std::uint64_t stop) {
   }
   const bool judge = refined.ok() && (params_.provisional || params_.clear_margin);
   if (judge) judge_refined(map, refined, candidate_);
-  if (candidate_ == 0 && !(judge && rated_[0] == 1)) leader_refuted_ = true;
   const bool sets_margin = refined.ok() && (!params_.clear_margin || rated_[candidate_] == 1);
   if (sets_margin && refined.fitness > best_fitness_) best_fitness_ = refined.fitness;
   ++candidate_;
@@ -559,10 +556,14 @@ bool PoseSearch::provisional(Mat4d& pose) const {
     pose = provisional_pose_;
     return true;
   }
-  if (!params_.provisional_scored || leader_refuted_ || phase_ == Phase::kScore || phase_ == Phase::kClimb ||
-      phase_ == Phase::kDone || !(top_[0].score >= 0.0)) {
+  if (!params_.provisional_scored || phase_ == Phase::kScore || phase_ == Phase::kClimb || phase_ == Phase::kDone ||
+      !(top_[0].score >= 0.0)) {
     return false;
   }
+  // The leader's refinement is over (the next candidate's began, or the selection) and did not
+  // rate it: refuted (rated_ stays -1 for a pose whose ICP failed or slid out).
+  const bool leader_refined = phase_ == Phase::kSelect || candidate_ > 0;
+  if (leader_refined && rated_[0] != 1) return false;
   pose = leader_coarse_ok_ ? leader_coarse_ : pose_of(top_[0].x, top_[0].y, result_.ground_z, top_[0].yaw);
   return true;
 }

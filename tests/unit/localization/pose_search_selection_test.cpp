@@ -80,6 +80,20 @@ std::vector<Vec3f> scan_of(const std::vector<Vec3f>& world, const Mat4d& pose) {
 
 double horizontal(const Mat4d& a, const Vec3d& b) { return std::hypot(a(0, 3) - b.x(), a(1, 3) - b.y()); }
 
+// Two courtyards 40 m apart in the map: the west one whole, with a partition 4.5 m east of its
+// centre, the east one with only its east and south walls and the western half of its north wall.
+// The world the scan sees is the east one whole (the vehicle stands in it).
+std::vector<Vec3f> two_courtyards(Target& map, std::mt19937_64& rng) {
+  courtyard(map.points, rng, 0.0f, 15u);
+  wall(map.points, rng, 5.0f, -4.0f, 5.0f, 4.0f, 600);  // the partition
+  courtyard(map.points, rng, 40.0f, 2u | 4u);
+  wall(map.points, rng, 30.0f, 6.0f, 40.0f, 6.0f, 750);  // the north wall's western half
+  build(map);
+  std::vector<Vec3f> world;
+  courtyard(world, rng, 40.0f, 15u);
+  return world;
+}
+
 // The courtyard matches itself turned by 180 degrees: both basins lie in the 4 m disc. With the
 // region cut to 1.5 m around the centre the mirror's refined pose is outside it: it is no
 // candidate (no runner-up), and the truth inside still wins.
@@ -127,13 +141,7 @@ TEST(PoseSearchSelection, RefinedPoseOutsideTheRegionIsNoCandidate) {
 TEST(PoseSearchSelection, WallCrossingPoseDoesNotSetTheFitnessMargin) {
   std::mt19937_64 rng(11);
   static Target map;
-  courtyard(map.points, rng, 0.0f, 15u);
-  wall(map.points, rng, 5.0f, -4.0f, 5.0f, 4.0f, 600);  // the partition
-  courtyard(map.points, rng, 40.0f, 2u | 4u);
-  wall(map.points, rng, 30.0f, 6.0f, 40.0f, 6.0f, 750);  // the north wall's western half
-  build(map);
-  std::vector<Vec3f> world;
-  courtyard(world, rng, 40.0f, 15u);
+  const std::vector<Vec3f> world = two_courtyards(map, rng);
   const Mat4d truth = pose_at(40.5, 0.0, 0.0);
   const Mat4d alias = pose_at(0.5, 0.0, 0.0);
   const std::vector<Vec3f> scan = scan_of(world, truth);
@@ -175,13 +183,7 @@ TEST(PoseSearchSelection, WallCrossingPoseDoesNotSetTheFitnessMargin) {
 TEST(PoseSearchSelection, ALeaderItsRefinementRefutesIsNoLongerOutput) {
   std::mt19937_64 rng(11);
   static Target map;
-  courtyard(map.points, rng, 0.0f, 15u);
-  wall(map.points, rng, 5.0f, -4.0f, 5.0f, 4.0f, 600);
-  courtyard(map.points, rng, 40.0f, 2u | 4u);
-  wall(map.points, rng, 30.0f, 6.0f, 40.0f, 6.0f, 750);
-  build(map);
-  std::vector<Vec3f> world;
-  courtyard(world, rng, 40.0f, 15u);
+  const std::vector<Vec3f> world = two_courtyards(map, rng);
   const Vec3d truth(40.5, 0.0, 0.0);
   const std::vector<Vec3f> scan = scan_of(world, pose_at(truth.x(), truth.y(), 0.0));
 

@@ -278,7 +278,6 @@ class PoseSearch {
   std::int8_t rated_[kPoseSearchRefine] = {};
   double provisional_tight_ = -1.0;
   Mat4d provisional_pose_ = Mat4d::Identity();
-  bool leader_refuted_ = false;                   // top_[0]'s refinement refuted it (provisional_scored)
   bool leader_coarse_ok_ = false;                 // top_[0]'s coarse ICP converged (provisional_scored)
   Mat4d leader_coarse_ = Mat4d::Identity();
   std::uint32_t winner_ = kPoseSearchRefine;
