@@ -187,6 +187,50 @@ TEST_F(SurveyedBackgroundTest, CellKeysStayInTheirSpan) {
   EXPECT_LT(a, b);
 }
 
+// The check's zero-offset fitness is plain set membership of each sampled point's cell, whatever
+// the keys' spread: cells at both ends of the key span, clusters and lone cells, points on them,
+// beside them and outside the span, counted against std::binary_search over the same keys.
+TEST_F(SurveyedBackgroundTest, FitnessIsCellMembershipOverTheWholeKeySpan) {
+  const double cell_size = 0.1;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> xy(-102.3f, 102.3f), z(-51.1f, 51.1f);
+  std::vector<Vec3f> seeds = {Vec3f(-102.35f, -102.35f, -51.15f), Vec3f(102.35f, 102.35f, 51.15f)};
+  for (int i = 0; i < 150; ++i) seeds.emplace_back(xy(rng), xy(rng), z(rng));
+  for (int i = 0; i < 150; ++i) seeds.emplace_back(3.0f + 0.02f * i, -2.0f, 0.5f);  // a dense run
+  std::vector<std::uint32_t> keys;
+  for (const Vec3f& p : seeds) {
+    std::uint32_t k = 0;
+    if (background_cell_key(p, 1.0 / cell_size, k)) keys.push_back(k);
+  }
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  const SurveyedBackground bg{cell_size, keys};
+  ASSERT_TRUE(background_valid(bg));
+
+  std::vector<Vec3f> points;
+  for (const Vec3f& p : seeds) {
+    points.push_back(p);                              // on a cell
+    points.push_back(p + Vec3f(0.1f, 0.0f, 0.0f));    // the next cell along x
+    points.push_back(p + Vec3f(0.0f, 0.0f, -0.1f));   // the next cell down
+  }
+  points.emplace_back(200.0f, 0.0f, 0.0f);  // outside the key span
+  std::uint32_t hits = 0, finite = 0;
+  for (const Vec3f& p : points) {
+    std::uint32_t k = 0;
+    ++finite;
+    if (background_cell_key(p, 1.0 / cell_size, k) && std::binary_search(keys.begin(), keys.end(), k)) ++hits;
+  }
+  BackgroundCheckParams params;
+  params.max_points = config::kBackgroundCheckPoints;
+  params.min_fitness = 2.0;  // score only: no probes
+  ASSERT_LE(points.size(), config::kBackgroundCheckPoints);  // every point sampled
+  const BackgroundScore s = check_background(bg, points, Mat3d::Identity(), params);
+  EXPECT_EQ(s.sampled, finite);
+  EXPECT_EQ(s.fitness, static_cast<double>(hits) / finite);
+  EXPECT_GT(hits, seeds.size() / 2);
+  EXPECT_LT(hits, points.size() - 1);
+}
+
 TEST_F(SurveyedBackgroundTest, UnusableBackgroundsAreRefused) {
   MapFusion& map = fresh_map();
   const std::vector<std::uint32_t>& good = survey_->cells;

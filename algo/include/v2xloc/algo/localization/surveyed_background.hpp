@@ -5,16 +5,16 @@
 // points were moved under the unit's true pose does not, and no other unit is needed to see it:
 // this is what a site with two units has in place of a quorum (map_fusion.hpp).
 //
-// The background is a set of voxel cells, as packed keys sorted ascending in caller-owned
-// storage (the firmware loads them at start; algo/ only reads them). A cloud point is "on the
-// background" when its own cell is a background cell (one binary search). The same sensor at the
-// same pose fires the same rays, so a genuine point falls into the cells its ray's earlier
-// returns filled, and the cells are a fingerprint of the ray pattern: even ground points, shifted
-// along the ground, fall between the rings' cells. The check scores an even subsample of the
-// cloud at zero offset (a floor) and displaced by world-axis probes (+-1, 2, 4 probe steps along
-// x, y, z, rotated into the sensor frame; a peak test): a genuine cloud scores high at zero and
-// lower anywhere else; a moved one scores low at zero, and better at the probe that undoes a
-// shift within the probes' reach. Measured on the 12 recordings: algo/TUNING.md.
+// The background is a set of voxel cells, as packed keys sorted ascending in caller-owned storage
+// (the firmware loads them at start; algo/ only reads them). A cloud point is "on the background"
+// when its own cell is a background cell (a binary search within one bucket of the sorted keys).
+// The same sensor at the same pose fires the same rays, so a genuine point falls into the cells its
+// ray's earlier returns filled, and the cells are a fingerprint of the ray pattern: even ground
+// points, shifted along the ground, fall between the rings' cells. The check scores an even
+// subsample of the cloud at zero offset (a floor) and displaced by world-axis probes (+-1, 2, 4
+// probe steps along x, y, z, rotated into the sensor frame; a peak test): a genuine cloud scores
+// high at zero and lower anywhere else; a moved one scores low at zero, and better at the probe
+// that undoes a shift within the probes' reach. Measured on the 12 recordings: algo/TUNING.md.
 #pragma once
 
 #include <cstddef>
@@ -66,7 +66,7 @@ struct BackgroundScore {
 
 // Scores `points` (the unit's cloud, sensor frame) against its background. sensor_R_world turns
 // world-axis probe offsets into the sensor frame. Bounded: at most max_points x (1 + 18 probes)
-// cell lookups (one binary search each); probes stop as soon as their verdict is decided.
+// cell lookups (a bucketed binary search each); probes stop as soon as their verdict is decided.
 BackgroundScore check_background(const SurveyedBackground& background, std::span<const Vec3f> points,
                                  const Mat3d& sensor_R_world, const BackgroundCheckParams& params);
 
