@@ -12,7 +12,8 @@ using Mat4x4 = Eigen::Matrix<double, 4, 4>;
 
 EkfVector EkfState::to_vector() const {
   EkfVector x;
-  x << pos_x, pos_y, pos_z, yaw, speed, yaw_rate, yaw_rate_bias, wheel_scale, gyro_bias, gyro_scale, road_grade;
+  x << pos_x, pos_y, pos_z, yaw, speed, yaw_rate, yaw_rate_bias, wheel_scale, gyro_bias, gyro_scale, road_grade,
+      odometry_yaw;
   return x;
 }
 
@@ -29,6 +30,7 @@ EkfState EkfState::from_vector(const EkfVector& x) {
   s.gyro_bias = x(idx::kGyroBias);
   s.gyro_scale = x(idx::kGyroScale);
   s.road_grade = x(idx::kRoadGrade);
+  s.odometry_yaw = x(idx::kOdometryYaw);
   return s;
 }
 
@@ -88,6 +90,7 @@ void Ekf::initialize(double t, const EkfState& state, const EkfCovariance& covar
   P_ = 0.5 * (covariance + covariance.transpose());
   time_ = t;
   gyro_chain_ = {};
+  odometry_chain_ = {};
   initialized_ = true;
   log_size_ = 0;
   snap_first_ = 0;
@@ -196,9 +199,10 @@ EkfFuseStatus Ekf::on_odometry(double t, double dt, const Pose3d& prev_T_curr) {
   e.t = t;
   e.type = EkfEventType::kOdometry;
   e.z[0] = relative_pose(0, 3) / dt;
-  e.z[1] = yaw_of(relative_pose.topLeftCorner<3, 3>()) / dt;
+  e.z[1] = yaw_of(relative_pose.topLeftCorner<3, 3>());
+  e.z[2] = dt;
   e.R[0][0] = params_.noise.odometry_speed * params_.noise.odometry_speed;
-  e.R[1][1] = params_.noise.odometry_yaw_rate * params_.noise.odometry_yaw_rate;
+  e.R[1][1] = params_.noise.odometry_yaw * params_.noise.odometry_yaw;
   return submit(e);
 }
 
@@ -266,6 +270,7 @@ EkfFuseStatus Ekf::submit(const Event& e) {
   x_ = from.x;
   P_ = from.P;
   gyro_chain_ = from.gyro;
+  odometry_chain_ = from.odometry;
   time_ = from.t;
   ++counters_.late_events;
   EkfFuseStatus status = EkfFuseStatus::kFused;
@@ -281,6 +286,7 @@ EkfFuseStatus Ekf::submit(const Event& e) {
         sn.x = x_;
         sn.P = P_;
         sn.gyro = gyro_chain_;
+        sn.odometry = odometry_chain_;
         ++next_snap;
       }
     }
@@ -408,22 +414,8 @@ EkfFuseStatus Ekf::apply(const Event& e) {
       if (count && s == EkfFuseStatus::kFused) ++counters_.signals_fused;
       return s;
     }
-    case EkfEventType::kOdometry: {
-      Eigen::Matrix<double, 2, 1> y;
-      y << e.z[0] - x_(idx::kSpeed), e.z[1] - x_(idx::kYawRate);
-      Eigen::Matrix<double, 2, kEkfStateSize> H = Eigen::Matrix<double, 2, kEkfStateSize>::Zero();
-      H(0, idx::kSpeed) = 1.0;
-      H(1, idx::kYawRate) = 1.0;
-      Eigen::Matrix<double, 2, 2> R = Eigen::Matrix<double, 2, 2>::Zero();
-      R(0, 0) = e.R[0][0];
-      R(1, 1) = e.R[1][1];
-      const double gate =
-          params_.gates.odometry_gate_enabled ? params_.gates.odometry_nis_threshold : 0.0;
-      const EkfFuseStatus s = fuse<2>(y, H, R, gate);
-      if (count && s == EkfFuseStatus::kFused) ++counters_.odometry_fused;
-      if (count && s == EkfFuseStatus::kRejectedGate) ++counters_.odometry_rejected;
-      return s;
-    }
+    case EkfEventType::kOdometry:
+      return apply_odometry(e, count);
     case EkfEventType::kGnss: {
       Eigen::Matrix<double, 3, 1> y;
       y << e.z[0] - x_(idx::kPosX), e.z[1] - x_(idx::kPosY), e.z[2] - x_(idx::kPosZ);
@@ -523,6 +515,56 @@ EkfFuseStatus Ekf::apply_scalar(const Event& e, bool count) {
   return s;
 }
 
+// One odometry frame, already propagated to e.t: its mean speed now; its yaw change into the
+// window's sum, and at the window's end the sum against the yaw's change since the clone.
+EkfFuseStatus Ekf::apply_odometry(const Event& e, bool count) {
+  const double dt = e.z[2];
+  Eigen::Matrix<double, 2, 1> rate;
+  rate << e.z[0] - x_(idx::kSpeed), e.z[1] / dt - x_(idx::kYawRate);
+  Eigen::Matrix<double, 2, kEkfStateSize> H2 = Eigen::Matrix<double, 2, kEkfStateSize>::Zero();
+  H2(0, idx::kSpeed) = 1.0;
+  H2(1, idx::kYawRate) = 1.0;
+  Eigen::Matrix<double, 2, 2> R2 = Eigen::Matrix<double, 2, 2>::Zero();
+  R2(0, 0) = e.R[0][0];
+  R2(1, 1) = params_.noise.odometry_yaw_rate * params_.noise.odometry_yaw_rate;
+  const double rate_gate = params_.gates.odometry_gate_enabled ? params_.gates.odometry_nis_threshold : 0.0;
+  const EkfFuseStatus s = fuse<2>(rate, H2, R2, rate_gate);
+  if (count && s == EkfFuseStatus::kFused) ++counters_.odometry_fused;
+  if (count && s == EkfFuseStatus::kRejectedGate) ++counters_.odometry_rejected;
+
+  // The frame continues the chain (1 us: the frames' stamps are differences of the same doubles).
+  OdometryChain& c = odometry_chain_;
+  if (!c.linked || std::fabs((e.t - dt) - c.t) > 1e-6) {
+    clone_yaw(e.t);
+    return s;
+  }
+  c.yaw += e.z[1];
+  c.t = e.t;
+  if (e.t - c.start < params_.noise.odometry_window - 1e-6) return s;
+  Eigen::Matrix<double, 1, 1> y, R;
+  Eigen::Matrix<double, 1, kEkfStateSize> H = Eigen::Matrix<double, 1, kEkfStateSize>::Zero();
+  y(0) = det::wrap_pi(c.yaw - det::wrap_pi(x_(idx::kYaw) - x_(idx::kOdometryYaw)));
+  H(0, idx::kYaw) = 1.0;
+  H(0, idx::kOdometryYaw) = -1.0;
+  const double turned = params_.noise.odometry_yaw_per_rad * c.yaw;
+  R(0, 0) = e.R[1][1] + turned * turned;
+  const double gate = params_.gates.odometry_gate_enabled ? params_.gates.window_nis_threshold : 0.0;
+  const EkfFuseStatus w = fuse<1>(y, H, R, gate);
+  if (count && w == EkfFuseStatus::kFused) ++counters_.odometry_windows_fused;
+  if (count && w == EkfFuseStatus::kRejectedGate) ++counters_.odometry_windows_rejected;
+  clone_yaw(e.t);
+  return s == EkfFuseStatus::kFused ? w : s;
+}
+
+void Ekf::clone_yaw(double t) {
+  constexpr int kYaw = idx::kYaw, kClone = idx::kOdometryYaw;
+  x_(kClone) = x_(kYaw);
+  P_.row(kClone) = P_.row(kYaw);
+  P_.col(kClone) = P_.col(kYaw);
+  P_(kClone, kClone) = P_(kYaw, kYaw);
+  odometry_chain_ = {true, t, t, 0.0};
+}
+
 void Ekf::take_snapshot(std::size_t log_pos) {
   if (snap_count_ == config::kEkfHistoryLength) {
     drop_oldest_snapshot();
@@ -534,6 +576,7 @@ void Ekf::take_snapshot(std::size_t log_pos) {
   s.x = x_;
   s.P = P_;
   s.gyro = gyro_chain_;
+  s.odometry = odometry_chain_;
   ++snap_count_;
 }
 

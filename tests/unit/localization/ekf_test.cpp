@@ -40,7 +40,7 @@ struct Truth {
 
 EkfCovariance initial_covariance() {
   EkfVector sd;
-  sd << 1.0, 1.0, 0.5, 0.05, 0.5, 0.02, 0.005, 0.02, 0.01, 0.005, 0.02;
+  sd << 1.0, 1.0, 0.5, 0.05, 0.5, 0.02, 0.005, 0.02, 0.01, 0.005, 0.02, 0.05;
   return sd.cwiseProduct(sd).asDiagonal();
 }
 
@@ -56,10 +56,13 @@ EkfState initial_state() {
   return s;
 }
 
-double nees(const Ekf& f, const EkfVector& truth) {
+// Over the first `states` states (the clone left out once taken: it equals the yaw then, and its
+// covariance is singular; its updates show in the yaw's error).
+double nees(const Ekf& f, const EkfVector& truth, int states = kEkfStateSize) {
   EkfVector e = truth - f.state_vector();
   e(idx::kYaw) = det::wrap_pi(e(idx::kYaw));
-  return e.dot(f.covariance().ldlt().solve(e));
+  const Eigen::VectorXd head = e.head(states);
+  return head.dot(f.covariance().topLeftCorner(states, states).ldlt().solve(head));
 }
 
 // Wilson-Hilferty chi-square quantile (z = standard normal quantile).
@@ -74,17 +77,23 @@ double chi2_quantile(double dof, double z) {
 // integrates the gyro's angle. The gyro measures the mean rate over its span, the model the rate at its end:
 // the two agree within the gyro's noise only if the yaw rate walks slowly, so that run's truth and
 // filter take a car-like yaw acceleration density (0.005 rad/s^2/sqrt(Hz), not the CAN tuning's 0.3).
-void check_nees(bool with_gyro) {
+// with_odometry: LiDAR odometry every frame, its speed the truth's with its noise and its yaw change
+// the truth's, the window's sum carrying the odometry's noise once (an error that does not grow
+// from frame to frame), so the clone (state 11) and its relative-yaw updates are checked too; its
+// per-frame rate is that mean rate, so this run too takes the slow yaw acceleration.
+void check_nees(bool with_gyro, bool with_odometry = false) {
   constexpr int kRuns = 40;
   constexpr int kFrames = 150;  // 15 s at 10 Hz
   constexpr int kSignalsPerFrame = 10;
   EkfParams params;
-  if (with_gyro) params.noise.yaw_accel = 0.005;
+  // The odometry's rate is the frame's mean too: the same slow yaw acceleration.
+  if (with_gyro || with_odometry) params.noise.yaw_accel = 0.005;
   params.gates.gnss_sigma_inflation = 1.0;  // the simulated GNSS noise is exactly the reported one
   const EkfNoise& q = params.noise;
   const double gnss_sigma = 3.0;
   const double reg_sigma[4] = {0.05, 0.05, 0.08, 0.004};
   std::vector<double> nees_sum(kFrames, 0.0);
+  const int states = with_odometry ? idx::kOdometryYaw : kEkfStateSize;
   std::mt19937_64 rng(1234);
   std::normal_distribution<double> n(0.0, 1.0);
   auto filter = std::make_unique<Ekf>(params);
@@ -96,6 +105,7 @@ void check_nees(bool with_gyro) {
     filter->initialize(0.0, initial_state(), P0);
     const EkfCounters before = filter->counters();  // counters are cumulative over restarts
     double t = 0.0;
+    double frame_yaw = truth.x(idx::kYaw), window_start = -1.0;
     for (int frame = 0; frame < kFrames; ++frame) {
       for (int s = 0; s < kSignalsPerFrame; ++s) {
         const double held_rate = truth.x(idx::kYawRate);  // the truth turns at it over the step
@@ -112,6 +122,19 @@ void check_nees(bool with_gyro) {
         }
       }
       filter->predict_to(t);
+      if (with_odometry) {
+        double dyaw = det::wrap_pi(truth.x(idx::kYaw) - frame_yaw);
+        if (window_start < 0.0) window_start = t;  // the first frame starts the chain
+        else if (t - window_start >= q.odometry_window - 1e-6) {
+          dyaw += q.odometry_yaw * n(rng);
+          window_start = t;
+        }
+        Mat4d delta = Mat4d::Identity();
+        delta.topLeftCorner<3, 3>() = rot_z(dyaw);
+        delta(0, 3) = (truth.x(idx::kSpeed) + q.odometry_speed * n(rng)) * 0.1;
+        filter->on_odometry(t, 0.1, Pose3d(delta));
+        frame_yaw = truth.x(idx::kYaw);
+      }
       if (frame % 10 == 5) {
         const Vec3d enu = truth.x.head<3>() + gnss_sigma * Vec3d(n(rng), n(rng), n(rng));
         filter->on_gnss(t, enu, gnss_sigma, gnss_sigma);
@@ -124,14 +147,14 @@ void check_nees(bool with_gyro) {
         for (int i = 0; i < 4; ++i) cov(i, i) = reg_sigma[i] * reg_sigma[i];
         filter->on_registration(t, Pose3d(pose), cov);
       }
-      nees_sum[frame] += nees(*filter, truth.x);
+      nees_sum[frame] += nees(*filter, truth.x, states);
     }
     // 99.9 % gates: about one false rejection per thousand consistent measurements.
     EXPECT_LE(filter->counters().gnss_rejected - before.gnss_rejected +
                   filter->counters().registration_rejected - before.registration_rejected,
               2u);
   }
-  const double dof = kRuns * kEkfStateSize;
+  const double dof = kRuns * states;
   const double lo = chi2_quantile(dof, -1.959964) / kRuns;
   const double hi = chi2_quantile(dof, 1.959964) / kRuns;
   int inside = 0;
@@ -142,21 +165,23 @@ void check_nees(bool with_gyro) {
     if (avg >= lo && avg <= hi) ++inside;
     else std::printf("  frame %d: averaged NEES %.2f outside\n", frame, avg);
   }
-  std::printf("averaged NEES: mean %.3f (expected 10), band [%.2f, %.2f], %d/%d frames inside\n",
-              mean, lo, hi, inside, kFrames);
+  std::printf("averaged NEES: mean %.3f (expected %d), band [%.2f, %.2f], %d/%d frames inside\n",
+              mean, states, lo, hi, inside, kFrames);
   // Frames of one run are correlated, so excursions come in clusters; a consistent filter keeps
   // most frames and the grand mean inside (an over/under-confident one drifts out entirely).
   EXPECT_GE(inside, static_cast<int>(0.8 * kFrames));
   // With the gyro the yaw's covariance after its angle replaces the prediction's is a
   // linearisation (ekf.cpp, apply_scalar): measured 9.52, slightly over-confident.
   const double band = with_gyro ? 0.75 : 0.5;
-  EXPECT_GT(mean, kEkfStateSize - band);
-  EXPECT_LT(mean, kEkfStateSize + band);
+  EXPECT_GT(mean, states - band);
+  EXPECT_LT(mean, states + band);
 }
 
 TEST(Ekf, NeesWithinChiSquareBandOverMonteCarloRuns) { check_nees(false); }
 
 TEST(Ekf, NeesWithinChiSquareBandWithTheGyro) { check_nees(true); }
+
+TEST(Ekf, NeesWithinChiSquareBandWithOdometryWindows) { check_nees(false, true); }
 
 // A filter that has converged on registrations, driving straight at 10 m/s.
 std::unique_ptr<Ekf> converged_filter(const EkfParams& params) {
@@ -220,11 +245,12 @@ TEST(Ekf, NisGateRejectsThirtyMetreOutliersAcceptsNormalFixes) {
 
 // Feeds a fixed scenario; the registration at t_reg is delivered `delay_frames` frames late.
 EkfVector run_with_delay(int delay_frames, EkfCounters* counters = nullptr,
-                         EkfFuseStatus* late_status = nullptr, bool with_gyro = false) {
+                         EkfFuseStatus* late_status = nullptr, bool with_gyro = false,
+                         bool with_odometry = false) {
   static Ekf filter;  // large object: static storage, as on the ECU
   filter = Ekf(EkfParams{});
   filter.initialize(0.0, initial_state(), initial_covariance());
-  std::mt19937_64 rng(99), gyro_rng(98);
+  std::mt19937_64 rng(99), gyro_rng(98), odometry_rng(97);
   std::normal_distribution<double> n(0.0, 1.0);
   double t = 0.0;
   const double t_reg = 1.05;  // between frames 10 and 11
@@ -244,6 +270,12 @@ EkfVector run_with_delay(int delay_frames, EkfCounters* counters = nullptr,
       }
     }
     filter.predict_to(t);
+    if (with_odometry) {
+      Mat4d delta = Mat4d::Identity();
+      delta.topLeftCorner<3, 3>() = rot_z(0.005 + 2e-4 * n(odometry_rng));
+      delta(0, 3) = 0.8;
+      filter.on_odometry(t, 0.1, Pose3d(delta));
+    }
     if (frame == 15) filter.on_gnss(t, Vec3d(22.0, -1.0, 0.0), 3.0, 3.0);
     if (delay_frames > 0 && frame == deliver_frame) {
       const EkfFuseStatus st = filter.on_registration(t_reg, Pose3d(reg_pose), reg_cov);
@@ -283,6 +315,20 @@ TEST(Ekf, DelayedRegistrationWithTheGyroEqualsOnTimeFusion) {
   EXPECT_GT(c_late.gyro_fused, 250u);
   EXPECT_LE((on_time - late).cwiseAbs().maxCoeff(), 1e-9);
   const EkfVector none = run_with_delay(1000, nullptr, nullptr, true);
+  EXPECT_GT((none - on_time).head<2>().norm(), 0.05);
+}
+
+// The same with odometry: the replay also restores the odometry window's clone and its sum.
+TEST(Ekf, DelayedRegistrationWithOdometryWindowsEqualsOnTimeFusion) {
+  EkfCounters c_late;
+  EkfFuseStatus st = EkfFuseStatus::kInvalidInput;
+  const EkfVector on_time = run_with_delay(0, nullptr, nullptr, false, true);
+  const EkfVector late = run_with_delay(5, &c_late, &st, false, true);
+  EXPECT_EQ(st, EkfFuseStatus::kFused);
+  EXPECT_EQ(c_late.late_events, 1u);
+  EXPECT_GE(c_late.odometry_windows_fused, 2u);
+  EXPECT_LE((on_time - late).cwiseAbs().maxCoeff(), 1e-9);
+  const EkfVector none = run_with_delay(1000, nullptr, nullptr, false, true);
   EXPECT_GT((none - on_time).head<2>().norm(), 0.05);
 }
 

@@ -31,7 +31,7 @@ std::unique_ptr<Ekf> turning_filter() {
   s.speed = 6.5;
   s.yaw_rate = 0.65;
   EkfVector sd;
-  sd << 0.05, 0.05, 0.05, 0.01, 0.1, 0.02, 0.002, 0.01, 0.01, 0.005, 0.01;
+  sd << 0.05, 0.05, 0.05, 0.01, 0.1, 0.02, 0.002, 0.01, 0.01, 0.005, 0.01, 0.01;
   f->initialize(0.0, s, EkfCovariance(sd.cwiseProduct(sd).asDiagonal()));
   for (int k = 1; k <= 10; ++k) EXPECT_EQ(f->on_vehicle_signals(0.01 * k, 6.5, 0.65), EkfFuseStatus::kFused);
   EXPECT_EQ(f->predict_to(0.1), EkfFuseStatus::kFused);
@@ -53,6 +53,36 @@ TEST(EkfRobustness, SlippedOdometryRateIsRejectedConsistentOneFused) {
   EXPECT_NEAR(f->state().yaw_rate, 0.65, 0.01) << "a rejected rate must not move the state";
   EXPECT_EQ(f->on_odometry(0.1, 0.1, Pose3d(frame_motion(0.65, 0.065))), EkfFuseStatus::kFused);
   EXPECT_EQ(f->counters().odometry_fused, 1u);
+}
+
+// Odometry frames from t = 0.1 to `until` (10 Hz) on the turn, the vehicle signals between them;
+// the frame at `slip_at` under-rotated by 3 deg (measured at Sim 3's turn before the gate).
+void turn_with_odometry(Ekf& f, double until, double slip_at) {
+  for (int frame = 1; 0.1 * frame <= until + 1e-9; ++frame) {
+    const double t = 0.1 * frame;
+    if (frame > 1) {
+      for (int k = 1; k <= 10; ++k) f.on_vehicle_signals(t - 0.1 + 0.01 * k, 6.5, 0.65);
+      f.predict_to(t);
+    }
+    const bool slipped = std::abs(t - slip_at) < 1e-9;
+    f.on_odometry(t, 0.1, Pose3d(frame_motion(0.65, slipped ? 0.065 - 0.052 : 0.065)));
+  }
+}
+
+TEST(EkfRobustness, SlippedOdometryWindowIsRejectedConsistentOneFused) {
+  auto f = turning_filter();
+  turn_with_odometry(*f, 1.1, 0.5);  // the chain starts at 0.1 s; its first window ends at 1.1 s
+  EXPECT_EQ(f->counters().odometry_rejected, 1u);  // the slipped frame's rate too
+  EXPECT_EQ(f->counters().odometry_windows_rejected, 1u);
+  EXPECT_EQ(f->counters().odometry_windows_fused, 0u);
+  auto g = turning_filter();
+  turn_with_odometry(*g, 1.1, -1.0);
+  // The slipped frame's own rate was refused too, so a rejected window leaves the heading where the
+  // consistent run's fused window put it (the slip, fused, would pull it 4 mrad).
+  EXPECT_NEAR(f->state().yaw, g->state().yaw, 5e-5) << "a rejected window must not turn the heading";
+  EXPECT_EQ(g->counters().odometry_windows_fused, 1u);
+  EXPECT_EQ(g->counters().odometry_windows_rejected, 0u);
+  EXPECT_EQ(g->counters().odometry_fused, 11u);  // every frame's speed
 }
 
 TEST(EkfRobustness, ResetDropsTheFilterAndKeepsCounters) {

@@ -230,11 +230,11 @@ struct PoseFilterParams {
   // [-] 1-sigma of the carried body pitch as the road's grade (ground_attitude.hpp): a car's
   // suspension pitches it by a few tenths of a degree under braking and acceleration (0.3 deg ~ 0.5 %).
   double road_grade_sigma = 0.005;
-  // [m, m, m, rad, m/s, rad/s, rad/s, -, rad/s, -, -] 1-sigma of each state (ekf_index order) at a
+  // [m, m, m, rad, m/s, rad/s, rad/s, -, rad/s, -, -, rad] 1-sigma of each state (ekf_index order) at a
   // (re)start; the gyro bias's (0.01 rad/s: the MEMS class's turn-on zero-rate offset) and scale
   // error's (0.5 %: the class's sensitivity error) when no earlier estimate exists; the road
-  // grade's 5 % (a steep city street).
-  double restart_sigmas[kEkfStateSize] = {0.1, 0.1, 0.1, 0.01, 0.5, 0.05, 0.005, 0.02, 0.01, 0.005, 0.05};
+  // grade's 5 % (a steep city street); the odometry clone's is replaced at the first odometry frame.
+  double restart_sigmas[kEkfStateSize] = {0.1, 0.1, 0.1, 0.01, 0.5, 0.05, 0.005, 0.02, 0.01, 0.005, 0.05, 0.01};
   ImuParams imu{};                           // the IMU's intake and its use (above)
   double tracking_max_sigma_xy = 0.5;        // [m] EKF position sigma above which the start-up search runs
   std::uint32_t max_failed_frames = 10;      // [frames] consecutive unfused registrations -> start-up search
