@@ -111,7 +111,8 @@ bool ShareVerificationQueue::release_next(const MapShareWanted* wanted, std::siz
     std::uint64_t* refused = timely ? &counters_.shares_paced : &counters_.shares_untrusted;
     // An infrastructure cloud off its unit's surveyed background would be refused by map fusion
     // anyway: refused here, it does not take one of the period's signature checks (the scoring,
-    // ~0.8 M, is a fifteenth of one; map fusion scores a cloud that passes again).
+    // 0.8-2.7 M, is a fifteenth to a fifth of one; a cloud that passes carries the verdict to map
+    // fusion, which does not score it again).
     if (worth && wanted != nullptr && signer != nullptr && signer->role == trust::SignerRole::kInfrastructure) {
       q.background_fits = wanted->fits_background(signer->sender_id, q.world_T_sensor,
                                                   std::span<const Vec3f>(queue_points_[at].data(), q.point_count));

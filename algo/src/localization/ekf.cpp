@@ -202,7 +202,8 @@ EkfFuseStatus Ekf::on_odometry(double t, double dt, const Pose3d& prev_T_curr) {
   e.z[1] = yaw_of(relative_pose.topLeftCorner<3, 3>());
   e.z[2] = dt;
   e.R[0][0] = params_.noise.odometry_speed * params_.noise.odometry_speed;
-  e.R[1][1] = params_.noise.odometry_yaw * params_.noise.odometry_yaw;
+  e.R[1][1] = params_.noise.odometry_yaw_rate * params_.noise.odometry_yaw_rate;
+  e.R[2][2] = params_.noise.odometry_yaw * params_.noise.odometry_yaw;  // the window's, before its turn
   return submit(e);
 }
 
@@ -526,7 +527,7 @@ EkfFuseStatus Ekf::apply_odometry(const Event& e, bool count) {
   H2(1, idx::kYawRate) = 1.0;
   Eigen::Matrix<double, 2, 2> R2 = Eigen::Matrix<double, 2, 2>::Zero();
   R2(0, 0) = e.R[0][0];
-  R2(1, 1) = params_.noise.odometry_yaw_rate * params_.noise.odometry_yaw_rate;
+  R2(1, 1) = e.R[1][1];
   const double rate_gate = params_.gates.odometry_gate_enabled ? params_.gates.odometry_nis_threshold : 0.0;
   const EkfFuseStatus s = fuse<2>(rate, H2, R2, rate_gate);
   if (count && s == EkfFuseStatus::kFused) ++counters_.odometry_fused;
@@ -547,7 +548,7 @@ EkfFuseStatus Ekf::apply_odometry(const Event& e, bool count) {
   H(0, idx::kYaw) = 1.0;
   H(0, idx::kOdometryYaw) = -1.0;
   const double turned = params_.noise.odometry_yaw_per_rad * c.yaw;
-  R(0, 0) = e.R[1][1] + turned * turned;
+  R(0, 0) = e.R[2][2] + turned * turned;
   const double gate = params_.gates.odometry_gate_enabled ? params_.gates.window_nis_threshold : 0.0;
   const EkfFuseStatus w = fuse<1>(y, H, R, gate);
   if (count && w == EkfFuseStatus::kFused) ++counters_.odometry_windows_fused;

@@ -62,6 +62,13 @@ trust::TrustList infrastructure_signers(std::uint32_t count) {
   return list;
 }
 
+// The same with one agent (kAgentSenderBase) beside the units.
+trust::TrustList infrastructure_and_agent_signers(std::uint32_t count) {
+  trust::TrustList list = infrastructure_signers(count);
+  test::add_signer(list, kAgentSenderBase, trust::SignerRole::kAgent);
+  return list;
+}
+
 // The source ids of the shares this period releases, each verified and fused.
 std::vector<std::uint32_t> fused_sources(ShareVerificationQueue& queue, const MapShareWanted* wanted) {
   std::vector<std::uint32_t> fused;
@@ -212,9 +219,7 @@ TEST(ShareVerificationQueue, SharesOffTheirBackgroundCostNoSignatureCheck) {
   };
   auto queue = std::make_unique<ShareVerificationQueue>();
   ShareFeed feed(*queue);
-  trust::TrustList list = infrastructure_signers(3);
-  test::add_signer(list, kAgentSenderBase, trust::SignerRole::kAgent);
-  queue->provision_trust(list);
+  queue->provision_trust(infrastructure_and_agent_signers(3));
   const std::vector<float> xyz = ramp_points(100);
   queue->begin_period(kEpoch + 400'000'000);
   for (const std::uint32_t sender : {kInfraSenderBase + 1, kAgentSenderBase, kInfraSenderBase, kInfraSenderBase + 2}) {
@@ -240,9 +245,7 @@ TEST(ShareVerificationQueue, ASharesBackgroundVerdictTravelsWithIt) {
   };
   auto queue = std::make_unique<ShareVerificationQueue>();
   ShareFeed feed(*queue);
-  trust::TrustList list = infrastructure_signers(1);
-  test::add_signer(list, kAgentSenderBase, trust::SignerRole::kAgent);
-  queue->provision_trust(list);
+  queue->provision_trust(infrastructure_and_agent_signers(1));
   const std::vector<float> xyz = ramp_points(100);
   queue->begin_period(kEpoch + 400'000'000);
   ASSERT_EQ(feed.send_signed(kInfraSenderBase, 500'000'000, xyz), CloudKind::kMapQueued);
@@ -258,7 +261,7 @@ TEST(ShareVerificationQueue, ASharesBackgroundVerdictTravelsWithIt) {
 
   auto plain = std::make_unique<ShareVerificationQueue>();
   ShareFeed plain_feed(*plain);
-  plain->provision_trust(list);
+  plain->provision_trust(infrastructure_and_agent_signers(1));
   plain->begin_period(kEpoch + 400'000'000);
   ASSERT_EQ(plain_feed.send_signed(kInfraSenderBase, 500'000'000, xyz), CloudKind::kMapQueued);
   plain->begin_period(kEpoch + 600'000'000);
