@@ -3,6 +3,7 @@
 #include "v2xloc/algo/core/symmetric_eigen.hpp"
 
 #include <cmath>
+#include <cstdint>
 
 #include "v2xloc/algo/core/det_math.hpp"
 #include "v2xloc/algo/core/normal_equations.hpp"
@@ -13,6 +14,7 @@ namespace v2xloc {
 
 namespace {
 constexpr auto kMaxProbes = static_cast<std::uint32_t>(config::kVoxelMaxProbes);
+constexpr std::uint32_t kMaxFineCoarsenSteps = 8;  // raw-sweep path: 0.5 v x (9/8)^8 <= 1.3 v
 
 Vec3d transform(const Mat4d& T, const Vec3f& p) {
   return T.topLeftCorner<3, 3>() * p.cast<double>() + T.topRightCorner<3, 1>();
@@ -67,10 +69,18 @@ OdometryResult LidarOdometry::register_frame(std::span<const Vec3f> scan, Odomet
   OdometryResult r;
   // Range filter (also drops NaN / Inf).
   keep_in_range(scan, buffers.in_range, r);
-  // Double voxelisation (KISS-ICP III-B): 0.5 v for the map, 1.5 v for registration.
-  frame_fine_.clear();
-  const VoxelDownsampleResult fine = buffers.downsample.run(
-      buffers.in_range.span(), static_cast<float>(0.5 * params_.voxel_size), frame_fine_);
+  // Double voxelisation (KISS-ICP III-B): 0.5 v for the map, 1.5 v for registration. A sweep
+  // with more fine voxels than the frame holds is read again with the voxel grown by 9/8 (as the
+  // localizer's scan ingest does): cutting the output would drop the sweep's last sectors, and an
+  // odometry without them drifts (EMBEDDED, a whole 32-beam sweep: 22 % of the distance).
+  float voxel = static_cast<float>(0.5 * params_.voxel_size);
+  VoxelDownsampleResult fine;
+  for (std::uint32_t step = 0;; ++step, voxel *= 1.125f) {
+    const bool last_try = step >= kMaxFineCoarsenSteps;
+    frame_fine_.clear();
+    fine = buffers.downsample.run(buffers.in_range.span(), voxel, frame_fine_, SIZE_MAX, !last_try);
+    if (fine.status != VoxelStatus::kStoppedFull) break;
+  }
   r.points_dropped_capacity += fine.output_overflow + fine.hash_overflow + fine.range_overflow;
   return register_fine(predicted_delta != nullptr ? &predicted_delta->matrix() : nullptr, r);
 }

@@ -38,8 +38,9 @@ ScanIngest::Accumulator* ScanIngest::find_or_add(const std::int32_t key[3]) {
 // finite and range tests share one comparison on the fast path (NaN and Inf fail it); a return
 // failing it is classified in the order of the full tests. stop_when_full: a pass that will be
 // read again coarser ends at its first capacity drop (the rest of the sweep would change nothing).
+// Returns the returns it read.
 template <bool kTimes>
-void ScanIngest::accumulate(std::span<const Vec3f> points, const float* times, const ScanIngestParams& params,
+std::size_t ScanIngest::accumulate(std::span<const Vec3f> points, const float* times, const ScanIngestParams& params,
                             bool stop_when_full, ScanIngestResult& r) {
   const float min2 = params.min_range * params.min_range;
   const float max2 = params.max_range * params.max_range;
@@ -67,7 +68,7 @@ void ScanIngest::accumulate(std::span<const Vec3f> points, const float* times, c
       a = find_or_add(key);
       if (a == nullptr) {
         ++r.capacity_dropped;
-        if (stop_when_full) return;
+        if (stop_when_full) return i + 1;
         continue;
       }
       last = a;
@@ -77,12 +78,31 @@ void ScanIngest::accumulate(std::span<const Vec3f> points, const float* times, c
     V2XLOC_UNROLL_AXES for (int k = 0; k < 3; ++k) a->sum[k] += p[k];
     a->time_sum += t;
   }
+  return points.size();
 }
 
 // The finest step at most the previous run's at which its voxels, x 81/64 per step finer, fit.
 std::uint32_t ScanIngest::first_step(const ScanIngestParams& params) const {
   return finest_fitting_step(last_step_, params.max_coarsen_steps, static_cast<double>(last_count_), 81.0 / 64.0,
                              static_cast<double>(kMaxVoxels));
+}
+
+// Steps coarser than `step` for a pass that filled the table after `read` of `total` returns: the
+// sweep's voxels extrapolated from the part read (a sweep meets its voxels about evenly in firing
+// order), thinned by the surface law (x 64/81 per step coarser) until they fit, at least one step.
+// A jump of several steps happens only for a sweep far over the capacity (a first sweep with no
+// history: one partial read instead of one per step); a near miss steps once. The pass that
+// follows still checks the estimate: a sweep that overflows again steps on.
+std::uint32_t ScanIngest::steps_to_fit(std::size_t read, std::size_t total, std::uint32_t step,
+                                       std::uint32_t max_steps) {
+  double voxels = static_cast<double>(kMaxVoxels) * static_cast<double>(total) /
+                  static_cast<double>(read > 0 ? read : 1);
+  std::uint32_t skip = 0;
+  do {
+    ++skip;
+    voxels *= 64.0 / 81.0;
+  } while (voxels > static_cast<double>(kMaxVoxels) && step + skip < max_steps);
+  return skip;
 }
 
 ScanIngestResult ScanIngest::run(std::span<const Vec3f> points, std::span<const float> times,
@@ -96,20 +116,19 @@ ScanIngestResult ScanIngest::run(std::span<const Vec3f> points, std::span<const 
   std::uint32_t step = first_step(params);
   for (std::uint32_t k = 0; k < step; ++k) p.voxel *= 1.125f;  // the same roundings as step by step
   r.coarsened = step;
-  for (;; ++step) {
+  for (;;) {
     const bool last_try = step >= params.max_coarsen_steps;
-    if (has_times) {
-      accumulate<true>(points, times.data(), p, !last_try, r);
-    } else {
-      accumulate<false>(points, nullptr, p, !last_try, r);
-    }
+    const std::size_t read = has_times ? accumulate<true>(points, times.data(), p, !last_try, r)
+                                       : accumulate<false>(points, nullptr, p, !last_try, r);
     if (r.capacity_dropped == 0 || last_try) break;
     // Full: whole azimuth sectors would be lost; the sweep is read again with a coarser voxel.
+    const std::uint32_t skip = steps_to_fit(read, points.size(), step, params.max_coarsen_steps);
     for (std::size_t v = 0; v < count_; ++v) slots_[voxels_[v].slot] = 0;
     count_ = 0;
     r.non_finite_dropped = r.range_dropped = r.capacity_dropped = 0;
-    p.voxel *= 1.125f;
-    ++r.coarsened;
+    for (std::uint32_t k = 0; k < skip; ++k) p.voxel *= 1.125f;
+    step += skip;
+    r.coarsened += skip;
   }
   last_step_ = r.coarsened;
   last_count_ = count_;

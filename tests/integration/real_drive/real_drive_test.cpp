@@ -111,10 +111,10 @@ TEST_F(RealDrive, ConverterKeepsTheScansStampsAndPoses) {
 
 // Both paths: a pose every frame; the columns from the first roadside cloud (frame 22) on. The
 // unaligned error's floor is the dataset's own vehicle-to-roadside calibration (~0.5-1.2 m).
-// The accuracy bounds below are the host profile's. The EMBEDDED profile holds 16,384 of each
-// scan's ~40,000 points (evenly thinned on reception) and an 8,192-point map; on this drive it gives
-// a pose every frame, but no registration passes the validity gate and the filter never starts
-// (docs/target.md): not met, so not asserted as if it were.
+// The accuracy bounds below are the host profile's. The EMBEDDED profile reads each scan into
+// 4,096 voxels and keeps an 8,192-point map; on this drive it gives a pose every frame, but no
+// registration passes the validity gate and the filter never starts (docs/target.md): not met, so
+// not asserted as if it were.
 
 void expect_pose_every_frame(const std::vector<eval::FrameRecord>& records) {
   ASSERT_EQ(records.size(), 42u);

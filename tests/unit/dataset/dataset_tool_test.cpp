@@ -47,6 +47,10 @@ std::string temp_dir(const std::string& name) {
 
 // 40 frames (4 s, ~32 m: a straight approach and most of a left turn).
 TEST(DatasetTool, KittiSequenceOdometryAndMetrics) {
+  // The bounds below are the host profile's. EMBEDDED's odometry map (16,384 points) is full after
+  // four whole sweeps of this 32-beam fixture (~4k fine points each); it then refuses the new
+  // structure (counted) and drifts: 26 % of the distance.
+  if (v2xloc::config::kEmbeddedProfile) GTEST_SKIP() << "needs the host's odometry map capacity (EMBEDDED: 16,384 points)";
   const std::string dir = temp_dir("kitti") + "/sequences/00";
   KittiFixtureInfo info;
   std::string error;

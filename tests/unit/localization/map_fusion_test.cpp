@@ -267,7 +267,7 @@ TEST(MapFusion, FullMapSharedEvenlyBetweenSources) {
 // cut in scan order: nothing dropped, and it spans its whole extent.
 TEST(MapFusion, CloudOverTheCapacityIsCoarsenedNotCut) {
   // Host: the staging buffer holds no more points than the map, so no cloud overflows it.
-  if (config::kMaxScanPoints <= config::kMaxMapPoints) GTEST_SKIP() << "needs more scan than map points (EMBEDDED)";
+  if (config::kMaxMapInputPoints <= config::kMaxMapPoints) GTEST_SKIP() << "needs more staged than map points (EMBEDDED)";
   MapFusionParams params;
   params.check_consistency = false;
   params.voxel_size = 0.2;
@@ -315,6 +315,20 @@ TEST(MapFusion, InputOverTheLimitReadWithAStride) {
   line.resize(1000);
   const auto small = map.insert(2, 0.0, Pose3d(Mat4d::Identity()), line, true);
   EXPECT_EQ(small.input_thinned, 0u);
+  // A limit above the staging's capacity is held to it: the cloud is strided, not cut.
+  MapFusionParams roomy = params;
+  roomy.max_input_points = 4 * static_cast<std::uint32_t>(config::kMaxMapInputPoints);
+  MapFusion& wide = fresh_map(roomy);
+  std::vector<Vec3f> long_line;
+  const std::size_t n = 2 * config::kMaxMapInputPoints;
+  for (std::size_t i = 0; i < n; ++i) long_line.emplace_back(125.0f * static_cast<float>(i) / static_cast<float>(n), 0.0f, 0.0f);
+  const auto strided = wide.insert(1, 0.0, Pose3d(Mat4d::Identity()), long_line, true);
+  EXPECT_EQ(strided.input_thinned, n / 2);
+  EXPECT_EQ(strided.capacity_dropped, 0u);
+  wide.extract(out);
+  hi = -1e9f;
+  for (const Vec3f& p : out) hi = std::max(hi, p.x());
+  EXPECT_GT(hi, 124.0f);
 }
 
 // Consistency before trust: an agent shifted by as little as 0.25 m fits the infrastructure better

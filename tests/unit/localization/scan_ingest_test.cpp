@@ -81,14 +81,22 @@ TEST(ScanIngest, OverflowingTheVoxelTableIsCountedNotSilent) {
   EXPECT_EQ(g_ingest.points()[0], one[0]);
 }
 
+// A flat square of one return per 0.5 m voxel, `times` as many voxels as the table holds (side x
+// side of them).
+std::vector<Vec3f> plane_of_voxels(double times, int& side) {
+  side = static_cast<int>(std::ceil(std::sqrt(times * static_cast<double>(config::kMaxDownsampledPoints))));
+  std::vector<Vec3f> pts;
+  for (int i = 0; i < side; ++i)
+    for (int j = 0; j < side; ++j) pts.emplace_back(4.25f + 0.5f * i, 0.25f + 0.5f * j, 0.25f);
+  return pts;
+}
+
 // A surface with more 0.5 m voxels than the table holds (1.5x) is read again with the voxel grown
 // by 9/8 until it fits: nothing dropped, and the centroids still span the whole surface (cutting
 // the overflow would drop the returns read last, i.e. whole sectors of a sweep).
 TEST(ScanIngest, OverflowIsReadAgainWithACoarserVoxel) {
-  const int side = static_cast<int>(std::ceil(std::sqrt(1.5 * static_cast<double>(config::kMaxDownsampledPoints))));
-  std::vector<Vec3f> pts;
-  for (int i = 0; i < side; ++i)
-    for (int j = 0; j < side; ++j) pts.emplace_back(4.25f + 0.5f * i, 0.25f + 0.5f * j, 0.25f);
+  int side = 0;
+  const std::vector<Vec3f> pts = plane_of_voxels(1.5, side);
   ScanIngestParams p;
   p.max_range = 300.0f;
   const ScanIngestResult r = g_ingest.run(pts, {}, nullptr, p);
@@ -123,6 +131,35 @@ TEST(ScanIngest, OverflowIsReadAgainWithACoarserVoxel) {
   g_ingest.run(pts, {}, nullptr, p);
   g_ingest.forget_steps();
   EXPECT_EQ(g_ingest.run(one, {}, nullptr, p).coarsened, 0u);
+}
+
+// A first sweep far over the capacity (4x the table's 0.5 m voxels, no history) is coarsened in
+// one jump from the share of the sweep that filled the table: it lands on the finest step at which
+// the surface fits, or the next (the surface law's estimate), never drops a return, and a finer
+// step would have overflowed.
+TEST(ScanIngest, FarOverflowJumpsToTheStepThatFits) {
+  int side = 0;
+  const std::vector<Vec3f> pts = plane_of_voxels(4.0, side);
+  ScanIngestParams p;
+  p.max_range = 300.0f;
+  // The finest fitting step, by reading the surface at each step with no coarsening.
+  std::uint32_t finest = 0;
+  for (;; ++finest) {
+    ScanIngestParams fixed = p;
+    fixed.max_coarsen_steps = 0;
+    for (std::uint32_t k = 0; k < finest; ++k) fixed.voxel *= 1.125f;
+    g_ingest.forget_steps();
+    if (g_ingest.run(pts, {}, nullptr, fixed).capacity_dropped == 0) break;
+    ASSERT_LT(finest, p.max_coarsen_steps);
+  }
+  ASSERT_GE(finest, 3u);  // far over: a step-by-step reading would read the sweep >= 4 times
+  g_ingest.forget_steps();
+  const ScanIngestResult r = g_ingest.run(pts, {}, nullptr, p);
+  EXPECT_EQ(r.capacity_dropped, 0u);
+  EXPECT_GE(r.coarsened, finest);
+  EXPECT_LE(r.coarsened, finest + 1);
+  EXPECT_LE(r.voxels, config::kMaxDownsampledPoints);
+  EXPECT_EQ(r.range_dropped + r.non_finite_dropped, 0u);
 }
 
 }  // namespace

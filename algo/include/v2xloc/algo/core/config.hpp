@@ -18,13 +18,20 @@ inline constexpr bool kEmbeddedProfile = false;
 
 // ---- Point clouds -------------------------------------------------------------------------
 // A 64-beam, 1800-step sweep has <= 115200 returns; a 32-beam infrastructure unit fewer.
-inline constexpr std::size_t kMaxScanPoints = kEmbeddedProfile ? 16384 : 131072;
+// EMBEDDED holds a 64-beam sweep of ~64k returns whole (16 B a point in the receive buffer):
+// thinned evenly to 16,384 it left the start-up search the street's look-alikes (algo/TUNING.md,
+// "EMBEDDED: whole sweeps"). More points arrive evenly thinned (counted).
+inline constexpr std::size_t kMaxScanPoints = kEmbeddedProfile ? 65536 : 131072;
 // After voxel downsampling (registration works on these).
 inline constexpr std::size_t kMaxDownsampledPoints = kEmbeddedProfile ? 4096 : 32768;
 // Ego stereo cloud (subsampled disparity pixels kept within the depth-noise limit).
 inline constexpr std::size_t kMaxStereoPoints = kEmbeddedProfile ? 4096 : 65536;
 // Reference map (fused infrastructure + agent clouds, downsampled).
 inline constexpr std::size_t kMaxMapPoints = kEmbeddedProfile ? 8192 : 131072;
+// A map cloud's points staged for fusion (MapFusionParams::max_input_points reads a bigger cloud
+// with an even stride down to its limit, 16,384 by default; this caps it). A 32-beam unit's
+// cloud holds ~16k points; EMBEDDED keeps no room for more (12 B a point).
+inline constexpr std::size_t kMaxMapInputPoints = kEmbeddedProfile ? 16384 : kMaxScanPoints;
 
 // ---- Voxel downsampling ---------------------------------------------------------------------
 // Open-addressing slots; a power of two, >= 2x the point capacity keeps probe chains short.

@@ -103,7 +103,9 @@ struct MapFusionParams {
   // [points] a cloud with more points is read with an even stride down to this many before it is
   // staged (counted): sources share max_points, so a source keeps a few thousand of them anyway,
   // and staging, downsampling and marking a 131k-point cloud cost ~160 M instructions, over a
-  // whole period's budget. The recordings' clouds hold <= 16.2k points (0: no limit).
+  // whole period's budget. The recordings' clouds hold <= 16.2k points. At most the staging's
+  // capacity (config::kMaxMapInputPoints); 0: no stride, a cloud over that capacity is cut there
+  // (counted).
   std::uint32_t max_input_points = 16384;
   // Infrastructure clouds of a unit with a surveyed background are checked against it (thresholds:
   // surveyed_background.hpp, measured in algo/TUNING.md); false skips that check.
@@ -310,7 +312,7 @@ class MapFusion {
   std::uint64_t revision_ = 0;
   MapFusionCounters counters_;
 
-  FixedVector<Vec3f, config::kMaxScanPoints> staging_;
+  FixedVector<Vec3f, config::kMaxMapInputPoints> staging_;
   FixedVector<Vec3f, config::kMaxMapPoints> candidate_;
   // Per source slot: the coarsening step its stored cloud needed. A sensor's clouds of one scene
   // have nearly the same number of voxels (EMBEDDED: a 16k-point infrastructure cloud ~12.6k at

@@ -5,19 +5,22 @@
 // 0.5 v frame) and the registration to the map (in the body frame) both start from these points:
 // one pass over the ~64k returns instead of three, and a capacity set by the voxels a scene
 // holds, not by the sensor's return count (the EMBEDDED profile cannot hold a raw 64-beam sweep).
-// A scene with more voxels than the capacity is ingested again with the voxel grown by 9/8 (at
-// most max_coarsen_steps times; counted; a pass stops reading where the table fills): dropping the returns beyond the capacity would cut the
-// sweep in firing order, i.e. lose whole azimuth sectors (EMBEDDED, 4,096 voxels: the 12
-// recordings' scans hold ~6.7k 0.5 m voxels, ~40 % of the returns were dropped, and a scan
-// without its last sectors locked the start-up search 23 m off along a street). Returns still
-// beyond the capacity after the last step are dropped and counted, never silently. The host
-// capacity never binds (identical output). Consecutive sweeps of one sensor hold nearly the same
-// number of voxels, so a sweep is read from the finest step at which the previous sweep would
-// have fit by the surface law (voxels ~ 1 / edge^2: x 81/64 per step finer): a finer pass would
-// only fill the table again (EMBEDDED: one read of the ~2 of nearly every sweep). The law
-// undercounts the recordings' finer voxels (~6.7k at 0.5 m where ~3.9k fill 0.5625 m, not ~4.9k),
-// so it skips a step only when even it says the step overflows. `coarsened` counts the steps from
-// the base voxel either way (the period's work is priced by it).
+// A scene with more voxels than the capacity is ingested again coarser, the voxel grown by 9/8 a
+// step (at most max_coarsen_steps; counted; a pass stops reading where the table fills): dropping
+// the returns beyond the capacity would cut the sweep in firing order, i.e. lose whole azimuth
+// sectors (EMBEDDED, 4,096 voxels: a whole 64-beam sweep of the recordings holds ~6-8k 0.5 m
+// voxels, and a scan without its last sectors locked the start-up search 23 m off along a
+// street). Returns still beyond the capacity after the last step are dropped and counted, never
+// silently. The host capacity never binds (identical output). Consecutive sweeps of one sensor
+// hold nearly the same number of voxels, so a sweep is read from the finest step at which the
+// previous sweep would have fit by the surface law (voxels ~ 1 / edge^2: x 81/64 per step
+// finer): a finer pass would only fill the table again. The law is rough for a sweep (grid phase:
+// a recording's first sweep holds 6.1k, 5.2k, 5.7k, 3.7k voxels over the first four steps), so
+// it skips a step only when even it says the step overflows. A sweep far over
+// the capacity (the first one, with no history) skips ahead by the same law from the share of the
+// sweep that filled the table (steps_to_fit: one partial read instead of one per step; EMBEDDED's
+// power-up period 89.7 -> 79.0 M x86-64 instructions, Sim 1 / 4_infra). `coarsened` counts the
+// steps from the base voxel either way (the period's work is priced by it).
 #pragma once
 
 #include <cstdint>
@@ -74,7 +77,7 @@ class ScanIngest {
   };
   Accumulator* find_or_add(const std::int32_t key[3]);
   template <bool kTimes>
-  void accumulate(std::span<const Vec3f> points, const float* times, const ScanIngestParams& params,
+  std::size_t accumulate(std::span<const Vec3f> points, const float* times, const ScanIngestParams& params,
                   bool stop_when_full, ScanIngestResult& r);
 
   Accumulator voxels_[kMaxVoxels];
@@ -83,6 +86,7 @@ class ScanIngest {
   float times_[kMaxVoxels];
   std::size_t count_ = 0;
   std::uint32_t first_step(const ScanIngestParams& params) const;
+  static std::uint32_t steps_to_fit(std::size_t read, std::size_t total, std::uint32_t step, std::uint32_t max_steps);
   std::uint32_t last_step_ = 0;   // coarsening steps the previous run needed
   std::size_t last_count_ = 0;    // and its voxels
 };
