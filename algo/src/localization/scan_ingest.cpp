@@ -14,7 +14,7 @@ namespace v2xloc {
 
 ScanIngest::Accumulator* ScanIngest::find_or_add(const std::int32_t key[3]) {
   Accumulator* found = nullptr;
-  linear_probe(spatial_hash(key), kSlots, static_cast<std::uint32_t>(config::kVoxelMaxProbes), [&](std::size_t slot) {
+  linear_probe(spatial_hash_folded(key), kSlots, static_cast<std::uint32_t>(config::kVoxelMaxProbes), [&](std::size_t slot) {
     const std::uint32_t v = slots_[slot];
     if (v == 0) {
       if (count_ == kMaxVoxels) return true;  // full: counted by the caller

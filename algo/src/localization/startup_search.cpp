@@ -380,23 +380,32 @@ void StartupSearch::take_result(const StartupFrame& f, Search& s) const {
   s.best = s.searched.best;
 }
 
-// An ambiguous result is decided by the GNSS track when one pose explains it clearly better.
+// An ambiguous result is decided by the GNSS track when one pose explains it clearly better, or
+// else by the map's negative evidence: of two poses that fit about as well, the one whose rays
+// cross mapped surfaces clearly more often (conflicts, pose_search.hpp) is contradicted by the map.
 void StartupSearch::resolve_ambiguity(const StartupFrame& f, Search& s, LocalizerCounters& counters) const {
   const PoseSearchResult& searched = s.searched;
   const bool distinct = searched.best_tight_fitness > 0.0 &&
                         searched.runner_up_tight_fitness < params_.max_ambiguity * searched.best_tight_fitness;
   if (distinct) return;
   s.best.status = RegistrationStatus::kDidNotConverge;
+  if (!searched.best.ok() || !searched.runner_up.ok()) return;
   const Mat4d& odom = f.odom_T_body.matrix();
   double d_best = 0.0, d_other = 0.0;
-  if (searched.best.ok() && searched.runner_up.ok() && track_gnss_distance(searched.best.transform, odom, d_best) &&
+  if (track_gnss_distance(searched.best.transform, odom, d_best) &&
       track_gnss_distance(searched.runner_up.transform, odom, d_other)) {
     const double lo = d_best < d_other ? d_best : d_other, hi = d_best < d_other ? d_other : d_best;
     if (lo < params_.track_distance_ratio * hi && hi - lo > params_.track_distance_margin) {
       s.best = d_best < d_other ? searched.best : searched.runner_up;
       ++counters.ambiguities_resolved;
+      return;
     }
   }
+  const int fewer = clearly_fewer_conflicts(searched.best_conflicts, searched.runner_up_conflicts,
+                                           params_.conflict_ratio, params_.conflict_margin);
+  if (fewer < 0) return;
+  s.best = fewer == 0 ? searched.best : searched.runner_up;
+  ++counters.ambiguities_resolved;
 }
 
 // A new candidate keeps its search's finalists (carried here) for the confirming search.

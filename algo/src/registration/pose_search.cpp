@@ -176,6 +176,14 @@ double ray_conflict_ratio(std::span<const Vec3f> scan_body, const IcpTarget& map
   return rays > 0 ? static_cast<double>(conflicts) / rays : -1.0;
 }
 
+int clearly_fewer_conflicts(double conflicts_a, double conflicts_b, double ratio, double margin) {
+  if (!(conflicts_a >= 0.0 && conflicts_b >= 0.0)) return -1;
+  const bool a_lower = conflicts_a < conflicts_b;
+  const double lo = a_lower ? conflicts_a : conflicts_b, hi = a_lower ? conflicts_b : conflicts_a;
+  if (!(hi >= ratio * lo && hi - lo >= margin)) return -1;
+  return a_lower ? 0 : 1;
+}
+
 const PoseSearchResult& PoseSearch::run(std::span<const Vec3f> scan_body, const IcpTarget& map, const Vec3d& center,
                                         const PoseSearchParams& params, PoseSearchScratch& scratch) {
   start(scan_body, map, center, params);

@@ -220,5 +220,21 @@ TEST(PoseSearchSelection, ALeaderItsRefinementRefutesIsNoLongerOutput) {
   EXPECT_NEAR(output_x.back(), truth.x(), 1.5);
 }
 
+
+// Two poses that fit about as well are told apart by the map's negative evidence only when one's
+// rays cross mapped surfaces clearly more often: a start-up search's alias 21 m along the street
+// (9 of 128 rays, 0.070) against the true pose (2 of 128, 0.016), EMBEDDED.
+TEST(PoseSearchSelection, ClearlyFewerRayConflictsDecideAnAmbiguity) {
+  const double ratio = 2.0, margin = 0.04;
+  EXPECT_EQ(clearly_fewer_conflicts(0.016, 0.070, ratio, margin), 0);
+  EXPECT_EQ(clearly_fewer_conflicts(0.109, 0.031, ratio, margin), 1);
+  EXPECT_EQ(clearly_fewer_conflicts(0.0, 0.047, ratio, margin), 0);  // no conflict at all against 6 rays
+  EXPECT_EQ(clearly_fewer_conflicts(0.0, 0.031, ratio, margin), -1);  // 4 rays: within the margin
+  EXPECT_EQ(clearly_fewer_conflicts(0.100, 0.180, ratio, margin), -1);  // under 2x: both look through walls
+  EXPECT_EQ(clearly_fewer_conflicts(0.050, 0.050, ratio, margin), -1);
+  EXPECT_EQ(clearly_fewer_conflicts(-1.0, 0.2, ratio, margin), -1);  // rays not checked
+  EXPECT_EQ(clearly_fewer_conflicts(0.016, -1.0, ratio, margin), -1);
+  EXPECT_EQ(clearly_fewer_conflicts(std::nan(""), 0.2, ratio, margin), -1);
+}
 }  // namespace
 }  // namespace v2xloc

@@ -137,6 +137,11 @@ struct StartupSearchParams {
   double track_distance_ratio = 0.6;  // [ratio] winner's mean track distance < ratio * loser's
   double track_distance_margin = 5.0; // [m] ... and smaller by at least this
   double track_max_distance = 25.0;   // [m] a solution whose track is farther is wrong
+  // An ambiguity the track leaves open goes to the pose whose ray conflict ratio (pose_search.hpp)
+  // is lower, when the other's is at least conflict_ratio x it and conflict_margin above it
+  // (5 of 128 rays; TUNING.md "Ambiguity and the map's negative evidence").
+  double conflict_ratio = 2.0;        // [ratio]
+  double conflict_margin = 0.04;      // [0-1]
   double heading_tolerance = 0.79;    // [rad] yaw window half-width around the GNSS course (45 deg)
 
   static PoseSearchParams default_search() {

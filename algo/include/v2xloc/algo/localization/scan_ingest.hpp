@@ -66,7 +66,7 @@ class ScanIngest {
 
  private:
   static constexpr std::size_t kMaxVoxels = config::kMaxDownsampledPoints;
-  static constexpr std::size_t kSlots = 2 * kMaxVoxels;
+  static constexpr std::size_t kSlots = 4 * kMaxVoxels;  // load <= 1/4: short probe chains
   static_assert((kSlots & (kSlots - 1)) == 0, "hash slots must be a power of two");
   struct Accumulator {
     std::int32_t key[3];

@@ -140,6 +140,10 @@ double ray_conflict_ratio(std::span<const Vec3f> scan_body, const IcpTarget& map
                           double ground_z, const PoseSearchParams& params, std::uint64_t* work = nullptr,
                           const ProximityGrid* free_space = nullptr);
 
+// Of two poses' ray conflict ratios, the clearly lower: 0 (a's) or 1 (b's) when the other is at
+// least ratio x it and margin above it; -1 when neither is (too close, or a ratio unchecked).
+int clearly_fewer_conflicts(double conflicts_a, double conflicts_b, double ratio, double margin);
+
 // [m] height bin of road_height: the road height (the hypotheses' z) is a bin centre, within
 // 0.1 m of the road's points, far inside the coarse ICP's gate, which refines it.
 inline constexpr double kRoadHeightBin = 0.2;
