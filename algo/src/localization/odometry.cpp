@@ -70,9 +70,8 @@ OdometryResult LidarOdometry::register_frame(std::span<const Vec3f> scan, Odomet
   // Range filter (also drops NaN / Inf).
   keep_in_range(scan, buffers.in_range, r);
   // Double voxelisation (KISS-ICP III-B): 0.5 v for the map, 1.5 v for registration. A sweep
-  // with more fine voxels than the frame holds is read again with the voxel grown by 9/8 (as the
-  // localizer's scan ingest does): cutting the output would drop the sweep's last sectors, and an
-  // odometry without them drifts (EMBEDDED, a whole 32-beam sweep: 22 % of the distance).
+  // with more fine voxels than the frame holds is read again with the voxel grown by 9/8, as the
+  // localizer's scan ingest does: cutting the output would drop the sweep's last sectors.
   float voxel = static_cast<float>(0.5 * params_.voxel_size);
   VoxelDownsampleResult fine;
   for (std::uint32_t step = 0;; ++step, voxel *= 1.125f) {

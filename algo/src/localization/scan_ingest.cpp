@@ -41,7 +41,7 @@ ScanIngest::Accumulator* ScanIngest::find_or_add(const std::int32_t key[3]) {
 // Returns the returns it read.
 template <bool kTimes>
 std::size_t ScanIngest::accumulate(std::span<const Vec3f> points, const float* times, const ScanIngestParams& params,
-                            bool stop_when_full, ScanIngestResult& r) {
+                                   bool stop_when_full, ScanIngestResult& r) {
   const float min2 = params.min_range * params.min_range;
   const float max2 = params.max_range * params.max_range;
   const float inv = 1.0f / params.voxel;  // keys stay within +-max_range / voxel: no overflow
