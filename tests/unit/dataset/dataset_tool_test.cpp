@@ -98,8 +98,8 @@ TEST(DatasetTool, DairPairsRegisterFromNoPrior) {
   std::printf("%s\n", j["summary"].dump().c_str());
   ASSERT_EQ(j["pairs"].size(), 3u);
   EXPECT_EQ(j["summary"]["skipped_missing"], 1);
-  // A profile whose scan capacity is below the fixture's vehicle clouds (EMBEDDED: 16,384 of
-  // ~40,000 points) registers them evenly thinned at a coarser voxel: a looser, still metric bound.
+  // A profile whose scan capacity were below the fixture's ~40,000-point vehicle clouds (both
+  // profiles' hold them) would register them evenly thinned at a coarser voxel: a looser bound.
   const bool thinned = j["pairs"][0]["points"]["vehicle"].get<std::size_t>() > v2xloc::config::kMaxScanPoints;
   const double max_t = thinned ? 0.5 : 0.05, max_r_deg = thinned ? 1.0 : 0.2;
   int registered = 0;
