@@ -561,8 +561,7 @@ void Ekf::clone_yaw(double t) {
   constexpr int kYaw = idx::kYaw, kClone = idx::kOdometryYaw;
   x_(kClone) = x_(kYaw);
   P_.row(kClone) = P_.row(kYaw);
-  P_.col(kClone) = P_.col(kYaw);
-  P_(kClone, kClone) = P_(kYaw, kYaw);
+  P_.col(kClone) = P_.col(kYaw);  // its (kClone, kClone) entry: the row's copy of P(kYaw, kYaw)
   odometry_chain_ = {true, t, t, 0.0};
 }
 

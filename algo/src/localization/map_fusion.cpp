@@ -252,7 +252,7 @@ void MapFusion::stage_candidate(const Mat4d& world_T_sensor, std::span<const Vec
   const Mat3d R = world_T_sensor.topLeftCorner<3, 3>();
   const Vec3d t = world_T_sensor.topRightCorner<3, 1>();
   const std::size_t limit = params_.max_input_points;  // 0: none (the staging's capacity cuts, counted)
-  const std::size_t cap = limit < staging_.capacity() ? limit : staging_.capacity();
+  const std::size_t cap = std::min(limit, staging_.capacity());
   const std::size_t stride = limit > 0 && points.size() > cap ? (points.size() + cap - 1) / cap : 1;
   if (stride > 1) {
     r.input_thinned = static_cast<std::uint32_t>(points.size() - (points.size() + stride - 1) / stride);
