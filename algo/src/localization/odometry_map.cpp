@@ -190,7 +190,8 @@ void OdometryVoxelMap::update(std::span<const Vec3f> frame, const Mat4d& pose, d
       continue;
     }
     std::uint32_t v = find_voxel(key);
-    if (v == kNone) v = insert_voxel(key);
+    // A full map takes no new voxel: it would stay empty, be evicted below and cost a re-index.
+    if (v == kNone && total < kMaxPoints) v = insert_voxel(key);
     if (v == kNone) {
       ++dropped;
       continue;

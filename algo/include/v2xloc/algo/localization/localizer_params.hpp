@@ -315,8 +315,7 @@ struct LocalizerParams {
     p.max_queries = 16384;
     // [points] a frame is thinned evenly to at most this many (counted odometry_frames_thinned)
     p.max_fine_points = 16384;
-    // [stride] every k-th 0.5 v point (host 2, EMBEDDED 1; TUNING.md)
-    p.fine_decimation = config::kEmbeddedProfile ? 1u : 2u;
+    p.fine_decimation = 2;  // [stride] every 2nd 0.5 v point (TUNING.md)
     p.convergence = 1e-3;  // [m, rad] stop once |d xi| is below this (TUNING.md)
     return p;
   }

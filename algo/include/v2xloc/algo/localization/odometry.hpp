@@ -40,7 +40,10 @@ struct OdometryParams {
   double voxel_size = 1.0;      // [m] local-map voxel v (KISS-ICP: max_range / 100)
   double max_range = 100.0;     // [m] scan points beyond are dropped; map eviction radius
   double min_range = 1.0;       // [m] drops returns from the ego vehicle itself
-  std::uint32_t max_points_per_voxel = 20;  // clamped to config::kOdometryMaxPointsPerVoxel
+  // Clamped to config::kOdometryMaxPointsPerVoxel. KISS-ICP's 20 fit a map of ~10^5 points; the
+  // EMBEDDED map (16,384) filled with 20 a voxel within five frames (~3,400 voxels) and refused
+  // the street ahead: 2 a voxel keep ~8,500 voxels (algo/TUNING.md, "EMBEDDED: odometry map").
+  std::uint32_t max_points_per_voxel = config::kEmbeddedProfile ? 2 : 20;
   double initial_threshold = 2.0;  // [m] sigma_0 until motion statistics exist
   double min_motion = 0.1;      // [m] model deviations below this are not sampled (no motion)
   std::uint32_t max_iterations = 50;   // clamped to config::kOdometryMaxIterations
