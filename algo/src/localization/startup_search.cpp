@@ -343,6 +343,9 @@ void StartupSearch::start_job(const StartupFrame& f, LocalizerCounters& counters
   }
   sp.provisional = params_.work_per_period > 0;  // a search over several periods outputs its best pose so far
   sp.provisional_scored = sp.provisional && first_scores_whole(f.frame);
+  sp.provisional_ambiguity = params_.max_ambiguity;  // a near-tie the rays decide, as resolve_ambiguity's last rule
+  sp.provisional_conflict_ratio = params_.conflict_ratio;
+  sp.provisional_conflict_margin = params_.conflict_margin;
   job_frame_ = f.frame;
   job_odom_ = f.odom_T_body.matrix();
   job_track_broken_ = false;

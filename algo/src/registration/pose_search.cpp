@@ -184,6 +184,18 @@ int clearly_fewer_conflicts(double conflicts_a, double conflicts_b, double ratio
   return a_lower ? 0 : 1;
 }
 
+bool replaces_best_so_far(const RatedPose& candidate, const RatedPose& best, double ambiguity, double conflict_ratio,
+                          double conflict_margin) {
+  const bool higher = candidate.tight > best.tight;
+  const double low = higher ? best.tight : candidate.tight;
+  const double high = higher ? candidate.tight : best.tight;
+  if (ambiguity > 0.0 && low >= ambiguity * high) {
+    const int fewer = clearly_fewer_conflicts(candidate.conflicts, best.conflicts, conflict_ratio, conflict_margin);
+    if (fewer >= 0) return fewer == 0;
+  }
+  return higher;
+}
+
 const PoseSearchResult& PoseSearch::run(std::span<const Vec3f> scan_body, const IcpTarget& map, const Vec3d& center,
                                         const PoseSearchParams& params, PoseSearchScratch& scratch) {
   start(scan_body, map, center, params);
@@ -226,6 +238,7 @@ bool PoseSearch::copy_scan(std::span<const Vec3f> scan_body, const IcpTarget& ma
   best_fitness_ = 0.0;
   winner_ = kPoseSearchRefine;
   provisional_tight_ = -1.0;
+  provisional_conflicts_ = -1.0;
   leader_coarse_ok_ = false;
   return true;
 }
@@ -532,8 +545,13 @@ void PoseSearch::judge_refined(const IcpTarget& map, const RegistrationResult& r
   tight_[i] = -1.0;
   const bool rated = rate_pose(map, refined.transform, conflicts_[i], tight_[i]);
   rated_[i] = rated ? 1 : 0;
-  if (params_.provisional && rated && tight_[i] > provisional_tight_) {
+  if (!params_.provisional || !rated) return;
+  const bool first = !(provisional_tight_ > 0.0);
+  if (first || replaces_best_so_far({tight_[i], conflicts_[i]}, {provisional_tight_, provisional_conflicts_},
+                                    params_.provisional_ambiguity, params_.provisional_conflict_ratio,
+                                    params_.provisional_conflict_margin)) {
     provisional_tight_ = tight_[i];
+    provisional_conflicts_ = conflicts_[i];
     provisional_pose_ = refined.transform;
   }
 }

@@ -236,5 +236,25 @@ TEST(PoseSearchSelection, ClearlyFewerRayConflictsDecideAnAmbiguity) {
   EXPECT_EQ(clearly_fewer_conflicts(0.016, -1.0, ratio, margin), -1);
   EXPECT_EQ(clearly_fewer_conflicts(std::nan(""), 0.2, ratio, margin), -1);
 }
+
+// The best pose so far, which a running search outputs: a near-tie in tight fitness goes to the
+// pose whose rays clearly cross fewer mapped surfaces (an EMBEDDED search on a 12,288-point map
+// output an alias 27 m along the street: tight 0.209 against the truth's 0.189, conflicts 0.117
+// against 0.023).
+TEST(PoseSearchSelection, NearTieForTheBestSoFarGoesToFewerRayConflicts) {
+  const double ambiguity = 0.85, ratio = 2.0, margin = 0.04;
+  const RatedPose truth{0.1885, 0.023}, alias{0.2094, 0.117};
+  EXPECT_FALSE(replaces_best_so_far(alias, truth, ambiguity, ratio, margin));
+  EXPECT_TRUE(replaces_best_so_far(truth, alias, ambiguity, ratio, margin));
+  EXPECT_TRUE(replaces_best_so_far(alias, truth, 0.0, ratio, margin));  // rule off: the higher fitness
+  // Clearly apart in fitness: the higher wins whatever its rays.
+  EXPECT_TRUE(replaces_best_so_far({0.30, 0.11}, {0.20, 0.01}, ambiguity, ratio, margin));
+  EXPECT_FALSE(replaces_best_so_far({0.20, 0.01}, {0.30, 0.11}, ambiguity, ratio, margin));
+  // A near-tie the rays cannot decide (too close, or unchecked): the higher fitness.
+  EXPECT_TRUE(replaces_best_so_far({0.21, 0.05}, {0.20, 0.04}, ambiguity, ratio, margin));
+  EXPECT_FALSE(replaces_best_so_far({0.20, 0.04}, {0.21, 0.05}, ambiguity, ratio, margin));
+  EXPECT_TRUE(replaces_best_so_far({0.21, -1.0}, {0.20, 0.0}, ambiguity, ratio, margin));
+  EXPECT_FALSE(replaces_best_so_far({0.20, 0.0}, {0.20, 0.0}, ambiguity, ratio, margin));  // equal: the first stays
+}
 }  // namespace
 }  // namespace v2xloc

@@ -99,6 +99,14 @@ struct PoseSearchParams {
   // is the GNSS fix), replaced by its coarse ICP's result once that converged; none once its own
   // refinement refutes it (no basin, outside the region or prior, rays through the map).
   bool provisional_scored = false;
+  // A refined pose whose tight fitness is within this ratio of the best so far (either side) is a
+  // near-tie for provisional(): the one whose rays clearly cross fewer mapped surfaces
+  // (clearly_fewer_conflicts with the two below) stands in, else the higher (0: the higher alone).
+  // The start-up search sets its own ambiguity rule here, so the pose it outputs while it runs is
+  // the one its final selection would keep from the two.
+  double provisional_ambiguity = 0.0;     // [0-1]
+  double provisional_conflict_ratio = 2.0;   // [ratio]
+  double provisional_conflict_margin = 0.04; // [0-1]
   // Scoring on a proximity grid (set_proximity_grid): a score point hits when a map point lies
   // in a cell within ceil(grid_reach / grid_cell) cells of its own on every axis, a cube that
   // stands for the score_distance sphere (1 m cells, reach 1: 3 m cube ~ the 2 m sphere's volume).
@@ -143,6 +151,16 @@ double ray_conflict_ratio(std::span<const Vec3f> scan_body, const IcpTarget& map
 // Of two poses' ray conflict ratios, the clearly lower: 0 (a's) or 1 (b's) when the other is at
 // least ratio x it and margin above it; -1 when neither is (too close, or a ratio unchecked).
 int clearly_fewer_conflicts(double conflicts_a, double conflicts_b, double ratio, double margin);
+
+// A rated pose (tight fitness, conflict ratio) against the best so far: whether it takes the
+// best's place. The higher tight fitness does, unless the two are a near-tie (the lower at least
+// `ambiguity` x the higher; 0: never) that clearly_fewer_conflicts decides.
+struct RatedPose {
+  double tight = 0.0;
+  double conflicts = -1.0;  // < 0: unchecked
+};
+bool replaces_best_so_far(const RatedPose& candidate, const RatedPose& best, double ambiguity, double conflict_ratio,
+                          double conflict_margin);
 
 // [m] height bin of road_height: the road height (the hypotheses' z) is a bin centre, within
 // 0.1 m of the road's points, far inside the coarse ICP's gate, which refines it.
@@ -281,6 +299,7 @@ class PoseSearch {
   // tight_[i]): -1 not judged, 0 its rays cross the map, 1 rated. The selection reuses them.
   std::int8_t rated_[kPoseSearchRefine] = {};
   double provisional_tight_ = -1.0;
+  double provisional_conflicts_ = -1.0;
   Mat4d provisional_pose_ = Mat4d::Identity();
   bool leader_coarse_ok_ = false;                 // top_[0]'s coarse ICP converged (provisional_scored)
   Mat4d leader_coarse_ = Mat4d::Identity();
