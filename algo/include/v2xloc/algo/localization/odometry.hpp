@@ -42,7 +42,7 @@ struct OdometryParams {
   double min_range = 1.0;       // [m] drops returns from the ego vehicle itself
   // Clamped to config::kOdometryMaxPointsPerVoxel. KISS-ICP's 20 fit a map of ~10^5 points; the
   // EMBEDDED map (16,384) filled with 20 a voxel within five frames (~3,400 voxels) and refused
-  // the street ahead: 2 a voxel keep ~8,500 voxels (algo/TUNING.md, "EMBEDDED: odometry map").
+  // the street ahead: 2 a voxel keep ~8,500 voxels (algo/TUNING.md, "EMBEDDED: 2 points a voxel").
   std::uint32_t max_points_per_voxel = config::kEmbeddedProfile ? 2 : 20;
   double initial_threshold = 2.0;  // [m] sigma_0 until motion statistics exist
   double min_motion = 0.1;      // [m] model deviations below this are not sampled (no motion)
