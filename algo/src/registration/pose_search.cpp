@@ -237,8 +237,7 @@ bool PoseSearch::copy_scan(std::span<const Vec3f> scan_body, const IcpTarget& ma
   run_started_ = false;
   best_fitness_ = 0.0;
   winner_ = kPoseSearchRefine;
-  provisional_tight_ = -1.0;
-  provisional_conflicts_ = -1.0;
+  provisional_ = kPoseSearchRefine;
   leader_coarse_ok_ = false;
   return true;
 }
@@ -546,13 +545,11 @@ void PoseSearch::judge_refined(const IcpTarget& map, const RegistrationResult& r
   const bool rated = rate_pose(map, refined.transform, conflicts_[i], tight_[i]);
   rated_[i] = rated ? 1 : 0;
   if (!params_.provisional || !rated) return;
-  const bool first = !(provisional_tight_ > 0.0);
-  if (first || replaces_best_so_far({tight_[i], conflicts_[i]}, {provisional_tight_, provisional_conflicts_},
-                                    params_.provisional_ambiguity, params_.provisional_conflict_ratio,
-                                    params_.provisional_conflict_margin)) {
-    provisional_tight_ = tight_[i];
-    provisional_conflicts_ = conflicts_[i];
-    provisional_pose_ = refined.transform;
+  const std::uint32_t b = provisional_;
+  if (b == kPoseSearchRefine ||
+      replaces_best_so_far({tight_[i], conflicts_[i]}, {tight_[b], conflicts_[b]}, params_.provisional_ambiguity,
+                           params_.provisional_conflict_ratio, params_.provisional_conflict_margin)) {
+    provisional_ = i;
   }
 }
 
@@ -578,8 +575,8 @@ bool PoseSearch::rate_pose(const IcpTarget& map, const Mat4d& pose, double& conf
 bool PoseSearch::provisional(Mat4d& pose) const {
   // Refined poses first: the best-scored hypothesis alone can be an alias along the street
   // (algo/TUNING.md, start-up); it stands in only with provisional_scored, once scoring is over.
-  if (provisional_tight_ > 0.0) {
-    pose = provisional_pose_;
+  if (provisional_ < kPoseSearchRefine && tight_[provisional_] > 0.0) {
+    pose = refined_[provisional_].transform;
     return true;
   }
   if (!params_.provisional_scored || phase_ == Phase::kScore || phase_ == Phase::kClimb || phase_ == Phase::kDone ||

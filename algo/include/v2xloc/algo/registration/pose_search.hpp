@@ -298,9 +298,7 @@ class PoseSearch {
   // Refined candidate i judged by judge_refined (its measures already in conflicts_[i] and
   // tight_[i]): -1 not judged, 0 its rays cross the map, 1 rated. The selection reuses them.
   std::int8_t rated_[kPoseSearchRefine] = {};
-  double provisional_tight_ = -1.0;
-  double provisional_conflicts_ = -1.0;
-  Mat4d provisional_pose_ = Mat4d::Identity();
+  std::uint32_t provisional_ = kPoseSearchRefine;  // the best rated candidate so far (kPoseSearchRefine: none)
   bool leader_coarse_ok_ = false;                 // top_[0]'s coarse ICP converged (provisional_scored)
   Mat4d leader_coarse_ = Mat4d::Identity();
   std::uint32_t winner_ = kPoseSearchRefine;
