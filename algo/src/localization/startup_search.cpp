@@ -52,6 +52,7 @@ void StartupSearch::configure(const StartupSearchParams& params, const IcpParams
   candidate_ = {};
   track_count_ = 0;
   frames_since_search_ = params.retry_frames;  // allow a search at the first frame
+  provisional_held_ = false;
   transition(Event::kStop);
   finalist_count_ = 0;
   acquisition_ = Acquisition::kNoSearchYet;
@@ -65,6 +66,7 @@ void StartupSearch::on_frame(bool odometry_ok, const Pose3d& odom_T_body, const 
   if (!odometry_ok) {
     track_count_ = 0;  // the odometry track is broken: start a new one
     job_track_broken_ = true;  // a running job's result can no longer be carried
+    provisional_held_ = false;  // nor a held pose
     return;
   }
   TrackSample& s = track_[track_count_ % kTrackFrames];
@@ -79,6 +81,7 @@ void StartupSearch::on_frame(bool odometry_ok, const Pose3d& odom_T_body, const 
 void StartupSearch::on_track_lost() {
   candidate_.valid = false;
   finalist_count_ = 0;
+  provisional_held_ = false;
   transition(Event::kStop);
   frames_since_search_ = params_.retry_frames;
   region_scale_ = 1.0;
@@ -96,11 +99,12 @@ void StartupSearch::nominate(std::uint32_t frame, const Pose3d& pose, const Pose
 
 bool StartupSearch::candidate_pose(std::uint32_t frame, const Pose3d& odom_T_body, Pose3d& pose) const {
   if (!candidate_.valid || !candidate_.output || frame - candidate_.frame > params_.confirm_window) {
-    if (!(state_ == State::kSearch || state_ == State::kSearchFinalIcp) || !provisional_valid_) return false;
-    // The running search's best pose so far, carried from the frame it started at; from a widened
-    // search only inside the normal region (beyond it nothing but the scan match vouches for it).
-    if (horizontal_distance(provisional_, job_fix_) > job_floor_region_) return false;
-    pose = Pose3d(carried_by_odometry(provisional_, job_odom_, odom_T_body.matrix()));
+    const bool running = state_ == State::kSearch || state_ == State::kSearchFinalIcp;
+    if (!provisional_valid_ || !(running || holds_provisional(frame))) return false;
+    // The best pose so far, carried from the frame it belongs to; from a widened search only
+    // inside the normal region (beyond it nothing but the scan match vouches for it).
+    if (!provisional_held_ && horizontal_distance(provisional_, job_fix_) > job_floor_region_) return false;
+    pose = Pose3d(carried_by_odometry(provisional_, provisional_odom_, odom_T_body.matrix()));
     return true;
   }
   pose = Pose3d(carried_by_odometry(candidate_.pose, candidate_.odom, odom_T_body.matrix()));
@@ -122,7 +126,46 @@ StartupSearch::State StartupSearch::next(State state, Event event) {
 
 void StartupSearch::transition(Event event) {
   state_ = next(state_, event);
-  if (state_ == State::kIdle) provisional_valid_ = false;  // the best pose so far belongs to a job
+  if (state_ == State::kIdle && !provisional_held_) provisional_valid_ = false;  // it belongs to a job
+}
+
+void StartupSearch::update_provisional(const StartupFrame& f) {
+  Mat4d pose;
+  if (!job_.provisional(pose)) {
+    // Refuted by its own refinement (or none yet): a pose held from the last search stays.
+    if (!holds_provisional(f.frame) || provisional_job_ == job_frame_) provisional_valid_ = provisional_held_ = false;
+    return;
+  }
+  if (refuted_by_gnss(f, carried_by_odometry(pose, job_odom_, f.odom_T_body.matrix()))) return;
+  provisional_ = pose;
+  provisional_odom_ = job_odom_;
+  provisional_job_ = job_frame_;
+  provisional_valid_ = true;
+  provisional_held_ = false;
+}
+
+// A search that refused its answer refutes only that pose: its best pose so far stays the output
+// until the next search has one (the GNSS fix is metres off), unless it is the refused answer
+// itself (an ambiguity refutes neither of its poses).
+void StartupSearch::hold_provisional(const StartupFrame& f, const RegistrationResult& answer) {
+  if (!provisional_valid_ || provisional_job_ != job_frame_) return;
+  const Mat4d now = carried_by_odometry(provisional_, provisional_odom_, f.odom_T_body.matrix());
+  const bool ambiguous = final_.searched.best.ok() && !final_.best.ok();
+  const bool other_pose = horizontal_distance(now, answer.transform.topRightCorner<3, 1>()) > params_.confirm_distance;
+  if (!(ambiguous || other_pose) || refuted_by_gnss(f, now)) return;
+  provisional_held_ = true;
+  provisional_held_until_ = f.frame + params_.confirm_window;
+}
+
+// A pose of this frame the acceptance checks would refuse on the GNSS alone: its track through the
+// odometry too far from the fixes, or its heading outside the course's window.
+bool StartupSearch::refuted_by_gnss(const StartupFrame& f, const Mat4d& pose) const {
+  double track_distance = 0.0;
+  if (track_gnss_distance(pose, f.odom_T_body.matrix(), track_distance) && track_distance > params_.track_max_distance) {
+    return true;
+  }
+  return f.course_known &&
+         std::abs(det::wrap_pi(yaw_of(pose.topLeftCorner<3, 3>()) - f.course)) > params_.heading_tolerance;
 }
 
 // One period of the search: the job (started when due), then, in the period it finishes, the
@@ -172,7 +215,7 @@ void StartupSearch::run_job(const StartupFrame& f, PoseSearchScratch& scratch, b
   if (f.work != nullptr) f.work->add(static_cast<double>(spent) * f.work->params().search_unit);
   counters.global_search_work += spent;
   if (!finished) {
-    if (state_ == State::kSearch) provisional_valid_ = job_.provisional(provisional_);
+    if (state_ == State::kSearch) update_provisional(f);
     return;
   }
   finish_job(f, report, counters);
@@ -187,11 +230,13 @@ void StartupSearch::run_final_icp(const StartupFrame& f, StartupOutcome& out, Lo
     return;
   }
   const bool exhaustive = state_ == State::kSearchFinalIcp;
-  transition(Event::kFinalIcpDone);
   out.status = accept(f, final_, out.registration, counters);
+  const bool candidate_now = candidate_.valid && candidate_.frame == f.frame;
+  if (exhaustive && out.status == StartupStatus::kRejected && !candidate_now) hold_provisional(f, out.registration);
+  transition(Event::kFinalIcpDone);
   if (out.status == StartupStatus::kStartFilter) acquisition_ = Acquisition::kAcquired;
   if (exhaustive) widen_region(out.status, f.frame, final_.searched.best);
-  if (out.status != StartupStatus::kRejected || !candidate_.valid || candidate_.frame != f.frame) return;
+  if (out.status != StartupStatus::kRejected || !candidate_now) return;
   if (exhaustive || !candidate_.contradicted) {
     keep_finalists(f);
     return;
@@ -349,7 +394,7 @@ void StartupSearch::start_job(const StartupFrame& f, LocalizerCounters& counters
   job_frame_ = f.frame;
   job_odom_ = f.odom_T_body.matrix();
   job_track_broken_ = false;
-  provisional_valid_ = false;
+  if (!provisional_held_) provisional_valid_ = false;
   const bool confirm_finalists = finalist_count_ > 0 && candidate_.valid &&
                                  f.frame - candidate_.frame <= params_.confirm_window;
   // The GNSS region a result must lie in: around this fix, or for a confirming search around the

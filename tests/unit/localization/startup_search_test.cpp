@@ -2,11 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <vector>
 
 #include "corner_map.hpp"
+#include "v2xloc/algo/registration/normals.hpp"
 #include "v2xloc/algo/localization/localizer_params.hpp"
 #include "v2xloc/algo/localization/period_work.hpp"
 
@@ -239,6 +241,116 @@ TEST(StartupSearch, ContradictedCandidateIsNotOutputAndTheNextSearchIsExhaustive
   EXPECT_LT(searches[1].work, searches[0].work) << "the confirming search re-decides finalists only";
   EXPECT_EQ(searches[2].work, searches[0].work) << "exhaustive, as the first (same scan, map and fix)";
   EXPECT_EQ(counters.global_confirmed, 1u);
+}
+
+// Two identical corners 30 m apart along x: a scan of one fits both equally, and neither's rays
+// cross the other's walls, so a search over both ends ambiguous.
+struct TwinCornerScene {
+  static constexpr float kShift = 30.0f;
+  std::vector<Vec3f> points;
+  std::unique_ptr<KdTreeStorage<Vec3f, 8192>> tree = std::make_unique<KdTreeStorage<Vec3f, 8192>>();
+  std::vector<Vec3f> normals;
+  std::vector<Vec3f> scan;
+  std::vector<std::uint32_t> hints;
+  std::unique_ptr<PoseSearchScratch> scratch = std::make_unique<PoseSearchScratch>();
+
+  TwinCornerScene() {
+    const testing::CornerMap corner;
+    points = corner.points;
+    for (const Vec3f& p : corner.points) points.push_back(p + Vec3f(kShift, 0.0f, 0.0f));
+    tree->build(points);
+    normals.resize(points.size());
+    NormalParams np;
+    np.radius = 1.2f;
+    estimate_normals(tree->tree, np, normals);
+    scan.assign(corner.points.begin(), corner.points.begin() + 900);
+    for (Vec3f& p : scan) p -= Vec3f(5.0f, 5.0f, 0.0f);  // the body 5 m out from both walls
+    hints.resize(scan.size());
+  }
+  StartupFrame frame(std::uint32_t index) {
+    StartupFrame f;
+    f.frame = index;
+    f.t = 0.1 * index;
+    f.scan = scan;
+    f.search_scan = scan;
+    f.tracking_scan = scan;
+    f.map = IcpTarget{points, normals, &tree->tree, nullptr, nullptr};
+    f.gnss.valid = true;
+    f.gnss.enu = Vec3d(0.5 * kShift + 5.0, 5.0, 0.0);  // halfway between the two
+    f.gnss.sigma = 3.0;
+    f.filter_needs_start = true;
+    f.icp_hints = hints;
+    return f;
+  }
+};
+
+// Before a candidate, the output is the running search's best pose so far. A search that ends
+// ambiguous (two poses fit alike, neither track nor rays decide) refutes neither: its best pose
+// stays the output while the next search starts, until that one has its own, instead of the GNSS
+// fix metres off. A search that refuses its answer on its own merits (here: below min_fitness)
+// refutes that pose: nothing is held.
+TEST(StartupSearch, AmbiguousSearchLeavesItsBestPoseOutputUntilTheNextSearchHasOne) {
+  LocalizerParams params;
+  params.startup.first_frames = 0;          // no power-up scoring slice: poses come from refinements
+  params.startup.work_per_period = 100000;  // the search over several periods (a best pose so far)
+  params.startup.min_work_per_period = 20000;
+  params.startup.search.refine_points = 256;  // both profiles alike
+  struct Frame {
+    bool searched = false;
+    StartupStatus status = StartupStatus::kNotDue;
+    bool shown = false;
+    Pose3d pose = Pose3d::Identity();
+  };
+  const auto run = [](const LocalizerParams& p, auto&& scene_frame, PoseSearchScratch& scratch) {
+    auto search = std::make_unique<StartupSearch>();
+    configure(*search, p);
+    LocalizerCounters counters;
+    std::vector<Frame> frames;
+    for (std::uint32_t frame = 0; frame < 120; ++frame) {
+      search->on_frame(true, Pose3d::Identity(), GnssFix{});
+      const StartupOutcome out = search->step(scene_frame(frame), scratch, counters);
+      Frame r;
+      r.searched = out.report.searched;
+      r.status = out.status;
+      r.shown = search->candidate_pose(frame, Pose3d::Identity(), r.pose);
+      frames.push_back(r);
+      if (counters.global_searches == 3) break;
+    }
+    return frames;
+  };
+  TwinCornerScene twins;
+  const std::vector<Frame> ambiguous = run(params, [&](std::uint32_t i) { return twins.frame(i); }, *twins.scratch);
+  std::size_t end = 0;
+  while (end < ambiguous.size() && ambiguous[end].status != StartupStatus::kRejected) ++end;
+  ASSERT_LT(end + 1, ambiguous.size()) << "the first search ended";
+  ASSERT_GT(end, 0u);
+  ASSERT_TRUE(ambiguous[end - 1].shown) << "its best pose so far was output while it ran";
+  EXPECT_TRUE(ambiguous[end].searched);
+  const Mat4d best_so_far = ambiguous[end - 1].pose.matrix();
+  std::size_t held = 0;  // the odometry stands still: held means the same pose, bit for bit
+  while (end + held < ambiguous.size() && ambiguous[end + held].shown &&
+         ambiguous[end + held].pose.matrix() == best_so_far) {
+    ++held;
+  }
+  EXPECT_GE(held, 2u) << "held at the search's end and while the next one starts";
+  EXPECT_LE(held, params.startup.confirm_window + 1);
+  ASSERT_LT(end + held, ambiguous.size());
+  EXPECT_TRUE(ambiguous[end + held].shown) << "the next search's own best pose takes over";
+  const double apart = (ambiguous[end + held].pose.translation() - ambiguous[end].pose.translation()).norm();
+  EXPECT_NEAR(apart, TwinCornerScene::kShift, 0.1) << "the other of the two look-alikes";
+
+  CornerScene one;  // a single corner: an unambiguous answer ...
+  for (Vec3f& p : one.scan) p -= Vec3f(5.0f, 5.0f, 0.0f);
+  LocalizerParams strict = params;
+  strict.startup.min_fitness = 1.01;  // ... refused on its own fit
+  strict.startup.work_per_period = strict.startup.min_work_per_period = 30000;  // over a few periods
+  const std::vector<Frame> refused =
+      run(strict, [&](std::uint32_t i) { return one.frame(i, Vec3d(7.0, 3.0, 0.0)); }, *one.scratch);
+  std::size_t refused_end = 0;
+  while (refused_end < refused.size() && refused[refused_end].status != StartupStatus::kRejected) ++refused_end;
+  ASSERT_LT(refused_end, refused.size());
+  EXPECT_TRUE(refused[refused_end - 1].shown);
+  EXPECT_FALSE(refused[refused_end].shown) << "its answer was its best pose so far: refuted, not held";
 }
 
 }  // namespace

@@ -139,7 +139,15 @@ class StartupSearch {
 
   // The transition function; an event a state does not expect leaves it where it is.
   static State next(State state, Event event);
-  void transition(Event event);  // entering kIdle forgets the running job's best pose so far
+  void transition(Event event);  // entering kIdle forgets the running job's best pose so far (unless held)
+  // The job's best pose so far as the output, when nothing this frame's GNSS track or course
+  // says refutes it (accept()'s cheap checks).
+  void update_provisional(const StartupFrame& f);
+  bool refuted_by_gnss(const StartupFrame& f, const Mat4d& pose) const;
+  void hold_provisional(const StartupFrame& f, const RegistrationResult& answer);
+  bool holds_provisional(std::uint32_t frame) const {
+    return provisional_held_ && frame <= provisional_held_until_;
+  }
   bool start_when_due(const StartupFrame& f, LocalizerCounters& counters);  // kIdle
   void run_job(const StartupFrame& f, PoseSearchScratch& scratch, bool started, StartupSearchReport& report,
                LocalizerCounters& counters);  // kSearch, kConfirm
@@ -200,8 +208,15 @@ class StartupSearch {
   Mat4d region_odom_ = Mat4d::Identity();
   PoseSearchParams job_params_{};
   bool job_heading_used_ = false;
-  bool provisional_valid_ = false;   // the running search's best pose so far (output only)
-  Mat4d provisional_ = Mat4d::Identity();  // world_T_body at job_frame_
+  // The output before a candidate (output only): the running search's best pose so far, unless
+  // the GNSS track or course refutes it (the previous one stays); after a search that ended
+  // ambiguous, held until the next search has its own, for at most confirm_window frames.
+  bool provisional_valid_ = false;
+  Mat4d provisional_ = Mat4d::Identity();       // world_T_body at provisional_odom_
+  Mat4d provisional_odom_ = Mat4d::Identity();  // odom_T_body of the frame it belongs to
+  std::uint32_t provisional_job_ = 0;           // job_frame_ of the search that found it
+  bool provisional_held_ = false;
+  std::uint32_t provisional_held_until_ = 0;    // [frame] the hold's last frame
   // The candidate's search finalists (world_T_body at candidate_.frame), winner first.
   Mat4d finalists_[kPoseSearchRefine];
   std::uint32_t finalist_count_ = 0;
