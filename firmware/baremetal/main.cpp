@@ -3,8 +3,8 @@
 // core needs no heap, no exceptions and no OS. Registration (downsample, k-d tree, normals, FPFH,
 // correspondences, RANSAC, ICP, Kabsch) and localization (map fusion with a surveyed background
 // held as the firmware holds it, deskew, LiDAR odometry, validity gate, EKF, geodesy, stereo cloud). The Localizer object itself is not linked: it owns a
-// copy of every stage's storage plus its frame buffers (~8 MiB static RAM in the EMBEDDED
-// profile), more than the few MB such a target has; the stages below are the same code.
+// copy of every stage's storage plus its frame buffers (the target image under
+// firmware/baremetal/target runs it); the stages below are the same code.
 // Prints nothing; results go to volatile sinks so nothing is optimised away.
 #include <algorithm>
 #include <cstdint>

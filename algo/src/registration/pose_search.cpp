@@ -18,12 +18,6 @@ constexpr std::uint32_t kGridLookupsPerUnit = 2;
 constexpr std::uint64_t kGridBuildPerUnit = 2;
 constexpr std::uint64_t kRoadHeightPointsPerUnit = 4;
 constexpr std::uint64_t kHypothesisUnits = 2;  // a hypothesis's own set-up and ranking
-// [work units] of the best hypothesis' coarse ICP run in the power-up scoring slice whatever the
-// budget (provisional_scored); the rest takes the budget's slices. ~17 M instructions: the host
-// profile's 256-point ICP finishes inside it on the 12 recordings, the EMBEDDED profile's on all
-// 1,024 search points (~380k units, 42 M) would put frame 0 over 100 M beside the first map and
-// its clouds (algo/TUNING.md, "The first acquisition within the budget").
-constexpr std::uint64_t kPowerUpCoarseWork = 150000;
 
 // The lattice form of scoring (proximity_grid.hpp cell_xy / near_cell): hypotheses a whole number
 // of grid cells apart put a score point into its cell at the search's centre shifted by whole
@@ -326,8 +320,8 @@ bool PoseSearch::step(const IcpTarget& map, PoseSearchScratch& scratch, std::uin
   if (score_whole && phase_ == Phase::kScore) score_hypotheses(map, ~std::uint64_t{0}, scratch);
   while (score_whole && phase_ == Phase::kClimb) climb_candidate(map, scratch.climb);
   // At power-up the output until a refined pose exists: the best hypothesis' coarse ICP, in this
-  // slice up to kPowerUpCoarseWork units whatever the budget; the rest in the budget's slices.
-  const std::uint64_t coarse_stop = work_ + kPowerUpCoarseWork;
+  // slice up to power_up_coarse_work units whatever the budget; the rest in the budget's slices.
+  const std::uint64_t coarse_stop = work_ + params_.power_up_coarse_work;
   while (score_whole && params_.provisional_scored && phase_ == Phase::kRefine && candidate_ == 0 && !refining_fine_ &&
          work_ < coarse_stop) {
     refine_candidate(map, coarse_stop);
@@ -588,6 +582,10 @@ bool PoseSearch::provisional(Mat4d& pose) const {
   const bool leader_refined = phase_ == Phase::kSelect || candidate_ > 0;
   if (leader_refined && rated_[0] != 1) return false;
   pose = leader_coarse_ok_ ? leader_coarse_ : pose_of(top_[0].x, top_[0].y, result_.ground_z, top_[0].yaw);
+  // The leader's coarse ICP under way: its latest estimate, nearer the basin's bottom than its start.
+  if (!leader_coarse_ok_ && !from_given_ && candidate_ == 0 && !refining_fine_ && run_started_ && run_.passes > 0) {
+    pose = run_.transform;
+  }
   return true;
 }
 

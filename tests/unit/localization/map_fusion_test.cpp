@@ -273,7 +273,10 @@ TEST(MapFusion, CloudOverTheCapacityIsCoarsenedNotCut) {
   params.voxel_size = 0.2;
   params.max_input_points = 0;
   MapFusion& map = fresh_map(params);
-  const int n = static_cast<int>(std::sqrt(double(config::kMaxMapPoints))) + 20;  // 0.2 m grid, > capacity
+  // A 0.2 m grid of more voxels than the map holds, every point staged.
+  const int n = std::min(static_cast<int>(std::sqrt(double(config::kMaxMapPoints))) + 20,
+                         static_cast<int>(std::sqrt(double(config::kMaxMapInputPoints))));
+  ASSERT_GT(static_cast<std::size_t>(n * n), config::kMaxMapPoints);
   std::vector<Vec3f> big;
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j) big.emplace_back(0.2f * i + 0.1f, 0.2f * j + 0.1f, 0.0f);

@@ -96,13 +96,19 @@ TEST(SourceCells, FarOrNonFinitePointsHaveNoCell) {
   EXPECT_FALSE(fresh_cells().any_around(Vec3f(std::nanf(""), 0.0f, 0.0f), 0.15, 0, 0xFFFF));
 }
 
-TEST(SourceCells, HalfFullAsksTheOwnerForARebuild) {
+TEST(SourceCells, ThreeQuartersFullAsksTheOwnerForARebuild) {
   SourceCells& cells = fresh_cells();
   std::size_t added = 0, attempts = 0;
-  for (std::int32_t x = 0; added < SourceCells::kSlots / 2; ++x, ++attempts) {
-    const std::int32_t key[3] = {x, 3 * x, 0};  // a line of cells: the hash clusters them
-    if (cells.add(key, 0x1) != SourceCells::kNoCell) ++added;
-  }
+  std::int32_t x = 0;
+  const auto fill_to = [&](std::size_t used) {
+    for (; added < used; ++x, ++attempts) {
+      const std::int32_t key[3] = {x, 3 * x, 0};  // a line of cells: the hash clusters them
+      if (cells.add(key, 0x1) != SourceCells::kNoCell) ++added;
+    }
+  };
+  fill_to(SourceCells::kSlots / 2);
+  EXPECT_FALSE(cells.needs_rebuild()) << "half full: chains still short";
+  fill_to(SourceCells::kSlots * 3 / 4);
   EXPECT_TRUE(cells.needs_rebuild());
   EXPECT_EQ(cells.used_cells(), added);
   EXPECT_EQ(cells.used_cells() + cells.dropped(), attempts);  // a cell without a slot is counted

@@ -27,7 +27,8 @@ inline constexpr std::size_t kMaxDownsampledPoints = kEmbeddedProfile ? 4096 : 3
 // Ego stereo cloud (subsampled disparity pixels kept within the depth-noise limit).
 inline constexpr std::size_t kMaxStereoPoints = kEmbeddedProfile ? 4096 : 65536;
 // Reference map (fused infrastructure + agent clouds, downsampled).
-inline constexpr std::size_t kMaxMapPoints = kEmbeddedProfile ? 8192 : 131072;
+// EMBEDDED 12,288: its start-up and valid registrations follow the map's density (algo/TUNING.md).
+inline constexpr std::size_t kMaxMapPoints = kEmbeddedProfile ? 12288 : 131072;
 // A map cloud's points staged for fusion (MapFusionParams::max_input_points reads a bigger cloud
 // with an even stride down to its limit, 16,384 by default; this caps it). A 32-beam unit's
 // cloud holds ~16k points; EMBEDDED keeps no room for more (12 B a point).
@@ -91,12 +92,12 @@ inline constexpr std::uint32_t kEkfMaxPredictSubsteps = 100;   // per prediction
 inline constexpr std::size_t kOdometryHashSlots = kEmbeddedProfile ? 16384 : 131072;
 inline constexpr std::size_t kOdometryMaxPointsPerVoxel = 20;
 inline constexpr std::uint32_t kOdometryMaxIterations = 50;
-// Map fusion: voxel hash slots for merging clouds (power of two, >= 2x points).
+// Map fusion: voxel hash slots for merging clouds (power of two, >= 2x points; EMBEDDED 4/3x, its RAM).
 inline constexpr std::size_t kMapConsistencyPoints = 4096;  // candidate points a consistency check samples
 inline constexpr std::size_t kMapFusionHashSlots = kEmbeddedProfile ? 16384 : 262144;
 // Map fusion's consistency reference (localization/source_cells.hpp): cells of the surveyed
-// sources' points on three grids, ~1.9 cells per point (measured, four units), rebuilt once live
-// and emptied cells fill half the slots (~every 60 frames on the 4-unit recordings). 16 B each.
+// sources' points on three grids, ~1.9-2.5 cells per point (measured, four units), rebuilt once live
+// and emptied cells fill three quarters of the slots (source_cells.hpp). 16 B each.
 inline constexpr std::size_t kMapReferenceCellSlots = kEmbeddedProfile ? 65536 : 262144;
 // Surveyed backgrounds (localization/surveyed_background.hpp): infrastructure units that have one,
 // and its cells (4 B packed keys in the firmware's static storage: kMaxBackgroundUnits x

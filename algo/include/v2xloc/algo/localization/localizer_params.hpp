@@ -128,7 +128,9 @@ struct StartupSearchParams {
   std::uint32_t first_frames = 10;    // [frames] since the first search: the first acquisition at most
   // [work units/period] first-acquisition slice floor, budget or not (0: within the budget; TUNING.md)
   std::uint32_t first_work_per_period = 0;
-  std::uint32_t max_frames = 20;      // [frames] a search job not finished within this is dropped
+  // [frames] a search job not finished within this is dropped (EMBEDDED: a first search over a
+  // 12,288-point map in the budget's slices takes up to ~30)
+  std::uint32_t max_frames = 40;
   std::uint32_t confirm_window = 10;  // [frames] a second search within this confirms (0: off)
   double confirm_distance = 0.5;      // [m] confirmation: horizontal disagreement allowed
   double confirm_yaw = 0.035;         // [rad] confirmation: heading disagreement allowed (2 deg)
@@ -163,6 +165,9 @@ struct StartupSearchParams {
     p.refine_min_score_ratio = 0.8; // [0-1] and only those within 20 % of the best climbed score are refined
     // [points] candidates' ICPs on this many search points (host 256 = every 4th; EMBEDDED 0: all)
     p.refine_points = config::kEmbeddedProfile ? 0u : 256u;
+    // [work units] the power-up slice's coarse ICP of the best hypothesis (host: its 256-point ICP
+    // whole, ~17 M instructions; EMBEDDED ~7 M of its ~42 M, beside the first map and clouds)
+    p.power_up_coarse_work = config::kEmbeddedProfile ? 60000u : 150000u;
     p.score_distance = 2.0;         // [m] score hit radius: half the grid cell's diagonal (TUNING.md)
     p.max_conflicts = 0.12;         // [0-1] ray conflict ratio above which a pose is no candidate (TUNING.md)
     p.clear_margin = true;          // [switch] the fitness margin from the best pose whose rays pass (TUNING.md)

@@ -5,7 +5,9 @@
 // check: ~8 M instructions per cloud with four infrastructure units in the map).
 // Several grids share the table: the grid's level sits in the low two bits of the z key.
 // Cells whose last bit is cleared stay in their probe chain (open addressing); once live and empty
-// cells fill half the table the owner rebuilds it from its points (needs_rebuild()). A cell that
+// cells fill three quarters of the table the owner rebuilds it from its points (needs_rebuild():
+// at half, a 12,288-point EMBEDDED map's first two clouds already rebuilt it within the power-up
+// period, 6.5 M instructions on the R52). A cell that
 // finds no slot within config::kVoxelMaxProbes probes is not recorded and counted (dropped()).
 // Most lookups are of absent cells (a consistency check asks for the 27 cells around a point); a
 // bitmap of the hashes ever added answers most of those without walking a probe chain.
@@ -50,7 +52,7 @@ class SourceCells {
   // Any of `allowed` in the 27 cells around p's cell on that grid.
   bool any_around(const Vec3f& p, double cell, std::int32_t level, Mask allowed) const;
 
-  bool needs_rebuild() const { return used_ * 2 >= kSlots; }
+  bool needs_rebuild() const { return used_ * 4 >= kSlots * 3; }
   std::size_t used_cells() const { return used_; }
   std::uint64_t dropped() const { return dropped_; }
 
@@ -70,7 +72,7 @@ class SourceCells {
     return ((seen_[bit / 64] >> (bit % 64)) & 1u) != 0;
   }
   // One bit per hash value modulo kSeenBits, set by add() until clear(): a clear bit proves the
-  // key absent. 4 bits per slot: at most half the slots are used, so >= 7/8 of the bits are clear.
+  // key absent. 4 bits per slot: at most 3/4 of the slots are used, so >= 13/16 of the bits are clear.
   static constexpr std::size_t kSeenBits = 4 * kSlots;
   static std::size_t seen_bit(std::uint32_t hash) { return hash & (kSeenBits - 1); }
 

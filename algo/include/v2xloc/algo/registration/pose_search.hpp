@@ -99,6 +99,9 @@ struct PoseSearchParams {
   // is the GNSS fix), replaced by its coarse ICP's result once that converged; none once its own
   // refinement refutes it (no basin, outside the region or prior, rays through the map).
   bool provisional_scored = false;
+  // [work units] of that coarse ICP run in the power-up scoring slice whatever the budget; the
+  // rest takes the budget's slices (~110 instructions a unit).
+  std::uint64_t power_up_coarse_work = 150000;
   // A refined pose whose tight fitness is within this ratio of the best so far (either side) is a
   // near-tie for provisional(): the one whose rays clearly cross fewer mapped surfaces
   // (clearly_fewer_conflicts with the two below) stands in, else the higher (0: the higher alone).
