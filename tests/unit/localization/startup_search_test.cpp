@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "corner_map.hpp"
@@ -20,6 +21,24 @@ void configure(StartupSearch& search, const LocalizerParams& params) {
   search.configure(params.startup, params.tracking.icp, params.filter.ekf.gates.gnss_sigma_inflation);
 }
 
+// A start-up frame of a scan against a map, with a GNSS fix of sigma 3 m.
+StartupFrame startup_frame(std::uint32_t index, std::span<const Vec3f> scan, std::span<std::uint32_t> hints,
+                           const IcpTarget& map, const Vec3d& fix) {
+  StartupFrame f;
+  f.frame = index;
+  f.t = 0.1 * index;
+  f.scan = scan;
+  f.search_scan = scan;
+  f.tracking_scan = scan;
+  f.map = map;
+  f.gnss.valid = true;
+  f.gnss.enu = fix;
+  f.gnss.sigma = 3.0;
+  f.filter_needs_start = true;
+  f.icp_hints = hints;
+  return f;
+}
+
 // The corner map; the scan is a part of it (body = world).
 struct CornerScene {
   testing::CornerMap map;
@@ -31,21 +50,7 @@ struct CornerScene {
     scan.assign(map.points.begin(), map.points.begin() + 900);
     hints.resize(scan.size());
   }
-  StartupFrame frame(std::uint32_t index, const Vec3d& fix) {
-    StartupFrame f;
-    f.frame = index;
-    f.t = 0.1 * index;
-    f.scan = scan;
-    f.search_scan = scan;
-    f.tracking_scan = scan;
-    f.map = map.target();
-    f.gnss.valid = true;
-    f.gnss.enu = fix;
-    f.gnss.sigma = 3.0;
-    f.filter_needs_start = true;
-    f.icp_hints = hints;
-    return f;
-  }
+  StartupFrame frame(std::uint32_t index, const Vec3d& fix) { return startup_frame(index, scan, hints, map.target(), fix); }
 };
 
 // The map's point spacing is measured, not assumed: the corner map's walls are sampled 0.5 m apart
@@ -268,19 +273,8 @@ struct TwinCornerScene {
     hints.resize(scan.size());
   }
   StartupFrame frame(std::uint32_t index) {
-    StartupFrame f;
-    f.frame = index;
-    f.t = 0.1 * index;
-    f.scan = scan;
-    f.search_scan = scan;
-    f.tracking_scan = scan;
-    f.map = IcpTarget{points, normals, &tree->tree, nullptr, nullptr};
-    f.gnss.valid = true;
-    f.gnss.enu = Vec3d(0.5 * kShift + 5.0, 5.0, 0.0);  // halfway between the two
-    f.gnss.sigma = 3.0;
-    f.filter_needs_start = true;
-    f.icp_hints = hints;
-    return f;
+    const Vec3d halfway(0.5 * kShift + 5.0, 5.0, 0.0);  // the fix between the two
+    return startup_frame(index, scan, hints, IcpTarget{points, normals, &tree->tree, nullptr, nullptr}, halfway);
   }
 };
 
