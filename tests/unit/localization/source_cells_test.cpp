@@ -96,7 +96,7 @@ TEST(SourceCells, FarOrNonFinitePointsHaveNoCell) {
   EXPECT_FALSE(fresh_cells().any_around(Vec3f(std::nanf(""), 0.0f, 0.0f), 0.15, 0, 0xFFFF));
 }
 
-TEST(SourceCells, ThreeQuartersFullAsksTheOwnerForARebuild) {
+TEST(SourceCells, FullEnoughAsksTheOwnerForARebuild) {
   SourceCells& cells = fresh_cells();
   std::size_t added = 0, attempts = 0;
   std::int32_t x = 0;
@@ -106,9 +106,10 @@ TEST(SourceCells, ThreeQuartersFullAsksTheOwnerForARebuild) {
       if (cells.add(key, 0x1) != SourceCells::kNoCell) ++added;
     }
   };
-  fill_to(SourceCells::kSlots / 2);
-  EXPECT_FALSE(cells.needs_rebuild()) << "half full: chains still short";
-  fill_to(SourceCells::kSlots * 3 / 4);
+  const std::size_t full = SourceCells::kSlots * SourceCells::kRebuildQuarters / 4;  // host half, EMBEDDED 3/4
+  fill_to(full - 1);
+  EXPECT_FALSE(cells.needs_rebuild()) << "chains still short";
+  fill_to(full);
   EXPECT_TRUE(cells.needs_rebuild());
   EXPECT_EQ(cells.used_cells(), added);
   EXPECT_EQ(cells.used_cells() + cells.dropped(), attempts);  // a cell without a slot is counted

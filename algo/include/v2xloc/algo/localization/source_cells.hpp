@@ -5,9 +5,9 @@
 // check: ~8 M instructions per cloud with four infrastructure units in the map).
 // Several grids share the table: the grid's level sits in the low two bits of the z key.
 // Cells whose last bit is cleared stay in their probe chain (open addressing); once live and empty
-// cells fill three quarters of the table the owner rebuilds it from its points (needs_rebuild():
-// at half, a 12,288-point EMBEDDED map's first two clouds already rebuilt it within the power-up
-// period, 6.5 M instructions on the R52). A cell that
+// cells fill half the table (EMBEDDED three quarters) the owner rebuilds it from its points
+// (needs_rebuild(); at half, a 12,288-point EMBEDDED map's first two clouds already rebuilt it within
+// the power-up period, 6.5 M instructions on the R52). A cell that
 // finds no slot within config::kVoxelMaxProbes probes is not recorded and counted (dropped()).
 // Most lookups are of absent cells (a consistency check asks for the 27 cells around a point); a
 // bitmap of the hashes ever added answers most of those without walking a probe chain.
@@ -52,7 +52,9 @@ class SourceCells {
   // Any of `allowed` in the 27 cells around p's cell on that grid.
   bool any_around(const Vec3f& p, double cell, std::int32_t level, Mask allowed) const;
 
-  bool needs_rebuild() const { return used_ * 4 >= kSlots * 3; }
+  static constexpr std::size_t kRebuildQuarters = config::kMapReferenceCellRebuildQuarters;
+  static_assert(kRebuildQuarters >= 1 && kRebuildQuarters <= 3, "a rebuild before the table fills");
+  bool needs_rebuild() const { return used_ * 4 >= kSlots * kRebuildQuarters; }
   std::size_t used_cells() const { return used_; }
   std::uint64_t dropped() const { return dropped_; }
 
