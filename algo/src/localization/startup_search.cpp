@@ -136,7 +136,7 @@ void StartupSearch::update_provisional(const StartupFrame& f) {
     if (!holds_provisional(f.frame) || provisional_job_ == job_frame_) provisional_valid_ = provisional_held_ = false;
     return;
   }
-  if (refuted_by_gnss(f, carried_by_odometry(pose, job_odom_, f.odom_T_body.matrix()))) return;
+  if (gnss_verdict(f, carried_by_odometry(pose, job_odom_, f.odom_T_body.matrix())).refutes) return;
   provisional_ = pose;
   provisional_odom_ = job_odom_;
   provisional_job_ = job_frame_;
@@ -152,20 +152,18 @@ void StartupSearch::hold_provisional(const StartupFrame& f, const RegistrationRe
   const Mat4d now = carried_by_odometry(provisional_, provisional_odom_, f.odom_T_body.matrix());
   const bool ambiguous = final_.searched.best.ok() && !final_.best.ok();
   const bool other_pose = horizontal_distance(now, answer.transform.topRightCorner<3, 1>()) > params_.confirm_distance;
-  if (!(ambiguous || other_pose) || refuted_by_gnss(f, now)) return;
+  if (!(ambiguous || other_pose) || gnss_verdict(f, now).refutes) return;
   provisional_held_ = true;
   provisional_held_until_ = f.frame + params_.confirm_window;
 }
 
-// A pose of this frame the acceptance checks would refuse on the GNSS alone: its track through the
-// odometry too far from the fixes, or its heading outside the course's window.
-bool StartupSearch::refuted_by_gnss(const StartupFrame& f, const Mat4d& pose) const {
-  double track_distance = 0.0;
-  if (track_gnss_distance(pose, f.odom_T_body.matrix(), track_distance) && track_distance > params_.track_max_distance) {
-    return true;
-  }
-  return f.course_known &&
-         std::abs(det::wrap_pi(yaw_of(pose.topLeftCorner<3, 3>()) - f.course)) > params_.heading_tolerance;
+StartupSearch::GnssVerdict StartupSearch::gnss_verdict(const StartupFrame& f, const Mat4d& pose) const {
+  GnssVerdict v;
+  v.track_known = track_gnss_distance(pose, f.odom_T_body.matrix(), v.track_distance);
+  v.heading_agrees = f.course_known && std::abs(det::wrap_pi(yaw_of(pose.topLeftCorner<3, 3>()) - f.course)) <=
+                                           params_.heading_tolerance;
+  v.refutes = (v.track_known && v.track_distance > params_.track_max_distance) || (f.course_known && !v.heading_agrees);
+  return v;
 }
 
 // One period of the search: the job (started when due), then, in the period it finishes, the
@@ -487,19 +485,13 @@ StartupStatus StartupSearch::accept(const StartupFrame& f, const Search& s, Regi
   if (final_frame_ != f.frame) result.transform = result.transform * se3_inverse(final_odom_) * f.odom_T_body.matrix();
   if (!result.ok()) return StartupStatus::kRejected;
   const Mat4d& odom = f.odom_T_body.matrix();
-  double track_distance = 0.0;
-  const bool track_known = track_gnss_distance(result.transform, odom, track_distance);
-  const bool heading_agrees =
-      f.course_known &&
-      std::abs(det::wrap_pi(yaw_of(result.transform.topLeftCorner<3, 3>()) - f.course)) <= params_.heading_tolerance;
+  const GnssVerdict gnss = gnss_verdict(f, result.transform);
   if (result.horizontal_constraint < params_.min_horizontal_constraint) {
     ++counters.global_unconstrained;  // an along-street alias fits as well (see the parameter)
     result.status = RegistrationStatus::kDegenerate;
     return StartupStatus::kRejected;
   }
-  if (result.fitness < params_.min_fitness || (f.course_known && !heading_agrees) ||
-      distance_from_region_fix(result.transform, odom) > s.region ||
-      (track_known && track_distance > params_.track_max_distance)) {
+  if (result.fitness < params_.min_fitness || gnss.refutes || distance_from_region_fix(result.transform, odom) > s.region) {
     result.status = RegistrationStatus::kDidNotConverge;
     return StartupStatus::kRejected;
   }
@@ -511,7 +503,7 @@ StartupStatus StartupSearch::accept(const StartupFrame& f, const Search& s, Regi
   // check removed the rest). Still flagged not localized until a second search confirms it.
   const bool sole = !f.course_known && s.params.max_conflicts > 0.0 && s.searched.best.ok() &&
                     s.searched.runner_up_tight_fitness <= 0.0;
-  if (!confirm(f.frame, result.transform, odom, track_known || heading_agrees || sole, counters)) {
+  if (!confirm(f.frame, result.transform, odom, gnss.track_known || gnss.heading_agrees || sole, counters)) {
     return StartupStatus::kRejected;
   }
   return StartupStatus::kStartFilter;

@@ -581,11 +581,12 @@ bool PoseSearch::provisional(Mat4d& pose) const {
   // rate it: refuted (rated_ stays -1 for a pose whose ICP failed or slid out).
   const bool leader_refined = phase_ == Phase::kSelect || candidate_ > 0;
   if (leader_refined && rated_[0] != 1) return false;
-  pose = leader_coarse_ok_ ? leader_coarse_ : pose_of(top_[0].x, top_[0].y, result_.ground_z, top_[0].yaw);
-  // The leader's coarse ICP under way: its latest estimate, nearer the basin's bottom than its start.
-  if (!leader_coarse_ok_ && !from_given_ && candidate_ == 0 && !refining_fine_ && run_started_ && run_.passes > 0) {
-    pose = run_.transform;
-  }
+  // Its coarse ICP's result; while that ICP runs, its latest estimate (nearer the basin's bottom
+  // than the hypothesis); before its first pass, the hypothesis.
+  const bool coarse_under_way = !from_given_ && candidate_ == 0 && !refining_fine_ && run_started_ && run_.passes > 0;
+  pose = leader_coarse_ok_   ? leader_coarse_
+         : coarse_under_way ? run_.transform
+                            : pose_of(top_[0].x, top_[0].y, result_.ground_z, top_[0].yaw);
   return true;
 }
 

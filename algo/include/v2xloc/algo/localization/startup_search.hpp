@@ -143,7 +143,15 @@ class StartupSearch {
   // The job's best pose so far as the output, when nothing this frame's GNSS track or course
   // says refutes it (accept()'s cheap checks).
   void update_provisional(const StartupFrame& f);
-  bool refuted_by_gnss(const StartupFrame& f, const Mat4d& pose) const;
+  // What the GNSS says of a pose of this frame: its track through the odometry against the fixes
+  // (when enough), its heading against the course; refutes: what accept() refuses on the GNSS alone.
+  struct GnssVerdict {
+    bool track_known = false;
+    double track_distance = 0.0;  // [m] mean, when track_known
+    bool heading_agrees = false;  // false without a course
+    bool refutes = false;
+  };
+  GnssVerdict gnss_verdict(const StartupFrame& f, const Mat4d& pose) const;
   void hold_provisional(const StartupFrame& f, const RegistrationResult& answer);
   bool holds_provisional(std::uint32_t frame) const {
     return provisional_held_ && frame <= provisional_held_until_;
