@@ -174,7 +174,7 @@ void Localizer::run_odometry(const EgoScanInput& in) {
   const OdometryResult r = odometry_.register_voxelized_frame(scan_.deskewed(), predict ? &predicted : nullptr);
   const std::uint64_t queries = static_cast<std::uint64_t>(r.iterations) * r.source_points;
   counters_.odometry_queries += queries;
-  work_.add(static_cast<double>(queries) * params_.work.odometry_query);
+  work_.add(params_.work.odometry_frame + static_cast<double>(queries) * params_.work.odometry_query);
   const bool ok = r.status == OdometryStatus::kOk || r.status == OdometryStatus::kFirstFrame;
   if (!ok) ++counters_.odometry_failures;
   if (r.query_capped) ++counters_.odometry_query_capped;

@@ -120,6 +120,7 @@ ScanIngestResult ScanIngest::run(std::span<const Vec3f> points, std::span<const 
     const bool last_try = step >= params.max_coarsen_steps;
     const std::size_t read = has_times ? accumulate<true>(points, times.data(), p, !last_try, r)
                                        : accumulate<false>(points, nullptr, p, !last_try, r);
+    ++r.passes;
     if (r.capacity_dropped == 0 || last_try) break;
     // Full: whole azimuth sectors would be lost; the sweep is read again with a coarser voxel.
     const std::uint32_t skip = steps_to_fit(read, points.size(), step, params.max_coarsen_steps);

@@ -50,7 +50,7 @@ std::uint32_t ScanPreparation::prepare(const EgoScanInput& in, const VehicleMoti
   const ScanIngestResult r = ingest_.run(in.points, in.point_times, have_vehicle_delta_ ? &delta : nullptr, ip);
   dropped += r.non_finite_dropped + r.range_dropped + r.capacity_dropped;
   coarsened += r.coarsened > 0 ? 1u : 0u;
-  return 1u + r.coarsened;
+  return r.passes > 0 ? r.passes : 1u;
 }
 
 void ScanPreparation::prepare_stereo(const StereoInput& stereo) {

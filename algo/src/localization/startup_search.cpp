@@ -181,9 +181,31 @@ StartupOutcome StartupSearch::step(const StartupFrame& f, PoseSearchScratch& scr
   if (!started) f.probe(LocalizerStage::kGlobalSearch);
   if (state_ == State::kSearch || state_ == State::kConfirm) run_job(f, scratch, started, out.report, counters);
   if (state_ == State::kSearchFinalIcp || state_ == State::kConfirmFinalIcp) run_final_icp(f, out, counters);
-  if (state_ != State::kIdle) out.status = StartupStatus::kSearching;
+  if (state_ == State::kIdle && confirms_this_period(f) && start_when_due(f, counters)) confirm_now(f, scratch, out, counters);
+  if (state_ != State::kIdle && out.status == StartupStatus::kNotDue) out.status = StartupStatus::kSearching;
   f.probe(LocalizerStage::kFusion);
   return out;
+}
+
+// A candidate made this period from a final ICP on an earlier frame's scan (the search or its
+// final ICP ran out of room): this frame's scan is another view, so its confirming search need not
+// wait a period for the next one.
+bool StartupSearch::confirms_this_period(const StartupFrame& f) const {
+  return candidate_.valid && candidate_.frame == f.frame && finalist_count_ > 0 && final_frame_ != f.frame;
+}
+
+// The confirming search's first slice in the candidate's period (and its final ICP, should it
+// finish). The candidate's outcome is the period's unless the confirmation decides.
+void StartupSearch::confirm_now(const StartupFrame& f, PoseSearchScratch& scratch, StartupOutcome& out,
+                                LocalizerCounters& counters) {
+  StartupOutcome confirming;
+  run_job(f, scratch, true, confirming.report, counters);
+  if (state_ == State::kConfirmFinalIcp) run_final_icp(f, confirming, counters);
+  if (confirming.report.searched) out.report = confirming.report;
+  if (state_ == State::kIdle) {
+    out.status = confirming.status;
+    out.registration = confirming.registration;
+  }
 }
 
 // kIdle: a job starts with a GNSS fix, retry_frames after the last one, in a period with

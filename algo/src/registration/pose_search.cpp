@@ -326,7 +326,9 @@ bool PoseSearch::step(const IcpTarget& map, PoseSearchScratch& scratch, std::uin
          work_ < coarse_stop) {
     refine_candidate(map, coarse_stop);
   }
-  while (phase_ != Phase::kDone && work_ < stop) {
+  // Selecting among candidates their refinement already judged costs nothing: a slice spent on
+  // the last refinement still finishes the search instead of leaving it for the next period.
+  while (phase_ != Phase::kDone && (work_ < stop || next_step_is_free())) {
     switch (phase_) {
       case Phase::kScore: score_hypotheses(map, stop, scratch); break;
       case Phase::kClimb: climb_candidate(map, scratch.climb); break;
@@ -602,12 +604,12 @@ void PoseSearch::select_candidate(const IcpTarget& map) {
   const std::uint32_t i = candidate_++;
   const RegistrationResult& r = refined_[i];
   const bool judged = rated_[i] >= 0;  // by judge_refined: conflicts_[i], tight_[i] hold its measures
-  const bool in_margin = r.ok() && r.fitness >= best_fitness_ - kPoseSearchFitnessMargin;
-  if (!judged || !in_margin) {
+  const bool eligible = in_margin(i);
+  if (!judged || !eligible) {
     tight_[i] = -1.0;
     conflicts_[i] = -1.0;
   }
-  if (!in_margin) return;
+  if (!eligible) return;
   const bool rated = judged ? rated_[i] == 1 : rate_pose(map, r.transform, conflicts_[i], tight_[i]);
   if (!rated) {
     ++result_.conflict_rejected;
@@ -617,6 +619,17 @@ void PoseSearch::select_candidate(const IcpTarget& map) {
     best_tight_ = tight_[i];
     winner_ = i;
   }
+}
+
+bool PoseSearch::in_margin(std::uint32_t i) const {
+  return refined_[i].ok() && refined_[i].fitness >= best_fitness_ - kPoseSearchFitnessMargin;
+}
+
+// The next step does no work: the refinement's end, or a selection step that rates no pose
+// (rate_pose is the selection's only work).
+bool PoseSearch::next_step_is_free() const {
+  if (phase_ == Phase::kRefine) return candidate_ >= refine_count();
+  return phase_ == Phase::kSelect && (candidate_ >= refine_count() || rated_[candidate_] >= 0 || !in_margin(candidate_));
 }
 
 void PoseSearch::finish() {

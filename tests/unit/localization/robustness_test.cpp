@@ -265,6 +265,28 @@ TEST(PoseSearchRobustness, SteppedSearchEqualsOneCallAndKeepsItsBudget) {
   EXPECT_EQ(stepped.conflict_rejected, once.conflict_rejected);
 }
 
+// A slice whose budget the search's work just fills finishes it: selecting among candidates the
+// refinement already judged costs nothing, so it is not left for the next period (a period lost
+// between the last refinement and the answer).
+TEST(PoseSearchRobustness, ASliceThatHoldsAllTheWorkFinishesTheSearch) {
+  static CourtyardScene scene;
+  build_courtyard_scene(scene);
+  PoseSearchParams sp = courtyard_search_params();
+  sp.max_conflicts = 0.5;
+  sp.sensor_in_body = Vec3d(0.0, 0.0, 1.0);
+  sp.clear_margin = true;  // every refined pose is judged as it comes
+  const Vec3d gnss(1.5, 0.5, 0.0);
+  static PoseSearch one_piece;
+  const PoseSearchResult& once = one_piece.run(scene.scan, scene.target, gnss, sp, search_scratch());
+  ASSERT_TRUE(once.best.ok());
+  static PoseSearch job;
+  job.start(scene.scan, scene.target, gnss, sp);
+  EXPECT_TRUE(job.step(scene.target, search_scratch(), one_piece.work()));
+  EXPECT_EQ(job.work(), one_piece.work());
+  EXPECT_TRUE(job.result().best.transform == once.best.transform);
+  EXPECT_EQ(job.result().best_tight_fitness, once.best_tight_fitness);
+}
+
 // The confirming search re-decides a finished search's finalists on a later scan: both basins
 // of the courtyard's mirror reach it, the same winner comes out at a fraction of the work, and a
 // finalist moved 1 m (the odometry's carry error) is pulled back by the fine ICP.

@@ -118,6 +118,11 @@ TEST(ScanIngest, OverflowIsReadAgainWithACoarserVoxel) {
   const ScanIngestResult again = g_ingest.run(pts, {}, nullptr, p);
   EXPECT_EQ(again.coarsened, r.coarsened);
   EXPECT_EQ(again.voxel, r.voxel);
+  // The period's work is priced by the reads: the first sweep read the surface more than once
+  // (the table filled), this one once, though both are `coarsened` steps from the base voxel.
+  EXPECT_GE(r.passes, 2u);
+  EXPECT_LE(r.passes, r.coarsened + 1u);
+  EXPECT_EQ(again.passes, 1u);
   EXPECT_TRUE(std::equal(first.begin(), first.end(), g_ingest.points().begin(), g_ingest.points().end()));
   // A scene that fits is read at the requested voxel once the previous sweep's voxels say it
   // may fit: the first sweep after the big one starts at the step the surface law allows.

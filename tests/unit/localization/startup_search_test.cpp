@@ -202,6 +202,63 @@ TEST(StartupSearch, FinalIcpRunsInSlicesWithTheSameResult) {
   EXPECT_EQ(sliced.outcome.registration.iterations, whole.outcome.registration.iterations);
 }
 
+// A candidate whose final ICP refined an earlier frame's scan (the period ran out of room) is
+// confirmed on this frame's, another view: its confirming search starts in the candidate's own
+// period (here it also finishes there and starts the filter). A final ICP on this frame's own
+// scan leaves the confirmation to a later frame.
+TEST(StartupSearch, ConfirmingSearchStartsInTheCandidatesPeriodOnANewScan) {
+  CornerScene scene;
+  for (Vec3f& p : scene.scan) p -= Vec3f(5.0f, 5.0f, 0.0f);  // the body 5 m out from both walls
+  LocalizerParams params;
+  params.startup.first_work_per_period = 0;
+  params.startup.work_per_period = 0;        // the search in one piece, the final ICP in slices
+  params.startup.min_work_per_period = 200;
+  params.startup.retry_frames = 1;           // a search may start every frame
+  struct Run {
+    std::uint32_t searched_frame = 0, outcome_frame = 0, start_frame = 0;
+    std::uint64_t searches_at_outcome = 0;
+    StartupStatus first_outcome = StartupStatus::kNotDue;
+    std::uint64_t confirmed = 0;
+  };
+  const auto run = [&](bool budget) {
+    Run r;
+    auto search = std::make_unique<StartupSearch>();
+    configure(*search, params);
+    LocalizerCounters counters;
+    for (std::uint32_t frame = 0; frame < 80 && r.start_frame == 0; ++frame) {
+      search->on_frame(true, Pose3d::Identity(), GnssFix{});
+      PeriodWork work;
+      work.configure(params.work);
+      work.add(params.work.budget - params.work.search_start - 1e5);
+      StartupFrame f = scene.frame(frame, Vec3d(7.0, 3.0, 0.0));
+      if (budget) f.work = &work;
+      const StartupOutcome out = search->step(f, *scene.scratch, counters);
+      if (frame == 0) EXPECT_TRUE(out.report.searched) << "the first search in one piece";
+      const bool outcome = out.status == StartupStatus::kRejected || out.status == StartupStatus::kStartFilter;
+      if (outcome && r.first_outcome == StartupStatus::kNotDue) {
+        r.first_outcome = out.status;
+        r.outcome_frame = frame;
+        r.searches_at_outcome = counters.global_searches;
+      }
+      if (out.status == StartupStatus::kStartFilter) r.start_frame = frame;
+    }
+    r.confirmed = counters.global_confirmed;
+    return r;
+  };
+  const Run sliced = run(true);
+  EXPECT_GT(sliced.outcome_frame, 0u) << "the final ICP went on in a later period";
+  EXPECT_EQ(sliced.searches_at_outcome, 2u) << "the confirming search started with the candidate";
+  EXPECT_EQ(sliced.first_outcome, StartupStatus::kStartFilter);
+  EXPECT_EQ(sliced.start_frame, sliced.outcome_frame);
+  EXPECT_EQ(sliced.confirmed, 1u);
+  const Run whole = run(false);
+  EXPECT_EQ(whole.outcome_frame, 0u) << "the final ICP on the search's own frame";
+  EXPECT_EQ(whole.first_outcome, StartupStatus::kRejected) << "a candidate, to be confirmed";
+  EXPECT_EQ(whole.searches_at_outcome, 1u) << "its confirmation waits for the next frame's scan";
+  EXPECT_GT(whole.start_frame, whole.outcome_frame);
+  EXPECT_EQ(whole.confirmed, 1u);
+}
+
 // A confirming search re-decides its candidate's finalists; when the odometry says the pose it
 // finds is not the candidate's (here the odometry jumps 0.25 m while the scan stays put: more than a
 // 0.1 m confirmation allows, less than the fine ICP pulls back), neither is

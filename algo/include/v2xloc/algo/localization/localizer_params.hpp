@@ -163,8 +163,9 @@ struct StartupSearchParams {
     p.refine_candidates = 5;        // [hypotheses] the best distinct ones refined by ICP
     p.climb_points = 256;           // [points] the kept hypotheses climb to their basins' bottoms (TUNING.md)
     p.refine_min_score_ratio = 0.8; // [0-1] and only those within 20 % of the best climbed score are refined
-    // [points] candidates' ICPs on this many search points (host 256 = every 4th; EMBEDDED 0: all)
-    p.refine_points = config::kEmbeddedProfile ? 0u : 256u;
+    // [points] candidates' ICPs on this many search points (host 256 = every 4th; EMBEDDED 384 of
+    // its thinner 1,024: 3/8; TUNING.md)
+    p.refine_points = config::kEmbeddedProfile ? 384u : 256u;
     // [work units] the power-up slice's coarse ICP of the best hypothesis (host: its 256-point ICP
     // whole, ~17 M instructions; EMBEDDED ~7 M of its ~42 M, beside the first map and clouds)
     p.power_up_coarse_work = config::kEmbeddedProfile ? 60000u : 150000u;
@@ -288,8 +289,8 @@ struct LocalizerParams {
   double odometry_prediction_max_gap = 1.0;  // [s] frame gap up to which the signals predict odometry
   // [clouds/period] map clouds taken per period while tracking (start-up: the caller's schedule; 0: no limit)
   std::uint32_t map_clouds_per_period_tracking = 1;
-  // [switch] no map clouds after the first map until the first acquisition ends (host only; TUNING.md)
-  bool defer_map_clouds_first_search = !config::kEmbeddedProfile;
+  // [switch] no map clouds after the first map until the first acquisition ends (TUNING.md)
+  bool defer_map_clouds_first_search = true;
   // [switch] fuse wheel speed / yaw rate; deskew and predict with them (ScanPreparation, PoseFilter)
   bool use_vehicle_signals = true;
   bool use_stereo = false;            // [switch] register and fuse the stereo cloud while tracking
@@ -307,7 +308,11 @@ struct LocalizerParams {
 
   static PeriodWorkParams default_work() {
     PeriodWorkParams p;  // per-unit costs: callgrind, x86-64 -O2, Sim 0 / 4_infra_2_agent (TUNING.md)
-    p.odometry_query = 2450.0;  // [instructions] per odometry point and iteration
+    // EMBEDDED's own, measured on its build (TUNING.md "Period budget"): a 4,096-voxel ingest
+    // read costs ~6.8 M, and its odometry map (2 points a voxel) ~3.3 M a frame + ~310 a query.
+    p.scan = config::kEmbeddedProfile ? 8.5e6 : 10.5e6;  // [instructions] per read of the sweep
+    p.odometry_frame = config::kEmbeddedProfile ? 4.5e6 : 0.0;  // [instructions] per odometry frame
+    p.odometry_query = config::kEmbeddedProfile ? 400.0 : 2450.0;  // [instructions] per odometry point and iteration
     p.tracking_query = 2300.0;  // [instructions] per tracking ICP point and pass
     p.evaluation_point = 1000.0;  // [instructions] per fitness-evaluation point (912 on a real 17.9k-point scan)
     p.map_normal = 5000.0;      // [instructions] per map normal

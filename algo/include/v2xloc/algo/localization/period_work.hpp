@@ -13,7 +13,7 @@ namespace v2xloc {
 struct PeriodWorkParams {
   bool enabled = true;                 // false: fixed quotas only (audit.work_per_period, every rebuild step)
   double budget = 92e6;                // [instructions] target per period (100 M less the estimate's error)
-  double scan = 10.5e6;                // [instructions] scan ingest and registration downsampling, per scan
+  double scan = 10.5e6;                // [instructions] scan ingest and registration downsampling, per read of the sweep
   // [instructions] per point of a map cloud handed to map fusion: the recordings' ~16k-point clouds
   // cost ~16-22 M; a 131k-point cloud of a synthetic canyon 61 M (priced high: the budget errs
   // towards deferring)
@@ -21,6 +21,7 @@ struct PeriodWorkParams {
   double map_vetting = 12e6;           // [instructions] per other unit the quorum checked after it
   double cells_rebuild = 25e6;         // [instructions] map fusion's reference cells rebuilt
   double background_check = 0.8e6;     // [instructions] a cloud scored on its unit's surveyed background
+  double odometry_frame = 0.0;         // [instructions] per frame the odometry registers (its map update, voxelization)
   double odometry_query = 0.0;         // [instructions] per odometry source point and iteration
   double tracking_query = 0.0;         // [instructions] per tracking ICP point and pass
   double evaluation_point = 0.0;       // [instructions] per point of a full-scan fitness evaluation

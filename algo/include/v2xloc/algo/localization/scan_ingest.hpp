@@ -20,7 +20,8 @@
 // the capacity (the first one, with no history) skips ahead by the same law from the share of the
 // sweep that filled the table (steps_to_fit: one partial read instead of one per step; EMBEDDED's
 // power-up period 89.7 -> 79.0 M x86-64 instructions, Sim 1 / 4_infra). `coarsened` counts the
-// steps from the base voxel either way (the period's work is priced by it).
+// steps from the base voxel either way; `passes` the reads of the sweep (the period's work is priced
+// by them: a sweep read once from a coarser step costs one read, not one per step).
 #pragma once
 
 #include <cstdint>
@@ -46,6 +47,7 @@ struct ScanIngestResult {
   std::uint32_t capacity_dropped = 0;     // voxel table full or hash probes exhausted
   std::uint32_t voxels = 0;               // points out
   std::uint32_t coarsened = 0;            // re-runs with the voxel grown by 9/8 (capacity overflow)
+  std::uint32_t passes = 0;               // reads of the sweep, a partial one that filled the table included
   float voxel = 0.0f;                     // [m] voxel edge used
   bool deskewed = false;
 };

@@ -160,6 +160,9 @@ class StartupSearch {
   void run_job(const StartupFrame& f, PoseSearchScratch& scratch, bool started, StartupSearchReport& report,
                LocalizerCounters& counters);  // kSearch, kConfirm
   void run_final_icp(const StartupFrame& f, StartupOutcome& out, LocalizerCounters& counters);  // the final ICP states
+  // A candidate whose confirming search may start in its own period, and that start.
+  bool confirms_this_period(const StartupFrame& f) const;
+  void confirm_now(const StartupFrame& f, PoseSearchScratch& scratch, StartupOutcome& out, LocalizerCounters& counters);
 
   std::uint64_t slice_budget(const StartupFrame& f) const;
   // Power-up exception (first_work_per_period > 0): the slices ignore the budget.

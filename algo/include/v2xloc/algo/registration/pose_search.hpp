@@ -255,6 +255,8 @@ class PoseSearch {
   std::int64_t lattice_step(const ProximityGrid& grid, PoseSearchScratch& scratch);
   void refine_candidate(const IcpTarget& map, std::uint64_t stop);
   void select_candidate(const IcpTarget& map);
+  bool in_margin(std::uint32_t i) const;
+  bool next_step_is_free() const;
   void finish();
   bool copy_scan(std::span<const Vec3f> scan_body, const IcpTarget& map);
   void build_grid(const IcpTarget& map);
