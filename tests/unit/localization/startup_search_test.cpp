@@ -233,7 +233,9 @@ TEST(StartupSearch, ConfirmingSearchStartsInTheCandidatesPeriodOnANewScan) {
       StartupFrame f = scene.frame(frame, Vec3d(7.0, 3.0, 0.0));
       if (budget) f.work = &work;
       const StartupOutcome out = search->step(f, *scene.scratch, counters);
-      if (frame == 0) EXPECT_TRUE(out.report.searched) << "the first search in one piece";
+      if (frame == 0) {
+        EXPECT_TRUE(out.report.searched) << "the first search in one piece";
+      }
       const bool outcome = out.status == StartupStatus::kRejected || out.status == StartupStatus::kStartFilter;
       if (outcome && r.first_outcome == StartupStatus::kNotDue) {
         r.first_outcome = out.status;

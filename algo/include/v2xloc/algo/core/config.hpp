@@ -97,7 +97,8 @@ inline constexpr std::size_t kMapConsistencyPoints = 4096;  // candidate points 
 inline constexpr std::size_t kMapFusionHashSlots = kEmbeddedProfile ? 16384 : 262144;
 // Map fusion's consistency reference (localization/source_cells.hpp): cells of the surveyed
 // sources' points on three grids, ~1.9-2.5 cells per point (measured, four units), rebuilt once live
-// and emptied cells fill this many quarters of the slots (source_cells.hpp). 16 B each.
+// and emptied cells fill this many quarters of the slots (source_cells.hpp). 17 B each (a cell and
+// its byte of the seen bitmap).
 inline constexpr std::size_t kMapReferenceCellSlots = kEmbeddedProfile ? 65536 : 262144;
 inline constexpr std::size_t kMapReferenceCellRebuildQuarters = kEmbeddedProfile ? 3 : 2;
 // Surveyed backgrounds (localization/surveyed_background.hpp): infrastructure units that have one,

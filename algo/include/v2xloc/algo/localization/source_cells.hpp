@@ -74,8 +74,11 @@ class SourceCells {
     return ((seen_[bit / 64] >> (bit % 64)) & 1u) != 0;
   }
   // One bit per hash value modulo kSeenBits, set by add() until clear(): a clear bit proves the
-  // key absent. 4 bits per slot: at most 3/4 of the slots are used, so >= 13/16 of the bits are clear.
-  static constexpr std::size_t kSeenBits = 4 * kSlots;
+  // key absent. 8 bits per slot: at most 3/4 of the slots are used, so >= 29/32 of the bits are
+  // clear. A set bit of an absent key walks the probe chain to its end, long at 3/4 load: with 4
+  // bits per slot those walks were most of the probes and map fusion's consistency check cost 10 %
+  // more (x86-64, EMBEDDED, Sim 3 / 4_infra_2_agent; algo/TUNING.md).
+  static constexpr std::size_t kSeenBits = 8 * kSlots;
   static std::size_t seen_bit(std::uint32_t hash) { return hash & (kSeenBits - 1); }
 
   Cell cells_[kSlots] = {};
