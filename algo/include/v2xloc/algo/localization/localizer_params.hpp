@@ -128,8 +128,8 @@ struct StartupSearchParams {
   std::uint32_t first_frames = 10;    // [frames] since the first search: the first acquisition at most
   // [work units/period] first-acquisition slice floor, budget or not (0: within the budget; TUNING.md)
   std::uint32_t first_work_per_period = 0;
-  // [frames] a search job not finished within this is dropped (EMBEDDED: a first search over a
-  // 12,288-point map in the budget's slices takes up to ~30)
+  // [frames] a search job not finished within this is dropped (a bound for crowded periods: an
+  // EMBEDDED first search takes 2-4 on the recordings, TUNING.md "EMBEDDED: the first acquisition")
   std::uint32_t max_frames = 40;
   std::uint32_t confirm_window = 10;  // [frames] a second search within this confirms (0: off)
   double confirm_distance = 0.5;      // [m] confirmation: horizontal disagreement allowed
