@@ -39,6 +39,15 @@ StartupFrame startup_frame(std::uint32_t index, std::span<const Vec3f> scan, std
   return f;
 }
 
+// A period with room to start a search and little more: the search and its final ICP run in
+// small slices.
+PeriodWork room_to_start_a_search(const PeriodWorkParams& params) {
+  PeriodWork work;
+  work.configure(params);
+  work.add(params.budget - params.search_start - 1e5);
+  return work;
+}
+
 // The corner map; the scan is a part of it (body = world).
 struct CornerScene {
   testing::CornerMap map;
@@ -168,9 +177,7 @@ TEST(StartupSearch, FinalIcpRunsInSlicesWithTheSameResult) {
     bool searched = false;
     for (std::uint32_t frame = 0; frame < 60; ++frame) {
       search->on_frame(true, Pose3d::Identity(), GnssFix{});
-      PeriodWork work;
-      work.configure(params.work);
-      work.add(params.work.budget - params.work.search_start - 1e5);  // room to start a search, little more
+      PeriodWork work = room_to_start_a_search(params.work);
       StartupFrame f = scene.frame(frame, fix);
       if (budget) f.work = &work;
       const StartupOutcome out = search->step(f, *scene.scratch, r.counters);
@@ -215,7 +222,7 @@ TEST(StartupSearch, ConfirmingSearchStartsInTheCandidatesPeriodOnANewScan) {
   params.startup.min_work_per_period = 200;
   params.startup.retry_frames = 1;           // a search may start every frame
   struct Run {
-    std::uint32_t searched_frame = 0, outcome_frame = 0, start_frame = 0;
+    std::uint32_t outcome_frame = 0, start_frame = 0;
     std::uint64_t searches_at_outcome = 0;
     StartupStatus first_outcome = StartupStatus::kNotDue;
     std::uint64_t confirmed = 0;
@@ -227,9 +234,7 @@ TEST(StartupSearch, ConfirmingSearchStartsInTheCandidatesPeriodOnANewScan) {
     LocalizerCounters counters;
     for (std::uint32_t frame = 0; frame < 80 && r.start_frame == 0; ++frame) {
       search->on_frame(true, Pose3d::Identity(), GnssFix{});
-      PeriodWork work;
-      work.configure(params.work);
-      work.add(params.work.budget - params.work.search_start - 1e5);
+      PeriodWork work = room_to_start_a_search(params.work);
       StartupFrame f = scene.frame(frame, Vec3d(7.0, 3.0, 0.0));
       if (budget) f.work = &work;
       const StartupOutcome out = search->step(f, *scene.scratch, counters);
