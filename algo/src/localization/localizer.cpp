@@ -280,7 +280,7 @@ StartupOutcome Localizer::search(double t, const Mat4d& body_T_lidar) {
     tracking_.rival().note(r.runner_up_pose, r.runner_up_tight, frame_, odom_T_body_);
   }
   if (s.status == StartupStatus::kStartFilter) {
-    const Pose3d start(s.registration.transform);
+    const Pose3d start = filter_.start_pose(s.registration, s.confirmed_candidate);
     if (filter_.accepts_restart_at(start)) {
       filter_.start(t, start, vehicle_);
       tracking_.rival().on_start(start, frame_, odom_T_body_);

@@ -158,6 +158,27 @@ void PoseFilter::start(double t, const Pose3d& pose, const VehicleMotion& vehicl
   failed_frames_ = 0;
 }
 
+Pose3d PoseFilter::start_pose(const RegistrationResult& confirmation, const RegistrationResult& candidate) const {
+  const Mat4d& b = confirmation.transform;
+  if (!candidate.ok() || !candidate.information.allFinite() || candidate.information.isZero(0.0)) return Pose3d(b);
+  const Mat4d& a = candidate.transform;
+  const PoseCovariance Ca = registration_covariance(candidate.information, candidate.inlier_rmse, Pose3d(a),
+                                                    params_.registration_covariance);
+  const PoseCovariance Cb = registration_covariance(confirmation.information, confirmation.inlier_rmse, Pose3d(b),
+                                                    params_.registration_covariance);
+  const Eigen::LDLT<PoseCovariance> sum(Ca + Cb);
+  if (sum.info() != Eigen::Success || !sum.isPositive()) return Pose3d(b);
+  Eigen::Matrix<double, 4, 1> d;
+  d.head<3>() = a.topRightCorner<3, 1>() - b.topRightCorner<3, 1>();
+  d(3) = det::wrap_pi(yaw_of(a.topLeftCorner<3, 3>()) - yaw_of(b.topLeftCorner<3, 3>()));
+  const Eigen::Matrix<double, 4, 1> step = Cb * sum.solve(d);  // b + Cb (Ca + Cb)^-1 (a - b)
+  if (!step.allFinite()) return Pose3d(b);
+  Mat4d mean = b;
+  mean.topRightCorner<3, 1>() += step.head<3>();
+  mean.topLeftCorner<3, 3>() = rot_z(step(3)) * b.topLeftCorner<3, 3>();
+  return Pose3d(mean);
+}
+
 bool PoseFilter::accepts_restart_at(const Pose3d& pose) const {
   if (!ekf_.initialized()) return true;
   const EkfState s = ekf_.state();

@@ -94,6 +94,8 @@ void StartupSearch::nominate(std::uint32_t frame, const Pose3d& pose, const Pose
   candidate_.frame = frame;
   candidate_.pose = pose.matrix();
   candidate_.odom = odom_T_body.matrix();
+  candidate_.information = Mat6d::Zero();
+  candidate_.inlier_rmse = 0.0;
   finalist_count_ = 0;  // an exhaustive search must confirm it
 }
 
@@ -205,6 +207,7 @@ void StartupSearch::confirm_now(const StartupFrame& f, PoseSearchScratch& scratc
   if (state_ == State::kIdle) {
     out.status = confirming.status;
     out.registration = confirming.registration;
+    out.confirmed_candidate = confirming.confirmed_candidate;
   }
 }
 
@@ -250,7 +253,7 @@ void StartupSearch::run_final_icp(const StartupFrame& f, StartupOutcome& out, Lo
     return;
   }
   const bool exhaustive = state_ == State::kSearchFinalIcp;
-  out.status = accept(f, final_, out.registration, counters);
+  out.status = accept(f, final_, out, counters);
   const bool candidate_now = candidate_.valid && candidate_.frame == f.frame;
   if (exhaustive && out.status == StartupStatus::kRejected && !candidate_now) hold_provisional(f, out.registration);
   transition(Event::kFinalIcpDone);
@@ -497,8 +500,9 @@ double StartupSearch::distance_from_region_fix(const Mat4d& pose, const Mat4d& o
 
 // (3) The acceptance checks on the final ICP's result (carried to this frame). An accepted
 // solution starts a filter that needs it only once a second search confirms it.
-StartupStatus StartupSearch::accept(const StartupFrame& f, const Search& s, RegistrationResult& result,
+StartupStatus StartupSearch::accept(const StartupFrame& f, const Search& s, StartupOutcome& out,
                                     LocalizerCounters& counters) {
+  RegistrationResult& result = out.registration;
   if (!s.best.ok()) {
     result = s.best;
     return StartupStatus::kRejected;
@@ -525,15 +529,19 @@ StartupStatus StartupSearch::accept(const StartupFrame& f, const Search& s, Regi
   // check removed the rest). Still flagged not localized until a second search confirms it.
   const bool sole = !f.course_known && s.params.max_conflicts > 0.0 && s.searched.best.ok() &&
                     s.searched.runner_up_tight_fitness <= 0.0;
-  if (!confirm(f.frame, result.transform, odom, gnss.track_known || gnss.heading_agrees || sole, counters)) {
+  if (!confirm(f.frame, result, odom, gnss.track_known || gnss.heading_agrees || sole, out.confirmed_candidate,
+               counters)) {
     return StartupStatus::kRejected;
   }
   return StartupStatus::kStartFilter;
 }
 
-bool StartupSearch::confirm(std::uint32_t frame, const Mat4d& pose, const Mat4d& odom_T_body, bool output,
-                            LocalizerCounters& counters) {
+// A candidate agrees when it lies within confirm_distance / confirm_yaw of this registration after
+// the odometry carried it here; then it is handed on (`confirmed`) as a second estimate of this pose.
+bool StartupSearch::confirm(std::uint32_t frame, const RegistrationResult& result, const Mat4d& odom_T_body,
+                            bool output, RegistrationResult& confirmed, LocalizerCounters& counters) {
   if (params_.confirm_window == 0) return true;
+  const Mat4d& pose = result.transform;
   if (candidate_.valid && frame - candidate_.frame <= params_.confirm_window) {
     const Mat4d predicted = candidate_.pose * se3_inverse(candidate_.odom) * odom_T_body;
     const double dyaw = det::wrap_pi(yaw_of(pose.topLeftCorner<3, 3>()) - yaw_of(predicted.topLeftCorner<3, 3>()));
@@ -541,6 +549,10 @@ bool StartupSearch::confirm(std::uint32_t frame, const Mat4d& pose, const Mat4d&
         std::abs(dyaw) <= params_.confirm_yaw) {
       candidate_.valid = false;
       ++counters.global_confirmed;
+      confirmed.status = RegistrationStatus::kOk;
+      confirmed.transform = predicted;
+      confirmed.information = candidate_.information;
+      confirmed.inlier_rmse = candidate_.inlier_rmse;
       return true;
     }
     ++counters.global_inconsistent;
@@ -550,6 +562,8 @@ bool StartupSearch::confirm(std::uint32_t frame, const Mat4d& pose, const Mat4d&
   candidate_.frame = frame;
   candidate_.pose = pose;
   candidate_.odom = odom_T_body;
+  candidate_.information = result.information;
+  candidate_.inlier_rmse = result.inlier_rmse;
   candidate_.output = output;
   candidate_.region_fix = region_fix_;
   candidate_.region_odom = region_odom_;

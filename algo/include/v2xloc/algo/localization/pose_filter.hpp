@@ -79,6 +79,11 @@ class PoseFilter {
 
   // Starts both filters at a confirmed start-up pose.
   void start(double t, const Pose3d& pose, const VehicleMotion& vehicle);
+  // Where a confirmed start-up begins: the confirming registration and the candidate it confirmed
+  // (carried to the same frame) are two estimates of one pose; their mean weighted by the
+  // registrations' covariances (x, y, z, yaw; roll and pitch the confirmation's). The
+  // confirmation's own pose when the candidate carries no information.
+  Pose3d start_pose(const RegistrationResult& confirmation, const RegistrationResult& candidate) const;
   // A start-up pose may restart the filter: it is not running, or the pose lies inside its belief
   // (PoseFilterParams::reacquire_*).
   bool accepts_restart_at(const Pose3d& pose) const;

@@ -65,6 +65,10 @@ enum class StartupStatus : std::uint8_t {
 struct StartupOutcome {
   StartupStatus status = StartupStatus::kNotDue;
   RegistrationResult registration{};
+  // kStartFilter: the candidate the registration confirmed, carried to this frame by the odometry
+  // (its ICP information and residual; zero information when the basin audit nominated it). The
+  // filter starts at both registrations' information-weighted mean (PoseFilter::start_pose).
+  RegistrationResult confirmed_candidate{};
   StartupSearchReport report{};
 };
 
@@ -111,6 +115,8 @@ class StartupSearch {
     std::uint32_t frame = 0;
     Mat4d pose = Mat4d::Identity();  // world_T_body
     Mat4d odom = Mat4d::Identity();  // odom_T_body at that frame
+    Mat6d information = Mat6d::Zero();  // its final ICP's (zero: nominated by the basin audit)
+    double inlier_rmse = 0.0;
     bool output = false;             // unambiguous: a better estimate than the GNSS fix
     bool contradicted = false;       // it replaced a candidate it disagreed with
     Vec3d region_fix = Vec3d::Zero();          // its search's region centre (the GNSS fix) ...
@@ -184,10 +190,9 @@ class StartupSearch {
   double distance_from_region_fix(const Mat4d& pose, const Mat4d& odom_T_body) const;
   void resolve_ambiguity(const StartupFrame& f, Search& s, LocalizerCounters& counters) const;
   void keep_finalists(const StartupFrame& f);
-  StartupStatus accept(const StartupFrame& f, const Search& s, RegistrationResult& result,
-                       LocalizerCounters& counters);
-  bool confirm(std::uint32_t frame, const Mat4d& pose, const Mat4d& odom_T_body, bool output,
-               LocalizerCounters& counters);
+  StartupStatus accept(const StartupFrame& f, const Search& s, StartupOutcome& out, LocalizerCounters& counters);
+  bool confirm(std::uint32_t frame, const RegistrationResult& result, const Mat4d& odom_T_body, bool output,
+               RegistrationResult& confirmed, LocalizerCounters& counters);
   // Mean horizontal distance between the GNSS fixes of the recent frames and the track a pose
   // hypothesis of this frame implies through the odometry; false when too few fixes.
   bool track_gnss_distance(const Mat4d& pose, const Mat4d& odom_T_body, double& mean_distance) const;
