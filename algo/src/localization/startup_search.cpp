@@ -508,7 +508,9 @@ StartupStatus StartupSearch::accept(const StartupFrame& f, const Search& s, Star
     return StartupStatus::kRejected;
   }
   result = final_run_.result;
-  if (final_frame_ != f.frame) result.transform = result.transform * se3_inverse(final_odom_) * f.odom_T_body.matrix();
+  if (final_frame_ != f.frame) {
+    result.transform = carried_by_odometry(result.transform, final_odom_, f.odom_T_body.matrix());
+  }
   if (!result.ok()) return StartupStatus::kRejected;
   const Mat4d& odom = f.odom_T_body.matrix();
   const GnssVerdict gnss = gnss_verdict(f, result.transform);
@@ -543,7 +545,7 @@ bool StartupSearch::confirm(std::uint32_t frame, const RegistrationResult& resul
   if (params_.confirm_window == 0) return true;
   const Mat4d& pose = result.transform;
   if (candidate_.valid && frame - candidate_.frame <= params_.confirm_window) {
-    const Mat4d predicted = candidate_.pose * se3_inverse(candidate_.odom) * odom_T_body;
+    const Mat4d predicted = carried_by_odometry(candidate_.pose, candidate_.odom, odom_T_body);
     const double dyaw = det::wrap_pi(yaw_of(pose.topLeftCorner<3, 3>()) - yaw_of(predicted.topLeftCorner<3, 3>()));
     if (horizontal_distance(pose, predicted.topRightCorner<3, 1>()) <= params_.confirm_distance &&
         std::abs(dyaw) <= params_.confirm_yaw) {
