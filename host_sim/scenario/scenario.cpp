@@ -11,6 +11,14 @@ using L = IntersectionLayout;
 constexpr double kHalfPi = M_PI / 2.0;
 constexpr double kWaitOffset = L::kStopLine + 3.0;  // car centre waiting at the stop line
 
+// A 90 deg turn's reach: how far it carries the car sideways (and forward) from where it starts
+// turning; the radius for a plain arc, more with its clothoids.
+double quarter_turn_reach(double radius, double transition) {
+  Path probe({0.0, 0.0, 0.0});
+  probe.turn(radius, kHalfPi, transition);
+  return probe.at(probe.length()).y;
+}
+
 }  // namespace
 
 const char* permutation_name(Permutation p) {
@@ -38,6 +46,10 @@ Scenario make_scenario(int id, double duration, const Terrain& terrain) {
   sc.name = "sim" + std::to_string(id);
   const double lane = L::kInnerLane;
   const double turn_radius = 10.0;
+  // [m] each clothoid of a turn: at 6-6.5 m/s the yaw rate ramps up over ~1 s (0.7 rad/s^2), a
+  // brisk urban left turn.
+  const double turn_transition = 6.0;
+  const double turn_reach = quarter_turn_reach(turn_radius, turn_transition);
   const double w = 2.0 * M_PI / 12.0;  // speed oscillation period 12 s
   // Straight runs start kApproach before the centre: the recording covers the V2X zone of the
   // intersection (the infrastructure LiDARs' useful range), where cooperative localization is
@@ -73,14 +85,14 @@ Scenario make_scenario(int id, double duration, const Terrain& terrain) {
       sc.duration = 22.0;
       const double approach = 50.0;
       sc.ego = Trajectory(std::move(Path({lane, -approach, kHalfPi})
-                                        .straight(approach - (turn_radius - lane))
-                                        .arc(turn_radius, kHalfPi)
+                                        .straight(approach - (turn_reach - lane))
+                                        .turn(turn_radius, kHalfPi, turn_transition)
                                         .straight(150.0)),
                           0.0, 6.5, 0.5, w);
       const double agent_approach = 45.0;
       sc.agents.push_back(Trajectory(std::move(Path({-lane, agent_approach, -kHalfPi})
-                                                   .straight(agent_approach - (turn_radius - lane))
-                                                   .arc(turn_radius, kHalfPi)
+                                                   .straight(agent_approach - (turn_reach - lane))
+                                                   .turn(turn_radius, kHalfPi, turn_transition)
                                                    .straight(150.0)),
                                      0.0, 6.0, 0.4, w * 1.2));
       sc.agents.push_back(Trajectory::stationary({-kWaitOffset, -lane, 0.0}));

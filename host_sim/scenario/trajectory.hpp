@@ -1,8 +1,10 @@
-// Smooth vehicle trajectories: a planar path of straight lines and circular arcs (continuous
-// heading), driven with a smooth speed profile v(t) = v0 + dv sin(w t) (or standing still), on
-// the ground of a Terrain (height, roll and pitch from the road under the wheels).
-// Everything is analytic, so the ground truth at any time (frames, LiDAR firings, 100 Hz vehicle
-// signals) is exact.
+// Smooth vehicle trajectories: a planar path of straight lines, circular arcs and clothoids,
+// driven with a smooth speed profile v(t) = v0 + dv sin(w t) (or standing still), on the ground of
+// a Terrain (height, roll and pitch from the road under the wheels). A turn enters and leaves its
+// arc on clothoids (the transition curves of road design; a driver steers the same way): a
+// straight meeting an arc directly would step the yaw rate within one sample, which no car can.
+// Everything is analytic (clothoid positions: quadrature to ~1e-12 m), so the ground truth at any
+// time (frames, LiDAR firings, 100 Hz vehicle signals) is exact.
 #pragma once
 
 #include "host_sim/world/world.hpp"
@@ -17,6 +19,12 @@ class Path {
   explicit Path(const PlanarPose& start) : start_(start) {}
   Path& straight(double length);
   Path& arc(double radius, double angle);  // angle > 0: left turn (counter-clockwise)
+  // Curvature changing linearly from its value at the path's end to `end_curvature` [1/m, signed]
+  // over `length` [m] (a clothoid, the transition curve of road design).
+  Path& clothoid(double length, double end_curvature);
+  // A turn by `angle` on a circle of `radius`, entered and left on clothoids of `transition` [m]
+  // each (they take transition / radius of the angle; the rest is the arc).
+  Path& turn(double radius, double angle, double transition);
 
   double length() const { return total_; }
   // Pose at arc length s (clamped to [0, length]; beyond the end the path continues straight).
@@ -26,10 +34,13 @@ class Path {
  private:
   struct Segment {
     PlanarPose start;
-    double length = 0, curvature = 0;  // 1/m, signed
+    double length = 0;
+    double curvature = 0, end_curvature = 0;  // 1/m, signed, at the start and the end
     double s0 = 0;
+    PlanarPose along(double ds) const;  // 0 <= ds <= length
   };
   PlanarPose end_pose() const;
+  double end_curvature() const { return segments_.empty() ? 0.0 : segments_.back().end_curvature; }
   PlanarPose start_;
   std::vector<Segment> segments_;
   double total_ = 0;
