@@ -13,7 +13,7 @@ using Mat4x4 = Eigen::Matrix<double, 4, 4>;
 EkfVector EkfState::to_vector() const {
   EkfVector x;
   x << pos_x, pos_y, pos_z, yaw, speed, yaw_rate, yaw_rate_bias, wheel_scale, gyro_bias, gyro_scale, road_grade,
-      odometry_yaw;
+      anchor_yaw, anchor_x, anchor_y;
   return x;
 }
 
@@ -30,7 +30,9 @@ EkfState EkfState::from_vector(const EkfVector& x) {
   s.gyro_bias = x(idx::kGyroBias);
   s.gyro_scale = x(idx::kGyroScale);
   s.road_grade = x(idx::kRoadGrade);
-  s.odometry_yaw = x(idx::kOdometryYaw);
+  s.anchor_yaw = x(idx::kAnchorYaw);
+  s.anchor_x = x(idx::kAnchorX);
+  s.anchor_y = x(idx::kAnchorY);
   return s;
 }
 
@@ -201,6 +203,7 @@ EkfFuseStatus Ekf::on_odometry(double t, double dt, const Pose3d& prev_T_curr) {
   e.z[0] = relative_pose(0, 3) / dt;
   e.z[1] = yaw_of(relative_pose.topLeftCorner<3, 3>());
   e.z[2] = dt;
+  e.z[3] = relative_pose(1, 3);
   e.R[0][0] = params_.noise.odometry_speed * params_.noise.odometry_speed;
   e.R[1][1] = params_.noise.odometry_yaw_rate * params_.noise.odometry_yaw_rate;
   e.R[2][2] = params_.noise.odometry_yaw * params_.noise.odometry_yaw;  // the window's, before its turn
@@ -536,33 +539,101 @@ EkfFuseStatus Ekf::apply_odometry(const Event& e, bool count) {
   // The frame continues the chain (1 us: the frames' stamps are differences of the same doubles).
   OdometryChain& c = odometry_chain_;
   if (!c.linked || std::fabs((e.t - dt) - c.t) > 1e-6) {
-    clone_yaw(e.t);
+    clone_anchor(e.t);
     return s;
+  }
+  if (params_.noise.anchor_span > 0.0) {
+    // Anchored once the filter has converged: the anchor taken then carries its accuracy forward.
+    const double arm = params_.noise.anchor_arm_sigma;
+    if (!c.armed && 0.5 * (P_(idx::kPosX, idx::kPosX) + P_(idx::kPosY, idx::kPosY)) <= arm * arm) {
+      c.armed = true;
+      clone_anchor(e.t);
+      return s;
+    }
+    if (c.armed) {
+      const EkfFuseStatus a = apply_anchor(e, count);
+      return s == EkfFuseStatus::kFused ? a : s;
+    }
   }
   c.yaw += e.z[1];
   c.t = e.t;
   if (e.t - c.start < params_.noise.odometry_window - 1e-6) return s;
   Eigen::Matrix<double, 1, 1> y, R;
   Eigen::Matrix<double, 1, kEkfStateSize> H = Eigen::Matrix<double, 1, kEkfStateSize>::Zero();
-  y(0) = det::wrap_pi(c.yaw - det::wrap_pi(x_(idx::kYaw) - x_(idx::kOdometryYaw)));
+  y(0) = det::wrap_pi(c.yaw - det::wrap_pi(x_(idx::kYaw) - x_(idx::kAnchorYaw)));
   H(0, idx::kYaw) = 1.0;
-  H(0, idx::kOdometryYaw) = -1.0;
+  H(0, idx::kAnchorYaw) = -1.0;
   const double turned = params_.noise.odometry_yaw_per_rad * c.yaw;
   R(0, 0) = e.R[2][2] + turned * turned;
   const double gate = params_.gates.odometry_gate_enabled ? params_.gates.window_nis_threshold : 0.0;
   const EkfFuseStatus w = fuse<1>(y, H, R, gate);
   if (count && w == EkfFuseStatus::kFused) ++counters_.odometry_windows_fused;
   if (count && w == EkfFuseStatus::kRejectedGate) ++counters_.odometry_windows_rejected;
-  clone_yaw(e.t);
+  clone_anchor(e.t);
   return s == EkfFuseStatus::kFused ? w : s;
 }
 
-void Ekf::clone_yaw(double t) {
-  constexpr int kYaw = idx::kYaw, kClone = idx::kOdometryYaw;
-  x_(kClone) = x_(kYaw);
-  P_.row(kClone) = P_.row(kYaw);
-  P_.col(kClone) = P_.col(kYaw);  // its (kClone, kClone) entry: the row's copy of P(kYaw, kYaw)
-  odometry_chain_ = {true, t, t, 0.0};
+void Ekf::clone_anchor(double t) {
+  const int from[3] = {idx::kYaw, idx::kPosX, idx::kPosY};
+  const int to[3] = {idx::kAnchorYaw, idx::kAnchorX, idx::kAnchorY};
+  for (int k = 0; k < 3; ++k) {
+    x_(to[k]) = x_(from[k]);
+    P_.row(to[k]) = P_.row(from[k]);
+    P_.col(to[k]) = P_.col(from[k]);
+  }
+  const bool armed = odometry_chain_.armed;
+  odometry_chain_ = {true, t, t, 0.0, 0.0, 0.0, armed};
+}
+
+// Anchored odometry: the odometry's pose since the anchor (composed frame by frame, in the
+// anchor's body frame) against the filter's pose relative to the anchor clone, every frame.
+// h = [R(-yaw_a) (p - p_a); yaw - yaw_a]. The anchor drifts as the odometry's map does (process
+// noise per metre driven); the frame's own error is white (anchor_position, odometry_yaw).
+EkfFuseStatus Ekf::apply_anchor(const Event& e, bool count) {
+  const EkfNoise& q = params_.noise;
+  OdometryChain& c = odometry_chain_;
+  const double dt = e.z[2];
+  const double dx = e.z[0] * dt, dy = e.z[3], dyaw = e.z[1];
+  const double cc = std::cos(c.yaw), sc = std::sin(c.yaw);
+  c.x += cc * dx - sc * dy;
+  c.y += sc * dx + cc * dy;
+  c.yaw += dyaw;
+  c.t = e.t;
+  const double dist = std::sqrt(dx * dx + dy * dy);
+  P_(idx::kAnchorX, idx::kAnchorX) += q.anchor_drift * q.anchor_drift * dist;
+  P_(idx::kAnchorY, idx::kAnchorY) += q.anchor_drift * q.anchor_drift * dist;
+  P_(idx::kAnchorYaw, idx::kAnchorYaw) += q.anchor_yaw_drift * q.anchor_yaw_drift * dist;
+
+  const double ya = x_(idx::kAnchorYaw);
+  const double ca = std::cos(ya), sa = std::sin(ya);
+  const double px = x_(idx::kPosX) - x_(idx::kAnchorX), py = x_(idx::kPosY) - x_(idx::kAnchorY);
+  const double hx = ca * px + sa * py, hy = -sa * px + ca * py;
+  Eigen::Matrix<double, 3, 1> y;
+  y << c.x - hx, c.y - hy, det::wrap_pi(c.yaw - det::wrap_pi(x_(idx::kYaw) - ya));
+  Eigen::Matrix<double, 3, kEkfStateSize> H = Eigen::Matrix<double, 3, kEkfStateSize>::Zero();
+  H(0, idx::kPosX) = ca;
+  H(0, idx::kPosY) = sa;
+  H(0, idx::kAnchorX) = -ca;
+  H(0, idx::kAnchorY) = -sa;
+  H(0, idx::kAnchorYaw) = hy;
+  H(1, idx::kPosX) = -sa;
+  H(1, idx::kPosY) = ca;
+  H(1, idx::kAnchorX) = sa;
+  H(1, idx::kAnchorY) = -ca;
+  H(1, idx::kAnchorYaw) = -hx;
+  H(2, idx::kYaw) = 1.0;
+  H(2, idx::kAnchorYaw) = -1.0;
+  Eigen::Matrix<double, 3, 3> R = Eigen::Matrix<double, 3, 3>::Zero();
+  const double turned = q.odometry_yaw_per_rad * c.yaw;
+  R(0, 0) = R(1, 1) = q.anchor_position * q.anchor_position;
+  R(2, 2) = e.R[2][2] + turned * turned;
+  const double gate = params_.gates.odometry_gate_enabled ? params_.gates.anchor_nis_threshold : 0.0;
+  const EkfFuseStatus w = fuse<3>(y, H, R, gate);
+  if (count && w == EkfFuseStatus::kFused) ++counters_.odometry_anchor_fused;
+  if (count && w == EkfFuseStatus::kRejectedGate) ++counters_.odometry_anchor_rejected;
+  // A rejected frame (the odometry slipped, or the filter jumped) starts a new anchor.
+  if (w != EkfFuseStatus::kFused || e.t - c.start >= q.anchor_span - 1e-6) clone_anchor(e.t);
+  return w;
 }
 
 void Ekf::take_snapshot(std::size_t log_pos) {

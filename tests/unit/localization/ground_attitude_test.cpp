@@ -76,7 +76,7 @@ EkfState driving(double grade) {
 
 EkfCovariance tight(double grade_sigma) {
   EkfVector sd;
-  sd << 0.1, 0.1, 0.1, 0.01, 0.05, 0.01, 0.005, 0.02, 0.01, 0.005, grade_sigma, 0.01;
+  sd << 0.1, 0.1, 0.1, 0.01, 0.05, 0.01, 0.005, 0.02, 0.01, 0.005, grade_sigma, 0.01, 0.1, 0.1;
   return sd.cwiseProduct(sd).asDiagonal();
 }
 

@@ -31,7 +31,7 @@ std::unique_ptr<Ekf> turning_filter() {
   s.speed = 6.5;
   s.yaw_rate = 0.65;
   EkfVector sd;
-  sd << 0.05, 0.05, 0.05, 0.01, 0.1, 0.02, 0.002, 0.01, 0.01, 0.005, 0.01, 0.01;
+  sd << 0.05, 0.05, 0.05, 0.01, 0.1, 0.02, 0.002, 0.01, 0.01, 0.005, 0.01, 0.01, 0.05, 0.05;
   f->initialize(0.0, s, EkfCovariance(sd.cwiseProduct(sd).asDiagonal()));
   for (int k = 1; k <= 10; ++k) EXPECT_EQ(f->on_vehicle_signals(0.01 * k, 6.5, 0.65), EkfFuseStatus::kFused);
   EXPECT_EQ(f->predict_to(0.1), EkfFuseStatus::kFused);

@@ -2,7 +2,7 @@
 // documented layout and index table, fixed-size matrices, Joseph-form updates, innovation gates
 // with counters, a bounded history for delayed measurements).
 //
-// State (kEkfStateSize = 12), local ENU frame (x east, y north, z up), with the process noise that
+// State (kEkfStateSize = 14), local ENU frame (x east, y north, z up), with the process noise that
 // drives each state (EkfNoise, continuous densities; PX4 EKF2 lists its states and their process
 // noise parameters the same way):
 //
@@ -19,13 +19,15 @@
 // | 8 | IMU gyro z bias (z = (1 + s_g) w + b_g)  | rad/s | gyro_bias_walk [rad/s/sqrt(s)] (sensor's) |
 // | 9 | IMU gyro z scale error s_g               | -     | gyro_scale_walk [1/sqrt(s)] (sensor's)    |
 // |10 | road grade g along the heading (dz/ds)   | -     | road_grade_walk [1/sqrt(s)] (road design) |
-// |11 | yaw at the odometry window's start       | rad   | none: a clone of state 3                  |
+// |11 | yaw at the odometry anchor               | rad   | anchor_yaw_drift [rad/sqrt(m)] when armed |
+// |12 | position x at the odometry anchor        | m     | anchor_drift [m/sqrt(m)] when armed       |
+// |13 | position y at the odometry anchor        | m     | anchor_drift                              |
 //
 // Measurements: CAN wheel speed (z = k v) and yaw rate (z = w + b), the IMU gyro z
 // (z = (1 + s_g) w + b_g, noise from the sensor's angle random walk gyro_noise_density:
 // sigma^2 = N^2 / span for the mean rate over span seconds), GNSS position, registration pose
-// (x, y, z, yaw), LiDAR odometry (the frame's mean speed; its yaw change over a window), the road
-// grade (the body's pitch, ground_attitude.hpp).
+// (x, y, z, yaw), LiDAR odometry (the frame's mean speed and yaw rate; its pose since an anchor),
+// the road grade (the body's pitch, ground_attitude.hpp).
 // The scale error s_g is what a turn adds to the gyro's error beyond its bias (a MEMS part's
 // sensitivity error, 0.5 % 1 sigma for the class): without it
 // the registrations' yaw corrections during a turn land in the bias, which is then wrong on the
@@ -57,6 +59,21 @@
 // of a window's yaw change is small (sigma 1.6e-3 rad over 10 frames against the window's 3.5e-4),
 // so counting the changes twice is left. The clone is taken again at each window's end, fused or
 // rejected, and when the chain of frames breaks (a frame without odometry).
+// Anchored odometry, once the filter has converged (position sigma <= anchor_arm_sigma, latched
+// until the next initialize()): the clone grows to the whole planar pose (states 11-13, taken
+// together) and every frame fuses the odometry's pose since the anchor, composed frame by frame,
+// as one 3-DoF measurement, h = [R(-yaw_a) (p - p_a); yaw - yaw_a] (stochastic cloning again). A
+// scan-to-map odometry's position error is white from frame to frame (5-8 mm along the track at
+// every span from 1 to 100 frames on the recordings) and its map drifts slowly: the frame's error
+// is measurement noise (anchor_position, odometry_yaw), the drift a random walk of the anchor per
+// metre driven. The filter then remembers each registration for as long as the anchor lives (30 s)
+// instead of the ~1 s the position diffusion and the per-frame rates leave it: a bias shared by
+// many registrations averages out against the odometry, and a pose stays anchored through a
+// spell without registrations. The anchor is taken again after anchor_span, when a frame's NIS
+// exceeds anchor_nis_threshold (the odometry slipped, or the filter jumped), and when the chain
+// breaks. Before arming the window above holds the yaw alone: an anchor taken while the pose is
+// still metres off would carry that error forward (measured: arming at 0.03 m instead of 0.02 m
+// costs 12 mm summed over the 12 rows).
 //
 // Out-of-sequence measurements: every event (measurement or predict_to() frame marker) is kept in a
 // time-ordered log (config::kEkfEventLogCapacity); after each frame marker a snapshot of
@@ -77,7 +94,7 @@
 
 namespace v2xloc {
 
-inline constexpr int kEkfStateSize = 12;
+inline constexpr int kEkfStateSize = 14;
 
 // Index table of the state vector (EKF2's StateSample indices).
 namespace ekf_index {
@@ -92,7 +109,9 @@ inline constexpr int kWheelScale = 7;
 inline constexpr int kGyroBias = 8;
 inline constexpr int kGyroScale = 9;
 inline constexpr int kRoadGrade = 10;
-inline constexpr int kOdometryYaw = 11;
+inline constexpr int kAnchorYaw = 11;
+inline constexpr int kAnchorX = 12;
+inline constexpr int kAnchorY = 13;
 }  // namespace ekf_index
 
 using EkfVector = Eigen::Matrix<double, kEkfStateSize, 1>;
@@ -111,7 +130,9 @@ struct EkfState {
   double gyro_bias = 0.0;      // [rad/s] IMU gyro z
   double gyro_scale = 0.0;     // [-] IMU gyro z scale error (z = (1 + s) w + b)
   double road_grade = 0.0;     // [-] dz per metre driven
-  double odometry_yaw = 0.0;   // [rad] yaw at the odometry window's start (a clone of yaw)
+  double anchor_yaw = 0.0;     // [rad] yaw at the odometry anchor / window start (a clone of yaw)
+  double anchor_x = 0.0;       // [m] position at the odometry anchor (a clone of pos_x)
+  double anchor_y = 0.0;       // [m] (a clone of pos_y)
 
   EkfVector to_vector() const;
   static EkfState from_vector(const EkfVector& x);
@@ -153,6 +174,16 @@ struct EkfNoise {
   // [rad/rad] more in proportion to the window's turn: a scan-to-map odometry's heading error grows
   // with rotation (motion distortion, the map's angular resolution); 1 % of a 90 deg turn is 0.9 deg.
   double odometry_yaw_per_rad = 0.01;
+  // Anchored odometry (see the header comment; anchor_span 0: off, the yaw window alone).
+  double anchor_span = 30.0;       // [s] an anchor's life
+  // [m] 1 sigma of a frame's position from the odometry, per axis: the upper end of its measured
+  // white error along the track (5.3-8.1 mm, Sim 0-2).
+  double anchor_position = 0.008;
+  // The odometry map's drift as the anchor's random walk per metre driven: 1 mm/sqrt(m) (2.4 mm
+  // over 6 m/s x 1 s, ~1 cm over a 100 m anchor) and 6e-5 rad/sqrt(m) (0.034 deg over 100 m).
+  double anchor_drift = 0.001;     // [m/sqrt(m)]
+  double anchor_yaw_drift = 6e-5;  // [rad/sqrt(m)]
+  double anchor_arm_sigma = 0.02;  // [m] armed once the position sigma (x, y mean) first reaches it
 };
 
 struct EkfGateParams {
@@ -168,6 +199,8 @@ struct EkfGateParams {
   double odometry_nis_threshold = 13.82;
   // Its yaw change over a window (1 DoF: 10.83) against the filter's: nor turn the heading.
   double window_nis_threshold = 10.83;
+  // The odometry's pose since the anchor (3 DoF: 16.27) against the filter's.
+  double anchor_nis_threshold = 16.27;
   // IMU gyro z (1 DoF: 10.83) against the yaw rate the CAN signal, odometry and registrations hold:
   // a bias step or a stuck axis is rejected instead of turning the yaw.
   double gyro_nis_threshold = 10.83;
@@ -226,6 +259,8 @@ struct EkfCounters {
   std::uint64_t odometry_rejected = 0;  // frames whose speed the NIS gate refused
   std::uint64_t odometry_windows_fused = 0;     // windows' yaw changes fused
   std::uint64_t odometry_windows_rejected = 0;  // windows' yaw changes the NIS gate refused
+  std::uint64_t odometry_anchor_fused = 0;     // frames whose pose since the anchor was fused
+  std::uint64_t odometry_anchor_rejected = 0;  // ... refused by the NIS gate (a new anchor follows)
   std::uint64_t grade_fused = 0;
   std::uint64_t signals_fused = 0;      // vehicle signals, with or without their yaw rate
   std::uint64_t gyro_fused = 0;
@@ -302,13 +337,16 @@ class Ekf {
     double t = 0.0;           // [s]
     double integrated = 0.0;  // [rad] yaw integrated by the prediction since t
   };
-  // The odometry frames since the clone (state kOdometryYaw) was taken: their yaw changes summed.
-  // Part of the snapshots, like GyroChain.
+  // The odometry frames since the clone (states kAnchorYaw, kAnchorX, kAnchorY) was taken: their
+  // yaw changes summed and their poses composed. Part of the snapshots, like GyroChain.
   struct OdometryChain {
     bool linked = false;  // t is the end of the last odometry frame, and the clone is at start
     double start = 0.0;   // [s] when the clone was taken
     double t = 0.0;       // [s]
     double yaw = 0.0;     // [rad] odometry's yaw change from start to t
+    double x = 0.0;       // [m] odometry's position since start, in the anchor's body frame
+    double y = 0.0;       // [m]
+    bool armed = false;   // anchored odometry armed (kept across anchors, cleared by initialize())
   };
   struct Snapshot {
     double t = 0.0;
@@ -323,7 +361,9 @@ class Ekf {
   EkfFuseStatus apply(const Event& e);  // predict to e.t, then fuse e
   EkfFuseStatus apply_scalar(const Event& e, bool count);
   EkfFuseStatus apply_odometry(const Event& e, bool count);
-  void clone_yaw(double t);  // state kOdometryYaw := yaw, with its covariance; the chain starts at t
+  // States kAnchorYaw, kAnchorX, kAnchorY := yaw, x, y, with their covariance; the chain starts at t.
+  void clone_anchor(double t);
+  EkfFuseStatus apply_anchor(const Event& e, bool count);
   void propagate(double t);
   template <int M>
   EkfFuseStatus fuse(const Eigen::Matrix<double, M, 1>& innovation,

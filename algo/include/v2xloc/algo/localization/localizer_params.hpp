@@ -245,7 +245,7 @@ struct PoseFilterParams {
   // (re)start; the gyro bias's (0.01 rad/s: the MEMS class's turn-on zero-rate offset) and scale
   // error's (0.5 %: the class's sensitivity error) when no earlier estimate exists; the road
   // grade's 5 % (a steep city street); the odometry clone's is replaced at the first odometry frame.
-  double restart_sigmas[kEkfStateSize] = {0.1, 0.1, 0.1, 0.01, 0.5, 0.05, 0.005, 0.02, 0.01, 0.005, 0.05, 0.01};
+  double restart_sigmas[kEkfStateSize] = {0.1, 0.1, 0.1, 0.01, 0.5, 0.05, 0.005, 0.02, 0.01, 0.005, 0.05, 0.01, 0.1, 0.1};
   ImuParams imu{};                           // the IMU's intake and its use (above)
   double tracking_max_sigma_xy = 0.5;        // [m] EKF position sigma above which the start-up search runs
   std::uint32_t max_failed_frames = 10;      // [frames] consecutive unfused registrations -> start-up search
