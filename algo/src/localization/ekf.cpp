@@ -625,7 +625,8 @@ EkfFuseStatus Ekf::apply_anchor(const Event& e, bool count) {
   H(2, idx::kAnchorYaw) = -1.0;
   Eigen::Matrix<double, 3, 3> R = Eigen::Matrix<double, 3, 3>::Zero();
   const double turned = q.odometry_yaw_per_rad * c.yaw;
-  R(0, 0) = R(1, 1) = q.anchor_position * q.anchor_position;
+  const double swung = q.anchor_position_per_rad * c.yaw;
+  R(0, 0) = R(1, 1) = q.anchor_position * q.anchor_position + swung * swung;
   R(2, 2) = e.R[2][2] + turned * turned;
   const double gate = params_.gates.odometry_gate_enabled ? params_.gates.anchor_nis_threshold : 0.0;
   const EkfFuseStatus w = fuse<3>(y, H, R, gate);

@@ -176,9 +176,14 @@ struct EkfNoise {
   double odometry_yaw_per_rad = 0.01;
   // Anchored odometry (see the header comment; anchor_span 0: off, the yaw window alone).
   double anchor_span = 30.0;       // [s] an anchor's life
-  // [m] 1 sigma of a frame's position from the odometry, per axis: the upper end of its measured
-  // white error along the track (5.3-8.1 mm, Sim 0-2).
-  double anchor_position = 0.008;
+  // [m] 1 sigma of a frame's position from the odometry, per axis: about the upper end of its
+  // frame-to-frame position error on the recordings, 6.2-7.5 mm rms (host) and 13-23 mm (the
+  // EMBEDDED profile's coarser map: 2 points a voxel, odometry.hpp).
+  double anchor_position = config::kEmbeddedProfile ? 0.02 : 0.008;
+  // [m/rad] more in proportion to the turn since the anchor: a rotation moves the odometry's
+  // position by its lever-arm and deskew errors (a few cm over a 90 deg turn); without it the
+  // EMBEDDED profile's Fused (valid) on Sim 3's turn rose 1.7-3.0 mm (algo/TUNING.md).
+  double anchor_position_per_rad = 0.03;
   // The odometry map's drift as the anchor's random walk per metre driven: 1 mm/sqrt(m) (2.4 mm
   // over 6 m/s x 1 s, ~1 cm over a 100 m anchor) and 6e-5 rad/sqrt(m) (0.034 deg over 100 m).
   double anchor_drift = 0.001;     // [m/sqrt(m)]
