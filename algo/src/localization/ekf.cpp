@@ -594,7 +594,7 @@ EkfFuseStatus Ekf::apply_anchor(const Event& e, bool count) {
   OdometryChain& c = odometry_chain_;
   const double dt = e.z[2];
   const double dx = e.z[0] * dt, dy = e.z[3], dyaw = e.z[1];
-  const double cc = std::cos(c.yaw), sc = std::sin(c.yaw);
+  const double cc = det::cos(c.yaw), sc = det::sin(c.yaw);
   c.x += cc * dx - sc * dy;
   c.y += sc * dx + cc * dy;
   c.yaw += dyaw;
@@ -605,7 +605,7 @@ EkfFuseStatus Ekf::apply_anchor(const Event& e, bool count) {
   P_(idx::kAnchorYaw, idx::kAnchorYaw) += q.anchor_yaw_drift * q.anchor_yaw_drift * dist;
 
   const double ya = x_(idx::kAnchorYaw);
-  const double ca = std::cos(ya), sa = std::sin(ya);
+  const double ca = det::cos(ya), sa = det::sin(ya);
   const double px = x_(idx::kPosX) - x_(idx::kAnchorX), py = x_(idx::kPosY) - x_(idx::kAnchorY);
   const double hx = ca * px + sa * py, hy = -sa * px + ca * py;
   Eigen::Matrix<double, 3, 1> y;
