@@ -582,7 +582,7 @@ void Ekf::clone_anchor(double t) {
     P_.col(to[k]) = P_.col(from[k]);
   }
   const bool armed = odometry_chain_.armed;
-  odometry_chain_ = {true, t, t, 0.0, 0.0, 0.0, armed};
+  odometry_chain_ = {true, t, t, 0.0, 0.0, 0.0, armed, 0};
 }
 
 // Anchored odometry: the odometry's pose since the anchor (composed frame by frame, in the
@@ -632,8 +632,14 @@ EkfFuseStatus Ekf::apply_anchor(const Event& e, bool count) {
   const EkfFuseStatus w = fuse<3>(y, H, R, gate);
   if (count && w == EkfFuseStatus::kFused) ++counters_.odometry_anchor_fused;
   if (count && w == EkfFuseStatus::kRejectedGate) ++counters_.odometry_anchor_rejected;
-  // A rejected frame (the odometry slipped, or the filter jumped) starts a new anchor.
-  if (w != EkfFuseStatus::kFused || e.t - c.start >= q.anchor_span - 1e-6) clone_anchor(e.t);
+  // A refused frame is either the odometry slipping or the filter drifting (a gyro bias step turns
+  // its yaw): the anchor is kept, as re-anchoring on a drifted filter would hold its error, and
+  // taken again only when the refusals persist (the odometry's chain itself slipped).
+  c.refused = w == EkfFuseStatus::kRejectedGate ? c.refused + 1 : 0;
+  if ((w != EkfFuseStatus::kFused && c.refused == 0) || c.refused >= params_.gates.anchor_max_refused ||
+      e.t - c.start >= q.anchor_span - 1e-6) {
+    clone_anchor(e.t);
+  }
   return w;
 }
 
