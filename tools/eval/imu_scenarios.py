@@ -13,8 +13,9 @@ the per-frame trace against the truth.
   tools/eval/imu_scenarios.py --imu A --no-imu B --eval build/host/bin/v2xloc-eval \\
       --firmware build/host/bin/v2xloc-firmware --jobs 2 --json scenarios.json
 
-Scenarios (the spells sit on Sim 3's left turn, 6.1-8.8 s, 35 deg/s at 6-7 m/s; Sim 0 drives straight):
-  lidar-blind        no ego scan reaches the firmware for 3 s from 6.0 s (18.6 m, 90 deg of the
+Scenarios (the spells sit on Sim 3's left turn, 5.6-9.1 s, up to 36 deg/s at 6-7 m/s; Sim 0 drives
+straight):
+  lidar-blind        no ego scan reaches the firmware for 3 s from 6.0 s (18.5 m, 87 deg of the
                      turn; its period timer closes each period without a scan): the error of the
                      spell's last pose, the largest in the spell, and of the first pose after it
   lidar-blind-empty  the scans of the same spell arrive without points: the same figures
