@@ -57,38 +57,27 @@ PlanarPose Path::end_pose() const {
   return segments_.back().along(segments_.back().length);
 }
 
-Path& Path::straight(double length) {
+Path& Path::append(double length, double curvature, double end_curvature) {
   Segment seg;
   seg.start = end_pose();
   seg.length = length;
-  seg.s0 = total_;
-  segments_.push_back(seg);
-  total_ += length;
-  return *this;
-}
-
-Path& Path::arc(double radius, double angle) {
-  const double k = (angle >= 0 ? 1.0 : -1.0) / radius;
-  Segment seg;
-  seg.start = end_pose();
-  seg.length = radius * std::abs(angle);
-  seg.curvature = seg.end_curvature = k;
-  seg.s0 = total_;
-  segments_.push_back(seg);
-  total_ += seg.length;
-  return *this;
-}
-
-Path& Path::clothoid(double length, double end_curvature) {
-  Segment seg;
-  seg.start = end_pose();
-  seg.length = length;
-  seg.curvature = this->end_curvature();
+  seg.curvature = curvature;
   seg.end_curvature = end_curvature;
   seg.s0 = total_;
   segments_.push_back(seg);
   total_ += length;
   return *this;
+}
+
+Path& Path::straight(double length) { return append(length, 0.0, 0.0); }
+
+Path& Path::arc(double radius, double angle) {
+  const double k = (angle >= 0 ? 1.0 : -1.0) / radius;
+  return append(radius * std::abs(angle), k, k);
+}
+
+Path& Path::clothoid(double length, double end_curvature) {
+  return append(length, this->end_curvature(), end_curvature);
 }
 
 Path& Path::turn(double radius, double angle, double transition) {

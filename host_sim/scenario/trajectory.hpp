@@ -40,6 +40,7 @@ class Path {
     PlanarPose along(double ds) const;  // 0 <= ds <= length
   };
   PlanarPose end_pose() const;
+  Path& append(double length, double curvature, double end_curvature);  // a segment at the end
   double end_curvature() const { return segments_.empty() ? 0.0 : segments_.back().end_curvature; }
   PlanarPose start_;
   std::vector<Segment> segments_;

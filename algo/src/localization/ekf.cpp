@@ -638,9 +638,10 @@ EkfFuseStatus Ekf::apply_anchor(const Event& e, bool count) {
   // A refused frame is either the odometry slipping or the filter drifting (a gyro bias step turns
   // its yaw): the anchor is kept, as re-anchoring on a drifted filter would hold its error, and
   // taken again only when the refusals persist (the odometry's chain itself slipped).
-  c.refused = w == EkfFuseStatus::kRejectedGate ? c.refused + 1 : 0;
-  if ((w != EkfFuseStatus::kFused && c.refused == 0) || c.refused >= params_.gates.anchor_max_refused ||
-      e.t - c.start >= q.anchor_span - 1e-6) {
+  const bool refused = w == EkfFuseStatus::kRejectedGate;
+  const bool failed = w != EkfFuseStatus::kFused && !refused;  // numeric failure: no anchor to keep
+  c.refused = refused ? c.refused + 1 : 0;
+  if (failed || c.refused >= params_.gates.anchor_max_refused || e.t - c.start >= q.anchor_span - 1e-6) {
     clone_anchor(e.t);
   }
   return w;

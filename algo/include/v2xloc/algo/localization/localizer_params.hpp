@@ -244,7 +244,8 @@ struct PoseFilterParams {
   // [m, m, m, rad, m/s, rad/s, rad/s, -, rad/s, -, -, rad] 1-sigma of each state (ekf_index order) at a
   // (re)start; the gyro bias's (0.01 rad/s: the MEMS class's turn-on zero-rate offset) and scale
   // error's (0.5 %: the class's sensitivity error) when no earlier estimate exists; the road
-  // grade's 5 % (a steep city street); the odometry clone's is replaced at the first odometry frame.
+  // grade's 5 % (a steep city street); the odometry anchor's (states 11-13) are replaced at the
+  // first odometry frame.
   double restart_sigmas[kEkfStateSize] = {0.1, 0.1, 0.1, 0.01, 0.5, 0.05, 0.005, 0.02, 0.01, 0.005, 0.05, 0.01, 0.1, 0.1};
   ImuParams imu{};                           // the IMU's intake and its use (above)
   double tracking_max_sigma_xy = 0.5;        // [m] EKF position sigma above which the start-up search runs
