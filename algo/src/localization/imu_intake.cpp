@@ -45,19 +45,18 @@ GyroMeasurement ImuIntake::push(const ImuInput& in, bool has_input, double lates
   if (!anchored_) {  // the first sample after a start or a dropout opens the span
     anchored_ = true;
     anchor_t_ = in.t;
-    sum_ = 0.0;
-    count_ = 0;
+    integral_ = 0.0;
+    previous_sample_ = {in.t, in.gyro[2]};
     return out;
   }
-  sum_ += in.gyro[2];
-  ++count_;
+  integral_ += 0.5 * (previous_sample_.rate + in.gyro[2]) * (in.t - previous_sample_.t);
+  previous_sample_ = {in.t, in.gyro[2]};
   const double span = in.t - anchor_t_;
   // 1 % slack: sensor-time stamps jitter, two 5 ms intervals may sum to just under 10 ms.
   if (span >= 0.99 * params_.fuse_period) {
-    out = {true, in.t, sum_ / count_, span};
+    out = {true, in.t, integral_ / span, span};
     anchor_t_ = in.t;
-    sum_ = 0.0;
-    count_ = 0;
+    integral_ = 0.0;
   }
   return out;
 }

@@ -50,7 +50,9 @@ TEST(ImuIntake, AveragesTheGyroOverTheFusePeriod) {
     ++ready;
     EXPECT_NEAR(g.span, 0.01, 1e-9);
     EXPECT_NEAR(g.t, 1.0 + i * kImuPeriod, 1e-12);
-    EXPECT_NEAR(g.rate, 0.1 + 0.01 * (i - 0.5), 1e-12);  // mean of the span's two samples
+    // The span [i - 2, i] of a rate ramping linearly between the samples: its mean is the middle
+    // sample's rate (the samples' plain mean, 0.1 + 0.01 (i - 0.5), would be 2.5 ms later).
+    EXPECT_NEAR(g.rate, 0.1 + 0.01 * (i - 1), 1e-12);
   }
   EXPECT_EQ(ready, 5);  // the first sample opens the span
   EXPECT_EQ(intake.recent().size(), 11u);
@@ -204,8 +206,8 @@ DriveOutcome drive(const Drive& d, const PoseFilterParams& base) {
     const double w_now = yaw_rate_at(s);
     const bool dropped = s >= d.dropout_from && s < d.dropout_to;
     if (d.imu && !dropped) {
-      // The sample's rate: the mean over its interval (what the truth's yaw integrated).
-      double gz = (1.0 + d.gyro_scale) * w + d.gyro_bias + (d.step_at >= 0.0 && s >= d.step_at ? d.step : 0.0) + d.gyro_sigma * n(imu_rng);
+      // The sample's rate at its time stamp (hal/HID_IMU_REPORT.md: the instant the rate applies to).
+      double gz = (1.0 + d.gyro_scale) * w_now + d.gyro_bias + (d.step_at >= 0.0 && s >= d.step_at ? d.step : 0.0) + d.gyro_sigma * n(imu_rng);
       if (d.stuck_from >= 0.0 && s >= d.stuck_from) {
         if (stuck == 0.0) stuck = gz;
         gz = stuck;

@@ -1,8 +1,10 @@
 // The IMU's samples on their way into the filter (PX4 EKF2's IMU down-sampler): each sample is
 // checked (finite, not saturated, after the previous one, not ahead of the other inputs by more
 // than ImuParams::max_lead), watched for a stuck axis (the same value stuck_samples times in a
-// row: a live MEMS axis's noise spans many LSBs), and its gyro z is averaged over fuse_period into
-// one filter measurement (the mean rate over the span since the previous one). A silence longer
+// row: a live MEMS axis's noise spans many LSBs), and its gyro z is integrated over fuse_period into
+// one filter measurement (the mean rate over the span since the previous one: trapezoids between
+// the samples, which are point samples of the rate; their plain mean would be the rate half a
+// sample interval later, turning the yaw ahead by that much of each change of rate). A silence longer
 // than max_gap is a dropout: the average restarts at the next sample. Every refusal is counted in
 // LocalizerCounters. The last kImuRecentSamples gyro z samples are kept for the sweep's deskew.
 #pragma once
@@ -64,8 +66,8 @@ class ImuIntake {
   std::uint32_t same_[6] = {0, 0, 0, 0, 0, 0};  // repeats of that value in a row
   bool anchored_ = false;  // the mean's span starts at anchor_t_
   double anchor_t_ = 0.0;
-  double sum_ = 0.0;
-  std::uint32_t count_ = 0;
+  double integral_ = 0.0;  // [rad] gyro z integrated since anchor_t_
+  GyroSample previous_sample_{};
   GyroSample recent_[2 * kImuRecentSamples];  // a window slid by copying back when it reaches the end
   std::size_t recent_first_ = 0;
   std::size_t recent_count_ = 0;
