@@ -20,6 +20,8 @@ import os
 import subprocess
 import sys
 
+from security_matrix import run  # same directory: one firmware replay's JSON row
+
 WORSE_MM = 0.05  # a row counts as worse beyond this (the tables print 0.1 mm)
 
 
@@ -33,11 +35,10 @@ def render(sim, seed, folder, with_imu):
 
 
 def replay(ev, fw, rec):
-    p = subprocess.run([ev, rec, "--firmware", fw, "--json", "--quiet"], capture_output=True, text=True)
-    if p.returncode != 0:
-        sys.exit(f"{rec}: {(p.stderr.strip().splitlines() or ['?'])[-1]}")
-    row = json.loads(p.stdout)["rows"][0]
-    return row["unaligned"]["fused"], row["unaligned"]["fused_valid"]
+    row = run(ev, fw, rec, "none")
+    if row["rc"] != 0:
+        sys.exit(f"{rec}: {row['error']}")
+    return row["fused"], row["valid"]
 
 
 def main():

@@ -156,8 +156,8 @@ struct EkfNoise {
   // an ST ASM330LHH-class part, 5 mdps/sqrt(Hz), would set 8.7e-5), carried at twice the data
   // sheet's: the filter takes each 10 ms mean as the rate at its end and uses it twice (the rate
   // update and the yaw's increment), which the sensor's own figure does not cover (algo/TUNING.md,
-  // "Gyro noise"). Bias walk above the class's 2-4 deg/h instability so the bias state follows a
-  // warming part (0.015 deg/s/K).
+  // "Gyro integration and noise"). Bias walk above the class's 2-4 deg/h instability so the bias
+  // state follows a warming part (0.015 deg/s/K).
   double gyro_noise_density = 4.88e-4;  // angle random walk [rad/s/sqrt(Hz)]
   double gyro_bias_walk = 2e-5;        // bias random walk [rad/s/sqrt(s)]
   // Sensitivity drift [1/sqrt(s)]: the BMI088's sensitivity temperature drift, 0.03 %/K, over a
